@@ -1,0 +1,9 @@
+// One binder per concept; module.cpp calls them all.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace spotkin::bindings {
+void bind_chain(pybind11::module_& m);
+void bind_runtime(pybind11::module_& m);
+}  // namespace spotkin::bindings

@@ -1,0 +1,10 @@
+// The private extension module spotkin._core.
+#include <pybind11/pybind11.h>
+
+#include "bindings.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "spotkin's C++ core. Use the public façade in `spotkin` instead.";
+  spotkin::bindings::bind_runtime(m);
+  spotkin::bindings::bind_chain(m);
+}

@@ -1,0 +1,123 @@
+// The numpy boundary: argument checking, dtype dispatch, batch shapes.
+//
+// Inputs arrive as any array-like. float32 stays float32; every other real
+// dtype is computed in float64. A batch argument has shape (..., *trailing);
+// it is viewed as a row-major (N, prod(trailing)) block, copied only when it
+// is not already C-contiguous in the working dtype.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <string>
+#include <vector>
+
+namespace spotkin::bindings {
+
+namespace py = pybind11;
+using Shape = std::vector<py::ssize_t>;
+
+inline std::string format_shape(const Shape& shape, bool ellipsis = false) {
+  std::string s = "(";
+  if (ellipsis) s += shape.empty() ? "..." : "..., ";
+  for (std::size_t i = 0; i < shape.size(); ++i) {
+    if (i) s += ", ";
+    s += std::to_string(shape[i]);
+  }
+  if (!ellipsis && shape.size() == 1) s += ",";
+  return s + ")";
+}
+
+// Any array-like to an ndarray of a real dtype; TypeError otherwise.
+inline py::array as_real_array(py::handle obj, const char* name) {
+  py::array arr;
+  try {
+    arr = py::array::ensure(obj);
+  } catch (py::error_already_set&) {
+    arr = py::array();
+  }
+  if (!arr) {
+    PyErr_Clear();
+    throw py::type_error(std::string(name) + " must be a real numeric array, got " +
+                         std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  }
+  const char kind = arr.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u' && kind != 'b')
+    throw py::type_error(std::string(name) + " must be a real numeric array, got dtype " +
+                         std::string(py::str(arr.dtype())));
+  return arr;
+}
+
+inline bool is_float32(const py::array& arr) {
+  return arr.dtype().is(py::dtype::of<float>());
+}
+
+// A C-contiguous view (or copy) of arr in dtype T.
+template <typename T>
+py::array_t<T, py::array::c_style> contiguous(const py::array& arr) {
+  return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(arr);
+}
+
+// Checks that arr has shape (..., *trailing) and returns the leading shape.
+inline Shape leading_shape(const py::array& arr, const char* name, const Shape& trailing) {
+  const auto nd = static_cast<std::size_t>(arr.ndim());
+  Shape shape(arr.shape(), arr.shape() + nd);
+  bool ok = nd >= trailing.size();
+  for (std::size_t i = 0; ok && i < trailing.size(); ++i)
+    ok = shape[nd - trailing.size() + i] == trailing[i];
+  if (!ok)
+    throw py::value_error(std::string(name) + " must have shape " +
+                          format_shape(trailing, true) + ", got " + format_shape(shape));
+  return Shape(shape.begin(), shape.end() - static_cast<std::ptrdiff_t>(trailing.size()));
+}
+
+inline py::ssize_t count(const Shape& leading) {
+  py::ssize_t n = 1;
+  for (auto d : leading) n *= d;
+  return n;
+}
+
+template <typename T>
+py::array_t<T> new_array(const Shape& leading, const Shape& trailing) {
+  Shape shape = leading;
+  shape.insert(shape.end(), trailing.begin(), trailing.end());
+  return py::array_t<T>(shape);
+}
+
+// Calls f(T{}, arr) with T = float for float32 input, double otherwise.
+template <typename F>
+py::object dispatch_real(py::handle obj, const char* name, F&& f) {
+  py::array arr = as_real_array(obj, name);
+  if (is_float32(arr)) return f(float{}, arr);
+  return f(double{}, arr);
+}
+
+// Reads a (4, 4) homogeneous transform given as any array-like.
+template <typename Rigid>
+Rigid rigid_from(py::handle obj, const char* name) {
+  py::array arr = as_real_array(obj, name);
+  if (arr.ndim() != 2 || arr.shape(0) != 4 || arr.shape(1) != 4)
+    throw py::value_error(std::string(name) + " must have shape (4, 4), got " +
+                          format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())));
+  auto a = contiguous<double>(arr);
+  auto m = a.template unchecked<2>();
+  Rigid T;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) T.R(i, j) = m(i, j);
+    T.p[i] = m(i, 3);
+  }
+  return T;
+}
+
+// Writes R, p as a row-major 4x4 homogeneous matrix.
+template <typename Rigid, typename T>
+inline void write_homogeneous(const Rigid& X, T* out) noexcept {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out[4 * i + j] = X.R(i, j);
+    out[4 * i + 3] = X.p[i];
+  }
+  out[12] = out[13] = out[14] = T(0);
+  out[15] = T(1);
+}
+
+}  // namespace spotkin::bindings

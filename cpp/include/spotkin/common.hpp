@@ -1,0 +1,55 @@
+// Shared types: statuses, rigid transforms as (R, p) pairs, angle helpers.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace spotkin {
+
+// One status per target; mirrored by the Python IntEnum `spotkin.Status`.
+enum class Status : std::int8_t {
+  Ok = 0,
+  Unreachable = 1,
+  JointLimit = 2,
+  InvalidInput = 3,
+};
+
+template <typename Scalar>
+using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+template <typename Scalar>
+using Mat3 = Eigen::Matrix<Scalar, 3, 3>;
+
+// A rigid transform kept as rotation + translation; cheaper than a 4x4 product.
+template <typename Scalar>
+struct Rigid {
+  Mat3<Scalar> R = Mat3<Scalar>::Identity();
+  Vec3<Scalar> p = Vec3<Scalar>::Zero();
+
+  Rigid operator*(const Rigid& other) const noexcept { return {R * other.R, R * other.p + p}; }
+
+  template <typename Other>
+  Rigid<Other> cast() const noexcept {
+    return {R.template cast<Other>(), p.template cast<Other>()};
+  }
+};
+
+template <typename Scalar>
+constexpr Scalar kPi = Scalar(3.14159265358979323846264338327950288);
+
+template <typename Scalar>
+constexpr Scalar quiet_nan() noexcept {
+  return std::numeric_limits<Scalar>::quiet_NaN();
+}
+
+// Wrap an angle into (-pi, pi].
+template <typename Scalar>
+inline Scalar wrap_angle(Scalar a) noexcept {
+  const Scalar two_pi = Scalar(2) * kPi<Scalar>;
+  Scalar w = std::remainder(a, two_pi);  // in [-pi, pi]
+  return w <= -kPi<Scalar> ? w + two_pi : w;
+}
+
+}  // namespace spotkin

@@ -1,0 +1,56 @@
+// Splitting a batch of independent samples across threads.
+//
+// Every sample is computed by the same code whatever the split, so results are
+// bit-identical for any thread count. Batches below `kMinSamplesPerThread` per
+// extra thread stay on the calling thread.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <cstdlib>
+#include <thread>
+#include <vector>
+
+namespace spotkin {
+
+inline std::atomic<int>& num_threads_setting() noexcept {
+  static std::atomic<int> value{[] {
+    if (const char* env = std::getenv("SPOTKIN_NUM_THREADS")) {
+      const int n = std::atoi(env);
+      if (n > 0) return n;
+    }
+    const unsigned hw = std::thread::hardware_concurrency();
+    return hw == 0 ? 1 : static_cast<int>(hw);
+  }()};
+  return value;
+}
+
+inline int get_num_threads() noexcept { return num_threads_setting().load(); }
+inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::max(1, n)); }
+
+// Calls body(begin, end) over [0, n) in contiguous chunks. `min_per_thread` is
+// the smallest chunk worth a thread (spawning one costs tens of microseconds).
+template <typename Body>
+void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) {
+  const std::ptrdiff_t by_size = min_per_thread > 0 ? n / min_per_thread : n;
+  const std::ptrdiff_t threads =
+      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(get_num_threads(), by_size));
+  if (threads <= 1) {
+    body(std::ptrdiff_t{0}, n);
+    return;
+  }
+  const std::ptrdiff_t chunk = (n + threads - 1) / threads;
+  std::vector<std::thread> workers;
+  workers.reserve(static_cast<std::size_t>(threads - 1));
+  for (std::ptrdiff_t t = 1; t < threads; ++t) {
+    const std::ptrdiff_t begin = t * chunk;
+    const std::ptrdiff_t end = std::min(n, begin + chunk);
+    if (begin >= end) break;
+    workers.emplace_back([&body, begin, end] { body(begin, end); });
+  }
+  body(std::ptrdiff_t{0}, std::min(n, chunk));
+  for (auto& w : workers) w.join();
+}
+
+}  // namespace spotkin

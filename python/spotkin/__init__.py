@@ -1,0 +1,22 @@
+"""spotkin: exact, batched, fast kinematics for Spot-like legged robots."""
+
+from __future__ import annotations
+
+from ._runtime import get_num_threads, set_num_threads
+from ._status import Status
+from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
+from .chain import Chain
+
+__all__ = [
+    "Chain",
+    "Status",
+    "get_num_threads",
+    "rotation_x",
+    "rotation_y",
+    "rotation_z",
+    "set_num_threads",
+    "transform",
+    "translation",
+]
+
+__version__ = "0.1.0"
