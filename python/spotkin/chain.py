@@ -19,14 +19,14 @@ _CONVENTIONS = {
 
 def _table(rows: ArrayLike) -> np.ndarray:
     try:
-        table = np.array(rows, dtype=np.float64)
-    except TypeError as error:
-        raise TypeError(f"rows must be a numeric table of shape (n, 5): {error}") from None
-    except ValueError as error:
+        table = np.asarray(rows)
+    except ValueError as error:  # ragged rows
         raise ValueError(f"rows must be a numeric table of shape (n, 5): {error}") from None
+    if table.dtype.kind not in "biuf":
+        raise TypeError(f"rows must be a numeric table of shape (n, 5), got dtype {table.dtype}")
     if table.ndim != 2 or table.shape[1] != 5:
         raise ValueError(f"rows must have shape (n, 5), got {table.shape}")
-    return table
+    return table.astype(np.float64)
 
 
 def _limits(limits: ArrayLike | None, dof: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,54 @@
+"""Benchmark helpers: every spotkin timing sits beside a baseline from the same run.
+
+At the end of the session a table gives time per item, throughput and the
+speed-up over the baseline (ratio of medians), which is what the notes report.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+import pytest
+
+SIZES = [1, 1_000, 100_000, 1_000_000]
+_RESULTS: dict[tuple[str, int], dict[str, float]] = defaultdict(dict)
+
+
+def rounds_for(n: int) -> dict:
+    if n >= 1_000_000:
+        return {"rounds": 3, "iterations": 1, "warmup_rounds": 1}
+    if n >= 100_000:
+        return {"rounds": 10, "iterations": 1, "warmup_rounds": 1}
+    if n >= 1_000:
+        return {"rounds": 200, "iterations": 5, "warmup_rounds": 5}
+    return {"rounds": 2000, "iterations": 20, "warmup_rounds": 50}
+
+
+@pytest.fixture
+def measure(benchmark):
+    """measure(op, n, impl, func, *args): time func(*args) and record the median."""
+
+    def run(op: str, n: int, impl: str, func, *args):
+        benchmark.group = f"{op} N={n}"
+        benchmark.extra_info.update(op=op, n=n, impl=impl)
+        result = benchmark.pedantic(func, args=args, **rounds_for(n))
+        _RESULTS[(op, n)][impl] = benchmark.stats.stats.median
+        return result
+
+    return run
+
+
+def pytest_terminal_summary(terminalreporter):
+    if not _RESULTS:
+        return
+    write = terminalreporter.write_line
+    write("")
+    write("spotkin benchmark summary (medians; speed-up = baseline time / spotkin time, same run)")
+    write(f"{'operation':<28}{'N':>9}  {'impl':<22}{'time/item':>12}{'items/s':>12}{'speed-up':>10}")
+    for (op, n), impls in sorted(_RESULTS.items()):
+        base = next((t for name, t in impls.items() if name.startswith(("numpy", "eaik"))), None)
+        for impl, t in sorted(impls.items(), key=lambda kv: kv[1]):
+            per = t / n
+            ratio = f"{base / t:9.1f}x" if base and not impl.startswith(("numpy", "eaik")) else ""
+            unit = f"{per * 1e9:9.1f} ns" if per < 1e-6 else f"{per * 1e6:9.2f} us"
+            write(f"{op:<28}{n:>9}  {impl:<22}{unit:>12}{1 / per:>12.3g}{ratio:>10}")

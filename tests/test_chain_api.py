@@ -1,0 +1,106 @@
+"""Chain construction, properties, pickling and bad input."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import spotkin as sk
+from conftest import random_rigid, random_table
+
+LEG = [(0, 0.0, -np.pi / 2, 0.0, 0.0), (0, 0.0, np.pi / 2, 0.11, 0.0), (0, 0.32, 0.0, 0.0, 0.0)]
+
+
+def test_properties():
+    limits = [(-1, 1), (-2, 2), (-3, 0)]
+    chain = sk.Chain.from_mdh(LEG, tool=sk.translation([0.37, 0, 0]), limits=limits)
+    assert chain.dof == 3 and chain.convention == "mdh"
+    np.testing.assert_array_equal(chain.lower, [-1, -2, -3])
+    np.testing.assert_array_equal(chain.upper, [1, 2, 0])
+    np.testing.assert_array_equal(chain.sigma, [0, 0, 0])
+    np.testing.assert_array_equal(chain.tool, sk.translation([0.37, 0, 0]))
+    np.testing.assert_array_equal(chain.base, np.eye(4))
+    assert "RRR" in repr(chain)
+    unlimited = sk.Chain.from_dh(LEG)
+    assert np.isneginf(unlimited.lower).all() and np.isposinf(unlimited.upper).all()
+
+
+def test_pickle_round_trip(rng):
+    chain = sk.Chain.from_mdh(
+        random_table(rng, 5),
+        base=random_rigid(rng),
+        tool=random_rigid(rng),
+        limits=np.tile([-1.0, 1.0], (5, 1)),
+    )
+    clone = pickle.loads(pickle.dumps(chain))
+    q = rng.uniform(-1, 1, (7, 5))
+    np.testing.assert_array_equal(clone.fk(q), chain.fk(q))
+    np.testing.assert_array_equal(clone.lower, chain.lower)
+
+
+def test_wrong_last_dimension_names_argument_and_shape():
+    chain = sk.Chain.from_mdh(LEG)
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 3\), got \(5, 4\)"):
+        chain.fk(np.zeros((5, 4)))
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 3\), got \(\)"):
+        chain.jacobian(1.0)
+    with pytest.raises(ValueError, match=r"got \(2,\)"):
+        chain.frames([1.0, 2.0])
+
+
+@pytest.mark.parametrize("bad", ["abc", [[1, 2, "a"]], [1 + 2j, 0, 0], None, {"q": 1}])
+def test_non_numeric_input_raises_type_error(bad):
+    chain = sk.Chain.from_mdh(LEG)
+    for method in (chain.fk, chain.frames, chain.jacobian, chain.position_jacobian):
+        with pytest.raises(TypeError, match="q must be a real numeric array"):
+            method(bad)
+
+
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        ([(2, 0, 0, 0, 0)], "sigma must be 0"),
+        ([(0.5, 0, 0, 0, 0)], "sigma must be 0"),
+        ([(0, np.nan, 0, 0, 0)], "non-finite"),
+        ([(0, 0, np.inf, 0, 0)], "non-finite"),
+        ([(0, 0, 0, 0)], r"shape \(n, 5\)"),
+        ([(0, 0, 0, 0, 0, 0)], r"shape \(n, 5\)"),
+        ([(0, 0, 0, 0, 0), (0, 0, 0)], "numeric table of shape"),
+        (np.zeros((0, 5)), "1 to 64 joints"),
+        (np.zeros((65, 5)), "1 to 64 joints"),
+        ([0, 0, 0, 0, 0], r"shape \(n, 5\)"),
+    ],
+)
+def test_malformed_rows_raise_value_error(rows, message):
+    with pytest.raises(ValueError, match=message):
+        sk.Chain.from_mdh(rows)
+
+
+def test_bad_base_tool_limits_convention():
+    with pytest.raises(ValueError, match=r"tool must have shape \(4, 4\)"):
+        sk.Chain.from_mdh(LEG, tool=np.eye(3))
+    with pytest.raises(ValueError, match="base and tool transforms must be finite"):
+        sk.Chain.from_mdh(LEG, base=np.full((4, 4), np.nan))
+    with pytest.raises(TypeError, match="rows must be a numeric table"):
+        sk.Chain.from_mdh([("a", 0, 0, 0, 0)])
+    with pytest.raises(ValueError, match=r"limits must have shape \(3, 2\)"):
+        sk.Chain.from_mdh(LEG, limits=[(0, 1)])
+    with pytest.raises(ValueError, match="lower <= upper"):
+        sk.Chain.from_mdh(LEG, limits=[(1, 0), (0, 1), (0, 1)])
+    with pytest.raises(ValueError, match="convention must be"):
+        sk.Chain(LEG, convention="xyz")
+    with pytest.raises(ValueError, match="frame must be"):
+        sk.Chain.from_mdh(LEG).jacobian([0, 0, 0], frame="world")
+
+
+def test_inf_input_gives_non_finite_output_not_a_crash():
+    chain = sk.Chain.from_mdh(LEG)
+    T = chain.fk([np.inf, 0, 0])
+    assert not np.isfinite(T[:3]).all()
+
+
+def test_set_num_threads_validates():
+    with pytest.raises(ValueError, match="positive thread count"):
+        sk.set_num_threads(0)
