@@ -3,6 +3,7 @@
 #include "spotkin/chain.hpp"
 
 #include "bindings.hpp"
+#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -36,6 +37,28 @@ ChainPair make_chain(Convention convention, py::handle rows_obj, py::handle base
 
 constexpr std::ptrdiff_t kMinPerThread = 20000;
 
+// Batch kernels, one per operation and precision, cloned per CPU level.
+SPOTKIN_MULTIVERSION void fk_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n) {
+  c.forward_batch(q, out, n);
+}
+SPOTKIN_MULTIVERSION void fk_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n) {
+  c.forward_batch(q, out, n);
+}
+SPOTKIN_MULTIVERSION void frames_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n) {
+  c.frames_batch(q, out, n);
+}
+SPOTKIN_MULTIVERSION void frames_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n) {
+  c.frames_batch(q, out, n);
+}
+SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n,
+                                          int rows, bool in_tool_frame) {
+  c.jacobian_batch(q, out, n, rows, in_tool_frame);
+}
+SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
+                                          int rows, bool in_tool_frame) {
+  c.jacobian_batch(q, out, n, rows, in_tool_frame);
+}
+
 py::object fk(const ChainPair& chain, py::handle q_obj) {
   return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
@@ -50,7 +73,7 @@ py::object fk(const ChainPair& chain, py::handle q_obj) {
     {
       py::gil_scoped_release release;
       parallel_for(N, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        for (std::ptrdiff_t i = b; i < e; ++i) write_homogeneous(c.forward(qd + i * n), od + 16 * i);
+        fk_kernel(c, qd + b * n, od + 16 * b, e - b);
       });
     }
     return std::move(out);
@@ -71,12 +94,7 @@ py::object frames(const ChainPair& chain, py::handle q_obj) {
     {
       py::gil_scoped_release release;
       parallel_for(N, kMinPerThread / 4, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        Rigid<T> buffer[Chain<T>::kMaxJoints + 2];
-        for (std::ptrdiff_t i = b; i < e; ++i) {
-          c.frames(qd + i * n, buffer);
-          for (py::ssize_t k = 0; k < n + 2; ++k)
-            write_homogeneous(buffer[k], od + 16 * ((n + 2) * i + k));
-        }
+        frames_kernel(c, qd + b * n, od + 16 * (n + 2) * b, e - b);
       });
     }
     return std::move(out);
@@ -97,8 +115,7 @@ py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_
     {
       py::gil_scoped_release release;
       parallel_for(N, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        for (std::ptrdiff_t i = b; i < e; ++i)
-          c.jacobian(qd + i * n, od + rows * n * i, rows, in_tool_frame);
+        jacobian_kernel(c, qd + b * n, od + rows * n * b, e - b, rows, in_tool_frame);
       });
     }
     return std::move(out);

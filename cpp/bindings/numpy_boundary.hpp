@@ -109,15 +109,4 @@ Rigid rigid_from(py::handle obj, const char* name) {
   return T;
 }
 
-// Writes R, p as a row-major 4x4 homogeneous matrix.
-template <typename Rigid, typename T>
-inline void write_homogeneous(const Rigid& X, T* out) noexcept {
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out[4 * i + j] = X.R(i, j);
-    out[4 * i + 3] = X.p[i];
-  }
-  out[12] = out[13] = out[14] = T(0);
-  out[15] = T(1);
-}
-
 }  // namespace spotkin::bindings

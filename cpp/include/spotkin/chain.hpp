@@ -10,6 +10,7 @@
 // the frame reached after X(pre).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "spotkin/common.hpp"
+#include "spotkin/vector_math.hpp"
 
 namespace spotkin {
 
@@ -40,7 +42,7 @@ struct XScrew {
   }
 
   // T <- T . TransX(a) RotX(alpha)
-  void apply(Rigid<Scalar>& T) const noexcept {
+  SPOTKIN_INLINE void apply(Rigid<Scalar>& T) const noexcept {
     if (identity) return;
     T.p.noalias() += a * T.R.col(0);
     const Vec3<Scalar> y = T.R.col(1), z = T.R.col(2);
@@ -57,14 +59,18 @@ struct Joint {
   Scalar r = 0;      // offset along z at q = 0
 };
 
-// T <- T . RotZ(theta) TransZ(r)
+// T <- T . RotZ(theta) TransZ(r), given c = cos(theta), s = sin(theta)
 template <typename Scalar>
-inline void apply_z_screw(Rigid<Scalar>& T, Scalar theta, Scalar r) noexcept {
-  const Scalar c = std::cos(theta), s = std::sin(theta);
+SPOTKIN_INLINE void apply_z_screw(Rigid<Scalar>& T, Scalar c, Scalar s, Scalar r) noexcept {
   const Vec3<Scalar> x = T.R.col(0), y = T.R.col(1);
   T.R.col(0) = c * x + s * y;
   T.R.col(1) = c * y - s * x;
   T.p.noalias() += r * T.R.col(2);
+}
+
+template <typename Scalar>
+SPOTKIN_INLINE void apply_z_screw(Rigid<Scalar>& T, Scalar theta, Scalar r) noexcept {
+  apply_z_screw(T, Scalar(std::cos(theta)), Scalar(std::sin(theta)), r);
 }
 
 template <typename Scalar>
@@ -163,7 +169,104 @@ class Chain {
       apply_z_screw(T, joint_theta(joint, q[j]), joint_r(joint, q[j]));
       joint.post.apply(T);
     }
-    T = T * tool_;
+    write_jacobian(T * tool_, axis, origin, J, rows, in_tool_frame);
+  }
+
+  // Batched versions over `count` samples (q row-major count x n). They work on
+  // blocks of kBlock samples: first every joint's sine and cosine for the whole
+  // block (vectorised), then the per-sample products.
+  static constexpr std::ptrdiff_t kBlock = 32;
+
+  SPOTKIN_INLINE void forward_batch(const Scalar* q, Scalar* out, std::ptrdiff_t count) const noexcept {
+    BlockTrig trig;
+    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+      const std::ptrdiff_t m = std::min(kBlock, count - b0);
+      block_trig(q + b0 * dof(), m, trig);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const Scalar* qi = q + (b0 + i) * dof();
+        Rigid<Scalar> T = base_;
+        for (std::size_t j = 0; j < joints_.size(); ++j) advance(T, j, qi[j], trig, i);
+        write_homogeneous(T * tool_, out + 16 * (b0 + i));
+      }
+    }
+  }
+
+  // (n + 2) frames per sample, as frames().
+  SPOTKIN_INLINE void frames_batch(const Scalar* q, Scalar* out, std::ptrdiff_t count) const noexcept {
+    BlockTrig trig;
+    const std::ptrdiff_t stride = 16 * (dof() + 2);
+    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+      const std::ptrdiff_t m = std::min(kBlock, count - b0);
+      block_trig(q + b0 * dof(), m, trig);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const Scalar* qi = q + (b0 + i) * dof();
+        Scalar* o = out + stride * (b0 + i);
+        Rigid<Scalar> T = base_;
+        write_homogeneous(T, o);
+        for (std::size_t j = 0; j < joints_.size(); ++j) {
+          advance(T, j, qi[j], trig, i);
+          write_homogeneous(T, o + 16 * (j + 1));
+        }
+        write_homogeneous(T * tool_, o + 16 * (joints_.size() + 1));
+      }
+    }
+  }
+
+  // rows x n Jacobian per sample, as jacobian().
+  SPOTKIN_INLINE void jacobian_batch(const Scalar* q, Scalar* out, std::ptrdiff_t count, int rows,
+                                     bool in_tool_frame) const noexcept {
+    BlockTrig trig;
+    const std::ptrdiff_t n = dof();
+    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+      const std::ptrdiff_t m = std::min(kBlock, count - b0);
+      block_trig(q + b0 * n, m, trig);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const Scalar* qi = q + (b0 + i) * n;
+        Vec3<Scalar> axis[kMaxJoints], origin[kMaxJoints];
+        Rigid<Scalar> T = base_;
+        for (std::size_t j = 0; j < joints_.size(); ++j) {
+          const Joint<Scalar>& joint = joints_[j];
+          joint.pre.apply(T);
+          axis[j] = T.R.col(2);
+          origin[j] = T.p;
+          apply_z_screw(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, qi[j]));
+          joint.post.apply(T);
+        }
+        write_jacobian(T * tool_, axis, origin, out + rows * n * (b0 + i), rows, in_tool_frame);
+      }
+    }
+  }
+
+ private:
+  struct BlockTrig {
+    double angle[kBlock];
+    double s[kMaxJoints][kBlock];
+    double c[kMaxJoints][kBlock];
+  };
+
+  SPOTKIN_INLINE void block_trig(const Scalar* q, std::ptrdiff_t m, BlockTrig& trig) const noexcept {
+    const std::ptrdiff_t n = dof();
+    for (std::ptrdiff_t j = 0; j < n; ++j) {
+      const Joint<Scalar>& joint = joints_[static_cast<std::size_t>(j)];
+      const double revolute = joint.type == JointType::Revolute ? 1.0 : 0.0;
+      for (std::ptrdiff_t i = 0; i < m; ++i)
+        trig.angle[i] = double(joint.theta) + revolute * double(q[i * n + j]);
+      vector_math::sincos(trig.angle, trig.s[j], trig.c[j], m);
+    }
+  }
+
+  SPOTKIN_INLINE void advance(Rigid<Scalar>& T, std::size_t j, Scalar q, const BlockTrig& trig,
+                              std::ptrdiff_t i) const noexcept {
+    const Joint<Scalar>& joint = joints_[j];
+    joint.pre.apply(T);
+    apply_z_screw(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, q));
+    joint.post.apply(T);
+  }
+
+  SPOTKIN_INLINE void write_jacobian(const Rigid<Scalar>& T, const Vec3<Scalar>* axis,
+                                     const Vec3<Scalar>* origin, Scalar* J, int rows,
+                                     bool in_tool_frame) const noexcept {
+    const std::size_t n = joints_.size();
     for (std::size_t j = 0; j < n; ++j) {
       Vec3<Scalar> v, w;
       if (joints_[j].type == JointType::Revolute) {
@@ -177,13 +280,12 @@ class Chain {
         v = T.R.transpose() * v;
         w = T.R.transpose() * w;
       }
-      for (int i = 0; i < 3; ++i) J[i * n + j] = v[i];
+      for (int r = 0; r < 3; ++r) J[r * n + j] = v[r];
       if (rows == 6)
-        for (int i = 0; i < 3; ++i) J[(i + 3) * n + j] = w[i];
+        for (int r = 0; r < 3; ++r) J[(r + 3) * n + j] = w[r];
     }
   }
 
- private:
   static Scalar joint_theta(const Joint<Scalar>& j, Scalar q) noexcept {
     return j.type == JointType::Revolute ? j.theta + q : j.theta;
   }

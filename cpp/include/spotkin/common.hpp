@@ -7,6 +7,14 @@
 #include <cstdint>
 #include <limits>
 
+// Forces inlining of the per-sample kernels into the batch loops, so that every
+// run-time dispatched clone of a loop gets its own vector code.
+#if defined(__GNUC__)
+#define SPOTKIN_INLINE inline __attribute__((always_inline))
+#else
+#define SPOTKIN_INLINE inline
+#endif
+
 namespace spotkin {
 
 // One status per target; mirrored by the Python IntEnum `spotkin.Status`.
@@ -35,6 +43,17 @@ struct Rigid {
     return {R.template cast<Other>(), p.template cast<Other>()};
   }
 };
+
+// Writes X as a row-major 4x4 homogeneous matrix.
+template <typename Scalar>
+SPOTKIN_INLINE void write_homogeneous(const Rigid<Scalar>& X, Scalar* out) noexcept {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out[4 * i + j] = X.R(i, j);
+    out[4 * i + 3] = X.p[i];
+  }
+  out[12] = out[13] = out[14] = Scalar(0);
+  out[15] = Scalar(1);
+}
 
 template <typename Scalar>
 constexpr Scalar kPi = Scalar(3.14159265358979323846264338327950288);

@@ -1,0 +1,75 @@
+// Elementary functions over arrays of samples, written so the compiler
+// vectorises the loops (plain arithmetic and selects, no calls, no branches).
+//
+// sincos: Cody-Waite reduction by pi/2 in three parts (fdlibm's pio2_1..3),
+// then fdlibm's __kernel_sin / __kernel_cos polynomials on [-pi/4, pi/4];
+// about 1 ulp. Arguments beyond kReducibleLimit, where the three-part
+// reduction loses bits, are recomputed with std::sin/std::cos. NaN and Inf give
+// NaN, as std::sin does.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+
+namespace spotkin::vector_math {
+
+constexpr double kReducibleLimit = 1.0e5;
+
+namespace detail {
+constexpr double kTwoOverPi = 6.36619772367581382433e-01;
+constexpr double kPio2_1 = 1.57079632673412561417e+00;
+constexpr double kPio2_2 = 6.07710050630396597660e-11;
+constexpr double kPio2_3 = 2.02226624871116645580e-21;
+// Round to nearest integer without a libm call: valid for |x| < 2^51.
+constexpr double kRoundMagic = 6755399441055744.0;  // 1.5 * 2^52
+
+inline double kernel_sin(double x) noexcept {
+  constexpr double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
+                   S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
+                   S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
+  const double z = x * x;
+  const double r = S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)));
+  return x + x * z * (S1 + z * r);
+}
+
+inline double kernel_cos(double x) noexcept {
+  constexpr double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
+                   C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
+                   C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
+  const double z = x * x;
+  const double r = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
+  const double hz = 0.5 * z;
+  const double w = 1.0 - hz;
+  return w + (((1.0 - w) - hz) + z * r);  // fdlibm's compensated 1 - z/2 + z^2 r
+}
+}  // namespace detail
+
+// s[i], c[i] = sin(x[i]), cos(x[i]) for i < n.
+inline void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noexcept {
+  using namespace detail;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const double xi = x[i];
+    const double k = (xi * kTwoOverPi + kRoundMagic) - kRoundMagic;
+    const double r = ((xi - k * kPio2_1) - k * kPio2_2) - k * kPio2_3;
+    const double sr = kernel_sin(r), cr = kernel_cos(r);
+    // Quadrant q = k mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
+    const double k4 = k * 0.25;  // exact: k is an integer
+    double floor_k4 = (k4 + kRoundMagic) - kRoundMagic;
+    floor_k4 -= floor_k4 > k4 ? 1.0 : 0.0;
+    const double q = k - 4.0 * floor_k4;  // k mod 4, in {0, 1, 2, 3}
+    const double q_mod2 = q >= 2.0 ? q - 2.0 : q;
+    const double q_plus1 = q == 3.0 ? 0.0 : q + 1.0;
+    const bool odd = q_mod2 == 1.0;
+    const double sin_abs = odd ? cr : sr, cos_abs = odd ? sr : cr;
+    s[i] = q >= 2.0 ? -sin_abs : sin_abs;
+    c[i] = q_plus1 >= 2.0 ? -cos_abs : cos_abs;
+  }
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    if (std::fabs(x[i]) > kReducibleLimit) {  // rare; also catches +-Inf (NaN either way)
+      s[i] = std::sin(x[i]);
+      c[i] = std::cos(x[i]);
+    }
+  }
+}
+
+}  // namespace spotkin::vector_math
