@@ -71,7 +71,7 @@ py::object fk(const ChainPair& chain, py::handle q_obj) {
     const T* qd = q.data();
     T* od = out.mutable_data();
     {
-      py::gil_scoped_release release;
+      ReleaseGilFor release(N);
       parallel_for(N, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         fk_kernel(c, qd + b * n, od + 16 * b, e - b);
       });
@@ -92,7 +92,7 @@ py::object frames(const ChainPair& chain, py::handle q_obj) {
     const T* qd = q.data();
     T* od = out.mutable_data();
     {
-      py::gil_scoped_release release;
+      ReleaseGilFor release(N);
       parallel_for(N, kMinPerThread / 4, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         frames_kernel(c, qd + b * n, od + 16 * (n + 2) * b, e - b);
       });
@@ -113,7 +113,7 @@ py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_
     const T* qd = q.data();
     T* od = out.mutable_data();
     {
-      py::gil_scoped_release release;
+      ReleaseGilFor release(N);
       parallel_for(N, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         jacobian_kernel(c, qd + b * n, od + rows * n * b, e - b, rows, in_tool_frame);
       });

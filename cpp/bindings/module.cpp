@@ -7,4 +7,5 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "spotkin's C++ core. Use the public façade in `spotkin` instead.";
   spotkin::bindings::bind_runtime(m);
   spotkin::bindings::bind_chain(m);
+  spotkin::bindings::bind_leg(m);
 }

@@ -9,6 +9,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,33 @@ py::array_t<T> new_array(const Shape& leading, const Shape& trailing) {
   Shape shape = leading;
   shape.insert(shape.end(), trailing.begin(), trailing.end());
   return py::array_t<T>(shape);
+}
+
+// Releases the GIL for batches big enough to gain from it; for a handful of
+// samples the release and re-acquire cost more than the computation.
+class ReleaseGilFor {
+ public:
+  static constexpr py::ssize_t kMinSamples = 256;
+  explicit ReleaseGilFor(py::ssize_t samples) {
+    if (samples >= kMinSamples) release_.emplace();
+  }
+
+ private:
+  std::optional<py::gil_scoped_release> release_;
+};
+
+// The Python IntEnum spotkin.Status, registered at import; single targets get
+// its members, batches an int8 array of its values.
+inline py::object& status_members() {
+  // Never destroyed: a static py::object would be released after the
+  // interpreter has finalised.
+  static auto* members = new py::object(py::none());
+  return *members;
+}
+inline py::object status_object(std::int8_t code) {
+  py::object& members = status_members();
+  if (members.is_none()) return py::int_(code);
+  return members[py::int_(code)];
 }
 
 // Calls f(T{}, arr) with T = float for float32 input, double otherwise.

@@ -6,9 +6,14 @@ from ._runtime import get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from .chain import Chain
+from .leg import Leg, LegSolutions
+from .spot import Spot
 
 __all__ = [
     "Chain",
+    "Leg",
+    "LegSolutions",
+    "Spot",
     "Status",
     "get_num_threads",
     "rotation_x",

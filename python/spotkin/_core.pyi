@@ -2,8 +2,9 @@
 spotkin's C++ core. Use the public façade in `spotkin` instead.
 """
 from __future__ import annotations
+import collections.abc
 import typing
-__all__: list[str] = ['Chain', 'Convention', 'get_num_threads', 'set_num_threads']
+__all__: list[str] = ['Chain', 'Convention', 'Leg', 'get_num_threads', 'set_num_threads']
 class Convention:
     """
     Members:
@@ -64,6 +65,29 @@ class Chain:
     @property
     def dof(self) -> int:
         ...
+class Leg:
+    def __init__(self, hip_offset: typing.SupportsFloat | typing.SupportsIndex, upper: typing.SupportsFloat | typing.SupportsIndex, lower: typing.SupportsFloat | typing.SupportsIndex, knee_offset: typing.SupportsFloat | typing.SupportsIndex, lower_limits: typing.Any, upper_limits: typing.Any) -> None:
+        ...
+    def fk(self, q: typing.Any) -> typing.Any:
+        ...
+    def ik(self, p: typing.Any, seed: typing.Any = None) -> typing.Any:
+        ...
+    def ik_all(self, p: typing.Any) -> typing.Any:
+        ...
+    def jacobian(self, q: typing.Any) -> typing.Any:
+        ...
+    def nearest_reachable(self, p: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"]) -> typing.Annotated[list[float], "FixedSize(3)"]:
+        ...
+    def singularity(self, q: typing.Any) -> typing.Any:
+        ...
+    @property
+    def max_reach(self) -> float:
+        ...
+    @property
+    def min_reach(self) -> float:
+        ...
+def _register_status(members: typing.Any) -> None:
+    ...
 def get_num_threads() -> int:
     ...
 def set_num_threads(n: typing.SupportsInt | typing.SupportsIndex) -> None:

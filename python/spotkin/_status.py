@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+from . import _core
+
 __all__ = ["Status"]
 
 
@@ -18,3 +20,6 @@ class Status(IntEnum):
     """Geometric solutions exist, but none is within the joint limits; q is NaN."""
     INVALID_INPUT = 3
     """NaN or Inf in the input, or a malformed pose; q is NaN."""
+
+
+_core._register_status(tuple(Status))

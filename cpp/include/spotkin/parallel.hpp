@@ -31,6 +31,11 @@ inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::m
 
 // Calls body(begin, end) over [0, n) in contiguous chunks. `min_per_thread` is
 // the smallest chunk worth a thread (spawning one costs tens of microseconds).
+// Chunks start at multiples of kChunkAlignment, a multiple of every kernel's
+// block size, so each sample goes through the same code path (vector body or
+// remainder loop) whatever the thread count: results are bit-identical.
+constexpr std::ptrdiff_t kChunkAlignment = 64;
+
 template <typename Body>
 void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) {
   const std::ptrdiff_t by_size = min_per_thread > 0 ? n / min_per_thread : n;
@@ -40,7 +45,8 @@ void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) 
     body(std::ptrdiff_t{0}, n);
     return;
   }
-  const std::ptrdiff_t chunk = (n + threads - 1) / threads;
+  std::ptrdiff_t chunk = (n + threads - 1) / threads;
+  chunk = (chunk + kChunkAlignment - 1) / kChunkAlignment * kChunkAlignment;
   std::vector<std::thread> workers;
   workers.reserve(static_cast<std::size_t>(threads - 1));
   for (std::ptrdiff_t t = 1; t < threads; ++t) {

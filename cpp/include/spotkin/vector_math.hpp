@@ -6,10 +6,20 @@
 // about 1 ulp. Arguments beyond kReducibleLimit, where the three-part
 // reduction loses bits, are recomputed with std::sin/std::cos. NaN and Inf give
 // NaN, as std::sin does.
+//
+// atan2: Cephes' atan rational approximation on [0, 0.66] and on the range
+// reduced by pi/4 for [0.66, 1] (the ratio min/max is in [0, 1]), then the
+// octant by selects; about 1 ulp. acos(x) = atan2(sqrt((1 - x)(1 + x)), x).
 #pragma once
 
 #include <cmath>
 #include <cstddef>
+
+#if defined(__GNUC__)
+#define SPOTKIN_VM_INLINE inline __attribute__((always_inline))
+#else
+#define SPOTKIN_VM_INLINE inline
+#endif
 
 namespace spotkin::vector_math {
 
@@ -23,7 +33,7 @@ constexpr double kPio2_3 = 2.02226624871116645580e-21;
 // Round to nearest integer without a libm call: valid for |x| < 2^51.
 constexpr double kRoundMagic = 6755399441055744.0;  // 1.5 * 2^52
 
-inline double kernel_sin(double x) noexcept {
+SPOTKIN_VM_INLINE double kernel_sin(double x) noexcept {
   constexpr double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
                    S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
                    S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
@@ -32,7 +42,7 @@ inline double kernel_sin(double x) noexcept {
   return x + x * z * (S1 + z * r);
 }
 
-inline double kernel_cos(double x) noexcept {
+SPOTKIN_VM_INLINE double kernel_cos(double x) noexcept {
   constexpr double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
@@ -45,7 +55,7 @@ inline double kernel_cos(double x) noexcept {
 }  // namespace detail
 
 // s[i], c[i] = sin(x[i]), cos(x[i]) for i < n.
-inline void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noexcept {
+SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noexcept {
   using namespace detail;
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const double xi = x[i];
@@ -70,6 +80,46 @@ inline void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noex
       c[i] = std::cos(x[i]);
     }
   }
+}
+
+namespace detail {
+// atan(t) for t in [0, 1] (Cephes atan.c, P/Q of degree 4/5).
+SPOTKIN_VM_INLINE double atan_unit(double t) noexcept {
+  constexpr double P0 = -8.750608600031904122785e-01, P1 = -1.615753718733365076637e+01,
+                   P2 = -7.500855792314704667340e+01, P3 = -1.228866684490136173410e+02,
+                   P4 = -6.485021904942025371773e+01;
+  constexpr double Q0 = 2.485846490142306297962e+01, Q1 = 1.650270098316988542046e+02,
+                   Q2 = 4.328810604912902668951e+02, Q3 = 4.853903996359136964868e+02,
+                   Q4 = 1.945506571482613964425e+02;
+  constexpr double kPio4 = 7.85398163397448309616e-01, kMoreBits = 6.123233995736765886130e-17;
+  const bool reduce = t > 0.66;
+  const double x = reduce ? (t - 1.0) / (t + 1.0) : t;
+  const double z = x * x;
+  const double p = (((P0 * z + P1) * z + P2) * z + P3) * z + P4;
+  const double q = ((((z + Q0) * z + Q1) * z + Q2) * z + Q3) * z + Q4;
+  const double r = x + x * (z * p / q);
+  return reduce ? kPio4 + (r + 0.5 * kMoreBits) : r;
+}
+}  // namespace detail
+
+// atan2(y, x) for one pair; finite inputs (NaN propagates).
+SPOTKIN_VM_INLINE double atan2(double y, double x) noexcept {
+  constexpr double kPio2 = 1.57079632679489661923, kPi = 3.14159265358979323846;
+  constexpr double kPio2Lo = 6.123233995736765886130e-17, kPiLo = 1.2246467991473531772e-16;
+  const double ax = std::fabs(x), ay = std::fabs(y);
+  const bool steep = ay > ax;
+  const double hi = steep ? ay : ax, lo = steep ? ax : ay;
+  const double t = hi > 0.0 ? lo / hi : (hi == hi ? 0.0 : hi);
+  double a = detail::atan_unit(t);
+  a = steep ? (kPio2 - a) + kPio2Lo : a;
+  const bool x_negative = std::copysign(1.0, x) < 0.0;  // true for -0 too: atan2(0, -0) = pi
+  a = x_negative ? (kPi - a) + kPiLo : a;
+  return std::copysign(a, y);
+}
+
+// acos(x) for x in [-1, 1]; NaN outside.
+SPOTKIN_VM_INLINE double acos(double x) noexcept {
+  return vector_math::atan2(std::sqrt((1.0 - x) * (1.0 + x)), x);
 }
 
 }  // namespace spotkin::vector_math

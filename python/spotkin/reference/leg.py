@@ -216,18 +216,10 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
     ties to the lowest slot; with no seed the lowest valid slot. -> OK.
     Solutions exist but none valid -> (NaN, JOINT_LIMIT).
     Non-finite p -> (NaN, INVALID_INPUT).
-    No solution -> UNREACHABLE with the "stretched or folded toward it" pose
-    (joint limits NOT applied, angles wrapped to (-pi, pi]):
-        hx = phi + acos(clamp(h1/r, -1, 1))  (hx = 0 if r == 0),
-        kn = -beta - acos(clamp(Zk/R, -1, 1)),  hy from (I4),
-    with Zk from D^2 = x^2 + z'^2 (the target projected on the sagittal plane).
-    For a fixed hx the foot then is the point of the sagittal annulus
-    D in [D_min, D_max] (plane y' = h1) nearest to the target's projection onto
-    that plane: nearest in the sagittal plane for a target beyond reach or
-    inside the dead zone, and the clamped hip solution otherwise. It is not the
-    exact 3-D nearest reachable point (that would be the radial projection onto
-    the sphere |p|^2 = h1^2 + D^2); for Spot it was measured at
-    <= 4 mm for targets up to 0.5 m beyond reach and <= 6 mm in the dead zone.
+    No solution -> UNREACHABLE with slot 0 (hip normal, knee back) of
+    nearest_reachable(p): the leg stretched or folded toward the target, its
+    foot at the reachable point nearest to it. Joint limits are NOT applied to
+    this fallback; angles are wrapped to (-pi, pi].
     """
     nan3 = np.full(3, np.nan)
     x, y, z = float(p[0]), float(p[1]), float(p[2])
@@ -252,17 +244,43 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
             return nan3, JOINT_LIMIT
         return best, OK
 
-    # Unreachable: clamped hip, then leg stretched or folded toward the target.
-    r = math.hypot(y, z)
-    if r == 0.0:
-        hx = 0.0
-    else:
-        hx = math.atan2(z, y) + math.acos(min(1.0, max(-1.0, h1 / r)))
-    zp = -math.sin(hx) * y + math.cos(hx) * z
-    ratio, beta = _knee_ratio(x * x + zp * zp, U, L, k)
+    # Unreachable: slot 0 of the nearest reachable point (ratios clamped).
+    xs, ys, zs = nearest_reachable(p, h1, U, L, k)
+    r = math.hypot(ys, zs)
+    hx = 0.0 if r == 0.0 else math.atan2(zs, ys) + math.acos(min(1.0, max(-1.0, h1 / r)))
+    ratio, beta = _knee_ratio(xs * xs + ys * ys + zs * zs - h1 * h1, U, L, k)
     kn = -beta - math.acos(min(1.0, max(-1.0, ratio)))
-    hy = _hip_pitch(x, y, z, hx, kn, U, L, k)
+    hy = _hip_pitch(xs, ys, zs, hx, kn, U, L, k)
     return np.array([wrap_angle(hx), wrap_angle(hy), wrap_angle(kn)]), UNREACHABLE
+
+
+def nearest_reachable(p, h1, U, L, k):
+    """The point of the reachable set (limits aside) nearest to p.
+
+    The reachable set is the shell h1^2 + Dmin^2 <= |p|^2 <= h1^2 + Dmax^2
+    (Dmax = R + L, Dmin = |R - L|, R = hypot(U, k); eq. (I3)) outside the
+    hip-roll cylinder y^2 + z^2 >= h1^2 (eq. (I1)). First the radial projection
+    onto the shell (exactly the nearest point when it lands outside the
+    cylinder); if it lands inside, (y, z) is pushed out to radius |h1| and
+    |x| clamped into [Dmin, Dmax]. p = 0 maps to (0, h1, -Dmin).
+    """
+    R = math.hypot(U, k)
+    d_max, d_min = R + L, abs(R - L)
+    x, y, z = float(p[0]), float(p[1]), float(p[2])
+    norm = math.sqrt(x * x + y * y + z * z)
+    if norm == 0.0:
+        x, y, z = 0.0, h1, -d_min
+    else:
+        target = min(max(norm, math.sqrt(h1 * h1 + d_min * d_min)), math.sqrt(h1 * h1 + d_max * d_max))
+        x, y, z = x * target / norm, y * target / norm, z * target / norm
+    r = math.hypot(y, z)
+    if r * r < h1 * h1:
+        if r > 0.0:
+            y, z = y * abs(h1) / r, z * abs(h1) / r
+        else:
+            y, z = h1, 0.0
+        x = math.copysign(min(max(abs(x), d_min), d_max), x)
+    return x, y, z
 
 
 def singularity(q, h1, U, L, k):

@@ -1,0 +1,197 @@
+// Bindings for spotkin::Leg: batched FK, Jacobian, singularity measures and
+// closed-form IK (limit-aware choice, and every branch).
+#include "spotkin/leg.hpp"
+
+#include <pybind11/stl.h>
+
+#include <array>
+#include <tuple>
+
+#include "bindings.hpp"
+#include "dispatch.hpp"
+#include "numpy_boundary.hpp"
+#include "spotkin/parallel.hpp"
+
+namespace spotkin::bindings {
+
+namespace {
+
+constexpr std::ptrdiff_t kMinPerThread = 50000;
+
+template <typename T>
+SPOTKIN_MULTIVERSION void leg_fk_kernel(const Leg& leg, const T* q, T* p, std::ptrdiff_t n) {
+  leg_batch::fk(leg, q, p, n);
+}
+template <typename T>
+SPOTKIN_MULTIVERSION void leg_jacobian_kernel(const Leg& leg, const T* q, T* J, std::ptrdiff_t n) {
+  leg_batch::jacobian(leg, q, J, n);
+}
+template <typename T>
+SPOTKIN_MULTIVERSION void leg_ik_kernel(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
+                                          std::ptrdiff_t n) {
+  leg_batch::ik(leg, p, seed, q, status, n);
+}
+template <typename T>
+SPOTKIN_MULTIVERSION void leg_ik_all_kernel(const Leg& leg, const T* p, T* q, std::uint8_t* valid,
+                                              std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n) {
+  leg_batch::ik_all(leg, p, q, valid, exists, status, n);
+}
+
+py::object fk(const Leg& leg, py::handle q_obj) {
+  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Shape leading = leading_shape(arr, "q", {3});
+    auto q = contiguous<T>(arr);
+    auto out = new_array<T>(leading, {3});
+    const T* qd = q.data();
+    T* od = out.mutable_data();
+    {
+      ReleaseGilFor release(count(leading));
+      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        leg_fk_kernel<T>(leg, qd + 3 * b, od + 3 * b, e - b);
+      });
+    }
+    return std::move(out);
+  });
+}
+
+py::object jacobian(const Leg& leg, py::handle q_obj) {
+  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Shape leading = leading_shape(arr, "q", {3});
+    auto q = contiguous<T>(arr);
+    auto out = new_array<T>(leading, {3, 3});
+    const T* qd = q.data();
+    T* od = out.mutable_data();
+    {
+      ReleaseGilFor release(count(leading));
+      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        leg_jacobian_kernel<T>(leg, qd + 3 * b, od + 9 * b, e - b);
+      });
+    }
+    return std::move(out);
+  });
+}
+
+py::object singularity(const Leg& leg, py::handle q_obj) {
+  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Shape leading = leading_shape(arr, "q", {3});
+    auto q = contiguous<T>(arr);
+    auto det = new_array<T>(leading, {});
+    auto sigma = new_array<T>(leading, {});
+    const T* qd = q.data();
+    T* dd = det.mutable_data();
+    T* sd = sigma.mutable_data();
+    {
+      ReleaseGilFor release(count(leading));
+      parallel_for(count(leading), kMinPerThread / 8, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        for (std::ptrdiff_t i = b; i < e; ++i) leg.singularity(qd + 3 * i, dd + i, sd + i);
+      });
+    }
+    return py::make_tuple(det, sigma);
+  });
+}
+
+// p (..., 3), seed None or (..., 3) of the same shape -> (q (..., 3), status (...)).
+py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj) {
+  return dispatch_real(p_obj, "p", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Shape leading = leading_shape(arr, "p", {3});
+    auto p = contiguous<T>(arr);
+    py::array_t<T, py::array::c_style> seed;  // default-constructed: an empty array, not null
+    const bool has_seed = !seed_obj.is_none();
+    if (has_seed) {
+      py::array seed_arr = as_real_array(seed_obj, "seed");
+      const Shape seed_leading = leading_shape(seed_arr, "seed", {3});
+      if (seed_leading != leading)
+        throw py::value_error("seed must have the shape of p, " + format_shape(leading) + " + (3,), got " +
+                              format_shape(seed_leading) + " + (3,); broadcast them first");
+      seed = contiguous<T>(seed_arr);
+    }
+    const bool single = leading.empty();
+    auto q = new_array<T>(leading, {3});
+    std::int8_t single_status = 0;
+    py::array_t<std::int8_t> status;
+    if (!single) status = new_array<std::int8_t>(leading, {});
+    const T* pd = p.data();
+    const T* sd = has_seed ? seed.data() : nullptr;
+    T* qd = q.mutable_data();
+    std::int8_t* status_data = single ? &single_status : status.mutable_data();
+    {
+      ReleaseGilFor release(count(leading));
+      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        leg_ik_kernel<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b);
+      });
+    }
+    if (single) return py::make_tuple(q, status_object(single_status));
+    return py::make_tuple(q, status);
+  });
+}
+
+py::object ik_all(const Leg& leg, py::handle p_obj) {
+  return dispatch_real(p_obj, "p", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Shape leading = leading_shape(arr, "p", {3});
+    auto p = contiguous<T>(arr);
+    auto q = new_array<T>(leading, {Leg::kSlots, 3});
+    auto valid = py::array(py::dtype("bool"), [&] { Shape s = leading; s.push_back(Leg::kSlots); return s; }());
+    auto exists = py::array(py::dtype("bool"), valid.request().shape);
+    auto status = new_array<std::int8_t>(leading, {});
+    const T* pd = p.data();
+    T* qd = q.mutable_data();
+    auto* vd = static_cast<std::uint8_t*>(valid.mutable_data());
+    auto* ed = static_cast<std::uint8_t*>(exists.mutable_data());
+    std::int8_t* sd = status.mutable_data();
+    {
+      ReleaseGilFor release(count(leading));
+      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        leg_ik_all_kernel<T>(leg, pd + 3 * b, qd + 12 * b, vd + 4 * b, ed + 4 * b, sd + b, e - b);
+      });
+    }
+    if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));
+    return py::make_tuple(q, valid, exists, status);
+  });
+}
+
+Leg make_leg(double hip_offset, double upper, double lower, double knee_offset, py::handle lower_limits,
+             py::handle upper_limits) {
+  for (double v : {hip_offset, upper, lower, knee_offset})
+    if (!std::isfinite(v)) throw std::invalid_argument("leg lengths must be finite");
+  if (!(upper > 0.0) || !(lower > 0.0))
+    throw std::invalid_argument("upper and lower leg lengths must be positive");
+  JointLimits<3> limits;
+  for (auto [obj, target, name] : {std::tuple{lower_limits, limits.lower, "lower limits"},
+                                   std::tuple{upper_limits, limits.upper, "upper limits"}}) {
+    auto arr = contiguous<double>(as_real_array(obj, name));
+    if (arr.ndim() != 1 || arr.shape(0) != 3)
+      throw py::value_error(std::string(name) + " must have shape (3,)");
+    for (int j = 0; j < 3; ++j) target[j] = arr.data()[j];
+  }
+  for (int j = 0; j < 3; ++j)
+    if (std::isnan(limits.lower[j]) || std::isnan(limits.upper[j]) || limits.lower[j] > limits.upper[j])
+      throw std::invalid_argument("limits must satisfy lower <= upper, with no NaN");
+  return Leg(LegGeometry{hip_offset, upper, lower, knee_offset}, limits);
+}
+
+}  // namespace
+
+void bind_leg(py::module_& m) {
+  py::class_<Leg>(m, "Leg")
+      .def(py::init(&make_leg), py::arg("hip_offset"), py::arg("upper"), py::arg("lower"),
+           py::arg("knee_offset"), py::arg("lower_limits"), py::arg("upper_limits"))
+      .def_property_readonly("max_reach", &Leg::max_reach)
+      .def_property_readonly("min_reach", &Leg::min_reach)
+      .def("fk", &fk, py::arg("q"))
+      .def("jacobian", &jacobian, py::arg("q"))
+      .def("singularity", &singularity, py::arg("q"))
+      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none())
+      .def("ik_all", &ik_all, py::arg("p"))
+      .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p) {
+        std::array<double, 3> out;
+        leg.nearest_reachable(p.data(), out.data());
+        return out;
+      }, py::arg("p"));
+}
+
+}  // namespace spotkin::bindings
