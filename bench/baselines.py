@@ -57,3 +57,46 @@ def mdh_jacobian(rows: np.ndarray, q: np.ndarray, tool: np.ndarray) -> np.ndarra
         else:
             J[:, :3, j] = z
     return J
+
+
+# -- Spot leg (roll-pitch-pitch), eqs. (M2) and (I1)-(I4) of spotkin.reference.leg ----------------------
+
+
+def leg_fk(q: np.ndarray, h1: float, U: float, L: float, k: float) -> np.ndarray:
+    hx, hy, kn = q[..., 0], q[..., 1], q[..., 2]
+    s1, c1 = np.sin(hx), np.cos(hx)
+    X = k * np.cos(hy) - U * np.sin(hy) - L * np.sin(hy + kn)
+    Zs = -k * np.sin(hy) - U * np.cos(hy) - L * np.cos(hy + kn)
+    return np.stack([X, h1 * c1 - Zs * s1, h1 * s1 + Zs * c1], axis=-1)
+
+
+def leg_jacobian(q: np.ndarray, h1: float, U: float, L: float, k: float) -> np.ndarray:
+    hx, hy, kn = q[..., 0], q[..., 1], q[..., 2]
+    s1, c1, s2, c2 = np.sin(hx), np.cos(hx), np.sin(hy), np.cos(hy)
+    s23, c23 = np.sin(hy + kn), np.cos(hy + kn)
+    X = k * c2 - U * s2 - L * s23
+    Zs = -k * s2 - U * c2 - L * c23
+    J = np.empty((*q.shape[:-1], 3, 3))
+    J[..., 0, 0] = 0.0
+    J[..., 1, 0] = -(h1 * s1 + Zs * c1)
+    J[..., 2, 0] = h1 * c1 - Zs * s1
+    J[..., 0, 1] = Zs
+    J[..., 1, 1] = X * s1
+    J[..., 2, 1] = -X * c1
+    J[..., 0, 2] = -L * c23
+    J[..., 1, 2] = -L * s23 * s1
+    J[..., 2, 2] = L * s23 * c1
+    return J
+
+
+def leg_ik_one_branch(p: np.ndarray, h1: float, U: float, L: float, k: float) -> np.ndarray:
+    """Slot 0 (hip normal, knee back), no limits or statuses: the usual hand-written IK."""
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    hx = np.arctan2(z, y) + np.arccos(np.clip(h1 / np.hypot(y, z), -1, 1))
+    zp = -np.sin(hx) * y + np.cos(hx) * z
+    R = np.hypot(U, k)
+    beta = np.arctan2(k, U)
+    ratio = (x * x + zp * zp - k * k - U * U - L * L) / (2 * L * R)
+    kn = -beta - np.arccos(np.clip(ratio, -1, 1))
+    hy = np.arctan2(x, zp) - np.arctan2(k - L * np.sin(kn), -U - L * np.cos(kn))
+    return np.stack([hx, hy, kn], axis=-1)

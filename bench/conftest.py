@@ -16,7 +16,7 @@ _RESULTS: dict[tuple[str, int], dict[str, float]] = defaultdict(dict)
 
 def rounds_for(n: int) -> dict:
     if n >= 1_000_000:
-        return {"rounds": 3, "iterations": 1, "warmup_rounds": 1}
+        return {"rounds": 7, "iterations": 1, "warmup_rounds": 1}
     if n >= 100_000:
         return {"rounds": 10, "iterations": 1, "warmup_rounds": 1}
     if n >= 1_000:

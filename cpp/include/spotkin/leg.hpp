@@ -44,6 +44,25 @@ struct JointLimits {
 
   static constexpr double kTolerance = 1e-12;  // rad
 
+  // Branch-free form of wrap_into for vectorised loops: wraps q in place and
+  // returns 1.0 if every joint fits, 0.0 otherwise (q is then left as given
+  // for the joints that do not fit).
+  SPOTKIN_INLINE double wrap_mask(double* q) const noexcept {
+    constexpr double two_pi = 2.0 * kPi<double>;
+    double all = 1.0;
+#pragma GCC unroll 8
+    for (int j = 0; j < N; ++j) {
+      const double lo = lower[j] - kTolerance, hi = upper[j] + kTolerance;
+      const double v = q[j], minus = v - two_pi, plus = v + two_pi;
+      const bool in0 = (v >= lo) & (v <= hi);
+      const bool in_minus = (minus >= lo) & (minus <= hi);
+      const bool in_plus = (plus >= lo) & (plus <= hi);
+      q[j] = in0 ? v : (in_minus ? minus : (in_plus ? plus : v));
+      all = (in0 | in_minus | in_plus) ? all : 0.0;
+    }
+    return all;
+  }
+
   // Wraps q by 0, -2pi or +2pi (first that fits) into the limits, in place.
   // Returns whether every joint fits.
   SPOTKIN_INLINE bool wrap_into(double* q) const noexcept {
@@ -330,26 +349,39 @@ SPOTKIN_INLINE void unreachable_fallback(const Leg& leg, double x, double y, dou
   for (int j = 0; j < 3; ++j) q_out[j] = T(q_all[0][j]);
 }
 
+// 1.0 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).
+SPOTKIN_INLINE double finite_mask(double x, double y, double z) noexcept {
+  return ((x - x) == 0.0) & ((y - y) == 0.0) & ((z - z) == 0.0) ? 1.0 : 0.0;
+}
+
 // Limit-aware IK: q (count, 3), status (count). seed may be null.
 template <typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count) noexcept {
-  double x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock];
+  double x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
     }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: slot 0 for every target
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: slot 0 and its limits for every target
       double q0[3];
-      exists[i] = leg.solve_slot0(x[i], y[i], z[i], q0, Leg::ratio_tolerance<T>());
+      const double finite = finite_mask(x[i], y[i], z[i]);
+      exists[i] = finite * leg.solve_slot0(x[i], y[i], z[i], q0, Leg::ratio_tolerance<T>());
+      ok[i] = exists[i] * leg.limits().wrap_mask(q0);
+      exists[i] = finite == 0.0 ? -1.0 : exists[i];  // -1: invalid input
       hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
     }
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 3 * t;
       const T* st = seed ? seed + 3 * t : nullptr;
-      if (!finite3(p + 3 * t) || (st && !finite3(st))) {
+      if (ok[i] != 0.0 && !st) {  // the common case: slot 0 valid, no seed
+        qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
+        status[t] = std::int8_t(Status::Ok);
+        continue;
+      }
+      if (exists[i] < 0.0 || (st && !finite3(st))) {
         qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
         status[t] = std::int8_t(Status::InvalidInput);
         continue;
@@ -357,12 +389,6 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
       if (exists[i] == 0.0) {
         unreachable_fallback(leg, x[i], y[i], z[i], qt);
         status[t] = std::int8_t(Status::Unreachable);
-        continue;
-      }
-      double q0[3] = {hx[i], hy[i], kn[i]};
-      if (!st && leg.limits().wrap_into(q0)) {  // the common case: slot 0 valid, no seed
-        qt[0] = T(q0[0]), qt[1] = T(q0[1]), qt[2] = T(q0[2]);
-        status[t] = std::int8_t(Status::Ok);
         continue;
       }
       double q_all[Leg::kSlots][3];
@@ -376,7 +402,9 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
 template <typename T>
 SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
                            std::int8_t* status, std::ptrdiff_t count) noexcept {
-  double x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ex[kBlock];
+  constexpr double nan = quiet_nan<double>();
+  double x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock];
+  double ex[kBlock], finite[kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
@@ -384,43 +412,92 @@ SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid
     }
     for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: all slots for every target
       double q_all[Leg::kSlots][3];
-      ex[i] = leg.solve_all_mask(x[i], y[i], z[i], q_all, Leg::ratio_tolerance<T>());
+      finite[i] = finite_mask(x[i], y[i], z[i]);
+      ex[i] = finite[i] * leg.solve_all_mask(x[i], y[i], z[i], q_all, Leg::ratio_tolerance<T>());
 #pragma GCC unroll 4
       for (int s = 0; s < Leg::kSlots; ++s)
 #pragma GCC unroll 3
         for (int j = 0; j < 3; ++j) qs[s][j][i] = q_all[s][j];
     }
+#pragma GCC unroll 4
+    for (int s = 0; s < Leg::kSlots; ++s) {
+      for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: limits per slot
+        double qi[3] = {qs[s][0][i], qs[s][1][i], qs[s][2][i]};
+        ok[s][i] = ex[i] * leg.limits().wrap_mask(qi);
+        for (int j = 0; j < 3; ++j) qs[s][j][i] = ex[i] != 0.0 ? qi[j] : nan;
+      }
+    }
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 12 * t;
-      std::uint8_t* vt = valid + 4 * t;
-      std::uint8_t* et = exists + 4 * t;
-      const bool finite = finite3(p + 3 * t);
-      const bool e = finite && ex[i] != 0.0;
-      double q_all[Leg::kSlots][3];
-      for (int s = 0; s < Leg::kSlots; ++s)
-        for (int j = 0; j < 3; ++j) q_all[s][j] = qs[s][j][i];
-      T chosen[3];
-      const Status st = finite ? choose(leg, q_all, e, static_cast<const T*>(nullptr), chosen, vt)
-                               : Status::InvalidInput;
+      bool any_valid = false;
       for (int s = 0; s < Leg::kSlots; ++s) {
-        et[s] = e;
-        if (!finite) vt[s] = 0;
-        for (int j = 0; j < 3; ++j) qt[3 * s + j] = T(e ? q_all[s][j] : quiet_nan<double>());
+        for (int j = 0; j < 3; ++j) qt[3 * s + j] = T(qs[s][j][i]);
+        valid[4 * t + s] = ok[s][i] != 0.0;
+        exists[4 * t + s] = ex[i] != 0.0;
+        any_valid |= ok[s][i] != 0.0;
       }
+      const Status st = finite[i] == 0.0 ? Status::InvalidInput
+                        : any_valid     ? Status::Ok
+                        : ex[i] != 0.0  ? Status::JointLimit
+                                        : Status::Unreachable;
       status[t] = std::int8_t(st);
     }
   }
 }
 
+// Sines and cosines of hx, hy and hy + kn for a block, vectorised.
+struct BlockAngles {
+  double angle[3][kBlock], s[3][kBlock], c[3][kBlock];
+};
+
+template <typename T>
+SPOTKIN_INLINE void block_angles(const T* q, std::ptrdiff_t m, BlockAngles& a) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    a.angle[0][i] = double(q[3 * i]);
+    a.angle[1][i] = double(q[3 * i + 1]);
+    a.angle[2][i] = double(q[3 * i + 1]) + double(q[3 * i + 2]);
+  }
+  for (int j = 0; j < 3; ++j) vector_math::sincos(a.angle[j], a.s[j], a.c[j], m);
+}
+
 template <typename T>
 SPOTKIN_INLINE void fk(const Leg& leg, const T* q, T* p, std::ptrdiff_t count) noexcept {
-  for (std::ptrdiff_t i = 0; i < count; ++i) leg.forward(q + 3 * i, p + 3 * i);
+  BlockAngles a;
+  const LegGeometry& g = leg.geometry();
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    block_angles(q + 3 * b0, m, a);
+    T* out = p + 3 * b0;
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // (M2)
+      const double X = g.knee_offset * a.c[1][i] - g.upper * a.s[1][i] - g.lower * a.s[2][i];
+      const double Zs = -g.knee_offset * a.s[1][i] - g.upper * a.c[1][i] - g.lower * a.c[2][i];
+      out[3 * i] = T(X);
+      out[3 * i + 1] = T(g.hip_offset * a.c[0][i] - Zs * a.s[0][i]);
+      out[3 * i + 2] = T(g.hip_offset * a.s[0][i] + Zs * a.c[0][i]);
+    }
+  }
 }
 
 template <typename T>
 SPOTKIN_INLINE void jacobian(const Leg& leg, const T* q, T* J, std::ptrdiff_t count) noexcept {
-  for (std::ptrdiff_t i = 0; i < count; ++i) leg.jacobian(q + 3 * i, J + 9 * i);
+  BlockAngles a;
+  const LegGeometry& g = leg.geometry();
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    block_angles(q + 3 * b0, m, a);
+    T* out = J + 9 * b0;
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // columns as in Leg::jacobian
+      const double s1 = a.s[0][i], c1 = a.c[0][i], s23 = a.s[2][i], c23 = a.c[2][i];
+      const double X = g.knee_offset * a.c[1][i] - g.upper * a.s[1][i] - g.lower * s23;
+      const double Zs = -g.knee_offset * a.s[1][i] - g.upper * a.c[1][i] - g.lower * c23;
+      const double py = g.hip_offset * c1 - Zs * s1, pz = g.hip_offset * s1 + Zs * c1;
+      T* Ji = out + 9 * i;
+      Ji[0] = T(0.0), Ji[1] = T(Zs), Ji[2] = T(-g.lower * c23);
+      Ji[3] = T(-pz), Ji[4] = T(X * s1), Ji[5] = T(-g.lower * s23 * s1);
+      Ji[6] = T(py), Ji[7] = T(-X * c1), Ji[8] = T(g.lower * s23 * c1);
+    }
+  }
 }
 
 }  // namespace leg_batch

@@ -1,0 +1,62 @@
+"""Spot leg FK, Jacobian and IK against NumPy-vectorised closed-form baselines."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from baselines import leg_fk, leg_ik_one_branch, leg_jacobian
+from conftest import SIZES
+
+import spotkin as sk
+
+LEG = sk.Spot().leg("fl")
+PARAMS = (LEG.hip_offset, LEG.upper, LEG.lower, LEG.knee_offset)
+
+
+def configurations(n: int) -> np.ndarray:
+    limits = LEG.limits
+    q = np.random.default_rng(0).uniform(limits[:, 0], limits[:, 1], (n, 3))
+    return q[0] if n == 1 else q
+
+
+def test_baselines_agree_with_spotkin():
+    q = configurations(1000)
+    np.testing.assert_allclose(leg_fk(q, *PARAMS), LEG.fk(q), atol=1e-14)
+    np.testing.assert_allclose(leg_jacobian(q, *PARAMS), LEG.jacobian(q), atol=1e-14)
+    p = LEG.fk(q)
+    below = p[:, 2] < -0.08  # where slot 0 is the limit-respecting branch
+    np.testing.assert_allclose(leg_ik_one_branch(p[below], *PARAMS), LEG.ik(p[below])[0], atol=1e-9)
+
+
+def run(measure, op, impl, n, func, arg):
+    threads = sk.get_num_threads()
+    if impl == "spotkin-1thread":
+        sk.set_num_threads(1)
+    try:
+        measure(f"leg.{op}", n, impl, func, arg)
+    finally:
+        sk.set_num_threads(threads)
+
+
+@pytest.mark.parametrize("n", SIZES)
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
+@pytest.mark.parametrize("op", ["fk", "jacobian"])
+def test_leg_fk_jacobian(measure, op, impl, n):
+    q = configurations(n)
+    if impl == "numpy":
+        base = {"fk": leg_fk, "jacobian": leg_jacobian}[op]
+        measure(f"leg.{op}", n, impl, lambda a: base(a, *PARAMS), q)
+    else:
+        run(measure, op, impl, n, getattr(LEG, op), q)
+
+
+@pytest.mark.parametrize("n", SIZES)
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "spotkin.ik_all", "numpy"])
+def test_leg_ik(measure, impl, n):
+    p = LEG.fk(configurations(n))
+    if impl == "numpy":
+        measure("leg.ik", n, "numpy (slot 0 only)", lambda a: leg_ik_one_branch(a, *PARAMS), p)
+    elif impl == "spotkin.ik_all":
+        run(measure, "ik", impl, n, LEG.ik_all, p)
+    else:
+        run(measure, "ik", impl, n, LEG.ik, p)
