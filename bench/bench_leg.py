@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from baselines import leg_fk, leg_ik_one_branch, leg_jacobian
-from conftest import SIZES
 
 import spotkin as sk
+from baselines import leg_fk, leg_ik_one_branch, leg_jacobian
+from conftest import SIZES
 
 LEG = sk.Spot().leg("fl")
 PARAMS = (LEG.hip_offset, LEG.upper, LEG.lower, LEG.knee_offset)

@@ -135,13 +135,13 @@ py::object ik_all(const Leg& leg, py::handle p_obj) {
     const Shape leading = leading_shape(arr, "p", {3});
     auto p = contiguous<T>(arr);
     auto q = new_array<T>(leading, {Leg::kSlots, 3});
-    auto valid = py::array(py::dtype("bool"), [&] { Shape s = leading; s.push_back(Leg::kSlots); return s; }());
-    auto exists = py::array(py::dtype("bool"), valid.request().shape);
+    auto valid = new_array<bool>(leading, {Leg::kSlots});
+    auto exists = new_array<bool>(leading, {Leg::kSlots});
     auto status = new_array<std::int8_t>(leading, {});
     const T* pd = p.data();
     T* qd = q.mutable_data();
-    auto* vd = static_cast<std::uint8_t*>(valid.mutable_data());
-    auto* ed = static_cast<std::uint8_t*>(exists.mutable_data());
+    auto* vd = reinterpret_cast<std::uint8_t*>(valid.mutable_data());
+    auto* ed = reinterpret_cast<std::uint8_t*>(exists.mutable_data());
     std::int8_t* sd = status.mutable_data();
     {
       ReleaseGilFor release(count(leading));

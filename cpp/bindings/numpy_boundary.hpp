@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "buffer_cache.hpp"
+
 namespace spotkin::bindings {
 
 namespace py = pybind11;
@@ -78,11 +80,12 @@ inline py::ssize_t count(const Shape& leading) {
   return n;
 }
 
+// A new C-contiguous output of shape leading + trailing (large ones from the buffer cache).
 template <typename T>
 py::array_t<T> new_array(const Shape& leading, const Shape& trailing) {
   Shape shape = leading;
   shape.insert(shape.end(), trailing.begin(), trailing.end());
-  return py::array_t<T>(shape);
+  return cached_array<T>(shape);
 }
 
 // Releases the GIL for batches big enough to gain from it; for a handful of
