@@ -9,8 +9,11 @@ import time
 import numpy as np
 
 from . import __version__
+from ._status import Status
 from ._transforms import translation
 from .chain import Chain
+from .leg import SLOT_NAMES
+from .spot import Spot
 
 # Seed 000 Q1.2: the exam's DHm leg, (sigma, d, alpha, r, theta), with Spot's lengths.
 _H1, _H2, _H3 = 0.110945, 0.3205, 0.3365
@@ -31,8 +34,53 @@ def _throughput(func, arg, repeats: int = 3) -> float:
 
 
 def demo(samples: int = 1_000_000) -> int:
-    print(f"spotkin {__version__} demo")
+    print(f"spotkin {__version__} demo: the built-in Spot model")
     print()
+    _demo_leg(samples)
+    print()
+    _demo_chain(samples)
+    return 0
+
+
+def _demo_leg(samples: int) -> None:
+    spot = Spot()
+    leg = spot.leg("fl")
+    print(f"Front-left leg: {leg!r}")
+    q_stand = np.array([0.05, 1.04, -1.8])
+    target = leg.fk(q_stand)
+    print(f"  target foot (leg frame) = fk({q_stand}) = {np.round(target, 6)} m")
+    sol = leg.ik_all(target)
+    for slot, name in enumerate(SLOT_NAMES):
+        mark = "valid" if sol.valid[slot] else ("outside limits" if sol.exists[slot] else "no solution")
+        error = np.linalg.norm(leg.fk(sol.q[slot]) - target)
+        print(
+            f"  slot {slot} ({name:<25}) q = {np.round(sol.q[slot], 4)}  |fk - target| = {error:.1e}  {mark}"
+        )
+    q, status = leg.ik(target)
+    print(f"  leg.ik -> {np.round(q, 6)} {status!r}")
+    for label, p in (("beyond reach", [0.0, 0.11, -0.9]), ("NaN", [np.nan, 0.0, -0.5])):
+        q, status = leg.ik(p)
+        print(f"  {label:>12}: {p} -> {status!r}, q = {np.round(q, 4)}")
+    rng = np.random.default_rng(0)
+    limits = leg.limits
+    q_batch = rng.uniform(limits[:, 0], limits[:, 1], (samples, 3))
+    feet = leg.fk(q_batch)
+    for name, func, arg in (("fk", leg.fk, q_batch), ("ik", leg.ik, feet), ("ik_all", leg.ik_all, feet)):
+        seconds = _throughput(func, arg)
+        print(
+            f"  {name:>8} on {samples:,} targets: {seconds * 1e3:7.1f} ms "
+            f"({samples / seconds / 1e6:.1f} M/s, {seconds / samples * 1e9:.1f} ns each)"
+        )
+    q_back, status = leg.ik(feet)
+    counts = {s.name: int((status == s).sum()) for s in Status}
+    foot_error = np.linalg.norm(leg.fk(q_back) - feet, axis=-1).max()
+    unique = feet[:, 2] < -0.08  # below this, the limits leave a single branch (slot 0)
+    joint_error = np.abs(q_back[unique] - q_batch[unique]).max()
+    print(f"  round trip fk -> ik: worst |fk(ik(p)) - p| = {foot_error:.1e} m; worst joint error "
+          f"{joint_error:.1e} rad where the branch is unique (foot > 8 cm below hx); statuses {counts}")
+
+
+def _demo_chain(samples: int) -> None:
     leg = Chain.from_mdh(EXAM_LEG_ROWS, tool=translation([_H3, 0.0, 0.0]))
     print(f"Seed 000 exam leg as a DHm chain: {leg!r}")
     q = np.array([0.1, -0.6, 1.2])
@@ -51,7 +99,6 @@ def demo(samples: int = 1_000_000) -> int:
         )
     worst = _fd_error(leg, batch[:1000])
     print(f"  worst |J - central finite differences| over 1,000 samples: {worst:.1e}")
-    return 0
 
 
 def _fd_error(chain: Chain, q: np.ndarray, step: float = 1e-6) -> float:
