@@ -8,4 +8,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_runtime(m);
   spotkin::bindings::bind_chain(m);
   spotkin::bindings::bind_leg(m);
+  spotkin::bindings::bind_arm(m);
 }

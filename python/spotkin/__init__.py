@@ -5,17 +5,22 @@ from __future__ import annotations
 from ._runtime import get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
+from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .chain import Chain
 from .leg import Leg, LegSolutions
 from .spot import Spot
 
 __all__ = [
+    "ArmSingularity",
+    "ArmSolutions",
     "Chain",
     "Leg",
     "LegSolutions",
     "Spot",
+    "SpotArm",
     "Status",
     "get_num_threads",
+    "pose_from",
     "rotation_x",
     "rotation_y",
     "rotation_z",

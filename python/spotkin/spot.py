@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arm import SpotArm
 from .leg import Leg
 from .models import LEG_NAMES, SPOT
 
@@ -14,7 +15,7 @@ class Spot:
     """Boston Dynamics Spot. Body frame: x forward, y left, z up, origin at the
     centre of the four hx joints. Legs in SDK order: fl, fr, hl, hr."""
 
-    __slots__ = ("_legs", "_model")
+    __slots__ = ("_arm", "_legs", "_model")
 
     def __init__(self, model: dict | None = None) -> None:
         self._model = SPOT if model is None else model
@@ -31,6 +32,20 @@ class Spot:
             )
             for name in LEG_NAMES
         )
+        arm = self._model["arm"]
+        self._arm = SpotArm(
+            arm["mount"],
+            arm["upper_arm"],
+            arm["forearm"],
+            arm["forearm_offset"],
+            arm["hand"],
+            limits=arm["limits"],
+        )
+
+    @property
+    def arm(self) -> SpotArm:
+        """The Spot Arm, mounted at its official position on the body."""
+        return self._arm
 
     @property
     def legs(self) -> tuple[Leg, Leg, Leg, Leg]:

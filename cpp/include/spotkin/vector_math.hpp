@@ -54,26 +54,29 @@ SPOTKIN_VM_INLINE double kernel_cos(double x) noexcept {
 }
 }  // namespace detail
 
+// sin and cos of one bounded argument (|x| < kReducibleLimit), for use inside
+// loops the compiler vectorises.
+SPOTKIN_VM_INLINE void sincos_bounded(double x, double& s, double& c) noexcept {
+  using namespace detail;
+  const double k = (x * kTwoOverPi + kRoundMagic) - kRoundMagic;
+  const double r = ((x - k * kPio2_1) - k * kPio2_2) - k * kPio2_3;
+  const double sr = kernel_sin(r), cr = kernel_cos(r);
+  const double k4 = k * 0.25;
+  double floor_k4 = (k4 + kRoundMagic) - kRoundMagic;
+  floor_k4 -= floor_k4 > k4 ? 1.0 : 0.0;
+  const double q = k - 4.0 * floor_k4;
+  const double q_mod2 = q >= 2.0 ? q - 2.0 : q;
+  const double q_plus1 = q == 3.0 ? 0.0 : q + 1.0;
+  const bool odd = q_mod2 == 1.0;
+  const double sin_abs = odd ? cr : sr, cos_abs = odd ? sr : cr;
+  s = q >= 2.0 ? -sin_abs : sin_abs;
+  c = q_plus1 >= 2.0 ? -cos_abs : cos_abs;
+}
+
 // s[i], c[i] = sin(x[i]), cos(x[i]) for i < n.
 SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noexcept {
   using namespace detail;
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    const double xi = x[i];
-    const double k = (xi * kTwoOverPi + kRoundMagic) - kRoundMagic;
-    const double r = ((xi - k * kPio2_1) - k * kPio2_2) - k * kPio2_3;
-    const double sr = kernel_sin(r), cr = kernel_cos(r);
-    // Quadrant q = k mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
-    const double k4 = k * 0.25;  // exact: k is an integer
-    double floor_k4 = (k4 + kRoundMagic) - kRoundMagic;
-    floor_k4 -= floor_k4 > k4 ? 1.0 : 0.0;
-    const double q = k - 4.0 * floor_k4;  // k mod 4, in {0, 1, 2, 3}
-    const double q_mod2 = q >= 2.0 ? q - 2.0 : q;
-    const double q_plus1 = q == 3.0 ? 0.0 : q + 1.0;
-    const bool odd = q_mod2 == 1.0;
-    const double sin_abs = odd ? cr : sr, cos_abs = odd ? sr : cr;
-    s[i] = q >= 2.0 ? -sin_abs : sin_abs;
-    c[i] = q_plus1 >= 2.0 ? -cos_abs : cos_abs;
-  }
+  for (std::ptrdiff_t i = 0; i < n; ++i) sincos_bounded(x[i], s[i], c[i]);
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     if (std::fabs(x[i]) > kReducibleLimit) {  // rare; also catches +-Inf (NaN either way)
       s[i] = std::sin(x[i]);

@@ -1,0 +1,439 @@
+// 6R arm with a spherical wrist (the Spot Arm): FK, geometric Jacobian,
+// singularity measures and closed-form IK with all 8 solutions (seed 000 §4,
+// re-derived; python/spotkin/reference/arm.py has the same steps written plainly).
+//
+//   T = Trans(mount) Rz(sh0) Ry(sh1) Trans(a,0,0) Ry(el0) Trans(b,0,h) Rx(el1) Ry(wr0) Rx(wr1) X
+//
+// with X = Trans(hand,0,0) . tool. The el1, wr0, wr1 axes meet at the wrist
+// centre, so the IK decouples (Pieper):
+//   (1) wrist pose T_w = T X^-1; wrist centre c = p(T_w) - mount.
+//   (2) sh0 = atan2(c_y, c_x) (front) or + pi (back): cos, sin = +-(c_x, c_y) / r.
+//   (3) elbow, Paul type 2: |c|^2 = a^2 + Lf^2 + 2 a Lf cos(el0 - phi), Lf = hypot(b, h),
+//       phi = atan2(h, b):  el0 = phi + mu acos(K / Lf),  K = (|c|^2 - a^2 - Lf^2) / (2a),
+//       mu = +1 (elbow branch 0) or -1; the forearm offset h is exact.
+//   (4) sh1: Ry multiplies z + i x by e^{i angle}; with u the in-plane reach and
+//       s = (a + b cos el0 + h sin el0, -b sin el0 + h cos el0) the wrist centre in
+//       the sh1 frame, sh1 = arg((w + i u)(s_z - i s_x)).
+//   (5) R_36 = (Rz(sh0) Ry(sh1 + el0))^T R_w = Rx(el1) Ry(wr0) Rx(wr1):
+//       el1 = atan2(R10, -R20), wr0 = atan2(hypot(R10, R20), R00),
+//       wr1 = atan2(-M12, M11), M = Rx(el1)^T R_36; the flip is (el1 + pi, -wr0, wr1 + pi).
+// Slot = 4 * shoulder_branch + 2 * elbow_branch + wrist_branch.
+//
+// Singular cases, with defined answers:
+//   shoulder (r = |c_xy| < kShoulderTolerance): sh0 = the seed's sh0 (0 without one);
+//   wrist (|sin wr0| < kWristTolerance): el1 = the seed's el1 (0 without one), wr0 = 0
+//   or pi exactly, wr1 solved so the orientation is exact;
+//   elbow stretched or folded: |K / Lf| <= 1 + kRatioTolerance is clamped (both
+//   elbow slots coincide).
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "spotkin/common.hpp"
+#include "spotkin/leg.hpp"  // JointLimits, circle_distance
+#include "spotkin/vector_math.hpp"
+
+namespace spotkin {
+
+struct ArmGeometry {
+  double mount[3] = {0.292, 0.0, 0.188};  // sh0 origin in the body frame
+  double upper_arm = 0.3385;              // a: sh1 -> el0 along x
+  double forearm = 0.4033;                // b: el0 -> el1 along x
+  double forearm_offset = 0.075;          // h: el0 -> el1 along z
+  double hand = 0.19557;                  // wr1 -> hand frame along x
+  Rigid<double> tool;                     // hand frame -> tool frame
+};
+
+// Which pose format a batch uses: row-major 4x4 matrices or [x y z qx qy qz qw].
+enum class PoseFormat : std::int8_t { Matrix = 0, PositionQuaternion = 1 };
+
+class Arm {
+ public:
+  static constexpr int kSlots = 8;
+  static constexpr double kShoulderTolerance = 1e-12;  // m
+  static constexpr double kWristTolerance = 1e-9;      // |sin wr0|
+  static constexpr double kRatioTolerance = 1e-12;
+  static constexpr double kRotationTolerance = 1e-6;  // max |R^T R - I| accepted
+
+  Arm() { update(); }
+  Arm(const ArmGeometry& g, const JointLimits<6>& limits) : g_(g), limits_(limits) { update(); }
+
+  const ArmGeometry& geometry() const noexcept { return g_; }
+  const JointLimits<6>& limits() const noexcept { return limits_; }
+
+  // Hand (tool) pose for one configuration, from the six sines and cosines.
+  SPOTKIN_INLINE Rigid<double> forward(const double* q) const noexcept {
+    double s[6], c[6];
+    const double angles[6] = {q[0], q[1], q[1] + q[2], q[3], q[4], q[5]};
+#pragma GCC unroll 6
+    for (int j = 0; j < 6; ++j) vector_math::sincos_bounded(angles[j], s[j], c[j]);
+    return forward_from(s, c);
+  }
+
+  // s, c: sin/cos of sh0, sh1, sh1 + el0, el1, wr0, wr1.
+  SPOTKIN_INLINE Rigid<double> forward_from(const double* s, const double* c) const noexcept {
+    Rigid<double> T;
+    const Mat3<double> R03 = rot_zy(c[0], s[0], c[2], s[2]);
+    const Mat3<double> R36 = rot_xyx(c[3], s[3], c[4], s[4], c[5], s[5]);
+    // wrist centre: mount + Rz(sh0) Ry(sh1) (a, 0, 0) + R03 (b, 0, h)
+    const double a = g_.upper_arm;
+    T.p = Vec3<double>(g_.mount[0], g_.mount[1], g_.mount[2]) +
+          Vec3<double>(c[0] * c[1] * a, s[0] * c[1] * a, -s[1] * a) +
+          R03 * Vec3<double>(g_.forearm, 0.0, g_.forearm_offset);
+    T.R = R03 * R36;
+    return T * hand_tool_;
+  }
+
+  // Geometric Jacobian [v; w] of the tool point, body frame, row-major 6x6.
+  SPOTKIN_INLINE void jacobian(const double* q, double* J) const noexcept {
+    double s[6], c[6];
+    const double angles[6] = {q[0], q[1], q[1] + q[2], q[3], q[4], q[5]};
+#pragma GCC unroll 6
+    for (int j = 0; j < 6; ++j) vector_math::sincos_bounded(angles[j], s[j], c[j]);
+    jacobian_from(s, c, J);
+  }
+
+  SPOTKIN_INLINE void jacobian_from(const double* s, const double* c, double* J) const noexcept {
+    const Rigid<double> T = forward_from(s, c);
+    const Vec3<double> mount(g_.mount[0], g_.mount[1], g_.mount[2]);
+    const double a = g_.upper_arm;
+    const Vec3<double> elbow = mount + Vec3<double>(c[0] * c[1] * a, s[0] * c[1] * a, -s[1] * a);
+    const Mat3<double> R03 = rot_zy(c[0], s[0], c[2], s[2]);
+    const Vec3<double> wrist = elbow + R03 * Vec3<double>(g_.forearm, 0.0, g_.forearm_offset);
+    const Vec3<double> y_axis(-s[0], c[0], 0.0);
+    const Vec3<double> x3 = R03.col(0);
+    const Vec3<double> y4 = R03 * Vec3<double>(0.0, c[3], s[3]);  // R03 Rx(el1) e_y
+    // R03 Rx(el1) Ry(wr0) e_x = R03 (c4, s3 s4, -c3 s4)
+    const Vec3<double> x5 = R03 * Vec3<double>(c[4], s[3] * s[4], -c[3] * s[4]);
+    const Vec3<double> axes[6] = {Vec3<double>(0, 0, 1), y_axis, y_axis, x3, y4, x5};
+    const Vec3<double> points[6] = {mount, mount, elbow, wrist, wrist, wrist};
+#pragma GCC unroll 6
+    for (int j = 0; j < 6; ++j) {
+      const Vec3<double> v = axes[j].cross(T.p - points[j]);
+      for (int r = 0; r < 3; ++r) {
+        J[r * 6 + j] = v[r];
+        J[(r + 3) * 6 + j] = axes[j][r];
+      }
+    }
+  }
+
+  // Wrist, elbow and shoulder distances to the singular sets, and sqrt(det(J J^T)).
+  void singularity(const double* q, double* out) const noexcept {
+    double J[36];
+    jacobian(q, J);
+    const double el0 = q[2];
+    const double sx = g_.upper_arm + g_.forearm * std::cos(el0) + g_.forearm_offset * std::sin(el0);
+    const double sz = -g_.forearm * std::sin(el0) + g_.forearm_offset * std::cos(el0);
+    const double cx = std::cos(q[1]) * sx + std::sin(q[1]) * sz;  // in-plane reach of the wrist centre
+    out[0] = std::fabs(std::sin(q[4]));
+    out[1] = std::fabs(std::sin(el0 - phi_));
+    out[2] = std::fabs(cx);
+    const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> Jm(J);
+    out[3] = std::fabs(Jm.determinant());
+  }
+
+  // Target pose of one sample and its validity (1.0 / 0.0), branch-free.
+  template <typename T>
+  SPOTKIN_INLINE double read_pose(const T* in, PoseFormat format, Rigid<double>& pose) const noexcept {
+    double ok = 1.0;
+    if (format == PoseFormat::Matrix) {
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) pose.R(i, j) = double(in[4 * i + j]);
+        pose.p[i] = double(in[4 * i + 3]);
+      }
+      const double row_error = std::max(std::max(std::fabs(double(in[12])), std::fabs(double(in[13]))),
+                                        std::max(std::fabs(double(in[14])), std::fabs(double(in[15]) - 1.0)));
+      ok = row_error <= 1e-9 ? ok : 0.0;
+      const Mat3<double> E = pose.R.transpose() * pose.R - Mat3<double>::Identity();
+      const double orth = E.cwiseAbs().maxCoeff();
+      ok = (orth <= kRotationTolerance) & (pose.R.determinant() > 0.0) ? ok : 0.0;
+    } else {
+      const double x = double(in[3]), y = double(in[4]), z = double(in[5]), w = double(in[6]);
+      const double n2 = x * x + y * y + z * z + w * w;
+      ok = std::fabs(std::sqrt(n2) - 1.0) <= kRotationTolerance ? ok : 0.0;
+      const double s = 2.0 / n2;  // exact rotation even for |q| = 1 +- 1e-6
+      pose.R << 1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w),  //
+          s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w),        //
+          s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y);
+      pose.p = Vec3<double>(double(in[0]), double(in[1]), double(in[2]));
+    }
+    // NaN and Inf fail every comparison above or produce NaN here
+    const double sum = pose.R.sum() + pose.p.sum();
+    return (sum - sum) == 0.0 ? ok : 0.0;
+  }
+
+  // All 8 solutions for a target pose (steps 1-5). seed_sh0 / seed_el1 are the
+  // free angles in the shoulder and wrist singular cases. Returns 1.0 where the
+  // solutions exist (all eight or none), 0.0 elsewhere. Branch-free.
+  SPOTKIN_INLINE double solve_all(const Rigid<double>& target, double seed_sh0, double seed_el1,
+                                  double q[kSlots][6]) const noexcept {
+    const Rigid<double> Tw = target * inv_hand_tool_;  // (1)
+    const Vec3<double> c = Tw.p - Vec3<double>(g_.mount[0], g_.mount[1], g_.mount[2]);
+    const double r = std::sqrt(c[0] * c[0] + c[1] * c[1]);
+    // (2) shoulder
+    const bool shoulder_singular = r < kShoulderTolerance;
+    double seed_s0, seed_c0;
+    vector_math::sincos_bounded(seed_sh0, seed_s0, seed_c0);
+    const double inv_r = shoulder_singular ? 0.0 : 1.0 / r;
+    const double c0 = shoulder_singular ? seed_c0 : c[0] * inv_r;
+    const double s0 = shoulder_singular ? seed_s0 : c[1] * inv_r;
+    const double sh0 = shoulder_singular ? wrap_angle_vec(seed_sh0) : vector_math::atan2(c[1], c[0]);
+    // (3) elbow
+    const double a = g_.upper_arm;
+    const double ratio = (c.squaredNorm() - a * a - Lf_ * Lf_) * inv_2aLf_;
+    const double exists = std::fabs(ratio) <= 1.0 + kRatioTolerance ? 1.0 : 0.0;
+    const double cos_delta = std::clamp(ratio, -1.0, 1.0);
+    const double sin_delta = std::sqrt((1.0 - cos_delta) * (1.0 + cos_delta));
+    const double delta = vector_math::atan2(sin_delta, cos_delta);
+    // seed el1 sin/cos for the wrist-singular case
+    double seed_s3, seed_c3;
+    vector_math::sincos_bounded(seed_el1, seed_s3, seed_c3);
+#pragma GCC unroll 2
+    for (int sb = 0; sb < 2; ++sb) {
+      const double sign0 = sb == 0 ? 1.0 : -1.0;
+      const double cs0 = sign0 * c0, ss0 = sign0 * s0;
+      const double sh0_b = sb == 0 ? sh0 : wrap_angle_vec(sh0 + kPi<double>);
+      const double u = cs0 * c[0] + ss0 * c[1], w = c[2];  // (4) the arm plane
+#pragma GCC unroll 2
+      for (int eb = 0; eb < 2; ++eb) {
+        const double mu = eb == 0 ? 1.0 : -1.0;
+        const double el0 = wrap_angle_vec(phi_ + mu * delta);
+        const double cos_el0 = cos_phi_ * cos_delta - mu * sin_phi_ * sin_delta;
+        const double sin_el0 = sin_phi_ * cos_delta + mu * cos_phi_ * sin_delta;
+        const double sx = a + g_.forearm * cos_el0 + g_.forearm_offset * sin_el0;
+        const double sz = -g_.forearm * sin_el0 + g_.forearm_offset * cos_el0;
+        const double sh1 = vector_math::atan2(u * sz - w * sx, w * sz + u * sx);
+        double s12, c12;
+        vector_math::sincos_bounded(sh1 + el0, s12, c12);
+        // (5) R36 = R03^T R_w, R03 = Rz(sh0) Ry(sh1 + el0)
+        const Mat3<double>& Rw = Tw.R;
+        const double r0[3] = {cs0 * c12, ss0 * c12, -s12};  // rows of R03^T
+        const double r1[3] = {-ss0, cs0, 0.0};
+        const double r2[3] = {cs0 * s12, ss0 * s12, c12};
+        double R36[3][3];
+        for (int j = 0; j < 3; ++j) {
+          R36[0][j] = r0[0] * Rw(0, j) + r0[1] * Rw(1, j) + r0[2] * Rw(2, j);
+          R36[1][j] = r1[0] * Rw(0, j) + r1[1] * Rw(1, j);
+          R36[2][j] = r2[0] * Rw(0, j) + r2[1] * Rw(1, j) + r2[2] * Rw(2, j);
+        }
+        const double s4 = std::sqrt(R36[1][0] * R36[1][0] + R36[2][0] * R36[2][0]);
+        const bool wrist_singular = s4 < kWristTolerance;
+        const double inv_s4 = wrist_singular ? 0.0 : 1.0 / s4;
+        const double c3 = wrist_singular ? seed_c3 : -R36[2][0] * inv_s4;
+        const double s3 = wrist_singular ? seed_s3 : R36[1][0] * inv_s4;
+        const double el1 = wrist_singular ? wrap_angle_vec(seed_el1) : vector_math::atan2(R36[1][0], -R36[2][0]);
+        const double wr0 = wrist_singular ? (R36[0][0] > 0.0 ? 0.0 : kPi<double>)
+                                          : vector_math::atan2(s4, R36[0][0]);
+        const double M11 = c3 * R36[1][1] + s3 * R36[2][1];
+        const double M12 = c3 * R36[1][2] + s3 * R36[2][2];
+        const double wr1 = vector_math::atan2(-M12, M11);
+        double* q0 = q[4 * sb + 2 * eb];
+        double* q1 = q[4 * sb + 2 * eb + 1];
+        q0[0] = q1[0] = sh0_b;
+        q0[1] = q1[1] = sh1;
+        q0[2] = q1[2] = el0;
+        q0[3] = el1, q0[4] = wr0, q0[5] = wr1;
+        q1[3] = wrap_angle_vec(el1 + kPi<double>);
+        q1[4] = wrap_angle_vec(-wr0);
+        q1[5] = wrap_angle_vec(wr1 + kPi<double>);
+      }
+    }
+    return exists;
+  }
+
+ private:
+  // Wrap into (-pi, pi] for |x| < 3 pi, branch-free.
+  static SPOTKIN_INLINE double wrap_angle_vec(double x) noexcept {
+    constexpr double pi = kPi<double>, two_pi = 2.0 * kPi<double>;
+    const double y = x > pi ? x - two_pi : x;
+    return y <= -pi ? y + two_pi : y;
+  }
+
+  static SPOTKIN_INLINE Mat3<double> rot_zy(double cz, double sz, double cy, double sy) noexcept {
+    Mat3<double> R;  // Rz Ry
+    R << cz * cy, -sz, cz * sy, sz * cy, cz, sz * sy, -sy, 0.0, cy;
+    return R;
+  }
+
+  static SPOTKIN_INLINE Mat3<double> rot_xyx(double c1, double s1, double c2, double s2, double c3,
+                                             double s3) noexcept {
+    Mat3<double> R;  // Rx(1) Ry(2) Rx(3)
+    R << c2, s2 * s3, s2 * c3,                                //
+        s1 * s2, c1 * c3 - s1 * c2 * s3, -c1 * s3 - s1 * c2 * c3,  //
+        -c1 * s2, s1 * c3 + c1 * c2 * s3, -s1 * s3 + c1 * c2 * c3;
+    return R;
+  }
+
+  void update() noexcept {
+    Rigid<double> hand;
+    hand.p = Vec3<double>(g_.hand, 0.0, 0.0);
+    hand_tool_ = hand * g_.tool;
+    inv_hand_tool_.R = hand_tool_.R.transpose();
+    inv_hand_tool_.p = -(hand_tool_.R.transpose() * hand_tool_.p);
+    Lf_ = std::hypot(g_.forearm, g_.forearm_offset);
+    phi_ = std::atan2(g_.forearm_offset, g_.forearm);
+    cos_phi_ = g_.forearm / Lf_;
+    sin_phi_ = g_.forearm_offset / Lf_;
+    inv_2aLf_ = 1.0 / (2.0 * g_.upper_arm * Lf_);
+  }
+
+  ArmGeometry g_;
+  JointLimits<6> limits_;
+  Rigid<double> hand_tool_, inv_hand_tool_;
+  double Lf_ = 0, phi_ = 0, cos_phi_ = 1, sin_phi_ = 0, inv_2aLf_ = 0;
+};
+
+namespace arm_batch {
+
+constexpr std::ptrdiff_t kBlock = 32;
+
+template <typename T>
+SPOTKIN_INLINE void fk(const Arm& arm, const T* q, T* out, std::ptrdiff_t count) noexcept {
+  double angle[6][kBlock], s[6][kBlock], c[6][kBlock];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const T* qi = q + 6 * (b0 + i);
+      angle[0][i] = double(qi[0]), angle[1][i] = double(qi[1]), angle[2][i] = double(qi[1]) + double(qi[2]);
+      angle[3][i] = double(qi[3]), angle[4][i] = double(qi[4]), angle[5][i] = double(qi[5]);
+    }
+    for (int j = 0; j < 6; ++j) vector_math::sincos(angle[j], s[j], c[j], m);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const double si[6] = {s[0][i], s[1][i], s[2][i], s[3][i], s[4][i], s[5][i]};
+      const double ci[6] = {c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]};
+      const Rigid<double> X = arm.forward_from(si, ci);
+      T* o = out + 16 * (b0 + i);
+      for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) o[4 * r + k] = T(X.R(r, k));
+        o[4 * r + 3] = T(X.p[r]);
+      }
+      o[12] = o[13] = o[14] = T(0), o[15] = T(1);
+    }
+  }
+}
+
+template <typename T>
+SPOTKIN_INLINE void jacobian(const Arm& arm, const T* q, T* out, std::ptrdiff_t count) noexcept {
+  double angle[6][kBlock], s[6][kBlock], c[6][kBlock];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const T* qi = q + 6 * (b0 + i);
+      angle[0][i] = double(qi[0]), angle[1][i] = double(qi[1]), angle[2][i] = double(qi[1]) + double(qi[2]);
+      angle[3][i] = double(qi[3]), angle[4][i] = double(qi[4]), angle[5][i] = double(qi[5]);
+    }
+    for (int j = 0; j < 6; ++j) vector_math::sincos(angle[j], s[j], c[j], m);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const double si[6] = {s[0][i], s[1][i], s[2][i], s[3][i], s[4][i], s[5][i]};
+      const double ci[6] = {c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]};
+      double J[36];
+      arm.jacobian_from(si, ci, J);
+      T* o = out + 36 * (b0 + i);
+      for (int k = 0; k < 36; ++k) o[k] = T(J[k]);
+    }
+  }
+}
+
+template <typename T>
+SPOTKIN_INLINE bool finite6(const T* v) noexcept {
+  for (int j = 0; j < 6; ++j)
+    if (!std::isfinite(double(v[j]))) return false;
+  return true;
+}
+
+// Every solution: q (count, 8, 6) NaN where none exist, valid and exists
+// (count, 8), status (count). seed (count, 6) or null: used for the free angles
+// of the shoulder and wrist singular cases.
+template <typename T>
+SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
+                           std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
+                           std::ptrdiff_t count) noexcept {
+  constexpr double nan = quiet_nan<double>();
+  const std::ptrdiff_t stride = format == PoseFormat::Matrix ? 16 : 7;
+  double qs[Arm::kSlots][6][kBlock], ex[kBlock], ok_pose[kBlock], ok[Arm::kSlots][kBlock];
+  double seed_sh0[kBlock], seed_el1[kBlock], seed_ok[kBlock];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const T* si = seed ? seed + 6 * (b0 + i) : nullptr;
+      seed_ok[i] = !si || finite6(si) ? 1.0 : 0.0;
+      seed_sh0[i] = si && seed_ok[i] != 0.0 ? std::remainder(double(si[0]), 2.0 * kPi<double>) : 0.0;
+      seed_el1[i] = si && seed_ok[i] != 0.0 ? std::remainder(double(si[3]), 2.0 * kPi<double>) : 0.0;
+    }
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: every solution of every pose
+      Rigid<double> pose;
+      ok_pose[i] = arm.read_pose(poses + stride * (b0 + i), format, pose) * seed_ok[i];
+      double q_all[Arm::kSlots][6];
+      ex[i] = ok_pose[i] * arm.solve_all(pose, seed_sh0[i], seed_el1[i], q_all);
+#pragma GCC unroll 8
+      for (int s = 0; s < Arm::kSlots; ++s)
+#pragma GCC unroll 6
+        for (int j = 0; j < 6; ++j) qs[s][j][i] = q_all[s][j];
+    }
+#pragma GCC unroll 8
+    for (int s = 0; s < Arm::kSlots; ++s) {
+      for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: limits per slot
+        double qi[6] = {qs[s][0][i], qs[s][1][i], qs[s][2][i], qs[s][3][i], qs[s][4][i], qs[s][5][i]};
+        ok[s][i] = ex[i] * arm.limits().wrap_mask(qi);
+        for (int j = 0; j < 6; ++j) qs[s][j][i] = ex[i] != 0.0 ? qi[j] : nan;
+      }
+    }
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const std::ptrdiff_t t = b0 + i;
+      bool any_valid = false;
+      for (int s = 0; s < Arm::kSlots; ++s) {
+        T* qt = q + 48 * t + 6 * s;
+        for (int j = 0; j < 6; ++j) qt[j] = T(qs[s][j][i]);
+        valid[8 * t + s] = ok[s][i] != 0.0;
+        exists[8 * t + s] = ex[i] != 0.0;
+        any_valid |= ok[s][i] != 0.0;
+      }
+      status[t] = std::int8_t(ok_pose[i] == 0.0 ? Status::InvalidInput
+                              : any_valid       ? Status::Ok
+                              : ex[i] != 0.0    ? Status::JointLimit
+                                                : Status::Unreachable);
+    }
+  }
+}
+
+// The in-limit solution nearest to the seed (largest single-joint move on the
+// circle; ties to the lower slot), or the lowest valid slot without a seed.
+template <typename T>
+SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
+                       std::int8_t* status, std::ptrdiff_t count) noexcept {
+  T q_all[kBlock * Arm::kSlots * 6];
+  std::uint8_t valid[kBlock * Arm::kSlots], exists[kBlock * Arm::kSlots];
+  std::int8_t st[kBlock];
+  const std::ptrdiff_t stride = format == PoseFormat::Matrix ? 16 : 7;
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    ik_all(arm, poses + stride * b0, format, seed ? seed + 6 * b0 : nullptr, q_all, valid, exists, st, m);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const std::ptrdiff_t t = b0 + i;
+      T* qt = q + 6 * t;
+      status[t] = st[i];
+      int best = -1;
+      double best_distance = std::numeric_limits<double>::infinity();
+      for (int s = 0; s < Arm::kSlots && st[i] == std::int8_t(Status::Ok); ++s) {
+        if (!valid[Arm::kSlots * i + s]) continue;
+        if (!seed) {
+          best = s;
+          break;
+        }
+        double qa[6], qb[6];
+        for (int j = 0; j < 6; ++j) qa[j] = double(q_all[48 * i + 6 * s + j]), qb[j] = double(seed[6 * t + j]);
+        const double d = circle_distance<6>(qa, qb);
+        if (d < best_distance) best = s, best_distance = d;
+      }
+      for (int j = 0; j < 6; ++j) qt[j] = best >= 0 ? q_all[48 * i + 6 * best + j] : T(quiet_nan<double>());
+    }
+  }
+}
+
+}  // namespace arm_batch
+
+}  // namespace spotkin
