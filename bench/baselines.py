@@ -100,3 +100,65 @@ def leg_ik_one_branch(p: np.ndarray, h1: float, U: float, L: float, k: float) ->
     kn = -beta - np.arccos(np.clip(ratio, -1, 1))
     hy = np.arctan2(x, zp) - np.arctan2(k - L * np.sin(kn), -U - L * np.cos(kn))
     return np.stack([hx, hy, kn], axis=-1)
+
+
+# -- Spot Arm ------------------------------------------------------------------------------------------
+
+
+def _rz(t):
+    c, s = np.cos(t), np.sin(t)
+    R = np.zeros((*t.shape, 3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = c, -s, s, c, 1
+    return R
+
+
+def _ry(t):
+    c, s = np.cos(t), np.sin(t)
+    R = np.zeros((*t.shape, 3, 3))
+    R[..., 0, 0], R[..., 0, 2], R[..., 2, 0], R[..., 2, 2], R[..., 1, 1] = c, s, -s, c, 1
+    return R
+
+
+def _rx(t):
+    c, s = np.cos(t), np.sin(t)
+    R = np.zeros((*t.shape, 3, 3))
+    R[..., 1, 1], R[..., 1, 2], R[..., 2, 1], R[..., 2, 2], R[..., 0, 0] = c, -s, s, c, 1
+    return R
+
+
+ARM = {"mount": np.array([0.292, 0.0, 0.188]), "a": 0.3385, "b": 0.4033, "h": 0.075, "hand": 0.19557}
+
+
+def _arm_frames(q):
+    R1 = _rz(q[:, 0])
+    R2 = R1 @ _ry(q[:, 1])
+    elbow = ARM["mount"] + R2[..., :, 0] * ARM["a"]
+    R3 = R2 @ _ry(q[:, 2])
+    wrist = elbow + R3 @ np.array([ARM["b"], 0.0, ARM["h"]])
+    R4 = R3 @ _rx(q[:, 3])
+    R5 = R4 @ _ry(q[:, 4])
+    R6 = R5 @ _rx(q[:, 5])
+    hand = wrist + R6[..., :, 0] * ARM["hand"]
+    return (R1, R2, R3, R4, R5, R6), (elbow, wrist, hand)
+
+
+def arm_fk(q: np.ndarray) -> np.ndarray:
+    (*_, R6), (_, _, hand) = _arm_frames(q)
+    T = np.zeros((q.shape[0], 4, 4))
+    T[:, :3, :3] = R6
+    T[:, :3, 3] = hand
+    T[:, 3, 3] = 1
+    return T
+
+
+def arm_jacobian(q: np.ndarray) -> np.ndarray:
+    (R1, R2, R3, R4, R5, _), (elbow, wrist, hand) = _arm_frames(q)
+    mount = np.broadcast_to(ARM["mount"], hand.shape)
+    axes = [np.broadcast_to([0.0, 0.0, 1.0], hand.shape), R1[..., :, 1], R2[..., :, 1],
+            R3[..., :, 0], R4[..., :, 1], R5[..., :, 0]]
+    points = [mount, mount, elbow, wrist, wrist, wrist]
+    J = np.empty((q.shape[0], 6, 6))
+    for j, (z, o) in enumerate(zip(axes, points)):
+        J[:, :3, j] = np.cross(z, hand - o)
+        J[:, 3:, j] = z
+    return J

@@ -56,7 +56,7 @@ class Arm {
   static constexpr int kSlots = 8;
   static constexpr double kShoulderTolerance = 1e-12;  // m
   static constexpr double kWristTolerance = 1e-9;      // |sin wr0|
-  static constexpr double kRatioTolerance = 1e-12;
+  static constexpr double kRatioTolerance = 1e-12;  // float32 targets: Leg::kRatioToleranceFloat
   static constexpr double kRotationTolerance = 1e-6;  // max |R^T R - I| accepted
 
   Arm() { update(); }
@@ -83,8 +83,8 @@ class Arm {
     const double a = g_.upper_arm;
     T.p = Vec3<double>(g_.mount[0], g_.mount[1], g_.mount[2]) +
           Vec3<double>(c[0] * c[1] * a, s[0] * c[1] * a, -s[1] * a) +
-          R03 * Vec3<double>(g_.forearm, 0.0, g_.forearm_offset);
-    T.R = R03 * R36;
+          R03.lazyProduct(Vec3<double>(g_.forearm, 0.0, g_.forearm_offset));
+    T.R = R03.lazyProduct(R36);
     return T * hand_tool_;
   }
 
@@ -136,43 +136,63 @@ class Arm {
     out[3] = std::fabs(Jm.determinant());
   }
 
+  // A pose as plain arrays: the vectorised kernels avoid Eigen, whose
+  // out-of-line product loops would stop the compiler vectorising them.
+  struct Pose {
+    double R[3][3];
+    double p[3];
+  };
+
   // Target pose of one sample and its validity (1.0 / 0.0), branch-free.
-  template <typename T>
-  SPOTKIN_INLINE double read_pose(const T* in, PoseFormat format, Rigid<double>& pose) const noexcept {
+  template <PoseFormat Format, typename T>
+  SPOTKIN_INLINE double read_pose(const T* in, Pose& pose) const noexcept {
     double ok = 1.0;
-    if (format == PoseFormat::Matrix) {
+    if constexpr (Format == PoseFormat::Matrix) {
       for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) pose.R(i, j) = double(in[4 * i + j]);
+        for (int j = 0; j < 3; ++j) pose.R[i][j] = double(in[4 * i + j]);
         pose.p[i] = double(in[4 * i + 3]);
       }
       const double row_error = std::max(std::max(std::fabs(double(in[12])), std::fabs(double(in[13]))),
                                         std::max(std::fabs(double(in[14])), std::fabs(double(in[15]) - 1.0)));
       ok = row_error <= 1e-9 ? ok : 0.0;
-      const Mat3<double> E = pose.R.transpose() * pose.R - Mat3<double>::Identity();
-      const double orth = E.cwiseAbs().maxCoeff();
-      ok = (orth <= kRotationTolerance) & (pose.R.determinant() > 0.0) ? ok : 0.0;
+      double orth = 0.0;  // max |R^T R - I|
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          const double dot = pose.R[0][a] * pose.R[0][b] + pose.R[1][a] * pose.R[1][b] + pose.R[2][a] * pose.R[2][b];
+          orth = std::max(orth, std::fabs(dot - (a == b ? 1.0 : 0.0)));
+        }
+      const double det = pose.R[0][0] * (pose.R[1][1] * pose.R[2][2] - pose.R[1][2] * pose.R[2][1]) -
+                         pose.R[0][1] * (pose.R[1][0] * pose.R[2][2] - pose.R[1][2] * pose.R[2][0]) +
+                         pose.R[0][2] * (pose.R[1][0] * pose.R[2][1] - pose.R[1][1] * pose.R[2][0]);
+      ok = (orth <= kRotationTolerance) & (det > 0.0) ? ok : 0.0;
     } else {
       const double x = double(in[3]), y = double(in[4]), z = double(in[5]), w = double(in[6]);
       const double n2 = x * x + y * y + z * z + w * w;
       ok = std::fabs(std::sqrt(n2) - 1.0) <= kRotationTolerance ? ok : 0.0;
-      const double s = 2.0 / n2;  // exact rotation even for |q| = 1 +- 1e-6
-      pose.R << 1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w),  //
-          s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w),        //
-          s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y);
-      pose.p = Vec3<double>(double(in[0]), double(in[1]), double(in[2]));
+      const double s = 2.0 / n2;  // an exact rotation even for |q| = 1 +- 1e-6
+      pose.R[0][0] = 1 - s * (y * y + z * z), pose.R[0][1] = s * (x * y - z * w), pose.R[0][2] = s * (x * z + y * w);
+      pose.R[1][0] = s * (x * y + z * w), pose.R[1][1] = 1 - s * (x * x + z * z), pose.R[1][2] = s * (y * z - x * w);
+      pose.R[2][0] = s * (x * z - y * w), pose.R[2][1] = s * (y * z + x * w), pose.R[2][2] = 1 - s * (x * x + y * y);
+      pose.p[0] = double(in[0]), pose.p[1] = double(in[1]), pose.p[2] = double(in[2]);
     }
-    // NaN and Inf fail every comparison above or produce NaN here
-    const double sum = pose.R.sum() + pose.p.sum();
+    double sum = 0.0;  // NaN and Inf fail every comparison above or make this NaN
+    for (int i = 0; i < 3; ++i) sum += pose.R[i][0] + pose.R[i][1] + pose.R[i][2] + pose.p[i];
     return (sum - sum) == 0.0 ? ok : 0.0;
   }
 
   // All 8 solutions for a target pose (steps 1-5). seed_sh0 / seed_el1 are the
   // free angles in the shoulder and wrist singular cases. Returns 1.0 where the
   // solutions exist (all eight or none), 0.0 elsewhere. Branch-free.
-  SPOTKIN_INLINE double solve_all(const Rigid<double>& target, double seed_sh0, double seed_el1,
-                                  double q[kSlots][6]) const noexcept {
-    const Rigid<double> Tw = target * inv_hand_tool_;  // (1)
-    const Vec3<double> c = Tw.p - Vec3<double>(g_.mount[0], g_.mount[1], g_.mount[2]);
+  SPOTKIN_INLINE double solve_all(const Pose& target, double seed_sh0, double seed_el1, double q[kSlots][6],
+                                  double tol = kRatioTolerance) const noexcept {
+    // (1) wrist pose T_w = T X^-1
+    double Rw_[3][3], c[3];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j)
+        Rw_[i][j] = target.R[i][0] * inv_X_R_[0][j] + target.R[i][1] * inv_X_R_[1][j] + target.R[i][2] * inv_X_R_[2][j];
+      c[i] = target.R[i][0] * inv_X_p_[0] + target.R[i][1] * inv_X_p_[1] + target.R[i][2] * inv_X_p_[2] +
+             target.p[i] - g_.mount[i];
+    }
     const double r = std::sqrt(c[0] * c[0] + c[1] * c[1]);
     // (2) shoulder
     const bool shoulder_singular = r < kShoulderTolerance;
@@ -184,8 +204,8 @@ class Arm {
     const double sh0 = shoulder_singular ? wrap_angle_vec(seed_sh0) : vector_math::atan2(c[1], c[0]);
     // (3) elbow
     const double a = g_.upper_arm;
-    const double ratio = (c.squaredNorm() - a * a - Lf_ * Lf_) * inv_2aLf_;
-    const double exists = std::fabs(ratio) <= 1.0 + kRatioTolerance ? 1.0 : 0.0;
+    const double ratio = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2] - a * a - Lf_ * Lf_) * inv_2aLf_;
+    const double exists = std::fabs(ratio) <= 1.0 + tol ? 1.0 : 0.0;
     const double cos_delta = std::clamp(ratio, -1.0, 1.0);
     const double sin_delta = std::sqrt((1.0 - cos_delta) * (1.0 + cos_delta));
     const double delta = vector_math::atan2(sin_delta, cos_delta);
@@ -210,15 +230,14 @@ class Arm {
         double s12, c12;
         vector_math::sincos_bounded(sh1 + el0, s12, c12);
         // (5) R36 = R03^T R_w, R03 = Rz(sh0) Ry(sh1 + el0)
-        const Mat3<double>& Rw = Tw.R;
         const double r0[3] = {cs0 * c12, ss0 * c12, -s12};  // rows of R03^T
         const double r1[3] = {-ss0, cs0, 0.0};
         const double r2[3] = {cs0 * s12, ss0 * s12, c12};
         double R36[3][3];
         for (int j = 0; j < 3; ++j) {
-          R36[0][j] = r0[0] * Rw(0, j) + r0[1] * Rw(1, j) + r0[2] * Rw(2, j);
-          R36[1][j] = r1[0] * Rw(0, j) + r1[1] * Rw(1, j);
-          R36[2][j] = r2[0] * Rw(0, j) + r2[1] * Rw(1, j) + r2[2] * Rw(2, j);
+          R36[0][j] = r0[0] * Rw_[0][j] + r0[1] * Rw_[1][j] + r0[2] * Rw_[2][j];
+          R36[1][j] = r1[0] * Rw_[0][j] + r1[1] * Rw_[1][j];
+          R36[2][j] = r2[0] * Rw_[0][j] + r2[1] * Rw_[1][j] + r2[2] * Rw_[2][j];
         }
         const double s4 = std::sqrt(R36[1][0] * R36[1][0] + R36[2][0] * R36[2][0]);
         const bool wrist_singular = s4 < kWristTolerance;
@@ -274,6 +293,10 @@ class Arm {
     hand_tool_ = hand * g_.tool;
     inv_hand_tool_.R = hand_tool_.R.transpose();
     inv_hand_tool_.p = -(hand_tool_.R.transpose() * hand_tool_.p);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) inv_X_R_[i][j] = inv_hand_tool_.R(i, j);
+      inv_X_p_[i] = inv_hand_tool_.p[i];
+    }
     Lf_ = std::hypot(g_.forearm, g_.forearm_offset);
     phi_ = std::atan2(g_.forearm_offset, g_.forearm);
     cos_phi_ = g_.forearm / Lf_;
@@ -284,6 +307,7 @@ class Arm {
   ArmGeometry g_;
   JointLimits<6> limits_;
   Rigid<double> hand_tool_, inv_hand_tool_;
+  double inv_X_R_[3][3], inv_X_p_[3];
   double Lf_ = 0, phi_ = 0, cos_phi_ = 1, sin_phi_ = 0, inv_2aLf_ = 0;
 };
 
@@ -345,6 +369,29 @@ SPOTKIN_INLINE bool finite6(const T* v) noexcept {
   return true;
 }
 
+// The vectorised core of ik_all: every solution of every pose in a block.
+// soa[k][i] is pose element k of sample i; qs[6 * slot + joint][i] receives the angles.
+template <PoseFormat Format>
+SPOTKIN_VECTOR_KERNEL void solve_block(const Arm& arm, const double (*__restrict soa)[kBlock],
+                                const double* __restrict seed_sh0, const double* __restrict seed_el1,
+                                const double* __restrict seed_ok, double* __restrict ok_pose,
+                                double* __restrict ex, double (*__restrict qs)[kBlock], std::ptrdiff_t m,
+                                double tol) noexcept {
+  constexpr int kWidth = Format == PoseFormat::Matrix ? 16 : 7;
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    double in[kWidth];
+    for (int k = 0; k < kWidth; ++k) in[k] = soa[k][i];
+    Arm::Pose pose;
+    const double pose_ok = arm.read_pose<Format>(in, pose) * seed_ok[i];
+    double q_all[Arm::kSlots][6];
+    const double found = arm.solve_all(pose, seed_sh0[i], seed_el1[i], q_all, tol);
+    ok_pose[i] = pose_ok;
+    ex[i] = pose_ok * found;
+    for (int s = 0; s < Arm::kSlots; ++s)
+      for (int j = 0; j < 6; ++j) qs[6 * s + j][i] = q_all[s][j];
+  }
+}
+
 // Every solution: q (count, 8, 6) NaN where none exist, valid and exists
 // (count, 8), status (count). seed (count, 6) or null: used for the free angles
 // of the shoulder and wrist singular cases.
@@ -354,48 +401,51 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
                            std::ptrdiff_t count) noexcept {
   constexpr double nan = quiet_nan<double>();
   const std::ptrdiff_t stride = format == PoseFormat::Matrix ? 16 : 7;
-  double qs[Arm::kSlots][6][kBlock], ex[kBlock], ok_pose[kBlock], ok[Arm::kSlots][kBlock];
-  double seed_sh0[kBlock], seed_el1[kBlock], seed_ok[kBlock];
+  double qs[Arm::kSlots * 6][kBlock], ex[kBlock], ok_pose[kBlock], ok[Arm::kSlots][kBlock];
+  double seed_sh0[kBlock], seed_el1[kBlock], seed_ok[kBlock], soa[16][kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // stage the poses as structure of arrays
+      const T* in = poses + stride * (b0 + i);
+      for (std::ptrdiff_t k = 0; k < stride; ++k) soa[k][i] = double(in[k]);
+    }
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const T* si = seed ? seed + 6 * (b0 + i) : nullptr;
       seed_ok[i] = !si || finite6(si) ? 1.0 : 0.0;
       seed_sh0[i] = si && seed_ok[i] != 0.0 ? std::remainder(double(si[0]), 2.0 * kPi<double>) : 0.0;
       seed_el1[i] = si && seed_ok[i] != 0.0 ? std::remainder(double(si[3]), 2.0 * kPi<double>) : 0.0;
     }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: every solution of every pose
-      Rigid<double> pose;
-      ok_pose[i] = arm.read_pose(poses + stride * (b0 + i), format, pose) * seed_ok[i];
-      double q_all[Arm::kSlots][6];
-      ex[i] = ok_pose[i] * arm.solve_all(pose, seed_sh0[i], seed_el1[i], q_all);
-#pragma GCC unroll 8
-      for (int s = 0; s < Arm::kSlots; ++s)
-#pragma GCC unroll 6
-        for (int j = 0; j < 6; ++j) qs[s][j][i] = q_all[s][j];
+    if (format == PoseFormat::Matrix) {
+      solve_block<PoseFormat::Matrix>(arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, Leg::ratio_tolerance<T>());
+    } else {
+      solve_block<PoseFormat::PositionQuaternion>(arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, Leg::ratio_tolerance<T>());
     }
+    double any_valid[kBlock];
+    for (std::ptrdiff_t i = 0; i < m; ++i) any_valid[i] = 0.0;
 #pragma GCC unroll 8
     for (int s = 0; s < Arm::kSlots; ++s) {
       for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: limits per slot
-        double qi[6] = {qs[s][0][i], qs[s][1][i], qs[s][2][i], qs[s][3][i], qs[s][4][i], qs[s][5][i]};
+        double qi[6];
+        for (int j = 0; j < 6; ++j) qi[j] = qs[6 * s + j][i];
         ok[s][i] = ex[i] * arm.limits().wrap_mask(qi);
-        for (int j = 0; j < 6; ++j) qs[s][j][i] = ex[i] != 0.0 ? qi[j] : nan;
+        any_valid[i] = std::max(any_valid[i], ok[s][i]);
+        for (int j = 0; j < 6; ++j) qs[6 * s + j][i] = ex[i] != 0.0 ? qi[j] : nan;
       }
     }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const std::ptrdiff_t t = b0 + i;
-      bool any_valid = false;
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: statuses
+      const std::int8_t st = ok_pose[i] == 0.0  ? std::int8_t(Status::InvalidInput)
+                             : any_valid[i] != 0 ? std::int8_t(Status::Ok)
+                             : ex[i] != 0.0      ? std::int8_t(Status::JointLimit)
+                                                 : std::int8_t(Status::Unreachable);
+      status[b0 + i] = st;
+    }
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // back to (sample, slot, joint) order
+      T* qt = q + 48 * (b0 + i);
+      for (int k = 0; k < 48; ++k) qt[k] = T(qs[k][i]);
       for (int s = 0; s < Arm::kSlots; ++s) {
-        T* qt = q + 48 * t + 6 * s;
-        for (int j = 0; j < 6; ++j) qt[j] = T(qs[s][j][i]);
-        valid[8 * t + s] = ok[s][i] != 0.0;
-        exists[8 * t + s] = ex[i] != 0.0;
-        any_valid |= ok[s][i] != 0.0;
+        valid[8 * (b0 + i) + s] = ok[s][i] != 0.0;
+        exists[8 * (b0 + i) + s] = ex[i] != 0.0;
       }
-      status[t] = std::int8_t(ok_pose[i] == 0.0 ? Status::InvalidInput
-                              : any_valid       ? Status::Ok
-                              : ex[i] != 0.0    ? Status::JointLimit
-                                                : Status::Unreachable);
     }
   }
 }

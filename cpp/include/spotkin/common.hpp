@@ -15,6 +15,17 @@
 #define SPOTKIN_INLINE inline
 #endif
 
+// A vectorised kernel that must not be inlined (inlining drops its __restrict
+// guarantees and with them the vectorisation) is compiled for baseline x86-64
+// and for x86-64-v3 (AVX2 + FMA), and the loader picks one at run time.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SPOTKIN_NATIVE_BUILD)
+#define SPOTKIN_VECTOR_KERNEL __attribute__((noinline, target_clones("arch=x86-64-v3", "default")))
+#elif defined(__GNUC__)
+#define SPOTKIN_VECTOR_KERNEL __attribute__((noinline))
+#else
+#define SPOTKIN_VECTOR_KERNEL
+#endif
+
 namespace spotkin {
 
 // One status per target; mirrored by the Python IntEnum `spotkin.Status`.
@@ -36,7 +47,10 @@ struct Rigid {
   Mat3<Scalar> R = Mat3<Scalar>::Identity();
   Vec3<Scalar> p = Vec3<Scalar>::Zero();
 
-  Rigid operator*(const Rigid& other) const noexcept { return {R * other.R, R * other.p + p}; }
+  // lazyProduct: coefficient-wise products that inline into vectorised loops
+  SPOTKIN_INLINE Rigid operator*(const Rigid& other) const noexcept {
+    return {R.lazyProduct(other.R), R.lazyProduct(other.p) + p};
+  }
 
   template <typename Other>
   Rigid<Other> cast() const noexcept {
