@@ -154,8 +154,14 @@ def arm_fk(q: np.ndarray) -> np.ndarray:
 def arm_jacobian(q: np.ndarray) -> np.ndarray:
     (R1, R2, R3, R4, R5, _), (elbow, wrist, hand) = _arm_frames(q)
     mount = np.broadcast_to(ARM["mount"], hand.shape)
-    axes = [np.broadcast_to([0.0, 0.0, 1.0], hand.shape), R1[..., :, 1], R2[..., :, 1],
-            R3[..., :, 0], R4[..., :, 1], R5[..., :, 0]]
+    axes = [
+        np.broadcast_to([0.0, 0.0, 1.0], hand.shape),
+        R1[..., :, 1],
+        R2[..., :, 1],
+        R3[..., :, 0],
+        R4[..., :, 1],
+        R5[..., :, 0],
+    ]
     points = [mount, mount, elbow, wrist, wrist, wrist]
     J = np.empty((q.shape[0], 6, 6))
     for j, (z, o) in enumerate(zip(axes, points)):

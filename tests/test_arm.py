@@ -47,6 +47,7 @@ def dhm_chain(tool: np.ndarray | None = None) -> sk.Chain:
 
 # -- reference agreement --------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("tool", [None, FINGERTIP], ids=["hand", "fingertip"])
 def test_fk_jacobian_singularity_match_reference(rng, tool):
     arm = ARM if tool is None else sk.SpotArm(tool=tool)
@@ -57,7 +58,9 @@ def test_fk_jacobian_singularity_match_reference(rng, tool):
     expected = [ref.singularity(qi, tool=tool) for qi in q]
     for name in ("wrist", "elbow", "shoulder"):
         np.testing.assert_allclose(getattr(s, name), [e[name] for e in expected], rtol=0, atol=1e-14)
-    np.testing.assert_allclose(s.manipulability, [e["manipulability"] for e in expected], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        s.manipulability, [e["manipulability"] for e in expected], rtol=1e-9, atol=1e-12
+    )
 
 
 def random_poses(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -91,8 +94,11 @@ def test_ik_all_and_ik_match_reference(rng, with_seed):
 
 # -- round trips ----------------------------------------------------------------------------------------
 
+
 @pytest.mark.slow
-@pytest.mark.parametrize(("dtype", "pose_tol", "q_tol"), [(np.float64, 1e-10, 1e-7), (np.float32, 1e-4, 5e-2)])
+@pytest.mark.parametrize(
+    ("dtype", "pose_tol", "q_tol"), [(np.float64, 1e-10, 1e-7), (np.float32, 1e-4, 5e-2)]
+)
 def test_round_trip_contains_generating_configuration(rng, dtype, pose_tol, q_tol):
     n = 100_000
     q = in_limit_q(rng, n)
@@ -130,6 +136,7 @@ def test_eight_solutions_generically_without_limits(rng):
 
 
 # -- singular cases -------------------------------------------------------------------------------------
+
 
 def pose_error(arm: sk.SpotArm, q: np.ndarray, T: np.ndarray) -> float:
     return float(np.abs(arm.fk(q) - T).max())
@@ -189,10 +196,13 @@ def test_elbow_stretched_is_exact():
         assert sol.exists.all()
         for s in range(8):
             assert pose_error(free, sol.q[s], T) < 1e-12
-        np.testing.assert_allclose(sol.q[:, 2][::2], sol.q[:, 2][1::2], atol=1e-7)  # the two elbow slots merge
+        np.testing.assert_allclose(
+            sol.q[:, 2][::2], sol.q[:, 2][1::2], atol=1e-7
+        )  # the two elbow slots merge
 
 
 # -- statuses, formats, bad input -----------------------------------------------------------------------
+
 
 def test_statuses():
     T_ok = ARM.fk(np.array([0.1, -1.0, 1.5, 0.2, 0.5, 0.0]))
@@ -270,6 +280,7 @@ def test_bad_input_raises():
 
 
 # -- independent oracle, Jacobian, batches ------------------------------------------------------------
+
 
 @pytest.mark.parametrize("tool", [None, FINGERTIP], ids=["hand", "fingertip"])
 def test_dhm_chain_of_the_same_arm_agrees(rng, tool):
