@@ -121,6 +121,68 @@ class Arm {
     }
   }
 
+  // Plain-array forms of forward_from / jacobian_from for vectorised block
+  // kernels; s[j][i], c[j][i] are the sines and cosines of sample i.
+  template <std::ptrdiff_t B>
+  SPOTKIN_INLINE void forward_arrays(const double (*s)[B], const double (*c)[B], std::ptrdiff_t i, double R[3][3],
+                                     double p[3]) const noexcept {
+    double wrist[3], Rw[3][3];
+    wrist_frame(s, c, i, wrist, Rw, nullptr);
+    // R = R03 R36 X_R, p = wrist + R03 R36 X_p
+    double R6[3][3];
+    const double s3 = s[3][i], c3 = c[3][i], s4 = s[4][i], c4 = c[4][i], s5 = s[5][i], c5 = c[5][i];
+    const double R36[3][3] = {{c4, s4 * s5, s4 * c5},
+                              {s3 * s4, c3 * c5 - s3 * c4 * s5, -c3 * s5 - s3 * c4 * c5},
+                              {-c3 * s4, s3 * c5 + c3 * c4 * s5, -s3 * s5 + c3 * c4 * c5}};
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) R6[r][k] = Rw[r][0] * R36[0][k] + Rw[r][1] * R36[1][k] + Rw[r][2] * R36[2][k];
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) R[r][k] = R6[r][0] * X_R_[0][k] + R6[r][1] * X_R_[1][k] + R6[r][2] * X_R_[2][k];
+      p[r] = wrist[r] + R6[r][0] * X_p_[0] + R6[r][1] * X_p_[1] + R6[r][2] * X_p_[2];
+    }
+  }
+
+  template <std::ptrdiff_t B>
+  SPOTKIN_INLINE void jacobian_arrays(const double (*s)[B], const double (*c)[B], std::ptrdiff_t i,
+                                      double* J) const noexcept {
+    double R[3][3], p[3], wrist[3], R03[3][3], elbow[3];
+    forward_arrays(s, c, i, R, p);
+    wrist_frame(s, c, i, wrist, R03, elbow);
+    const double s0 = s[0][i], c0 = c[0][i], s3 = s[3][i], c3 = c[3][i], s4 = s[4][i], c4 = c[4][i];
+    const double y4_local[3] = {0.0, c3, s3};                  // Rx(el1) e_y
+    const double x5_local[3] = {c4, s3 * s4, -c3 * s4};        // Rx(el1) Ry(wr0) e_x
+    double axes[6][3] = {{0, 0, 1}, {-s0, c0, 0}, {-s0, c0, 0}, {R03[0][0], R03[1][0], R03[2][0]}, {}, {}};
+    for (int r = 0; r < 3; ++r) {
+      axes[4][r] = R03[r][0] * y4_local[0] + R03[r][1] * y4_local[1] + R03[r][2] * y4_local[2];
+      axes[5][r] = R03[r][0] * x5_local[0] + R03[r][1] * x5_local[1] + R03[r][2] * x5_local[2];
+    }
+    const double* points[6] = {g_.mount, g_.mount, elbow, wrist, wrist, wrist};
+    for (int j = 0; j < 6; ++j) {
+      const double d[3] = {p[0] - points[j][0], p[1] - points[j][1], p[2] - points[j][2]};
+      const double* z = axes[j];
+      J[0 * 6 + j] = z[1] * d[2] - z[2] * d[1];
+      J[1 * 6 + j] = z[2] * d[0] - z[0] * d[2];
+      J[2 * 6 + j] = z[0] * d[1] - z[1] * d[0];
+      J[3 * 6 + j] = z[0];
+      J[4 * 6 + j] = z[1];
+      J[5 * 6 + j] = z[2];
+    }
+  }
+
+  // Wrist centre and R03 = Rz(sh0) Ry(sh1 + el0) (and the elbow point if asked).
+  template <std::ptrdiff_t B>
+  SPOTKIN_INLINE void wrist_frame(const double (*s)[B], const double (*c)[B], std::ptrdiff_t i, double wrist[3],
+                                  double R03[3][3], double* elbow) const noexcept {
+    const double s0 = s[0][i], c0 = c[0][i], s1 = s[1][i], c1 = c[1][i], s2 = s[2][i], c2 = c[2][i];
+    const double a = g_.upper_arm, b = g_.forearm, h = g_.forearm_offset;
+    R03[0][0] = c0 * c2, R03[0][1] = -s0, R03[0][2] = c0 * s2;
+    R03[1][0] = s0 * c2, R03[1][1] = c0, R03[1][2] = s0 * s2;
+    R03[2][0] = -s2, R03[2][1] = 0.0, R03[2][2] = c2;
+    const double e[3] = {g_.mount[0] + c0 * c1 * a, g_.mount[1] + s0 * c1 * a, g_.mount[2] - s1 * a};
+    for (int r = 0; r < 3; ++r) wrist[r] = e[r] + R03[r][0] * b + R03[r][2] * h;
+    if (elbow) elbow[0] = e[0], elbow[1] = e[1], elbow[2] = e[2];
+  }
+
   // Wrist, elbow and shoulder distances to the singular sets, and sqrt(det(J J^T)).
   void singularity(const double* q, double* out) const noexcept {
     double J[36];
@@ -294,8 +356,8 @@ class Arm {
     inv_hand_tool_.R = hand_tool_.R.transpose();
     inv_hand_tool_.p = -(hand_tool_.R.transpose() * hand_tool_.p);
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) inv_X_R_[i][j] = inv_hand_tool_.R(i, j);
-      inv_X_p_[i] = inv_hand_tool_.p[i];
+      for (int j = 0; j < 3; ++j) inv_X_R_[i][j] = inv_hand_tool_.R(i, j), X_R_[i][j] = hand_tool_.R(i, j);
+      inv_X_p_[i] = inv_hand_tool_.p[i], X_p_[i] = hand_tool_.p[i];
     }
     Lf_ = std::hypot(g_.forearm, g_.forearm_offset);
     phi_ = std::atan2(g_.forearm_offset, g_.forearm);
@@ -307,7 +369,7 @@ class Arm {
   ArmGeometry g_;
   JointLimits<6> limits_;
   Rigid<double> hand_tool_, inv_hand_tool_;
-  double inv_X_R_[3][3], inv_X_p_[3];
+  double inv_X_R_[3][3], inv_X_p_[3], X_R_[3][3], X_p_[3];
   double Lf_ = 0, phi_ = 0, cos_phi_ = 1, sin_phi_ = 0, inv_2aLf_ = 0;
 };
 
@@ -315,26 +377,57 @@ namespace arm_batch {
 
 constexpr std::ptrdiff_t kBlock = 32;
 
+// sin/cos of sh0, sh1, sh1 + el0, el1, wr0, wr1 for a block (vectorised).
+struct BlockTrig {
+  double angle[6][kBlock], s[6][kBlock], c[6][kBlock];
+};
+
+template <typename T>
+SPOTKIN_INLINE void block_trig(const T* q, std::ptrdiff_t m, BlockTrig& b) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    const T* qi = q + 6 * i;
+    b.angle[0][i] = double(qi[0]), b.angle[1][i] = double(qi[1]), b.angle[2][i] = double(qi[1]) + double(qi[2]);
+    b.angle[3][i] = double(qi[3]), b.angle[4][i] = double(qi[4]), b.angle[5][i] = double(qi[5]);
+  }
+  for (int j = 0; j < 6; ++j) vector_math::sincos(b.angle[j], b.s[j], b.c[j], m);
+}
+
+// Tool poses (16 per sample, row-major 4x4) from a block's sines and cosines.
+SPOTKIN_VECTOR_KERNEL inline void fk_block(const Arm& arm, const double (*__restrict s)[kBlock],
+                                           const double (*__restrict c)[kBlock], double (*__restrict out)[kBlock],
+                                           std::ptrdiff_t m) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    double R[3][3], p[3];
+    arm.forward_arrays(s, c, i, R, p);
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) out[4 * r + k][i] = R[r][k];
+      out[4 * r + 3][i] = p[r];
+    }
+  }
+}
+
+// Jacobians (36 per sample, row-major 6x6) from a block's sines and cosines.
+SPOTKIN_VECTOR_KERNEL inline void jacobian_block(const Arm& arm, const double (*__restrict s)[kBlock],
+                                                 const double (*__restrict c)[kBlock],
+                                                 double (*__restrict out)[kBlock], std::ptrdiff_t m) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    double J[36];
+    arm.jacobian_arrays(s, c, i, J);
+    for (int k = 0; k < 36; ++k) out[k][i] = J[k];
+  }
+}
+
 template <typename T>
 SPOTKIN_INLINE void fk(const Arm& arm, const T* q, T* out, std::ptrdiff_t count) noexcept {
-  double angle[6][kBlock], s[6][kBlock], c[6][kBlock];
+  BlockTrig b;
+  double soa[16][kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    block_trig(q + 6 * b0, m, b);
+    fk_block(arm, b.s, b.c, soa, m);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const T* qi = q + 6 * (b0 + i);
-      angle[0][i] = double(qi[0]), angle[1][i] = double(qi[1]), angle[2][i] = double(qi[1]) + double(qi[2]);
-      angle[3][i] = double(qi[3]), angle[4][i] = double(qi[4]), angle[5][i] = double(qi[5]);
-    }
-    for (int j = 0; j < 6; ++j) vector_math::sincos(angle[j], s[j], c[j], m);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const double si[6] = {s[0][i], s[1][i], s[2][i], s[3][i], s[4][i], s[5][i]};
-      const double ci[6] = {c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]};
-      const Rigid<double> X = arm.forward_from(si, ci);
       T* o = out + 16 * (b0 + i);
-      for (int r = 0; r < 3; ++r) {
-        for (int k = 0; k < 3; ++k) o[4 * r + k] = T(X.R(r, k));
-        o[4 * r + 3] = T(X.p[r]);
-      }
+      for (int k = 0; k < 12; ++k) o[k] = T(soa[k][i]);
       o[12] = o[13] = o[14] = T(0), o[15] = T(1);
     }
   }
@@ -342,22 +435,15 @@ SPOTKIN_INLINE void fk(const Arm& arm, const T* q, T* out, std::ptrdiff_t count)
 
 template <typename T>
 SPOTKIN_INLINE void jacobian(const Arm& arm, const T* q, T* out, std::ptrdiff_t count) noexcept {
-  double angle[6][kBlock], s[6][kBlock], c[6][kBlock];
+  BlockTrig b;
+  double soa[36][kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    block_trig(q + 6 * b0, m, b);
+    jacobian_block(arm, b.s, b.c, soa, m);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const T* qi = q + 6 * (b0 + i);
-      angle[0][i] = double(qi[0]), angle[1][i] = double(qi[1]), angle[2][i] = double(qi[1]) + double(qi[2]);
-      angle[3][i] = double(qi[3]), angle[4][i] = double(qi[4]), angle[5][i] = double(qi[5]);
-    }
-    for (int j = 0; j < 6; ++j) vector_math::sincos(angle[j], s[j], c[j], m);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const double si[6] = {s[0][i], s[1][i], s[2][i], s[3][i], s[4][i], s[5][i]};
-      const double ci[6] = {c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]};
-      double J[36];
-      arm.jacobian_from(si, ci, J);
       T* o = out + 36 * (b0 + i);
-      for (int k = 0; k < 36; ++k) o[k] = T(J[k]);
+      for (int k = 0; k < 36; ++k) o[k] = T(soa[k][i]);
     }
   }
 }
