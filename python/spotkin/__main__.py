@@ -38,6 +38,8 @@ def demo(samples: int = 1_000_000) -> int:
     print()
     _demo_leg(samples)
     print()
+    _demo_arm(samples)
+    print()
     _demo_chain(samples)
     return 0
 
@@ -76,8 +78,37 @@ def _demo_leg(samples: int) -> None:
     foot_error = np.linalg.norm(leg.fk(q_back) - feet, axis=-1).max()
     unique = feet[:, 2] < -0.08  # below this, the limits leave a single branch (slot 0)
     joint_error = np.abs(q_back[unique] - q_batch[unique]).max()
-    print(f"  round trip fk -> ik: worst |fk(ik(p)) - p| = {foot_error:.1e} m; worst joint error "
-          f"{joint_error:.1e} rad where the branch is unique (foot > 8 cm below hx); statuses {counts}")
+    print(
+        f"  round trip fk -> ik: worst |fk(ik(p)) - p| = {foot_error:.1e} m; worst joint error "
+        f"{joint_error:.1e} rad where the branch is unique (foot > 8 cm below hx); statuses {counts}"
+    )
+
+
+def _demo_arm(samples: int) -> None:
+    arm = Spot().arm
+    print(f"Spot Arm: {arm!r}")
+    q_true = np.array([0.4, -1.2, 1.9, 0.3, -0.6, 0.8])
+    T = arm.fk(q_true)
+    print(f"  hand target = fk({q_true}): position {np.round(T[:3, 3], 4)} m")
+    sol = arm.ik_all(T)
+    names = [
+        f"{('front', 'back ')[s // 4]} {('up  ', 'down')[s // 2 % 2]} {('wr0+', 'wr0-')[s % 2]}" for s in range(8)
+    ]
+    for slot in range(8):
+        error = np.abs(arm.fk(sol.q[slot]) - T).max()
+        mark = "valid" if sol.valid[slot] else ("outside limits" if sol.exists[slot] else "no solution")
+        print(f"  slot {slot} ({names[slot]}) q = {np.round(sol.q[slot], 3)}  |fk - T| = {error:.0e}  {mark}")
+    q, status = arm.ik(T, seed=q_true + 0.05)
+    print(f"  arm.ik(T, seed=q_true + 0.05) -> {np.round(q, 6)} {status!r}")
+    rng = np.random.default_rng(1)
+    limits = arm.limits
+    n = max(1, samples // 10)
+    poses = arm.fk(rng.uniform(limits[:, 0], limits[:, 1], (n, 6)))
+    seconds = _throughput(arm.ik_all, poses)
+    print(
+        f"    ik_all on {n:,} poses (8 solutions each): {seconds * 1e3:7.1f} ms "
+        f"({n / seconds / 1e6:.2f} M poses/s, {seconds / n * 1e9:.0f} ns each)"
+    )
 
 
 def _demo_chain(samples: int) -> None:
