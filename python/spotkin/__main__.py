@@ -92,7 +92,8 @@ def _demo_arm(samples: int) -> None:
     print(f"  hand target = fk({q_true}): position {np.round(T[:3, 3], 4)} m")
     sol = arm.ik_all(T)
     names = [
-        f"{('front', 'back ')[s // 4]} {('up  ', 'down')[s // 2 % 2]} {('wr0+', 'wr0-')[s % 2]}" for s in range(8)
+        f"{('front', 'back ')[s // 4]} {('up  ', 'down')[s // 2 % 2]} {('wr0+', 'wr0-')[s % 2]}"
+        for s in range(8)
     ]
     for slot in range(8):
         error = np.abs(arm.fk(sol.q[slot]) - T).max()
