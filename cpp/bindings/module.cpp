@@ -9,4 +9,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_chain(m);
   spotkin::bindings::bind_leg(m);
   spotkin::bindings::bind_arm(m);
+  spotkin::bindings::bind_body(m);
 }

@@ -6,19 +6,25 @@ from ._runtime import get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
+from .body import EULER_SEQUENCES, body_transform
 from .chain import Chain
 from .leg import Leg, LegSolutions
-from .spot import Spot
+from .spot import BodyFrames, BodyIK, BodyRates, Spot
 
 __all__ = [
+    "EULER_SEQUENCES",
     "ArmSingularity",
     "ArmSolutions",
+    "BodyFrames",
+    "BodyIK",
+    "BodyRates",
     "Chain",
     "Leg",
     "LegSolutions",
     "Spot",
     "SpotArm",
     "Status",
+    "body_transform",
     "get_num_threads",
     "pose_from",
     "rotation_x",

@@ -4,7 +4,7 @@ spotkin's C++ core. Use the public façade in `spotkin` instead.
 from __future__ import annotations
 import collections.abc
 import typing
-__all__: list[str] = ['Arm', 'Chain', 'Convention', 'Leg', 'get_num_threads', 'set_num_threads']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'Convention', 'Leg', 'get_num_threads', 'set_num_threads']
 class Convention:
     """
     Members:
@@ -98,6 +98,15 @@ class Arm:
     def jacobian(self, q: typing.Any) -> typing.Any:
         ...
     def singularity(self, q: typing.Any) -> typing.Any:
+        ...
+class Body:
+    def __init__(self, legs: collections.abc.Sequence[Leg], hip_positions: typing.Any) -> None:
+        ...
+    def fk(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, axes: typing.Annotated[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], "FixedSize(3)"], order: typing.Annotated[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], "FixedSize(3)"], q12: typing.Any) -> typing.Any:
+        ...
+    def ik(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, axes: typing.Annotated[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], "FixedSize(3)"], order: typing.Annotated[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], "FixedSize(3)"], feet: typing.Any, seed: typing.Any) -> typing.Any:
+        ...
+    def jacobian(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, axes: typing.Annotated[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], "FixedSize(3)"], order: typing.Annotated[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], "FixedSize(3)"], q12: typing.Any) -> typing.Any:
         ...
 def _register_status(members: typing.Any) -> None:
     ...

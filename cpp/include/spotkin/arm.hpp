@@ -207,7 +207,7 @@ class Arm {
 
   // Target pose of one sample and its validity (1.0 / 0.0), branch-free.
   template <PoseFormat Format, typename T>
-  SPOTKIN_INLINE double read_pose(const T* in, Pose& pose) const noexcept {
+  static SPOTKIN_INLINE double read_pose(const T* in, Pose& pose) noexcept {
     double ok = 1.0;
     if constexpr (Format == PoseFormat::Matrix) {
       for (int i = 0; i < 3; ++i) {

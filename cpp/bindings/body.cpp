@@ -1,0 +1,159 @@
+// Bindings for whole-body kinematics: batched body IK, FK and Jacobian.
+#include "spotkin/body.hpp"
+
+#include <pybind11/stl.h>
+
+#include <string>
+#include <utility>
+
+#include "bindings.hpp"
+#include "dispatch.hpp"
+#include "numpy_boundary.hpp"
+#include "spotkin/parallel.hpp"
+
+namespace spotkin::bindings {
+
+namespace {
+
+constexpr std::ptrdiff_t kMinPerThread = 8192;
+
+template <typename T>
+SPOTKIN_MULTIVERSION void body_ik_kernel(const Body& body, const T* poses, BodyPoseFormat format,
+                                         const EulerSequence& seq, const T* feet, bool feet_shared, const T* seed,
+                                         T* q, std::int8_t* status, std::ptrdiff_t n) {
+  body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n);
+}
+template <typename T>
+SPOTKIN_MULTIVERSION void body_fk_kernel(const Body& body, const T* poses, BodyPoseFormat format,
+                                         const EulerSequence& seq, const T* q, T* feet, std::ptrdiff_t n) {
+  body_batch::fk(body, poses, format, seq, q, feet, n);
+}
+template <typename T>
+SPOTKIN_MULTIVERSION void body_jacobian_kernel(const Body& body, const T* poses, BodyPoseFormat format,
+                                               const EulerSequence& seq, const T* q, T* J, std::ptrdiff_t n) {
+  body_batch::jacobian(body, poses, format, seq, q, J, n);
+}
+
+std::ptrdiff_t pose_width(BodyPoseFormat format) {
+  return format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+}
+
+// body_pose (N, width) contiguous in T, already broadcast by the façade.
+struct Poses {
+  BodyPoseFormat format;
+  Shape leading;
+};
+
+Poses pose_shape(const py::array& arr, BodyPoseFormat format) {
+  const Shape trailing = format == BodyPoseFormat::Matrix ? Shape{4, 4} : Shape{pose_width(format)};
+  return {format, leading_shape(arr, "body_pose", trailing)};
+}
+
+EulerSequence make_sequence(std::array<int, 3> axes, std::array<int, 3> order) {
+  EulerSequence seq;
+  for (int k = 0; k < 3; ++k) {
+    if (axes[k] < 0 || axes[k] > 2 || order[k] < 0 || order[k] > 2)
+      throw py::value_error("invalid Euler sequence");
+    seq.axis[k] = axes[k], seq.order[k] = order[k];
+  }
+  return seq;
+}
+
+py::object ik(const Body& body, py::handle pose_obj, int format_code, std::array<int, 3> axes,
+              std::array<int, 3> order, py::handle feet_obj, py::handle seed_obj) {
+  const auto format = static_cast<BodyPoseFormat>(format_code);
+  const EulerSequence seq = make_sequence(axes, order);
+  return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Poses shape = pose_shape(arr, format);
+    auto poses = contiguous<T>(arr);
+    auto feet = contiguous<T>(as_real_array(feet_obj, "feet"));
+    const Shape feet_leading = leading_shape(feet, "feet", {4, 3});
+    const bool feet_shared = feet_leading.empty();
+    if (!feet_shared && feet_leading != shape.leading)
+      throw py::value_error("feet " + format_shape(feet_leading) + " + (4, 3) must match body_pose's leading shape " +
+                            format_shape(shape.leading));
+    const bool has_seed = !seed_obj.is_none();
+    py::array_t<T, py::array::c_style> seed;
+    if (has_seed) {
+      seed = contiguous<T>(as_real_array(seed_obj, "seed"));
+      if (leading_shape(seed, "seed", {12}) != shape.leading)
+        throw py::value_error("seed must have shape " + format_shape(shape.leading) + " + (12,)");
+    }
+    auto q = new_array<T>(shape.leading, {12});
+    auto status = new_array<std::int8_t>(shape.leading, {4});
+    const std::ptrdiff_t width = pose_width(format);
+    const T* pd = poses.data();
+    const T* fd = feet.data();
+    const T* sd = has_seed ? seed.data() : nullptr;
+    T* qd = q.mutable_data();
+    std::int8_t* std_ = status.mutable_data();
+    {
+      ReleaseGilFor release(count(shape.leading));
+      parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        body_ik_kernel<T>(body, pd + width * b, format, seq, feet_shared ? fd : fd + 12 * b, feet_shared,
+                          sd ? sd + 12 * b : nullptr, qd + 12 * b, std_ + 4 * b, e - b);
+      });
+    }
+    return py::make_tuple(q, status);
+  });
+}
+
+template <bool Jacobian>
+py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code, std::array<int, 3> axes,
+                          std::array<int, 3> order, py::handle q_obj) {
+  const auto format = static_cast<BodyPoseFormat>(format_code);
+  const EulerSequence seq = make_sequence(axes, order);
+  return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Poses shape = pose_shape(arr, format);
+    auto poses = contiguous<T>(arr);
+    auto q = contiguous<T>(as_real_array(q_obj, "q12"));
+    if (leading_shape(q, "q12", {12}) != shape.leading)
+      throw py::value_error("q12 must have shape " + format_shape(shape.leading) + " + (12,)");
+    auto out = Jacobian ? new_array<T>(shape.leading, {12, 18}) : new_array<T>(shape.leading, {4, 3});
+    const std::ptrdiff_t width = pose_width(format);
+    const T* pd = poses.data();
+    const T* qd = q.data();
+    T* od = out.mutable_data();
+    {
+      ReleaseGilFor release(count(shape.leading));
+      parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        if constexpr (Jacobian) {
+          body_jacobian_kernel<T>(body, pd + width * b, format, seq, qd + 12 * b, od + 216 * b, e - b);
+        } else {
+          body_fk_kernel<T>(body, pd + width * b, format, seq, qd + 12 * b, od + 12 * b, e - b);
+        }
+      });
+    }
+    return std::move(out);
+  });
+}
+
+Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj) {
+  if (legs.size() != 4) throw py::value_error("a body needs four legs");
+  auto hips = contiguous<double>(as_real_array(hips_obj, "hip_positions"));
+  if (hips.ndim() != 2 || hips.shape(0) != 4 || hips.shape(1) != 3)
+    throw py::value_error("hip_positions must have shape (4, 3)");
+  Body body;
+  for (int l = 0; l < 4; ++l) {
+    body.legs[l] = *legs[static_cast<std::size_t>(l)];
+    for (int k = 0; k < 3; ++k) body.hips[l][k] = hips.data()[3 * l + k];
+  }
+  return body;
+}
+
+}  // namespace
+
+void bind_body(py::module_& m) {
+  py::class_<Body>(m, "Body")
+      .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"))
+      .def("ik", &ik, py::arg("body_pose"), py::arg("format"), py::arg("axes"), py::arg("order"), py::arg("feet"),
+           py::arg("seed"))
+      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("format"), py::arg("axes"),
+           py::arg("order"), py::arg("q12"))
+      .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("format"), py::arg("axes"),
+           py::arg("order"), py::arg("q12"));
+}
+
+}  // namespace spotkin::bindings

@@ -1,0 +1,248 @@
+// Whole-body kinematics (seed 000 §3): the body pose in the world, the four
+// feet fixed on the ground, the 12 leg joints.
+//
+//   foot_world_i = t + R (hip_i + fk_leg_i(q_i))                      (B1)
+//   IK: p_leg_i = R^T (foot_world_i - t) - hip_i, then the leg IK     (B2)
+//   d foot_world_i = v + w x (foot_world_i - t) + R J_leg_i dq_i      (B3)
+// with (v, w) the body twist: the linear velocity of the body origin and the
+// angular velocity, both in the world frame.
+//
+// Body orientation from Euler angles: intrinsic sequences (scipy's upper case,
+// e.g. "XYZ": R = R_X(a) R_Y(b) R_Z(c), seed 000 Q3.2) or extrinsic ones (lower
+// case, e.g. "xyz": R = R_z(c) R_y(b) R_x(a), ROS roll-pitch-yaw).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "spotkin/arm.hpp"
+#include "spotkin/common.hpp"
+#include "spotkin/leg.hpp"
+#include "spotkin/vector_math.hpp"
+
+namespace spotkin {
+
+enum class BodyPoseFormat : std::int8_t { Euler = 0, Matrix = 1, PositionQuaternion = 2 };
+
+// An Euler sequence as three axes (0 = x, 1 = y, 2 = z) applied intrinsically:
+// R = R_axis[0](angle[order[0]]) R_axis[1](angle[order[1]]) R_axis[2](angle[order[2]]).
+struct EulerSequence {
+  int axis[3] = {0, 1, 2};
+  int order[3] = {0, 1, 2};
+};
+
+struct Body {
+  Leg legs[4];
+  double hips[4][3];  // hx joint origins in the body frame, SDK order
+
+  // R = product of elementary rotations for one sample (branch-free).
+  static SPOTKIN_INLINE void euler_rotation(const EulerSequence& seq, const double angles[3], double R[3][3]) noexcept {
+    double M[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int k = 0; k < 3; ++k) {
+      double s, c;
+      vector_math::sincos_bounded(angles[seq.order[k]], s, c);
+      const int a = seq.axis[k], i = (a + 1) % 3, j = (a + 2) % 3;
+      // M <- M R_a: columns i and j mix (R_a e_i = c e_i + s e_j, R_a e_j = -s e_i + c e_j)
+      for (int r = 0; r < 3; ++r) {
+        const double mi = M[r][i], mj = M[r][j];
+        M[r][i] = c * mi + s * mj;
+        M[r][j] = c * mj - s * mi;
+      }
+    }
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) R[r][k] = M[r][k];
+  }
+};
+
+namespace body_batch {
+
+constexpr std::ptrdiff_t kBlock = 64;
+
+// Rotation, translation and validity (1.0 / 0.0) of body poses for a block, SoA.
+struct BlockPoses {
+  double R[9][kBlock], t[3][kBlock], ok[kBlock];
+};
+
+template <typename T>
+SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const EulerSequence& seq, std::ptrdiff_t stride,
+                               std::ptrdiff_t m, BlockPoses& out) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    const T* in = poses + stride * i;
+    double R[3][3], t[3], ok = 1.0;
+    if (format == BodyPoseFormat::Euler) {
+      const double angles[3] = {double(in[3]), double(in[4]), double(in[5])};
+      const bool bounded = std::fabs(angles[0]) < vector_math::kReducibleLimit &&
+                           std::fabs(angles[1]) < vector_math::kReducibleLimit &&
+                           std::fabs(angles[2]) < vector_math::kReducibleLimit;
+      Body::euler_rotation(seq, angles, R);
+      ok = bounded ? 1.0 : 0.0;
+      t[0] = double(in[0]), t[1] = double(in[1]), t[2] = double(in[2]);
+    } else {
+      Arm::Pose pose;
+      double buffer[16];
+      const int width = format == BodyPoseFormat::Matrix ? 16 : 7;
+      for (int k = 0; k < width; ++k) buffer[k] = double(in[k]);
+      ok = format == BodyPoseFormat::Matrix ? Arm::read_pose<PoseFormat::Matrix>(buffer, pose)
+                                            : Arm::read_pose<PoseFormat::PositionQuaternion>(buffer, pose);
+      for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) R[r][k] = pose.R[r][k];
+        t[r] = pose.p[r];
+      }
+    }
+    double sum = t[0] + t[1] + t[2];
+    for (int r = 0; r < 3; ++r) sum += R[r][0] + R[r][1] + R[r][2];
+    out.ok[i] = (sum - sum) == 0.0 ? ok : 0.0;
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) out.R[3 * r + k][i] = R[r][k];
+      out.t[r][i] = t[r];
+    }
+  }
+}
+
+// (B2) + leg slot 0 for one leg over a block: vectorised.
+SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __restrict hip,
+                                            const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
+                                            const double* __restrict fx, const double* __restrict fy,
+                                            const double* __restrict fz, double* __restrict x, double* __restrict y,
+                                            double* __restrict z, double (*__restrict q0)[kBlock],
+                                            double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
+                                            double tol) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    const double dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
+    const double px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
+    const double py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
+    const double pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
+    x[i] = px, y[i] = py, z[i] = pz;
+    double q[3];
+    const double finite = leg_batch::finite_mask(px, py, pz);
+    const double e = finite * leg.solve_slot0(px, py, pz, q, tol);
+    ok[i] = e * leg.limits().wrap_mask(q);
+    exists[i] = finite == 0.0 ? -1.0 : e;
+    q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
+  }
+}
+
+// Whole-body IK over `count` poses. feet: (count, 4, 3) or, when feet_shared,
+// one (4, 3) stance for every pose. seed: null or (count, 12). q (count, 12),
+// status (count, 4): each leg's status and fallback are exactly the leg API's.
+template <typename T>
+SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                       const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
+                       std::ptrdiff_t count) noexcept {
+  const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  BlockPoses P;
+  double fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock],
+      ok[kBlock];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    read_poses(poses + stride * b0, format, seq, stride, m, P);
+    for (int l = 0; l < 4; ++l) {
+      const Leg& leg = body.legs[l];
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const T* f = feet + (feet_shared ? 3 * l : 12 * (b0 + i) + 3 * l);
+        fx[i] = double(f[0]), fy[i] = double(f[1]), fz[i] = double(f[2]);
+      }
+      leg_block(leg, body.hips[l], P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, Leg::ratio_tolerance<T>());
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const std::ptrdiff_t t = b0 + i;
+        T* qt = q + 12 * t + 3 * l;
+        std::int8_t& st = status[4 * t + l];
+        const T* sd = seed ? seed + 12 * t + 3 * l : nullptr;
+        if (ok[i] != 0.0 && P.ok[i] != 0.0 && !sd) {  // the common case
+          qt[0] = T(q0[0][i]), qt[1] = T(q0[1][i]), qt[2] = T(q0[2][i]);
+          st = std::int8_t(Status::Ok);
+          continue;
+        }
+        if (P.ok[i] == 0.0 || exists[i] < 0.0 || (sd && !leg_batch::finite3(sd))) {
+          qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
+          st = std::int8_t(Status::InvalidInput);
+          continue;
+        }
+        if (exists[i] == 0.0) {
+          leg_batch::unreachable_fallback(leg, x[i], y[i], z[i], qt);
+          st = std::int8_t(Status::Unreachable);
+          continue;
+        }
+        double q_all[Leg::kSlots][3];
+        leg.solve_all(x[i], y[i], z[i], q_all, true);
+        st = std::int8_t(leg_batch::choose(leg, q_all, true, sd, qt, nullptr));
+      }
+    }
+  }
+}
+
+// (B1): world foot centres (count, 4, 3).
+template <typename T>
+SPOTKIN_INLINE void fk(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                       const T* q, T* feet, std::ptrdiff_t count) noexcept {
+  const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  BlockPoses P;
+  double legq[kBlock * 3], p[kBlock * 3];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    read_poses(poses + stride * b0, format, seq, stride, m, P);
+    for (int l = 0; l < 4; ++l) {
+      for (std::ptrdiff_t i = 0; i < m; ++i)
+        for (int j = 0; j < 3; ++j) legq[3 * i + j] = double(q[12 * (b0 + i) + 3 * l + j]);
+      leg_batch::fk(body.legs[l], legq, p, m);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const double h[3] = {body.hips[l][0] + p[3 * i], body.hips[l][1] + p[3 * i + 1], body.hips[l][2] + p[3 * i + 2]};
+        T* f = feet + 12 * (b0 + i) + 3 * l;
+        const double nan_if_bad = P.ok[i] != 0.0 ? 0.0 : quiet_nan<double>();
+        for (int r = 0; r < 3; ++r)
+          f[r] = T(P.t[r][i] + P.R[3 * r][i] * h[0] + P.R[3 * r + 1][i] * h[1] + P.R[3 * r + 2][i] * h[2] +
+                   nan_if_bad);
+      }
+    }
+  }
+}
+
+// (B3): d(feet world) / d(v, w, q12), (count, 12, 18), row-major.
+template <typename T>
+SPOTKIN_INLINE void jacobian(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                             const T* q, T* J, std::ptrdiff_t count) noexcept {
+  const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  BlockPoses P;
+  double legq[kBlock * 3], p[kBlock * 3], Jl[kBlock * 9];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    read_poses(poses + stride * b0, format, seq, stride, m, P);
+    for (std::ptrdiff_t i = 0; i < m; ++i) std::fill(J + 216 * (b0 + i), J + 216 * (b0 + i + 1), T(0));
+    for (int l = 0; l < 4; ++l) {
+      for (std::ptrdiff_t i = 0; i < m; ++i)
+        for (int j = 0; j < 3; ++j) legq[3 * i + j] = double(q[12 * (b0 + i) + 3 * l + j]);
+      leg_batch::fk(body.legs[l], legq, p, m);
+      leg_batch::jacobian(body.legs[l], legq, Jl, m);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const double nan_if_bad = P.ok[i] != 0.0 ? 0.0 : quiet_nan<double>();
+        const double h[3] = {body.hips[l][0] + p[3 * i], body.hips[l][1] + p[3 * i + 1], body.hips[l][2] + p[3 * i + 2]};
+        double r[3];  // foot_world - t = R h
+        for (int a = 0; a < 3; ++a) r[a] = P.R[3 * a][i] * h[0] + P.R[3 * a + 1][i] * h[1] + P.R[3 * a + 2][i] * h[2];
+        T* rows = J + 216 * (b0 + i) + 18 * 3 * l;
+        for (int a = 0; a < 3; ++a) {
+          T* row = rows + 18 * a;
+          row[a] = T(1.0 + nan_if_bad);  // d/dv = I
+        }
+        // d/dw: w x r = -[r]x w
+        rows[0 * 18 + 3] = T(0.0 + nan_if_bad), rows[0 * 18 + 4] = T(r[2] + nan_if_bad),
+        rows[0 * 18 + 5] = T(-r[1] + nan_if_bad);
+        rows[1 * 18 + 3] = T(-r[2] + nan_if_bad), rows[1 * 18 + 4] = T(0.0 + nan_if_bad),
+        rows[1 * 18 + 5] = T(r[0] + nan_if_bad);
+        rows[2 * 18 + 3] = T(r[1] + nan_if_bad), rows[2 * 18 + 4] = T(-r[0] + nan_if_bad),
+        rows[2 * 18 + 5] = T(0.0 + nan_if_bad);
+        // d/dq_l = R J_leg
+        const double* Jli = Jl + 9 * i;
+        for (int a = 0; a < 3; ++a)
+          for (int k = 0; k < 3; ++k)
+            rows[18 * a + 6 + 3 * l + k] = T(P.R[3 * a][i] * Jli[k] + P.R[3 * a + 1][i] * Jli[3 + k] +
+                                             P.R[3 * a + 2][i] * Jli[6 + k] + nan_if_bad);
+      }
+    }
+  }
+}
+
+}  // namespace body_batch
+
+}  // namespace spotkin

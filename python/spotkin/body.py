@@ -1,0 +1,100 @@
+"""Whole-body kinematics helpers: body poses in every accepted form.
+
+A body pose is one of
+
+- ``(..., 6)`` ``[x, y, z, a, b, c]``: position, then Euler angles in the sequence
+  ``seq`` (scipy's names). The default ``"XYZ"`` is intrinsic X, Y', Z''
+  (Tait–Bryan, seed 000 Q3.2): R = Rx(a) Ry(b) Rz(c). Lower case is extrinsic:
+  ``"xyz"`` gives R = Rz(c) Ry(b) Rx(a), ROS roll-pitch-yaw;
+- ``(..., 4, 4)`` homogeneous transforms (world <- body);
+- ``(..., 7)`` ``[x, y, z, qx, qy, qz, qw]`` (scipy's scalar-last quaternions).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = ["EULER_SEQUENCES", "body_transform"]
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+EULER_SEQUENCES = tuple(
+    s
+    for case in (str.upper, str.lower)
+    for s in (case(a + b + c) for a in "xyz" for b in "xyz" for c in "xyz")
+    if s[0] != s[1] and s[1] != s[2]
+)
+"""Every accepted ``seq``: the 12 intrinsic (upper case) and 12 extrinsic (lower case)
+Tait–Bryan and proper Euler sequences, as in scipy."""
+
+FORMAT_EULER, FORMAT_MATRIX, FORMAT_QUATERNION = 0, 1, 2
+
+
+def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
+    """(axes, order) such that R = R_axes[0](angle[order[0]]) R_axes[1](...) R_axes[2](...)."""
+    if not isinstance(seq, str) or seq not in EULER_SEQUENCES:
+        raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}")
+    axes = tuple(_AXES[ch.lower()] for ch in seq)
+    if seq.isupper():  # intrinsic: R = R_0(a) R_1(b) R_2(c)
+        return axes, (0, 1, 2)
+    # extrinsic: R = R_2(c) R_1(b) R_0(a)
+    return (axes[2], axes[1], axes[0]), (2, 1, 0)
+
+
+def pose_format(body_pose: np.ndarray) -> tuple[int, tuple[int, ...]]:
+    """(format code, leading shape) of a body-pose array."""
+    shape = body_pose.shape
+    if shape[-2:] == (4, 4):
+        return FORMAT_MATRIX, shape[:-2]
+    if shape[-1:] == (6,):
+        return FORMAT_EULER, shape[:-1]
+    if shape[-1:] == (7,):
+        return FORMAT_QUATERNION, shape[:-1]
+    raise ValueError(
+        "body_pose must have shape (..., 6) [x, y, z, a, b, c], (..., 4, 4) or (..., 7) "
+        f"[x, y, z, qx, qy, qz, qw], got {shape}"
+    )
+
+
+def _elementary(axis: int, angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    R = np.zeros((*angle.shape, 3, 3))
+    R[..., axis, axis] = 1.0
+    R[..., i, i] = c
+    R[..., j, j] = c
+    R[..., j, i] = s
+    R[..., i, j] = -s
+    return R
+
+
+def body_transform(body_pose: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+    """The world <- body transform (..., 4, 4) of body poses in any accepted form (NumPy).
+
+    Matrices are returned as given; quaternions are converted with s = 2 / |q|^2.
+    """
+    pose = np.asarray(body_pose, dtype=np.float64)
+    fmt, lead = pose_format(pose)
+    if fmt == FORMAT_MATRIX:
+        return pose.copy()
+    T = np.zeros((*lead, 4, 4))
+    T[..., 3, 3] = 1.0
+    T[..., :3, 3] = pose[..., :3]
+    if fmt == FORMAT_EULER:
+        axes, order = parse_sequence(seq)
+        R = np.broadcast_to(np.eye(3), (*lead, 3, 3))
+        for k in range(3):
+            R = R @ _elementary(axes[k], pose[..., 3 + order[k]])
+    else:
+        x, y, z, w = np.moveaxis(pose[..., 3:], -1, 0)
+        s = 2.0 / (x * x + y * y + z * z + w * w)
+        R = np.stack(
+            [
+                np.stack([1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)], -1),
+                np.stack([s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)], -1),
+                np.stack([s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)], -1),
+            ],
+            -2,
+        )
+    T[..., :3, :3] = R
+    return T

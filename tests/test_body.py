@@ -1,0 +1,321 @@
+"""Whole body: conventions against scipy, round trips, per-leg statuses, Jacobian,
+the reverse differential map, the arm on the body, batch semantics, threads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+import spotkin as sk
+from conftest import BATCH_SHAPES
+from spotkin.reference import leg as ref_leg
+
+SPOT = sk.Spot()
+FEET = SPOT.stance_feet(0.5)
+NOMINAL = np.array([0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
+
+
+def random_poses(rng: np.random.Generator, n: int, spread: float = 0.05) -> np.ndarray:
+    noise = rng.normal(0, 1, (n, 6)) * [spread, spread, spread, 2 * spread, 2 * spread, 2 * spread]
+    return NOMINAL + noise
+
+
+def matrix_poses(poses: np.ndarray, seq: str = "XYZ") -> np.ndarray:
+    T = np.zeros((*poses.shape[:-1], 4, 4))
+    T[..., :3, :3] = (
+        Rotation.from_euler(seq, poses[..., 3:].reshape(-1, 3)).as_matrix().reshape(*poses.shape[:-1], 3, 3)
+    )
+    T[..., :3, 3] = poses[..., :3]
+    T[..., 3, 3] = 1
+    return T
+
+
+# -- conventions -----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seq", sk.EULER_SEQUENCES)
+def test_every_sequence_matches_scipy(rng, seq):
+    poses = random_poses(rng, 200, spread=0.5)
+    T_ref = matrix_poses(poses, seq)
+    np.testing.assert_allclose(sk.body_transform(poses, seq), T_ref, atol=1e-14)
+    q12 = SPOT.body_ik(NOMINAL, FEET).q
+    np.testing.assert_allclose(SPOT.body_fk(poses, q12, seq=seq), SPOT.body_fk(T_ref, q12), atol=1e-14)
+
+
+def test_default_is_intrinsic_xyz_and_ros_rpy_is_extrinsic():
+    a, b, c = 0.3, -0.2, 0.7
+    Rx, Ry, Rz = (sk.rotation_x(a)[:3, :3], sk.rotation_y(b)[:3, :3], sk.rotation_z(c)[:3, :3])
+    pose = [0, 0, 0.5, a, b, c]
+    np.testing.assert_allclose(sk.body_transform(pose)[:3, :3], Rx @ Ry @ Rz, atol=1e-15)
+    np.testing.assert_allclose(sk.body_transform(pose, "xyz")[:3, :3], Rz @ Ry @ Rx, atol=1e-15)
+    with pytest.raises(ValueError, match="seq must be one of scipy's Euler sequences"):
+        SPOT.body_ik(pose, FEET, seq="XYX Z")
+    with pytest.raises(ValueError, match="seq must be one of"):
+        SPOT.body_fk(pose, np.zeros(12), seq="xYz")
+
+
+def test_pose_formats_agree(rng):
+    poses = random_poses(rng, 500)
+    T = matrix_poses(poses)
+    quat = Rotation.from_euler("XYZ", poses[:, 3:]).as_quat()
+    p7 = np.concatenate([poses[:, :3], quat], -1)
+    a, b, c = SPOT.body_ik(poses, FEET), SPOT.body_ik(T, FEET), SPOT.body_ik(p7, FEET)
+    np.testing.assert_allclose(a.q, b.q, atol=1e-12)
+    np.testing.assert_allclose(a.q, c.q, atol=1e-12)
+    np.testing.assert_array_equal(a.status, b.status)
+
+
+# -- IK ----------------------------------------------------------------------------------------------------
+
+
+def test_body_ik_matches_the_leg_reference(rng):
+    poses = random_poses(rng, 100, spread=0.1)
+    feet = FEET + rng.normal(0, 0.1, (100, 4, 3))
+    res = SPOT.body_ik(poses, feet)
+    T = sk.body_transform(poses)
+    for n in range(100):
+        R, t = T[n, :3, :3], T[n, :3, 3]
+        for i, leg in enumerate(SPOT.legs):
+            p = R.T @ (feet[n, i] - t) - SPOT.hip_positions[i]
+            q_ref, status_ref = ref_leg.ik(
+                p, leg.hip_offset, leg.upper, leg.lower, leg.knee_offset, leg.limits[:, 0], leg.limits[:, 1]
+            )
+            assert res.status[n, i] == status_ref
+            q = res.q[n, 3 * i : 3 * i + 3]
+            if status_ref == sk.Status.UNREACHABLE:  # on a singular set: compare the feet
+                np.testing.assert_allclose(leg.fk(q), leg.fk(q_ref), atol=1e-12)
+            else:
+                np.testing.assert_allclose(q, q_ref, atol=1e-9)
+
+
+@pytest.mark.slow
+def test_round_trip_on_random_stances(rng):
+    n = 100_000
+    poses = random_poses(rng, n)
+    feet = FEET + rng.normal(0, 0.03, (n, 4, 3))
+    res = SPOT.body_ik(poses, feet)
+    ok = res.status == sk.Status.OK
+    assert ok.mean() > 0.99
+    back = SPOT.body_fk(poses, res.q)
+    assert np.abs(back - feet)[ok].max() < 1e-12
+
+
+@pytest.mark.slow
+def test_round_trip_recovers_the_generating_joints(rng):
+    # joints with every foot more than 8 cm below its hip, where the limits leave one branch
+    n = 100_000
+    limits = SPOT.leg("fl").limits
+    q = rng.uniform(limits[:, 0], limits[:, 1], (4 * n, 3))
+    q = q[SPOT.leg("fl").fk(q)[:, 2] < -0.1][: 4 * (len(q) // 8) // 4 * 4]
+    q12 = q[: (len(q) // 4) * 4].reshape(-1, 12)
+    poses = random_poses(rng, len(q12), spread=0.1)
+    feet = SPOT.body_fk(poses, q12)
+    res = SPOT.body_ik(poses, feet)
+    assert (res.status == 0).all()
+    np.testing.assert_allclose(res.q, q12, atol=1e-9)
+
+
+def test_failures_stay_in_their_leg():
+    feet = np.broadcast_to(FEET, (4, 4, 3)).copy()
+    feet[1, 2] = np.nan  # one foot NaN
+    feet[2, 0, 2] = -1.0  # one foot far below: unreachable
+    poses = np.tile(NOMINAL, (4, 1))
+    poses[3, 4] = np.nan  # NaN in one body pose
+    res = SPOT.body_ik(poses, feet)
+    np.testing.assert_array_equal(res.status, [[0, 0, 0, 0], [0, 0, 3, 0], [1, 0, 0, 0], [3, 3, 3, 3]])
+    good = SPOT.body_ik(NOMINAL, FEET).q
+    np.testing.assert_array_equal(
+        res.q[1, [0, 1, 2, 3, 4, 5, 9, 10, 11]], good[[0, 1, 2, 3, 4, 5, 9, 10, 11]]
+    )
+    assert np.isnan(res.q[1, 6:9]).all() and np.isnan(res.q[3]).all()
+    # the unreachable leg gets the leg API's fallback
+    p = feet[2, 0] - [0, 0, 0.5] - SPOT.hip_positions[0]
+    q_leg, status = SPOT.leg("fl").ik(p)
+    assert status == sk.Status.UNREACHABLE
+    np.testing.assert_allclose(res.q[2, :3], q_leg, atol=1e-12)
+
+
+def test_invalid_rotation_marks_all_legs():
+    T = matrix_poses(NOMINAL[None])[0]
+    T[:3, :3] *= 1.01
+    np.testing.assert_array_equal(SPOT.body_ik(T, FEET).status, [3, 3, 3, 3])
+
+
+def test_seed_picks_among_valid_branches():
+    # lift the body so the front-left foot ends near hip height: two hip branches are valid
+    foot = SPOT.hip_positions[0] + [0.3, 0.13, 0.0] + [0, 0, 0.5]
+    feet = FEET.copy()
+    feet[0] = foot
+    sol = SPOT.leg("fl").ik_all(foot - [0, 0, 0.5] - SPOT.hip_positions[0])
+    assert sol.valid[[0, 2]].all()
+    seed = np.zeros(12)
+    seed[:3] = sol.q[2]
+    np.testing.assert_allclose(SPOT.body_ik(NOMINAL, feet).q[:3], sol.q[0], atol=1e-12)
+    np.testing.assert_allclose(SPOT.body_ik(NOMINAL, feet, seed=seed).q[:3], sol.q[2], atol=1e-12)
+
+
+# -- Jacobian and rates ----------------------------------------------------------------------------------
+
+
+def twist_step(T: np.ndarray, twist: np.ndarray) -> np.ndarray:
+    """exp of a world-frame twist applied to a body pose: t + v, exp([w]) R."""
+    out = T.copy()
+    out[:3, :3] = Rotation.from_rotvec(twist[3:]).as_matrix() @ T[:3, :3]
+    out[:3, 3] = T[:3, 3] + twist[:3]
+    return out
+
+
+def test_body_jacobian_matches_central_differences(rng):
+    step = 1e-6
+    for _ in range(20):
+        T = matrix_poses(random_poses(rng, 1))[0]
+        q12 = SPOT.body_ik(T, FEET + rng.normal(0, 0.02, (4, 3))).q
+        J = SPOT.body_jacobian(T, q12)
+        fd = np.zeros((12, 18))
+        for k in range(6):
+            e = np.zeros(6)
+            e[k] = step
+            fd[:, k] = (
+                SPOT.body_fk(twist_step(T, e), q12) - SPOT.body_fk(twist_step(T, -e), q12)
+            ).ravel() / (2 * step)
+        for k in range(12):
+            e = np.zeros(12)
+            e[k] = step
+            fd[:, 6 + k] = (SPOT.body_fk(T, q12 + e) - SPOT.body_fk(T, q12 - e)).ravel() / (2 * step)
+        np.testing.assert_allclose(J, fd, atol=1e-8)
+
+
+def test_body_rates_keep_the_feet_still(rng):
+    poses = random_poses(rng, 50)
+    q12 = SPOT.body_ik(poses, FEET).q
+    twist = rng.normal(0, 0.2, (50, 6))
+    rates = SPOT.body_rates(poses, q12, twist)
+    assert not rates.singular.any()
+    J = SPOT.body_jacobian(poses, q12)
+    feet_velocity = J[..., :6] @ twist[..., None] + J[..., 6:] @ rates.qd[..., None]
+    assert np.abs(feet_velocity).max() < 1e-12
+
+
+def test_body_rates_flag_singular_legs():
+    q12 = SPOT.body_ik(NOMINAL, FEET).q
+    beta = np.arctan2(SPOT.leg("fl").knee_offset, SPOT.leg("fl").upper)
+    q12[2] = -beta  # front-left knee stretched
+    rates = SPOT.body_rates(NOMINAL, q12, [0.1, 0, 0, 0, 0, 0.2])
+    np.testing.assert_array_equal(rates.singular, [True, False, False, False])
+    assert np.isnan(rates.qd[:3]).all() and np.isfinite(rates.qd[3:]).all()
+
+
+# -- arm on the body, frames ---------------------------------------------------------------------------
+
+
+def test_arm_ik_world_and_fk_all(rng):
+    arm = SPOT.arm
+    limits = arm.limits
+    q_arm = rng.uniform(limits[:, 0], limits[:, 1], (200, 6))
+    poses = random_poses(rng, 200)
+    T_world = sk.body_transform(poses) @ arm.fk(q_arm)
+    q, status = SPOT.arm_ik_world(poses, T_world, seed=q_arm)
+    assert (status == 0).all()
+    np.testing.assert_allclose(q, q_arm, atol=1e-9)
+    q12 = SPOT.body_ik(poses, FEET).q
+    frames = SPOT.fk_all(poses, q12, q_arm)
+    np.testing.assert_allclose(frames.feet, SPOT.body_fk(poses, q12), atol=1e-14)
+    np.testing.assert_allclose(frames.hand, T_world, atol=1e-14)
+    np.testing.assert_allclose(
+        frames.hips,
+        sk.body_transform(poses)[:, None, :3, 3]
+        + np.einsum("nij,kj->nki", sk.body_transform(poses)[:, :3, :3], SPOT.hip_positions),
+        atol=1e-14,
+    )
+    # knees sit at the upper-leg length from the hy joints and the lower-leg length from the feet
+    assert np.allclose(np.linalg.norm(frames.feet - frames.knees, axis=-1), SPOT.leg("fl").lower)
+    # a hand target held fixed in the world while the body moves
+    target = sk.body_transform(NOMINAL) @ arm.fk([0.2, -1.0, 1.7, 0.1, 0.4, 0.0])
+    moving = random_poses(rng, 50, spread=0.02)
+    q, status = SPOT.arm_ik_world(moving, target)
+    assert (status == 0).all()
+    np.testing.assert_allclose(
+        sk.body_transform(moving) @ arm.fk(q), np.broadcast_to(target, (50, 4, 4)), atol=1e-12
+    )
+
+
+def test_stance_feet():
+    feet = SPOT.stance_feet(0.46)
+    q = SPOT.body_ik([0, 0, 0.46, 0, 0, 0], feet).q.reshape(4, 3)
+    np.testing.assert_allclose(q[:, 0], 0.0, atol=1e-12)  # hx = 0: feet straight below the hips
+    np.testing.assert_allclose(feet[:, 2], 0.036)
+    with pytest.raises(ValueError, match="out of reach"):
+        SPOT.stance_feet(1.5)
+
+
+# -- batches, bad input, threads --------------------------------------------------------------------------
+
+
+@given(
+    pose_batch=st.sampled_from(BATCH_SHAPES),
+    feet_shared=st.booleans(),
+    dtype=st.sampled_from([np.float64, np.float32]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_batch_shapes_and_broadcasting(pose_batch, feet_shared, dtype, seed):
+    rng = np.random.default_rng(seed)
+    poses = random_poses(rng, int(np.prod(pose_batch, dtype=int))).reshape(*pose_batch, 6).astype(dtype)
+    feet = (
+        FEET
+        if feet_shared
+        else np.broadcast_to(FEET, (*pose_batch, 4, 3)) + rng.normal(0, 0.01, (*pose_batch, 4, 3))
+    )
+    feet = feet.astype(dtype)
+    res = SPOT.body_ik(poses, feet)
+    assert res.q.shape == (*pose_batch, 12) and res.status.shape == (*pose_batch, 4) and res.q.dtype == dtype
+    assert np.isin(res.status, [0, 2]).all()  # random stances may hit a joint limit, nothing else
+    tolerance = 1e-12 if dtype == np.float64 else 2e-5
+    ok = res.status == 0
+    assert np.abs(SPOT.body_fk(poses, res.q) - feet)[ok].max(initial=0) < tolerance
+    assert SPOT.body_jacobian(poses, res.q).shape == (*pose_batch, 12, 18)
+
+
+def test_broadcasting_feet_against_poses(rng):
+    poses = random_poses(rng, 6).reshape(2, 3, 6)
+    feet = np.broadcast_to(FEET, (3, 4, 3)).copy()
+    res = SPOT.body_ik(poses, feet)
+    assert res.q.shape == (2, 3, 12)
+    np.testing.assert_allclose(res.q[1, 2], SPOT.body_ik(poses[1, 2], FEET).q)
+    empty = SPOT.body_ik(np.zeros((0, 6)), FEET)
+    assert empty.q.shape == (0, 12) and empty.status.shape == (0, 4)
+
+
+def test_bad_shapes_name_both_arguments():
+    with pytest.raises(ValueError, match=r"body_pose \(5, 6\) and feet \(3, 4, 3\) do not broadcast"):
+        SPOT.body_ik(np.zeros((5, 6)), np.zeros((3, 4, 3)))
+    with pytest.raises(ValueError, match=r"feet must have shape \(\.\.\., 4, 3\)"):
+        SPOT.body_ik(NOMINAL, np.zeros((4, 2)))
+    with pytest.raises(ValueError, match=r"body_pose must have shape \(\.\.\., 6\)"):
+        SPOT.body_ik(np.zeros(5), FEET)
+    with pytest.raises(ValueError, match=r"q12 must have shape \(\.\.\., 12\)"):
+        SPOT.body_fk(NOMINAL, np.zeros(11))
+    with pytest.raises(TypeError, match="must be a real numeric array"):
+        SPOT.body_ik(["a"] * 6, FEET)
+
+
+def test_threads_bit_identical_and_concurrent_callers(rng):
+    from concurrent.futures import ThreadPoolExecutor
+
+    poses = random_poses(rng, 200_001)
+    before = sk.get_num_threads()
+    try:
+        sk.set_num_threads(1)
+        one = SPOT.body_ik(poses, FEET)
+        sk.set_num_threads(2)
+        two = SPOT.body_ik(poses, FEET)
+    finally:
+        sk.set_num_threads(before)
+    np.testing.assert_array_equal(one.q, two.q)
+    np.testing.assert_array_equal(one.status, two.status)
+    chunks = np.array_split(poses, 8)
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(lambda c: SPOT.body_ik(c, FEET).q, chunks))
+    np.testing.assert_array_equal(np.concatenate(results), one.q)
