@@ -30,10 +30,7 @@ Tait–Bryan and proper Euler sequences, as in scipy."""
 FORMAT_EULER, FORMAT_MATRIX, FORMAT_QUATERNION = 0, 1, 2
 
 
-def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
-    """(axes, order) such that R = R_axes[0](angle[order[0]]) R_axes[1](...) R_axes[2](...)."""
-    if not isinstance(seq, str) or seq not in EULER_SEQUENCES:
-        raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}")
+def _sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
     axes = tuple(_AXES[ch.lower()] for ch in seq)
     if seq.isupper():  # intrinsic: R = R_0(a) R_1(b) R_2(c)
         return axes, (0, 1, 2)
@@ -41,14 +38,26 @@ def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]
     return (axes[2], axes[1], axes[0]), (2, 1, 0)
 
 
+_PARSED = {seq: _sequence(seq) for seq in EULER_SEQUENCES}
+
+
+def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
+    """(axes, order) such that R = R_axes[0](angle[order[0]]) R_axes[1](...) R_axes[2](...)."""
+    try:
+        return _PARSED[seq]
+    except (KeyError, TypeError):
+        raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}") from None
+
+
 def pose_format(body_pose: np.ndarray) -> tuple[int, tuple[int, ...]]:
     """(format code, leading shape) of a body-pose array."""
     shape = body_pose.shape
+    last = shape[-1] if shape else None
+    if last == 6:
+        return FORMAT_EULER, shape[:-1]
     if shape[-2:] == (4, 4):
         return FORMAT_MATRIX, shape[:-2]
-    if shape[-1:] == (6,):
-        return FORMAT_EULER, shape[:-1]
-    if shape[-1:] == (7,):
+    if last == 7:
         return FORMAT_QUATERNION, shape[:-1]
     raise ValueError(
         "body_pose must have shape (..., 6) [x, y, z, a, b, c], (..., 4, 4) or (..., 7) "

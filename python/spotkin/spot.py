@@ -77,6 +77,7 @@ class Spot:
             )
             for name in LEG_NAMES
         )
+        self._body_core = _core.Body([leg._core for leg in self._legs], self.hip_positions)
         arm = self._model["arm"]
         self._arm = SpotArm(
             arm["mount"],
@@ -113,11 +114,7 @@ class Spot:
 
     @property
     def _body(self):
-        core = getattr(self, "_body_core", None)
-        if core is None:
-            core = _core.Body([leg._core for leg in self._legs], self.hip_positions)
-            object.__setattr__(self, "_body_core", core)
-        return core
+        return self._body_core
 
     def stance_feet(self, height: float = 0.5) -> np.ndarray:
         """(4, 3) world foot centres of a nominal stance, for the body at [0, 0, height, 0, 0, 0].
@@ -150,24 +147,29 @@ class Spot:
         quaternion that is not a rotation, gives INVALID_INPUT on all four legs of that
         sample only.
         """
-        pose = np.asarray(body_pose)
+        pose = body_pose if type(body_pose) is np.ndarray else np.asarray(body_pose)
         fmt, pose_lead = pose_format(pose)
         axes, order = parse_sequence(seq)
-        feet = np.asarray(feet)
+        feet = feet if type(feet) is np.ndarray else np.asarray(feet)
         if feet.shape[-2:] != (4, 3):
             raise ValueError(f"feet must have shape (..., 4, 3), got {feet.shape}")
-        try:
-            lead = np.broadcast_shapes(pose_lead, feet.shape[:-2])
-        except ValueError:
-            raise ValueError(f"body_pose {pose.shape} and feet {feet.shape} do not broadcast") from None
-        if feet.shape[:-2] != lead:
-            feet = feet.reshape(4, 3) if feet.size == 12 else np.broadcast_to(feet, (*lead, 4, 3))
-        pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
+        feet_lead = feet.shape[:-2]
+        if not feet_lead or feet_lead == pose_lead:  # a shared stance, or one stance per pose
+            lead = pose_lead
+        else:
+            try:
+                lead = np.broadcast_shapes(pose_lead, feet_lead)
+            except ValueError:
+                raise ValueError(f"body_pose {pose.shape} and feet {feet.shape} do not broadcast") from None
+            if feet_lead != lead:
+                feet = feet.reshape(4, 3) if feet.size == 12 else np.broadcast_to(feet, (*lead, 4, 3))
+            pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
         if seed is not None:
             seed = np.asarray(seed)
             if seed.shape[-1:] != (12,):
                 raise ValueError(f"seed must have shape (..., 12), got {seed.shape}")
-            seed = np.broadcast_to(seed, (*lead, 12))
+            if seed.shape[:-1] != lead:
+                seed = np.broadcast_to(seed, (*lead, 12))
         return BodyIK(*self._body.ik(pose, fmt, axes, order, feet, seed))
 
     def body_fk(self, body_pose: ArrayLike, q12: ArrayLike, seq: str = "XYZ") -> np.ndarray:

@@ -68,6 +68,37 @@ struct BlockPoses {
 template <typename T>
 SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const EulerSequence& seq, std::ptrdiff_t stride,
                                std::ptrdiff_t m, BlockPoses& out) noexcept {
+  const bool intrinsic_xyz = seq.axis[0] == 0 && seq.axis[1] == 1 && seq.axis[2] == 2 && seq.order[0] == 0 &&
+                             seq.order[1] == 1 && seq.order[2] == 2;
+  const bool extrinsic_xyz = seq.axis[0] == 2 && seq.axis[1] == 1 && seq.axis[2] == 0 && seq.order[0] == 2 &&
+                             seq.order[1] == 1 && seq.order[2] == 0;
+  if (format == BodyPoseFormat::Euler && (intrinsic_xyz || extrinsic_xyz)) {
+    // Fast paths, vectorised: Rx(a) Ry(b) Rz(c) ("XYZ") and Rz(c) Ry(b) Rx(a) ("xyz").
+    double angle[3][kBlock], s[3][kBlock], c[3][kBlock];
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const T* in = poses + 6 * i;
+      for (int k = 0; k < 3; ++k) out.t[k][i] = double(in[k]), angle[k][i] = double(in[3 + k]);
+    }
+    for (int k = 0; k < 3; ++k) vector_math::sincos(angle[k], s[k], c[k], m);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const double sa = s[0][i], ca = c[0][i], sb = s[1][i], cb = c[1][i], sc = s[2][i], cc = c[2][i];
+      const double R[9] = {
+          intrinsic_xyz ? cb * cc : cb * cc,
+          intrinsic_xyz ? -cb * sc : sa * sb * cc - ca * sc,
+          intrinsic_xyz ? sb : ca * sb * cc + sa * sc,
+          intrinsic_xyz ? ca * sc + sa * sb * cc : cb * sc,
+          intrinsic_xyz ? ca * cc - sa * sb * sc : sa * sb * sc + ca * cc,
+          intrinsic_xyz ? -sa * cb : ca * sb * sc - sa * cc,
+          intrinsic_xyz ? sa * sc - ca * sb * cc : -sb,
+          intrinsic_xyz ? sa * cc + ca * sb * sc : sa * cb,
+          intrinsic_xyz ? ca * cb : ca * cb,
+      };
+      double sum = out.t[0][i] + out.t[1][i] + out.t[2][i];
+      for (int k = 0; k < 9; ++k) out.R[k][i] = R[k], sum += R[k];
+      out.ok[i] = (sum - sum) == 0.0 ? 1.0 : 0.0;
+    }
+    return;
+  }
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     const T* in = poses + stride * i;
     double R[3][3], t[3], ok = 1.0;

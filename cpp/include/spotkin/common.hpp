@@ -17,9 +17,10 @@
 
 // A vectorised kernel that must not be inlined (inlining drops its __restrict
 // guarantees and with them the vectorisation) is compiled for baseline x86-64
-// and for x86-64-v3 (AVX2 + FMA), and the loader picks one at run time.
+// for x86-64-v3 (AVX2 + FMA) and for x86-64-v4 (AVX-512), and the loader
+// picks one at run time.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SPOTKIN_NATIVE_BUILD)
-#define SPOTKIN_VECTOR_KERNEL __attribute__((noinline, target_clones("arch=x86-64-v3", "default")))
+#define SPOTKIN_VECTOR_KERNEL __attribute__((noinline, target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #elif defined(__GNUC__)
 #define SPOTKIN_VECTOR_KERNEL __attribute__((noinline))
 #else

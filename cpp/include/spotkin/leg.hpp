@@ -181,8 +181,8 @@ class Leg {
 #pragma GCC unroll 2
     for (int hb = 0; hb < 2; ++hb) {
       const double eps = hb == 0 ? 1.0 : -1.0;
-      const double hx = vector_math::atan2((z * h1_ + eps * y * hip.S) * hip.inv_r2,
-                                           (y * h1_ - eps * z * hip.S) * hip.inv_r2);
+      // atan2 is scale-invariant: the cos/sin of (I1) without their common 1 / r^2
+      const double hx = vector_math::atan2(z * h1_ + eps * y * hip.S, y * h1_ - eps * z * hip.S);
       const double hx_safe = hip.r2 > 0.0 ? hx : 0.0;
 #pragma GCC unroll 2
       for (int kb = 0; kb < 2; ++kb) {
@@ -200,7 +200,7 @@ class Leg {
                                     double tol = kRatioTolerance) const noexcept {
     const Hip hip = solve_hip(y, z, tol);
     const Knee knee = solve_knee(x, hip.S, tol);
-    const double hx = vector_math::atan2((z * h1_ + y * hip.S) * hip.inv_r2, (y * h1_ - z * hip.S) * hip.inv_r2);
+    const double hx = vector_math::atan2(z * h1_ + y * hip.S, y * h1_ - z * hip.S);
     q[0] = hip.r2 > 0.0 ? hx : 0.0;
     q[1] = hip_pitch(x, -hip.S, knee, 0);
     q[2] = knee_angle(knee, 0);
@@ -240,7 +240,7 @@ class Leg {
  private:
   // `exists` is 1.0 or 0.0 (a double, so that the solve loops vectorise).
   struct Hip {
-    double r2, inv_r2, S, exists;
+    double r2, S, exists;
   };
   struct Knee {
     double cos_psi, sin_psi, acos_psi, exists;  // psi = kn + beta, knee branch 0: psi = -acos
@@ -252,7 +252,6 @@ class Leg {
     const double disc = h.r2 - h1_ * h1_;
     h.exists = disc >= -tol * 2.0 * h1_ * h1_ ? 1.0 : 0.0;  // (h1/r)^2 <= 1 + 2 tol
     h.S = std::sqrt(std::max(disc, 0.0));
-    h.inv_r2 = h.r2 > 0.0 ? 1.0 / h.r2 : 0.0;
     return h;
   }
 

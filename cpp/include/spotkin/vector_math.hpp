@@ -86,8 +86,10 @@ SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdif
 }
 
 namespace detail {
-// atan(t) for t in [0, 1] (Cephes atan.c, P/Q of degree 4/5).
-SPOTKIN_VM_INLINE double atan_unit(double t) noexcept {
+// atan(lo / hi) for 0 <= lo <= hi (Cephes atan.c, P/Q of degree 4/5). Above
+// 0.66 the argument is reduced by pi/4, x = (lo - hi) / (lo + hi), formed with
+// a single division either way.
+SPOTKIN_VM_INLINE double atan_ratio(double lo, double hi) noexcept {
   constexpr double P0 = -8.750608600031904122785e-01, P1 = -1.615753718733365076637e+01,
                    P2 = -7.500855792314704667340e+01, P3 = -1.228866684490136173410e+02,
                    P4 = -6.485021904942025371773e+01;
@@ -95,8 +97,9 @@ SPOTKIN_VM_INLINE double atan_unit(double t) noexcept {
                    Q2 = 4.328810604912902668951e+02, Q3 = 4.853903996359136964868e+02,
                    Q4 = 1.945506571482613964425e+02;
   constexpr double kPio4 = 7.85398163397448309616e-01, kMoreBits = 6.123233995736765886130e-17;
-  const bool reduce = t > 0.66;
-  const double x = reduce ? (t - 1.0) / (t + 1.0) : t;
+  const bool reduce = lo > 0.66 * hi;
+  const double num = reduce ? lo - hi : lo, den = reduce ? lo + hi : hi;
+  const double x = den > 0.0 ? num / den : (den == den ? 0.0 : den);  // 0/0 -> 0, NaN stays
   const double z = x * x;
   const double p = (((P0 * z + P1) * z + P2) * z + P3) * z + P4;
   const double q = ((((z + Q0) * z + Q1) * z + Q2) * z + Q3) * z + Q4;
@@ -112,8 +115,7 @@ SPOTKIN_VM_INLINE double atan2(double y, double x) noexcept {
   const double ax = std::fabs(x), ay = std::fabs(y);
   const bool steep = ay > ax;
   const double hi = steep ? ay : ax, lo = steep ? ax : ay;
-  const double t = hi > 0.0 ? lo / hi : (hi == hi ? 0.0 : hi);
-  double a = detail::atan_unit(t);
+  double a = detail::atan_ratio(lo, hi);
   a = steep ? (kPio2 - a) + kPio2Lo : a;
   const bool x_negative = std::copysign(1.0, x) < 0.0;  // true for -0 too: atan2(0, -0) = pi
   a = x_negative ? (kPi - a) + kPiLo : a;
