@@ -99,6 +99,7 @@ def leg_ik_one_branch(p: np.ndarray, h1: float, U: float, L: float, k: float) ->
     ratio = (x * x + zp * zp - k * k - U * U - L * L) / (2 * L * R)
     kn = -beta - np.arccos(np.clip(ratio, -1, 1))
     hy = np.arctan2(x, zp) - np.arctan2(k - L * np.sin(kn), -U - L * np.cos(kn))
+    hy = (hy + np.pi) % (2 * np.pi) - np.pi
     return np.stack([hx, hy, kn], axis=-1)
 
 
@@ -167,4 +168,49 @@ def arm_jacobian(q: np.ndarray) -> np.ndarray:
     for j, (z, o) in enumerate(zip(axes, points)):
         J[:, :3, j] = np.cross(z, hand - o)
         J[:, 3:, j] = z
+    return J
+
+
+# -- whole body ----------------------------------------------------------------------------------------
+
+
+def body_rotation_xyz(angles: np.ndarray) -> np.ndarray:
+    """R = Rx(a) Ry(b) Rz(c), vectorised."""
+    return _rx(angles[:, 0]) @ _ry(angles[:, 1]) @ _rz(angles[:, 2])
+
+
+def body_ik(poses: np.ndarray, feet: np.ndarray, hips: np.ndarray, legs: list[tuple]) -> np.ndarray:
+    """Body rotation, feet into the hip frames, closed-form leg IK (slot 0): (N, 12)."""
+    R = body_rotation_xyz(poses[:, 3:])
+    q = np.empty((poses.shape[0], 12))
+    for i, params in enumerate(legs):
+        d = feet[i] - poses[:, :3]
+        p = np.einsum("nji,nj->ni", R, d) - hips[i]
+        q[:, 3 * i : 3 * i + 3] = leg_ik_one_branch(p, *params)
+    return q
+
+
+def body_fk(poses: np.ndarray, q12: np.ndarray, hips: np.ndarray, legs: list[tuple]) -> np.ndarray:
+    R = body_rotation_xyz(poses[:, 3:])
+    feet = np.empty((poses.shape[0], 4, 3))
+    for i, params in enumerate(legs):
+        local = hips[i] + leg_fk(q12[:, 3 * i : 3 * i + 3], *params)
+        feet[:, i] = poses[:, :3] + np.einsum("nij,nj->ni", R, local)
+    return feet
+
+
+def body_jacobian(poses: np.ndarray, q12: np.ndarray, hips: np.ndarray, legs: list[tuple]) -> np.ndarray:
+    R = body_rotation_xyz(poses[:, 3:])
+    n = poses.shape[0]
+    J = np.zeros((n, 12, 18))
+    for i, params in enumerate(legs):
+        qi = q12[:, 3 * i : 3 * i + 3]
+        r = np.einsum("nij,nj->ni", R, hips[i] + leg_fk(qi, *params))
+        rows = slice(3 * i, 3 * i + 3)
+        J[:, rows, 0:3] = np.eye(3)
+        skew = np.zeros((n, 3, 3))
+        skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = r[:, 2], -r[:, 1], r[:, 0]
+        skew[:, 1, 0], skew[:, 2, 0], skew[:, 2, 1] = -r[:, 2], r[:, 1], -r[:, 0]
+        J[:, rows, 3:6] = skew
+        J[:, rows, 6 + 3 * i : 9 + 3 * i] = R @ leg_jacobian(qi, *params)
     return J

@@ -49,20 +49,21 @@ Poses pose_shape(const py::array& arr, BodyPoseFormat format) {
   return {format, leading_shape(arr, "body_pose", trailing)};
 }
 
-EulerSequence make_sequence(std::array<int, 3> axes, std::array<int, 3> order) {
+// The Euler sequence packed in one int by the façade: axis[0] + 3 axis[1] + 9 axis[2],
+// plus 27 when the angles are applied in reverse order (extrinsic sequences).
+EulerSequence make_sequence(int code) {
+  if (code < 0 || code >= 54) throw py::value_error("invalid Euler sequence code " + std::to_string(code));
   EulerSequence seq;
-  for (int k = 0; k < 3; ++k) {
-    if (axes[k] < 0 || axes[k] > 2 || order[k] < 0 || order[k] > 2)
-      throw py::value_error("invalid Euler sequence");
-    seq.axis[k] = axes[k], seq.order[k] = order[k];
-  }
+  seq.axis[0] = code % 3, seq.axis[1] = code / 3 % 3, seq.axis[2] = code / 9 % 3;
+  const bool reversed = code >= 27;
+  for (int k = 0; k < 3; ++k) seq.order[k] = reversed ? 2 - k : k;
   return seq;
 }
 
-py::object ik(const Body& body, py::handle pose_obj, int format_code, std::array<int, 3> axes,
-              std::array<int, 3> order, py::handle feet_obj, py::handle seed_obj) {
+py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle feet_obj,
+              py::handle seed_obj) {
   const auto format = static_cast<BodyPoseFormat>(format_code);
-  const EulerSequence seq = make_sequence(axes, order);
+  const EulerSequence seq = make_sequence(sequence);
   return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const Poses shape = pose_shape(arr, format);
@@ -100,10 +101,9 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, std::array
 }
 
 template <bool Jacobian>
-py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code, std::array<int, 3> axes,
-                          std::array<int, 3> order, py::handle q_obj) {
+py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle q_obj) {
   const auto format = static_cast<BodyPoseFormat>(format_code);
-  const EulerSequence seq = make_sequence(axes, order);
+  const EulerSequence seq = make_sequence(sequence);
   return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const Poses shape = pose_shape(arr, format);
@@ -148,12 +148,12 @@ Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj) {
 void bind_body(py::module_& m) {
   py::class_<Body>(m, "Body")
       .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"))
-      .def("ik", &ik, py::arg("body_pose"), py::arg("format"), py::arg("axes"), py::arg("order"), py::arg("feet"),
+      .def("ik", &ik, py::arg("body_pose"), py::arg("format"), py::arg("sequence"), py::arg("feet"),
            py::arg("seed"))
-      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("format"), py::arg("axes"),
-           py::arg("order"), py::arg("q12"))
-      .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("format"), py::arg("axes"),
-           py::arg("order"), py::arg("q12"));
+      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
+           py::arg("q12"))
+      .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
+           py::arg("q12"));
 }
 
 }  // namespace spotkin::bindings

@@ -39,12 +39,24 @@ def _sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
 
 
 _PARSED = {seq: _sequence(seq) for seq in EULER_SEQUENCES}
+# The core's packed form: axis[0] + 3 axis[1] + 9 axis[2], + 27 for reversed angle order.
+_CODES = {
+    seq: axes[0] + 3 * axes[1] + 9 * axes[2] + (27 if order[0] == 2 else 0) for seq, (axes, order) in _PARSED.items()
+}
 
 
 def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
     """(axes, order) such that R = R_axes[0](angle[order[0]]) R_axes[1](...) R_axes[2](...)."""
     try:
         return _PARSED[seq]
+    except (KeyError, TypeError):
+        raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}") from None
+
+
+def sequence_code(seq: str) -> int:
+    """The packed int the core takes for an Euler sequence."""
+    try:
+        return _CODES[seq]
     except (KeyError, TypeError):
         raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}") from None
 

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from .arm import SpotArm
-from .body import body_transform, parse_sequence, pose_format
+from .body import body_transform, pose_format, sequence_code
 from .leg import Leg
 from .models import LEG_NAMES, SPOT
 
@@ -112,10 +112,6 @@ class Spot:
 
     # -- whole body -----------------------------------------------------------------------------------
 
-    @property
-    def _body(self):
-        return self._body_core
-
     def stance_feet(self, height: float = 0.5) -> np.ndarray:
         """(4, 3) world foot centres of a nominal stance, for the body at [0, 0, height, 0, 0, 0].
 
@@ -149,7 +145,7 @@ class Spot:
         """
         pose = body_pose if type(body_pose) is np.ndarray else np.asarray(body_pose)
         fmt, pose_lead = pose_format(pose)
-        axes, order = parse_sequence(seq)
+        code = sequence_code(seq)
         feet = feet if type(feet) is np.ndarray else np.asarray(feet)
         if feet.shape[-2:] != (4, 3):
             raise ValueError(f"feet must have shape (..., 4, 3), got {feet.shape}")
@@ -170,12 +166,12 @@ class Spot:
                 raise ValueError(f"seed must have shape (..., 12), got {seed.shape}")
             if seed.shape[:-1] != lead:
                 seed = np.broadcast_to(seed, (*lead, 12))
-        return BodyIK(*self._body.ik(pose, fmt, axes, order, feet, seed))
+        return BodyIK(*self._body_core.ik(pose, fmt, code, feet, seed))
 
     def body_fk(self, body_pose: ArrayLike, q12: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)). Leading dimensions broadcast."""
-        pose, q12, fmt, axes, order = self._pose_and_q(body_pose, q12, seq)
-        return self._body.fk(pose, fmt, axes, order, q12)
+        pose, q12, fmt, code = self._pose_and_q(body_pose, q12, seq)
+        return self._body_core.fk(pose, fmt, code, q12)
 
     def body_jacobian(self, body_pose: ArrayLike, q12: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """(..., 12, 18) d(feet world) / d(body twist [v; w], q12).
@@ -183,8 +179,8 @@ class Spot:
         The twist is the linear velocity of the body origin and the angular velocity,
         both in the world frame: d foot_i = v + w x (foot_i - t) + R J_leg_i dq_i.
         """
-        pose, q12, fmt, axes, order = self._pose_and_q(body_pose, q12, seq)
-        return self._body.jacobian(pose, fmt, axes, order, q12)
+        pose, q12, fmt, code = self._pose_and_q(body_pose, q12, seq)
+        return self._body_core.jacobian(pose, fmt, code, q12)
 
     def body_rates(
         self,
@@ -280,19 +276,20 @@ class Spot:
         return BodyFrames(T.copy(), world(hips), world(knees), world(feet), hand)
 
     def _pose_and_q(self, body_pose, q12, seq):
-        pose = np.asarray(body_pose)
+        pose = body_pose if type(body_pose) is np.ndarray else np.asarray(body_pose)
         fmt, pose_lead = pose_format(pose)
-        axes, order = parse_sequence(seq)
-        q12 = np.asarray(q12)
+        code = sequence_code(seq)
+        q12 = q12 if type(q12) is np.ndarray else np.asarray(q12)
         if q12.shape[-1:] != (12,):
             raise ValueError(f"q12 must have shape (..., 12), got {q12.shape}")
-        try:
-            lead = np.broadcast_shapes(pose_lead, q12.shape[:-1])
-        except ValueError:
-            raise ValueError(f"body_pose {pose.shape} and q12 {q12.shape} do not broadcast") from None
-        pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
-        q12 = _broadcast_to_lead(q12, 1, lead)
-        return pose, q12, fmt, axes, order
+        if q12.shape[:-1] != pose_lead:
+            try:
+                lead = np.broadcast_shapes(pose_lead, q12.shape[:-1])
+            except ValueError:
+                raise ValueError(f"body_pose {pose.shape} and q12 {q12.shape} do not broadcast") from None
+            pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
+            q12 = _broadcast_to_lead(q12, 1, lead)
+        return pose, q12, fmt, code
 
     def __reduce__(self):
         return (Spot, (None if self._model is SPOT else self._model,))
