@@ -34,10 +34,14 @@ inline std::string format_shape(const Shape& shape, bool ellipsis = false) {
 // Any array-like to an ndarray of a real dtype; TypeError otherwise.
 inline py::array as_real_array(py::handle obj, const char* name) {
   py::array arr;
-  try {
-    arr = py::array::ensure(obj);
-  } catch (py::error_already_set&) {
-    arr = py::array();
+  if (py::isinstance<py::array>(obj)) {  // no conversion needed
+    arr = py::reinterpret_borrow<py::array>(obj);
+  } else {
+    try {
+      arr = py::array::ensure(obj);
+    } catch (py::error_already_set&) {
+      arr = py::array();
+    }
   }
   if (!arr) {
     PyErr_Clear();
@@ -58,6 +62,8 @@ inline bool is_float32(const py::array& arr) {
 // A C-contiguous view (or copy) of arr in dtype T.
 template <typename T>
 py::array_t<T, py::array::c_style> contiguous(const py::array& arr) {
+  using Exact = py::array_t<T, py::array::c_style>;
+  if (Exact::check_(arr)) return py::reinterpret_borrow<Exact>(arr);  // already right: no copy, no call
   return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(arr);
 }
 
