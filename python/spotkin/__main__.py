@@ -9,8 +9,10 @@ import time
 import numpy as np
 
 from . import __version__
+from ._runtime import get_num_threads
 from ._status import Status
 from ._transforms import translation
+from .body import body_transform
 from .chain import Chain
 from .leg import SLOT_NAMES
 from .spot import Spot
@@ -36,12 +38,60 @@ def _throughput(func, arg, repeats: int = 3) -> float:
 def demo(samples: int = 1_000_000) -> int:
     print(f"spotkin {__version__} demo: the built-in Spot model")
     print()
+    _demo_body(samples)
+    print()
     _demo_leg(samples)
     print()
     _demo_arm(samples)
     print()
     _demo_chain(samples)
     return 0
+
+
+def body_trajectory(samples: int, height: float = 0.5) -> np.ndarray:
+    """A body trajectory (samples, 6) [x, y, z, roll, pitch, yaw] over 20 s: sway, pitch, crouch."""
+    t = np.linspace(0.0, 20.0, samples)
+    pose = np.zeros((samples, 6))
+    pose[:, 1] = 0.06 * np.sin(2 * np.pi * 0.5 * t)  # lateral sway
+    pose[:, 0] = 0.04 * np.sin(2 * np.pi * 0.25 * t)  # fore-aft
+    pose[:, 2] = height - 0.08 * (0.5 - 0.5 * np.cos(2 * np.pi * 0.1 * t))  # crouch
+    pose[:, 3] = 0.12 * np.sin(2 * np.pi * 0.3 * t)  # roll
+    pose[:, 4] = 0.15 * np.sin(2 * np.pi * 0.2 * t)  # pitch
+    pose[:, 5] = 0.10 * np.sin(2 * np.pi * 0.15 * t)  # yaw
+    return pose
+
+
+def _demo_body(samples: int) -> None:
+    spot = Spot()
+    feet = spot.stance_feet(height=0.5)
+    poses = body_trajectory(samples)
+    print(
+        f"Whole body: {samples:,} body poses (sway, pitch, crouch) over a fixed stance, "
+        f"{get_num_threads()} threads"
+    )
+    seconds = _throughput(lambda p: spot.body_ik(p, feet), poses)
+    result = spot.body_ik(poses, feet)
+    print(
+        f"  body_ik: {seconds * 1e3:.1f} ms, {samples / seconds / 1e6:.1f} M poses/s "
+        f"({seconds / samples * 1e9:.1f} ns per pose, 12 joints)"
+    )
+    counts = {s.name: int((result.status == s).sum()) for s in Status}
+    ok = result.status == Status.OK
+    error = np.abs(spot.body_fk(poses, result.q) - feet)[ok].max(initial=0.0)
+    print(f"  check by body_fk: worst foot error {error:.1e} m; leg statuses {counts}")
+    # the arm holds a hand target fixed in the world while the body moves
+    arm_q = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
+    target = body_transform(poses[0]) @ spot.arm.fk(arm_q)
+    every = max(1, samples // 100_000)
+    q_arm, arm_status = spot.arm_ik_world(poses[::every], target, seed=arm_q)
+    reached = arm_status == Status.OK
+    hand = body_transform(poses[::every][reached]) @ spot.arm.fk(q_arm[reached])
+    hand_error = np.abs(hand - target).max(initial=0.0)
+    print(
+        f"  arm holding a world-fixed hand target at {np.round(target[:3, 3], 3)} m on "
+        f"{len(reached):,} of those poses: {int(reached.sum()):,} solved within limits, "
+        f"worst hand pose error {hand_error:.1e}"
+    )
 
 
 def _demo_leg(samples: int) -> None:

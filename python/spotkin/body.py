@@ -41,8 +41,10 @@ def _sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
 _PARSED = {seq: _sequence(seq) for seq in EULER_SEQUENCES}
 # The core's packed form: axis[0] + 3 axis[1] + 9 axis[2], + 27 for reversed angle order.
 _CODES = {
-    seq: axes[0] + 3 * axes[1] + 9 * axes[2] + (27 if order[0] == 2 else 0) for seq, (axes, order) in _PARSED.items()
+    seq: axes[0] + 3 * axes[1] + 9 * axes[2] + (27 if order[0] == 2 else 0)
+    for seq, (axes, order) in _PARSED.items()
 }
+_SEQ_ERROR = "seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {!r}"
 
 
 def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
@@ -50,7 +52,7 @@ def parse_sequence(seq: str) -> tuple[tuple[int, int, int], tuple[int, int, int]
     try:
         return _PARSED[seq]
     except (KeyError, TypeError):
-        raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}") from None
+        raise ValueError(_SEQ_ERROR.format(seq)) from None
 
 
 def sequence_code(seq: str) -> int:
@@ -58,7 +60,7 @@ def sequence_code(seq: str) -> int:
     try:
         return _CODES[seq]
     except (KeyError, TypeError):
-        raise ValueError(f"seq must be one of scipy's Euler sequences, e.g. 'XYZ' or 'xyz', got {seq!r}") from None
+        raise ValueError(_SEQ_ERROR.format(seq)) from None
 
 
 def pose_format(body_pose: np.ndarray) -> tuple[int, tuple[int, ...]]:

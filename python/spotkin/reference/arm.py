@@ -242,8 +242,7 @@ def _valid_pose(T):
     return np.max(np.abs(R.T @ R - np.eye(3))) <= 1e-6 and np.linalg.det(R) >= 0.0
 
 
-def ik(T, *, lower=LOWER, upper=UPPER, seed=None, mount=MOUNT, a=A, b=B, h=H, hand=HAND,
-       tool=None):
+def ik(T, *, lower=LOWER, upper=UPPER, seed=None, mount=MOUNT, a=A, b=B, h=H, hand=HAND, tool=None):
     """One IK solution within the joint limits. Returns (q (6,), status).
 
     INVALID_INPUT: T non-finite, last row != [0,0,0,1] (1e-9), max|R^T R - I| > 1e-6 or
@@ -293,8 +292,7 @@ def singularity(q, *, mount=MOUNT, a=A, b=B, h=H, hand=HAND, tool=None):
     manipulability: sqrt(det(J J^T)) of the geometric Jacobian at the hand (tool) point.
     """
     sh0, sh1, el0 = float(q[0]), float(q[1]), float(q[2])
-    s = np.array([a + b * math.cos(el0) + h * math.sin(el0), 0.0,
-                  -b * math.sin(el0) + h * math.cos(el0)])
+    s = np.array([a + b * math.cos(el0) + h * math.sin(el0), 0.0, -b * math.sin(el0) + h * math.cos(el0)])
     c = rot_z(sh0) @ rot_y(sh1) @ s  # eq. (2), relative to mount
     J = jacobian(q, mount=mount, a=a, b=b, h=h, hand=hand, tool=tool)
     return {
@@ -318,9 +316,11 @@ def pose_from(position, quat_xyzw):
     if not (np.all(np.isfinite(p)) and math.isfinite(n2)) or abs(math.sqrt(n2) - 1.0) > 1e-6:
         return np.full((4, 4), np.nan)
     s = 2.0 / n2
-    R = np.array([
-        [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
-        [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)],
-        [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)],
-    ])
+    R = np.array(
+        [
+            [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
+            [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)],
+            [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)],
+        ]
+    )
     return _hom(R, p)

@@ -118,11 +118,13 @@ def jacobian(q, h1, U, L, k):
     Zs = -k * s2 - U * c2 - L * c23
     py = h1 * c1 - Zs * s1
     pz = h1 * s1 + Zs * c1
-    return np.array([
-        [0.0, Zs, -L * c23],
-        [-pz, s1 * X, -s1 * L * s23],
-        [py, -c1 * X, c1 * L * s23],
-    ])
+    return np.array(
+        [
+            [0.0, Zs, -L * c23],
+            [-pz, s1 * X, -s1 * L * s23],
+            [py, -c1 * X, c1 * L * s23],
+        ]
+    )
 
 
 def _acos_branch(ratio):
