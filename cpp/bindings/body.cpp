@@ -60,12 +60,24 @@ EulerSequence make_sequence(int code) {
   return seq;
 }
 
+// The format from the shape: (..., 6) Euler, (..., 4, 4) matrix, (..., 7) quaternion.
+BodyPoseFormat detect_format(const py::array& arr) {
+  const auto nd = arr.ndim();
+  if (nd >= 1 && arr.shape(nd - 1) == 6) return BodyPoseFormat::Euler;
+  if (nd >= 2 && arr.shape(nd - 1) == 4 && arr.shape(nd - 2) == 4) return BodyPoseFormat::Matrix;
+  if (nd >= 1 && arr.shape(nd - 1) == 7) return BodyPoseFormat::PositionQuaternion;
+  throw py::value_error(
+      "body_pose must have shape (..., 6) [x, y, z, a, b, c], (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw], got " +
+      format_shape(Shape(arr.shape(), arr.shape() + nd)));
+}
+
+// format_code -1: detect the format from body_pose's shape.
 py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle feet_obj,
               py::handle seed_obj) {
-  const auto format = static_cast<BodyPoseFormat>(format_code);
   const EulerSequence seq = make_sequence(sequence);
   return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
+    const auto format = format_code < 0 ? detect_format(arr) : static_cast<BodyPoseFormat>(format_code);
     const Poses shape = pose_shape(arr, format);
     auto poses = contiguous<T>(arr);
     auto feet = contiguous<T>(as_real_array(feet_obj, "feet"));

@@ -146,15 +146,9 @@ class Spot:
         quaternion that is not a rotation, gives INVALID_INPUT on all four legs of that
         sample only.
         """
-        if (
-            seed is None
-            and type(body_pose) is np.ndarray
-            and type(feet) is np.ndarray
-            and feet.shape == (4, 3)
-            and body_pose.shape[-1:] == (6,)
-            and seq == "XYZ"
-        ):  # the control-loop call: Euler poses over one shared stance
-            return BodyIK._make(self._body_core.ik(body_pose, 0, _XYZ, feet, None))
+        if seed is None and seq == "XYZ" and type(feet) is np.ndarray and feet.shape == (4, 3):
+            # the control-loop call, one shared stance: the core checks body_pose itself
+            return BodyIK._make(self._body_core.ik(body_pose, -1, _XYZ, feet, None))
         pose = body_pose if type(body_pose) is np.ndarray else np.asarray(body_pose)
         fmt, pose_lead = pose_format(pose)
         code = sequence_code(seq)
