@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from . import paul
 from ._runtime import get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
@@ -26,6 +27,7 @@ __all__ = [
     "Status",
     "body_transform",
     "get_num_threads",
+    "paul",
     "pose_from",
     "rotation_x",
     "rotation_y",

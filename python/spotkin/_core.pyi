@@ -3,8 +3,10 @@ spotkin's C++ core. Use the public façade in `spotkin` instead.
 """
 from __future__ import annotations
 import collections.abc
+import numpy
+import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'Convention', 'Leg', 'get_num_threads', 'set_num_threads']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'Convention', 'Leg', 'get_num_threads', 'paul_type2', 'paul_type3', 'paul_type6', 'set_num_threads']
 class Convention:
     """
     Members:
@@ -111,6 +113,12 @@ class Body:
 def _register_status(members: typing.Any) -> None:
     ...
 def get_num_threads() -> int:
+    ...
+def paul_type2(X: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Y: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> tuple:
+    ...
+def paul_type3(X1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Y1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], X2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Y2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> tuple:
+    ...
+def paul_type6(W: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], X: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Y: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> tuple:
     ...
 def set_num_threads(n: typing.SupportsInt | typing.SupportsIndex) -> None:
     ...
