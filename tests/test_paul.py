@@ -101,12 +101,47 @@ def test_type6_recovers_the_pair(ti, tj, W, X, Y, negative):
     assert np.nanmin(distance) < 1e-5
 
 
-def test_type6_with_zero_w_is_invalid_and_batches_broadcast():
-    _, _, valid = sk.paul.type6(0.0, 1.0, 1.0, 0.5, 0.5)
-    assert not valid.any()
+def test_type6_with_zero_w_and_batches_broadcast():
+    ti, tj, valid = sk.paul.type6(0.0, 1.0, 1.0, -1.0, 1.0)  # tj free: ti from the type-3 system
+    np.testing.assert_array_equal(valid, [True, False])
+    assert (
+        abs(np.cos(ti[0]) + np.sin(ti[0]) - 1.0) < 1e-12 and abs(np.sin(ti[0]) - np.cos(ti[0]) + 1.0) < 1e-12
+    )
+    assert tj[0] == 0.0
     t, valid = sk.paul.type2(np.ones((3, 1)), np.ones(4), 0.5)
     assert t.shape == (3, 4, 2) and valid.shape == (3, 4, 2)
     t, valid = sk.paul.type2(np.nan, 1.0, 0.5)
     assert not valid.any()
     with pytest.raises(TypeError, match="real numbers"):
         sk.paul.type2("a", 1.0, 0.5)
+
+
+def test_solvers_match_the_pure_python_reference(rng):
+    from spotkin.reference import paul as ref
+
+    n = 400
+    t, u = rng.uniform(-np.pi, np.pi, (2, n))
+    X, Y, W, X2, Y2 = rng.normal(size=(5, n))
+    X[:20] = 0.0  # the annex's special cases
+    Y[20:40] = 0.0
+    W[40:50] = 0.0
+    Z = X * np.sin(t) + Y * np.cos(t)
+    Z[50:80] = 0.0
+    Z[80:100] *= 50.0  # out of reach
+    roots, valid = sk.paul.type2(X, Y, Z)
+    Z1 = W * np.sin(u) - X * np.cos(t) - Y * np.sin(t)
+    Z2 = W * np.cos(u) - X * np.sin(t) + Y * np.cos(t)
+    ti, tj, valid6 = sk.paul.type6(W, X, Y, Z1, Z2)
+    t3, valid3 = sk.paul.type3(X, Y, Z, X2, Y2, X2 * np.sin(t) + Y2 * np.cos(t))
+    for i in range(n):
+        r_ref, v_ref = ref.type2(X[i], Y[i], Z[i])
+        np.testing.assert_array_equal(valid[i], v_ref)
+        np.testing.assert_allclose(roots[i], r_ref, atol=1e-12)
+        a, b, v = ref.type6(W[i], X[i], Y[i], Z1[i], Z2[i])
+        np.testing.assert_array_equal(valid6[i], v)
+        np.testing.assert_allclose(ti[i], a, atol=1e-12)
+        np.testing.assert_allclose(tj[i], b, atol=1e-12)
+        r3, v3 = ref.type3(X[i], Y[i], Z[i], X2[i], Y2[i], X2[i] * np.sin(t[i]) + Y2[i] * np.cos(t[i]))
+        assert valid3[i] == v3
+        if v3:
+            assert abs(wrap(t3[i] - r3)) < 1e-12

@@ -13,9 +13,11 @@
 // Type 6:  W sin tj = X cos ti + Y sin ti + Z1,  W cos tj = X sin ti - Y cos ti + Z2.
 //          Squaring and adding: B1 sin ti + B2 cos ti = B3 (type 2) with
 //          B1 = 2 (Z1 Y + Z2 X), B2 = 2 (Z1 X - Z2 Y), B3 = W^2 - X^2 - Y^2 - Z1^2 - Z2^2;
-//          then tj = atan2(sign(W)(X cos ti + Y sin ti + Z1), sign(W)(X sin ti - Y cos ti + Z2)).
-//          W = 0 leaves tj undetermined: invalid. X = Y = 0 leaves ti free: ti = 0 is
-//          reported (both roots), with tj solving the pair.
+//          then tj from sin tj = (X cos ti + Y sin ti + Z1) / W, cos tj = (X sin ti - Y cos ti + Z2) / W
+//          (type 3, valid when on the unit circle to 1e-9). W = 0: ti from the type-3 system
+//          X cos ti + Y sin ti = -Z1, X sin ti - Y cos ti = -Z2, tj free (reported 0) in slot 0,
+//          slot 1 invalid. X = Y = 0 leaves ti free: ti = 0 is reported, tj solving the pair.
+//          Every equation is first divided by its largest coefficient.
 #pragma once
 
 #include <algorithm>
@@ -28,6 +30,16 @@ namespace spotkin::paul {
 
 constexpr double kTolerance = 1e-12;  // relative: r^2 - Z^2 >= -tol r^2 counts as a double root
 
+// 1 / the largest |coefficient| (1 if all are zero): every equation is solved
+// after dividing by it, which leaves the roots unchanged and keeps tiny or huge
+// coefficients from under- or overflowing in the squares.
+template <typename... Args>
+SPOTKIN_INLINE double inverse_scale(Args... c) noexcept {
+  double m = 0.0;
+  ((m = std::max(m, std::fabs(c))), ...);
+  return m > 0.0 && std::isfinite(m) ? 1.0 / m : 1.0;
+}
+
 struct Type2 {
   double t[2];
   double valid[2];  // 1.0 / 0.0
@@ -36,6 +48,8 @@ struct Type2 {
 // zero_tolerance: |Z| at or below it counts as 0 when X = Y = 0 (type 6 passes
 // one scaled to its coefficients, since its Z is a difference of squares).
 SPOTKIN_INLINE Type2 type2(double X, double Y, double Z, double zero_tolerance = 0.0) noexcept {
+  const double k = inverse_scale(X, Y, Z);
+  X *= k, Y *= k, Z *= k, zero_tolerance *= k;
   Type2 out;
   const double r2 = X * X + Y * Y;
   const double disc = r2 - Z * Z;
@@ -57,6 +71,8 @@ struct Type3 {
 };
 
 SPOTKIN_INLINE Type3 type3(double X1, double Y1, double Z1, double X2, double Y2, double Z2) noexcept {
+  const double k1 = inverse_scale(X1, Y1, Z1), k2 = inverse_scale(X2, Y2, Z2);
+  X1 *= k1, Y1 *= k1, Z1 *= k1, X2 *= k2, Y2 *= k2, Z2 *= k2;
   const double D = X1 * Y2 - X2 * Y1;
   const double scale = std::max(std::max(std::fabs(X1), std::fabs(Y1)), std::max(std::fabs(X2), std::fabs(Y2)));
   Type3 out;
@@ -85,19 +101,26 @@ struct Type6 {
 };
 
 SPOTKIN_INLINE Type6 type6(double W, double X, double Y, double Z1, double Z2) noexcept {
+  const double k = inverse_scale(W, X, Y, Z1, Z2);
+  W *= k, X *= k, Y *= k, Z1 *= k, Z2 *= k;
+  Type6 out;
+  out.ti[0] = out.ti[1] = out.tj[0] = out.tj[1] = quiet_nan<double>();
+  out.valid[0] = out.valid[1] = 0.0;
+  if (W == 0.0) {  // X cos ti + Y sin ti = -Z1, X sin ti - Y cos ti = -Z2 (type 3); tj free, reported 0
+    const Type3 t = type3(Y, X, -Z1, X, -Y, -Z2);
+    if (t.valid != 0.0) out.ti[0] = t.t, out.tj[0] = 0.0, out.valid[0] = 1.0;
+    return out;
+  }
   const double scale = W * W + X * X + Y * Y + Z1 * Z1 + Z2 * Z2;
   const Type2 roots = type2(2.0 * (Z1 * Y + Z2 * X), 2.0 * (Z1 * X - Z2 * Y),
                             W * W - X * X - Y * Y - Z1 * Z1 - Z2 * Z2, 1e-12 * scale);
-  Type6 out;
-  const double sign = W < 0.0 ? -1.0 : 1.0;
-  for (int k = 0; k < 2; ++k) {
+  for (int r = 0; r < 2; ++r) {
+    if (roots.valid[r] == 0.0) continue;
     double s, c;
-    vector_math::sincos_bounded(roots.valid[k] != 0.0 ? roots.t[k] : 0.0, s, c);
-    const double a = X * c + Y * s + Z1, b = X * s - Y * c + Z2;
-    out.ti[k] = roots.t[k];
-    out.valid[k] = W != 0.0 ? roots.valid[k] : 0.0;
-    out.tj[k] = out.valid[k] != 0.0 ? vector_math::atan2(sign * a, sign * b) : quiet_nan<double>();
-    out.ti[k] = out.valid[k] != 0.0 ? out.ti[k] : quiet_nan<double>();
+    vector_math::sincos_bounded(roots.t[r], s, c);
+    const double sj = (X * c + Y * s + Z1) / W, cj = (X * s - Y * c + Z2) / W;
+    if (std::fabs(sj * sj + cj * cj - 1.0) > 1e-9) continue;  // type 3 consistency
+    out.ti[r] = roots.t[r], out.tj[r] = vector_math::atan2(sj, cj), out.valid[r] = 1.0;
   }
   return out;
 }
