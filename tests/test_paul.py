@@ -94,8 +94,8 @@ def test_type6_recovers_the_pair(ti, tj, W, X, Y, negative):
     for a, b in zip(roots_i[valid], roots_j[valid]):  # every valid pair solves both equations
         assert abs(W * np.sin(b) - (X * np.cos(a) + Y * np.sin(a) + Z1)) < 1e-9
         assert abs(W * np.cos(b) - (X * np.sin(a) - Y * np.cos(a) + Z2)) < 1e-9
-    if X * X + Y * Y < 1e-12:  # ti is free: 0 is reported, tj must match
-        assert (roots_i[valid] == 0).all() and np.nanmin(np.abs(wrap(roots_j - tj))) < 1e-5
+    if X * X + Y * Y < 1e-12:  # ti is (nearly) free: any reported ti solves the pair; tj must match
+        assert np.nanmin(np.abs(wrap(roots_j - tj))) < 1e-5
         return
     distance = np.maximum(np.abs(wrap(roots_i - ti)), np.abs(wrap(roots_j - tj)))
     assert np.nanmin(distance) < 1e-5
