@@ -57,6 +57,16 @@ def test_default_is_intrinsic_xyz_and_ros_rpy_is_extrinsic():
         SPOT.body_fk(pose, np.zeros(12), seq="xYz")
 
 
+@pytest.mark.parametrize("seq", ["XYZ", "ZYX", "xyz"])
+def test_large_euler_angles_are_reduced_exactly(rng, seq):
+    # the vectorised ("XYZ", "xyz") and generic paths must agree with NumPy far from 0
+    poses = random_poses(rng, 50)
+    poses[:, 3:] += rng.choice([1e6, -3e7, 1e12], (50, 3))
+    q12 = SPOT.body_ik(NOMINAL, FEET).q
+    T = sk.body_transform(poses, seq)
+    np.testing.assert_allclose(SPOT.body_fk(poses, q12, seq=seq), SPOT.body_fk(T, q12), atol=1e-12)
+
+
 def test_pose_formats_agree(rng):
     poses = random_poses(rng, 500)
     T = matrix_poses(poses)

@@ -103,12 +103,11 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
     const T* in = poses + stride * i;
     double R[3][3], t[3], ok = 1.0;
     if (format == BodyPoseFormat::Euler) {
-      const double angles[3] = {double(in[3]), double(in[4]), double(in[5])};
-      const bool bounded = std::fabs(angles[0]) < vector_math::kReducibleLimit &&
-                           std::fabs(angles[1]) < vector_math::kReducibleLimit &&
-                           std::fabs(angles[2]) < vector_math::kReducibleLimit;
+      // exact reduction first: sincos_bounded is accurate for |angle| < kReducibleLimit
+      const double angles[3] = {std::remainder(double(in[3]), 2.0 * kPi<double>),
+                                std::remainder(double(in[4]), 2.0 * kPi<double>),
+                                std::remainder(double(in[5]), 2.0 * kPi<double>)};
       Body::euler_rotation(seq, angles, R);
-      ok = bounded ? 1.0 : 0.0;
       t[0] = double(in[0]), t[1] = double(in[1]), t[2] = double(in[2]);
     } else {
       Arm::Pose pose;
