@@ -59,16 +59,6 @@ def test_eaik_solves_the_same_arm():
         np.testing.assert_allclose(theirs, np.sort(np.round(np.mod(ours, 2 * np.pi), 6), axis=0), atol=2e-6)
 
 
-def run(measure, op, impl, n, func, arg):
-    threads = sk.get_num_threads()
-    if impl.endswith("1thread"):
-        sk.set_num_threads(1)
-    try:
-        measure(f"arm.{op}", n, impl, func, arg)
-    finally:
-        sk.set_num_threads(threads)
-
-
 @pytest.mark.parametrize("n", SIZES)
 @pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
@@ -77,7 +67,7 @@ def test_arm_fk_jacobian(measure, op, impl, n):
     if impl == "numpy":
         measure(f"arm.{op}", n, impl, {"fk": arm_fk, "jacobian": arm_jacobian}[op], np.atleast_2d(q))
     else:
-        run(measure, op, impl, n, getattr(ARM, op), q)
+        measure(f"arm.{op}", n, impl, getattr(ARM, op), q)
 
 
 @pytest.mark.parametrize("n", [1, 1_000, 100_000])
@@ -90,4 +80,4 @@ def test_arm_ik(measure, impl, n):
         robot = eaik_robot()
         measure("arm.ik (all 8)", n, "eaik IK_batched", robot.IK_batched, np.atleast_3d(T).reshape(-1, 4, 4))
     else:
-        run(measure, "ik (all 8)", impl, n, ARM.ik if impl == "spotkin.ik" else ARM.ik_all, T)
+        measure("arm.ik (all 8)", n, impl, ARM.ik if impl == "spotkin.ik" else ARM.ik_all, T)

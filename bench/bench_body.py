@@ -41,16 +41,6 @@ def test_baselines_agree_with_spotkin():
     np.testing.assert_allclose(body_jacobian(p, res.q, HIPS, LEGS), SPOT.body_jacobian(p, res.q), atol=1e-13)
 
 
-def run(measure, op, impl, n, func, *args):
-    threads = sk.get_num_threads()
-    if impl == "spotkin-1thread":
-        sk.set_num_threads(1)
-    try:
-        measure(f"body.{op}", n, impl, func, *args)
-    finally:
-        sk.set_num_threads(threads)
-
-
 @pytest.mark.parametrize("n", SIZES)
 @pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
 def test_body_ik(measure, impl, n):
@@ -58,7 +48,7 @@ def test_body_ik(measure, impl, n):
     if impl == "numpy":
         measure("body.ik", n, "numpy (slot 0 only)", body_ik, np.atleast_2d(p), FEET, HIPS, LEGS)
     else:
-        run(measure, "ik", impl, n, SPOT.body_ik, p, FEET)
+        measure("body.ik", n, impl, SPOT.body_ik, p, FEET)
 
 
 @pytest.mark.parametrize("n", [1, 1_000, 1_000_000])
@@ -71,7 +61,7 @@ def test_body_fk_jacobian(measure, op, impl, n):
         base = {"fk": body_fk, "jacobian": body_jacobian}[op]
         measure(f"body.{op}", n, impl, base, np.atleast_2d(p), np.atleast_2d(q12), HIPS, LEGS)
     else:
-        run(measure, op, impl, n, getattr(SPOT, f"body_{op}"), p, q12)
+        measure(f"body.{op}", n, impl, getattr(SPOT, f"body_{op}"), p, q12)
 
 
 def test_bandwidth_bound(capsys):

@@ -43,10 +43,4 @@ def test_chain6(measure, op, impl, n):
         func = {"fk": mdh_fk, "jacobian": mdh_jacobian}[op]
         measure(f"chain6.{op}", n, impl, func, ROWS, np.atleast_2d(q), TOOL)
         return
-    threads = sk.get_num_threads()
-    if impl == "spotkin-1thread":
-        sk.set_num_threads(1)
-    try:
-        measure(f"chain6.{op}", n, impl, getattr(CHAIN, op), q)
-    finally:
-        sk.set_num_threads(threads)
+    measure(f"chain6.{op}", n, impl, getattr(CHAIN, op), q)

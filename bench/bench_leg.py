@@ -28,16 +28,6 @@ def test_baselines_agree_with_spotkin():
     np.testing.assert_allclose(leg_ik_one_branch(p[below], *PARAMS), LEG.ik(p[below])[0], atol=1e-9)
 
 
-def run(measure, op, impl, n, func, arg):
-    threads = sk.get_num_threads()
-    if impl == "spotkin-1thread":
-        sk.set_num_threads(1)
-    try:
-        measure(f"leg.{op}", n, impl, func, arg)
-    finally:
-        sk.set_num_threads(threads)
-
-
 @pytest.mark.parametrize("n", SIZES)
 @pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
@@ -47,7 +37,7 @@ def test_leg_fk_jacobian(measure, op, impl, n):
         base = {"fk": leg_fk, "jacobian": leg_jacobian}[op]
         measure(f"leg.{op}", n, impl, lambda a: base(a, *PARAMS), q)
     else:
-        run(measure, op, impl, n, getattr(LEG, op), q)
+        measure(f"leg.{op}", n, impl, getattr(LEG, op), q)
 
 
 @pytest.mark.parametrize("n", SIZES)
@@ -57,6 +47,6 @@ def test_leg_ik(measure, impl, n):
     if impl == "numpy":
         measure("leg.ik", n, "numpy (slot 0 only)", lambda a: leg_ik_one_branch(a, *PARAMS), p)
     elif impl == "spotkin.ik_all":
-        run(measure, "ik", impl, n, LEG.ik_all, p)
+        measure("leg.ik", n, impl, LEG.ik_all, p)
     else:
-        run(measure, "ik", impl, n, LEG.ik, p)
+        measure("leg.ik", n, impl, LEG.ik, p)

@@ -10,6 +10,8 @@ from collections import defaultdict
 
 import pytest
 
+import spotkin as sk
+
 SIZES = [1, 1_000, 100_000, 1_000_000]
 _RESULTS: dict[tuple[str, int], dict[str, float]] = defaultdict(dict)
 
@@ -26,12 +28,21 @@ def rounds_for(n: int) -> dict:
 
 @pytest.fixture
 def measure(benchmark):
-    """measure(op, n, impl, func, *args): time func(*args) and record the median."""
+    """measure(op, n, impl, func, *args): time func(*args) and record the median.
+
+    An ``impl`` ending in "1thread" runs with spotkin limited to one thread.
+    """
 
     def run(op: str, n: int, impl: str, func, *args):
         benchmark.group = f"{op} N={n}"
         benchmark.extra_info.update(op=op, n=n, impl=impl)
-        result = benchmark.pedantic(func, args=args, **rounds_for(n))
+        threads = sk.get_num_threads()
+        if impl.endswith("1thread"):
+            sk.set_num_threads(1)
+        try:
+            result = benchmark.pedantic(func, args=args, **rounds_for(n))
+        finally:
+            sk.set_num_threads(threads)
         _RESULTS[(op, n)][impl] = benchmark.stats.stats.median
         return result
 

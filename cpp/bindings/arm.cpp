@@ -38,35 +38,14 @@ SPOTKIN_MULTIVERSION void arm_ik_kernel(const Arm& arm, const T* poses, PoseForm
   arm_batch::ik(arm, poses, format, seed, q, status, n);
 }
 
-template <typename T, typename Kernel>
-py::object map_q(const Arm& arm, py::handle q_obj, const Shape& trailing, std::ptrdiff_t width, Kernel kernel) {
-  py::array arr = as_real_array(q_obj, "q");
-  const Shape leading = leading_shape(arr, "q", {6});
-  auto q = contiguous<T>(arr);
-  auto out = new_array<T>(leading, trailing);
-  const T* qd = q.data();
-  T* od = out.mutable_data();
-  {
-    ReleaseGilFor release(count(leading));
-    parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      kernel(arm, qd + 6 * b, od + width * b, e - b);
-    });
-  }
-  return std::move(out);
-}
-
 py::object fk(const Arm& arm, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array) -> py::object {
-    using T = decltype(tag);
-    return map_q<T>(arm, q_obj, {4, 4}, 16, arm_fk_kernel<T>);
-  });
+  return map_batch(q_obj, "q", 6, {4, 4}, kMinPerThread,
+                   [&](const auto* q, auto* T, std::ptrdiff_t n) { arm_fk_kernel(arm, q, T, n); });
 }
 
 py::object jacobian(const Arm& arm, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array) -> py::object {
-    using T = decltype(tag);
-    return map_q<T>(arm, q_obj, {6, 6}, 36, arm_jacobian_kernel<T>);
-  });
+  return map_batch(q_obj, "q", 6, {6, 6}, kMinPerThread,
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) { arm_jacobian_kernel(arm, q, J, n); });
 }
 
 py::object singularity(const Arm& arm, py::handle q_obj) {

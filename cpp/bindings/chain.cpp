@@ -2,6 +2,8 @@
 // frames and Jacobians.
 #include "spotkin/chain.hpp"
 
+#include <type_traits>
+
 #include "bindings.hpp"
 #include "dispatch.hpp"
 #include "numpy_boundary.hpp"
@@ -59,67 +61,29 @@ SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<float>& c, const float* q,
   c.jacobian_batch(q, out, n, rows, in_tool_frame);
 }
 
+// The chain in the precision of the batch's working dtype.
+template <typename T>
+const Chain<std::remove_const_t<T>>& in_precision(const ChainPair& chain, T*) {
+  return chain.get(std::remove_const_t<T>{});
+}
+
 py::object fk(const ChainPair& chain, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto& c = chain.get(tag);
-    const py::ssize_t n = c.dof();
-    const Shape leading = leading_shape(arr, "q", {n});
-    auto q = contiguous<T>(arr);
-    auto out = new_array<T>(leading, {4, 4});
-    const py::ssize_t N = count(leading);
-    const T* qd = q.data();
-    T* od = out.mutable_data();
-    {
-      ReleaseGilFor release(N);
-      parallel_for(N, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        fk_kernel(c, qd + b * n, od + 16 * b, e - b);
-      });
-    }
-    return std::move(out);
+  return map_batch(q_obj, "q", chain.f64.dof(), {4, 4}, kMinPerThread, [&](const auto* q, auto* T, std::ptrdiff_t n) {
+    fk_kernel(in_precision(chain, q), q, T, n);
   });
 }
 
 py::object frames(const ChainPair& chain, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto& c = chain.get(tag);
-    const py::ssize_t n = c.dof();
-    const Shape leading = leading_shape(arr, "q", {n});
-    auto q = contiguous<T>(arr);
-    auto out = new_array<T>(leading, {n + 2, 4, 4});
-    const py::ssize_t N = count(leading);
-    const T* qd = q.data();
-    T* od = out.mutable_data();
-    {
-      ReleaseGilFor release(N);
-      parallel_for(N, kMinPerThread / 4, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        frames_kernel(c, qd + b * n, od + 16 * (n + 2) * b, e - b);
-      });
-    }
-    return std::move(out);
-  });
+  const py::ssize_t n_frames = chain.f64.dof() + 2;
+  return map_batch(q_obj, "q", chain.f64.dof(), {n_frames, 4, 4}, kMinPerThread / 4,
+                   [&](const auto* q, auto* F, std::ptrdiff_t n) { frames_kernel(in_precision(chain, q), q, F, n); });
 }
 
 py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_tool_frame) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto& c = chain.get(tag);
-    const py::ssize_t n = c.dof();
-    const Shape leading = leading_shape(arr, "q", {n});
-    auto q = contiguous<T>(arr);
-    auto out = new_array<T>(leading, {rows, n});
-    const py::ssize_t N = count(leading);
-    const T* qd = q.data();
-    T* od = out.mutable_data();
-    {
-      ReleaseGilFor release(N);
-      parallel_for(N, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        jacobian_kernel(c, qd + b * n, od + rows * n * b, e - b, rows, in_tool_frame);
-      });
-    }
-    return std::move(out);
-  });
+  return map_batch(q_obj, "q", chain.f64.dof(), {rows, chain.f64.dof()}, kMinPerThread,
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) {
+                     jacobian_kernel(in_precision(chain, q), q, J, n, rows, in_tool_frame);
+                   });
 }
 
 }  // namespace

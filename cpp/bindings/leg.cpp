@@ -38,39 +38,13 @@ SPOTKIN_MULTIVERSION void leg_ik_all_kernel(const Leg& leg, const T* p, T* q, st
 }
 
 py::object fk(const Leg& leg, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, "q", {3});
-    auto q = contiguous<T>(arr);
-    auto out = new_array<T>(leading, {3});
-    const T* qd = q.data();
-    T* od = out.mutable_data();
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        leg_fk_kernel<T>(leg, qd + 3 * b, od + 3 * b, e - b);
-      });
-    }
-    return std::move(out);
-  });
+  return map_batch(q_obj, "q", 3, {3}, kMinPerThread,
+                   [&](const auto* q, auto* p, std::ptrdiff_t n) { leg_fk_kernel(leg, q, p, n); });
 }
 
 py::object jacobian(const Leg& leg, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, "q", {3});
-    auto q = contiguous<T>(arr);
-    auto out = new_array<T>(leading, {3, 3});
-    const T* qd = q.data();
-    T* od = out.mutable_data();
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        leg_jacobian_kernel<T>(leg, qd + 3 * b, od + 9 * b, e - b);
-      });
-    }
-    return std::move(out);
-  });
+  return map_batch(q_obj, "q", 3, {3, 3}, kMinPerThread,
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) { leg_jacobian_kernel(leg, q, J, n); });
 }
 
 py::object singularity(const Leg& leg, py::handle q_obj) {

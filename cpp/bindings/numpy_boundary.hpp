@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "buffer_cache.hpp"
+#include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
@@ -127,6 +128,31 @@ py::object dispatch_real(py::handle obj, const char* name, F&& f) {
   py::array arr = as_real_array(obj, name);
   if (is_float32(arr)) return f(float{}, arr);
   return f(double{}, arr);
+}
+
+// The common binding: a batch obj (..., in_width) mapped to a new (..., *trailing)
+// array by kernel(first_input, first_output, count), called on thread chunks with
+// the GIL released; float32 stays float32, other real dtypes run in float64.
+template <typename Kernel>
+py::object map_batch(py::handle obj, const char* name, py::ssize_t in_width, const Shape& trailing,
+                     std::ptrdiff_t min_per_thread, Kernel&& kernel) {
+  return dispatch_real(obj, name, [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const Shape leading = leading_shape(arr, name, {in_width});
+    auto in = contiguous<T>(arr);
+    auto out = new_array<T>(leading, trailing);
+    py::ssize_t out_width = 1;
+    for (auto d : trailing) out_width *= d;
+    const T* id = in.data();
+    T* od = out.mutable_data();
+    {
+      ReleaseGilFor release(count(leading));
+      parallel_for(count(leading), min_per_thread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        kernel(id + in_width * b, od + out_width * b, e - b);
+      });
+    }
+    return std::move(out);
+  });
 }
 
 // Reads a (4, 4) homogeneous transform given as any array-like.

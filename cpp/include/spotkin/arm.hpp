@@ -65,64 +65,36 @@ class Arm {
   const ArmGeometry& geometry() const noexcept { return g_; }
   const JointLimits<6>& limits() const noexcept { return limits_; }
 
-  // Hand (tool) pose for one configuration, from the six sines and cosines.
-  SPOTKIN_INLINE Rigid<double> forward(const double* q) const noexcept {
-    double s[6], c[6];
-    const double angles[6] = {q[0], q[1], q[1] + q[2], q[3], q[4], q[5]};
-#pragma GCC unroll 6
-    for (int j = 0; j < 6; ++j) vector_math::sincos_bounded(angles[j], s[j], c[j]);
-    return forward_from(s, c);
-  }
-
-  // s, c: sin/cos of sh0, sh1, sh1 + el0, el1, wr0, wr1.
-  SPOTKIN_INLINE Rigid<double> forward_from(const double* s, const double* c) const noexcept {
+  // Tool pose for one configuration (the block kernels' formulas, one sample).
+  Rigid<double> forward(const double* q) const noexcept {
+    double s[6][1], c[6][1], R[3][3], p[3];
+    trig(q, s, c);
+    forward_arrays<1>(s, c, 0, R, p);
     Rigid<double> T;
-    const Mat3<double> R03 = rot_zy(c[0], s[0], c[2], s[2]);
-    const Mat3<double> R36 = rot_xyx(c[3], s[3], c[4], s[4], c[5], s[5]);
-    // wrist centre: mount + Rz(sh0) Ry(sh1) (a, 0, 0) + R03 (b, 0, h)
-    const double a = g_.upper_arm;
-    T.p = Vec3<double>(g_.mount[0], g_.mount[1], g_.mount[2]) +
-          Vec3<double>(c[0] * c[1] * a, s[0] * c[1] * a, -s[1] * a) +
-          R03.lazyProduct(Vec3<double>(g_.forearm, 0.0, g_.forearm_offset));
-    T.R = R03.lazyProduct(R36);
-    return T * hand_tool_;
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) T.R(r, k) = R[r][k];
+      T.p[r] = p[r];
+    }
+    return T;
   }
 
   // Geometric Jacobian [v; w] of the tool point, body frame, row-major 6x6.
-  SPOTKIN_INLINE void jacobian(const double* q, double* J) const noexcept {
-    double s[6], c[6];
+  void jacobian(const double* q, double* J) const noexcept {
+    double s[6][1], c[6][1];
+    trig(q, s, c);
+    jacobian_arrays<1>(s, c, 0, J);
+  }
+
+  // sin/cos of sh0, sh1, sh1 + el0, el1, wr0, wr1 for one sample (any magnitude).
+  static void trig(const double* q, double (*s)[1], double (*c)[1]) noexcept {
     const double angles[6] = {q[0], q[1], q[1] + q[2], q[3], q[4], q[5]};
-#pragma GCC unroll 6
-    for (int j = 0; j < 6; ++j) vector_math::sincos_bounded(angles[j], s[j], c[j]);
-    jacobian_from(s, c, J);
+    double sv[6], cv[6];
+    vector_math::sincos(angles, sv, cv, 6);
+    for (int j = 0; j < 6; ++j) s[j][0] = sv[j], c[j][0] = cv[j];
   }
 
-  SPOTKIN_INLINE void jacobian_from(const double* s, const double* c, double* J) const noexcept {
-    const Rigid<double> T = forward_from(s, c);
-    const Vec3<double> mount(g_.mount[0], g_.mount[1], g_.mount[2]);
-    const double a = g_.upper_arm;
-    const Vec3<double> elbow = mount + Vec3<double>(c[0] * c[1] * a, s[0] * c[1] * a, -s[1] * a);
-    const Mat3<double> R03 = rot_zy(c[0], s[0], c[2], s[2]);
-    const Vec3<double> wrist = elbow + R03 * Vec3<double>(g_.forearm, 0.0, g_.forearm_offset);
-    const Vec3<double> y_axis(-s[0], c[0], 0.0);
-    const Vec3<double> x3 = R03.col(0);
-    const Vec3<double> y4 = R03 * Vec3<double>(0.0, c[3], s[3]);  // R03 Rx(el1) e_y
-    // R03 Rx(el1) Ry(wr0) e_x = R03 (c4, s3 s4, -c3 s4)
-    const Vec3<double> x5 = R03 * Vec3<double>(c[4], s[3] * s[4], -c[3] * s[4]);
-    const Vec3<double> axes[6] = {Vec3<double>(0, 0, 1), y_axis, y_axis, x3, y4, x5};
-    const Vec3<double> points[6] = {mount, mount, elbow, wrist, wrist, wrist};
-#pragma GCC unroll 6
-    for (int j = 0; j < 6; ++j) {
-      const Vec3<double> v = axes[j].cross(T.p - points[j]);
-      for (int r = 0; r < 3; ++r) {
-        J[r * 6 + j] = v[r];
-        J[(r + 3) * 6 + j] = axes[j][r];
-      }
-    }
-  }
-
-  // Plain-array forms of forward_from / jacobian_from for vectorised block
-  // kernels; s[j][i], c[j][i] are the sines and cosines of sample i.
+  // FK and Jacobian on plain arrays, so block kernels vectorise them across
+  // samples; s[j][i], c[j][i] are the sines and cosines of sample i.
   template <std::ptrdiff_t B>
   SPOTKIN_INLINE void forward_arrays(const double (*s)[B], const double (*c)[B], std::ptrdiff_t i, double R[3][3],
                                      double p[3]) const noexcept {
@@ -332,21 +304,6 @@ class Arm {
     constexpr double pi = kPi<double>, two_pi = 2.0 * kPi<double>;
     const double y = x > pi ? x - two_pi : x;
     return y <= -pi ? y + two_pi : y;
-  }
-
-  static SPOTKIN_INLINE Mat3<double> rot_zy(double cz, double sz, double cy, double sy) noexcept {
-    Mat3<double> R;  // Rz Ry
-    R << cz * cy, -sz, cz * sy, sz * cy, cz, sz * sy, -sy, 0.0, cy;
-    return R;
-  }
-
-  static SPOTKIN_INLINE Mat3<double> rot_xyx(double c1, double s1, double c2, double s2, double c3,
-                                             double s3) noexcept {
-    Mat3<double> R;  // Rx(1) Ry(2) Rx(3)
-    R << c2, s2 * s3, s2 * c3,                                //
-        s1 * s2, c1 * c3 - s1 * c2 * s3, -c1 * s3 - s1 * c2 * c3,  //
-        -c1 * s2, s1 * c3 + c1 * c2 * s3, -s1 * s3 + c1 * c2 * c3;
-    return R;
   }
 
   void update() noexcept {

@@ -44,9 +44,9 @@ struct JointLimits {
 
   static constexpr double kTolerance = 1e-12;  // rad
 
-  // Branch-free form of wrap_into for vectorised loops: wraps q in place and
-  // returns 1.0 if every joint fits, 0.0 otherwise (q is then left as given
-  // for the joints that do not fit).
+  // Wraps each joint by 0, -2pi or +2pi (the first that fits) into the limits,
+  // in place, and returns 1.0 if every joint fits, 0.0 otherwise (joints that
+  // fit no way are left as given). Branch-free, for vectorised loops.
   SPOTKIN_INLINE double wrap_mask(double* q) const noexcept {
     constexpr double two_pi = 2.0 * kPi<double>;
     double all = 1.0;
@@ -59,26 +59,6 @@ struct JointLimits {
       const bool in_plus = (plus >= lo) & (plus <= hi);
       q[j] = in0 ? v : (in_minus ? minus : (in_plus ? plus : v));
       all = (in0 | in_minus | in_plus) ? all : 0.0;
-    }
-    return all;
-  }
-
-  // Wraps q by 0, -2pi or +2pi (first that fits) into the limits, in place.
-  // Returns whether every joint fits.
-  SPOTKIN_INLINE bool wrap_into(double* q) const noexcept {
-    constexpr double two_pi = 2.0 * kPi<double>;
-    bool all = true;
-    for (int j = 0; j < N; ++j) {
-      const double lo = lower[j] - kTolerance, hi = upper[j] + kTolerance;
-      const double v = q[j];
-      if (v >= lo && v <= hi) continue;
-      if (v - two_pi >= lo && v - two_pi <= hi) {
-        q[j] = v - two_pi;
-      } else if (v + two_pi >= lo && v + two_pi <= hi) {
-        q[j] = v + two_pi;
-      } else {
-        all = false;
-      }
     }
     return all;
   }
@@ -181,9 +161,7 @@ class Leg {
 #pragma GCC unroll 2
     for (int hb = 0; hb < 2; ++hb) {
       const double eps = hb == 0 ? 1.0 : -1.0;
-      // atan2 is scale-invariant: the cos/sin of (I1) without their common 1 / r^2
-      const double hx = vector_math::atan2(z * h1_ + eps * y * hip.S, y * h1_ - eps * z * hip.S);
-      const double hx_safe = hip.r2 > 0.0 ? hx : 0.0;
+      const double hx_safe = hip_roll(y, z, hip, eps);
 #pragma GCC unroll 2
       for (int kb = 0; kb < 2; ++kb) {
         double* slot = q[2 * hb + kb];
@@ -200,8 +178,7 @@ class Leg {
                                     double tol = kRatioTolerance) const noexcept {
     const Hip hip = solve_hip(y, z, tol);
     const Knee knee = solve_knee(x, hip.S, tol);
-    const double hx = vector_math::atan2(z * h1_ + y * hip.S, y * h1_ - z * hip.S);
-    q[0] = hip.r2 > 0.0 ? hx : 0.0;
+    q[0] = hip_roll(y, z, hip, 1.0);
     q[1] = hip_pitch(x, -hip.S, knee, 0);
     q[2] = knee_angle(knee, 0);
     return hip.exists * knee.exists;
@@ -265,6 +242,13 @@ class Leg {
     return k;
   }
 
+  // (I1): hx for hip branch eps; atan2 is scale-invariant, so the cos/sin are
+  // used without their common 1 / r^2. hx = 0 when r = 0 (every hx works).
+  SPOTKIN_INLINE double hip_roll(double y, double z, const Hip& hip, double eps) const noexcept {
+    const double hx = vector_math::atan2(z * h1_ + eps * y * hip.S, y * h1_ - eps * z * hip.S);
+    return hip.r2 > 0.0 ? hx : 0.0;
+  }
+
   SPOTKIN_INLINE double knee_angle(const Knee& k, int kb) const noexcept {
     const double kn = kb == 0 ? -beta_ - k.acos_psi : -beta_ + k.acos_psi;
     const double wrapped = kn <= -kPi<double> ? kn + 2.0 * kPi<double> : kn;  // kn in (-2pi, 2pi)
@@ -320,7 +304,7 @@ SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], bool 
   double seed_d[3] = {0, 0, 0};
   if (seed) seed_d[0] = double(seed[0]), seed_d[1] = double(seed[1]), seed_d[2] = double(seed[2]);
   for (int s = 0; s < Leg::kSlots; ++s) {
-    const bool ok = exists && leg.limits().wrap_into(q_all[s]);
+    const bool ok = exists && leg.limits().wrap_mask(q_all[s]) != 0.0;
     if (valid_out) valid_out[s] = ok;
     if (!ok) continue;
     if (!seed) {
