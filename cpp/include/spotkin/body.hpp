@@ -37,12 +37,14 @@ struct Body {
   Leg legs[4];
   double hips[4][3];  // hx joint origins in the body frame, SDK order
 
-  // R = product of elementary rotations for one sample (branch-free).
+  // R = product of elementary rotations for one sample. vector_math::sincos is
+  // exact for any magnitude (glibc's reduction beyond its polynomial range).
   static SPOTKIN_INLINE void euler_rotation(const EulerSequence& seq, const double angles[3], double R[3][3]) noexcept {
+    double sines[3], cosines[3];
+    vector_math::sincos(angles, sines, cosines, 3);
     double M[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     for (int k = 0; k < 3; ++k) {
-      double s, c;
-      vector_math::sincos_bounded(angles[seq.order[k]], s, c);
+      const double s = sines[seq.order[k]], c = cosines[seq.order[k]];
       const int a = seq.axis[k], i = (a + 1) % 3, j = (a + 2) % 3;
       // M <- M R_a: columns i and j mix (R_a e_i = c e_i + s e_j, R_a e_j = -s e_i + c e_j)
       for (int r = 0; r < 3; ++r) {
@@ -103,10 +105,7 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
     const T* in = poses + stride * i;
     double R[3][3], t[3], ok = 1.0;
     if (format == BodyPoseFormat::Euler) {
-      // exact reduction first: sincos_bounded is accurate for |angle| < kReducibleLimit
-      const double angles[3] = {std::remainder(double(in[3]), 2.0 * kPi<double>),
-                                std::remainder(double(in[4]), 2.0 * kPi<double>),
-                                std::remainder(double(in[5]), 2.0 * kPi<double>)};
+      const double angles[3] = {double(in[3]), double(in[4]), double(in[5])};
       Body::euler_rotation(seq, angles, R);
       t[0] = double(in[0]), t[1] = double(in[1]), t[2] = double(in[2]);
     } else {
