@@ -30,14 +30,15 @@ namespace spotkin::paul {
 
 constexpr double kTolerance = 1e-12;  // relative: r^2 - Z^2 >= -tol r^2 counts as a double root
 
-// 1 / the largest |coefficient| (1 if all are zero): every equation is solved
-// after dividing by it, which leaves the roots unchanged and keeps tiny or huge
-// coefficients from under- or overflowing in the squares.
+// The largest |coefficient| (1 if all are zero or it is not finite): every
+// equation is solved after dividing by it, which leaves the roots unchanged and
+// keeps tiny or huge coefficients from under- or overflowing in the squares.
+// (Dividing, not multiplying by its reciprocal, which overflows for subnormals.)
 template <typename... Args>
-SPOTKIN_INLINE double inverse_scale(Args... c) noexcept {
+SPOTKIN_INLINE double scale_of(Args... c) noexcept {
   double m = 0.0;
   ((m = std::max(m, std::fabs(c))), ...);
-  return m > 0.0 && std::isfinite(m) ? 1.0 / m : 1.0;
+  return m > 0.0 && std::isfinite(m) ? m : 1.0;
 }
 
 struct Type2 {
@@ -48,8 +49,8 @@ struct Type2 {
 // zero_tolerance: |Z| at or below it counts as 0 when X = Y = 0 (type 6 passes
 // one scaled to its coefficients, since its Z is a difference of squares).
 SPOTKIN_INLINE Type2 type2(double X, double Y, double Z, double zero_tolerance = 0.0) noexcept {
-  const double k = inverse_scale(X, Y, Z);
-  X *= k, Y *= k, Z *= k, zero_tolerance *= k;
+  const double m = scale_of(X, Y, Z);
+  X /= m, Y /= m, Z /= m, zero_tolerance /= m;
   Type2 out;
   const double r2 = X * X + Y * Y;
   const double disc = r2 - Z * Z;
@@ -71,8 +72,8 @@ struct Type3 {
 };
 
 SPOTKIN_INLINE Type3 type3(double X1, double Y1, double Z1, double X2, double Y2, double Z2) noexcept {
-  const double k1 = inverse_scale(X1, Y1, Z1), k2 = inverse_scale(X2, Y2, Z2);
-  X1 *= k1, Y1 *= k1, Z1 *= k1, X2 *= k2, Y2 *= k2, Z2 *= k2;
+  const double m1 = scale_of(X1, Y1, Z1), m2 = scale_of(X2, Y2, Z2);
+  X1 /= m1, Y1 /= m1, Z1 /= m1, X2 /= m2, Y2 /= m2, Z2 /= m2;
   const double D = X1 * Y2 - X2 * Y1;
   const double scale = std::max(std::max(std::fabs(X1), std::fabs(Y1)), std::max(std::fabs(X2), std::fabs(Y2)));
   Type3 out;
@@ -101,8 +102,8 @@ struct Type6 {
 };
 
 SPOTKIN_INLINE Type6 type6(double W, double X, double Y, double Z1, double Z2) noexcept {
-  const double k = inverse_scale(W, X, Y, Z1, Z2);
-  W *= k, X *= k, Y *= k, Z1 *= k, Z2 *= k;
+  const double m = scale_of(W, X, Y, Z1, Z2);
+  W /= m, X /= m, Y /= m, Z1 /= m, Z2 /= m;
   Type6 out;
   out.ti[0] = out.ti[1] = out.tj[0] = out.tj[1] = quiet_nan<double>();
   out.valid[0] = out.valid[1] = 0.0;
