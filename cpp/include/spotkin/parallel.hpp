@@ -36,7 +36,7 @@ inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::m
 // its measured single-thread cost per sample (kChunkWork below).
 // Chunks start at multiples of kChunkAlignment, a multiple of every kernel's
 // block size, so each sample goes through the same code path (vector body or
-// remainder loop) whatever the thread count: results are bit-identical.
+// remainder loop) whatever the thread count or split: results are bit-identical.
 constexpr std::ptrdiff_t kChunkAlignment = 64;
 
 // Smallest chunk for a kernel costing `ns_per_sample` on one thread.
@@ -54,17 +54,23 @@ void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) 
     body(std::ptrdiff_t{0}, n);
     return;
   }
-  std::ptrdiff_t chunk = (n + threads - 1) / threads;
-  chunk = (chunk + kChunkAlignment - 1) / kChunkAlignment * kChunkAlignment;
+  // Chunks are handed out from a shared counter, about 8 per thread, so a core
+  // that runs faster (cores of a VM often differ) takes more of the batch
+  // instead of waiting for the slowest; each chunk starts on a block boundary.
+  std::ptrdiff_t grain = std::max<std::ptrdiff_t>(min_per_thread / 4, n / (8 * threads));
+  grain = (grain + kChunkAlignment - 1) / kChunkAlignment * kChunkAlignment;
+  std::atomic<std::ptrdiff_t> next{0};
+  auto work = [&] {
+    for (;;) {
+      const std::ptrdiff_t begin = next.fetch_add(grain, std::memory_order_relaxed);
+      if (begin >= n) return;
+      body(begin, std::min(n, begin + grain));
+    }
+  };
   std::vector<std::thread> workers;
   workers.reserve(static_cast<std::size_t>(threads - 1));
-  for (std::ptrdiff_t t = 1; t < threads; ++t) {
-    const std::ptrdiff_t begin = t * chunk;
-    const std::ptrdiff_t end = std::min(n, begin + chunk);
-    if (begin >= end) break;
-    workers.emplace_back([&body, begin, end] { body(begin, end); });
-  }
-  body(std::ptrdiff_t{0}, std::min(n, chunk));
+  for (std::ptrdiff_t t = 1; t < threads; ++t) workers.emplace_back(work);
+  work();
   for (auto& w : workers) w.join();
 }
 
