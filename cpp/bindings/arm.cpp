@@ -64,17 +64,6 @@ py::object singularity(const Arm& arm, py::handle q_obj) {
   return std::move(out);
 }
 
-// The pose batch: (..., 4, 4) matrices or (..., 7) [x y z qx qy qz qw].
-std::pair<PoseFormat, Shape> pose_shape(const py::array& arr, const char* name) {
-  const auto nd = static_cast<std::size_t>(arr.ndim());
-  Shape shape(arr.shape(), arr.shape() + nd);
-  if (nd >= 2 && shape[nd - 1] == 4 && shape[nd - 2] == 4)
-    return {PoseFormat::Matrix, Shape(shape.begin(), shape.end() - 2)};
-  if (nd >= 1 && shape[nd - 1] == 7) return {PoseFormat::PositionQuaternion, Shape(shape.begin(), shape.end() - 1)};
-  throw py::value_error(std::string(name) + " must have shape (..., 4, 4) or (..., 7) as [x, y, z, qx, qy, qz, qw], got " +
-                        format_shape(shape));
-}
-
 template <typename T>
 py::array_t<T, py::array::c_style> seed_array(py::handle seed_obj, const Shape& leading, bool& has_seed) {
   has_seed = !seed_obj.is_none();

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "buffer_cache.hpp"
+#include "spotkin/arm.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
@@ -153,6 +154,17 @@ py::object map_batch(py::handle obj, const char* name, py::ssize_t in_width, con
     }
     return std::move(out);
   });
+}
+
+// The pose batch: (..., 4, 4) matrices or (..., 7) [x y z qx qy qz qw].
+inline std::pair<PoseFormat, Shape> pose_shape(const py::array& arr, const char* name) {
+  const auto nd = static_cast<std::size_t>(arr.ndim());
+  Shape shape(arr.shape(), arr.shape() + nd);
+  if (nd >= 2 && shape[nd - 1] == 4 && shape[nd - 2] == 4)
+    return {PoseFormat::Matrix, Shape(shape.begin(), shape.end() - 2)};
+  if (nd >= 1 && shape[nd - 1] == 7) return {PoseFormat::PositionQuaternion, Shape(shape.begin(), shape.end() - 1)};
+  throw py::value_error(std::string(name) + " must have shape (..., 4, 4) or (..., 7) as [x, y, z, qx, qy, qz, qw], got " +
+                        format_shape(shape));
 }
 
 // Reads a (4, 4) homogeneous transform given as any array-like.

@@ -8,7 +8,7 @@ from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
-from .chain import Chain
+from .chain import Chain, ChainSolutions
 from .leg import Leg, LegSolutions
 from .spot import BodyFrames, BodyIK, BodyRates, Spot
 
@@ -20,6 +20,7 @@ __all__ = [
     "BodyIK",
     "BodyRates",
     "Chain",
+    "ChainSolutions",
     "Leg",
     "LegSolutions",
     "Spot",

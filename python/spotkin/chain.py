@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
 
-__all__ = ["Chain"]
+__all__ = ["Chain", "ChainSolutions"]
 
 _CONVENTIONS = {
     "mdh": _core.Convention.MODIFIED_DH,
@@ -41,6 +41,24 @@ def _limits(limits: ArrayLike | None, dof: int) -> tuple[np.ndarray, np.ndarray]
     return lower, upper
 
 
+class ChainSolutions(NamedTuple):
+    """Every closed-form IK solution for a batch of targets, from :meth:`Chain.ik_position` or
+    :meth:`Chain.ik`."""
+
+    q: np.ndarray
+    """(..., slots, dof) joint values per slot (4 slots for ik_position, 8 for ik), NaN where none.
+    Solutions fill the first slots. Revolute angles are in [-pi, pi], or shifted by 2 pi where that
+    brings them into the limits."""
+    valid: np.ndarray
+    """(..., slots) bool: the solution exists and is within the joint limits."""
+    exists: np.ndarray
+    """(..., slots) bool: the solution exists, limits aside."""
+    status: np.ndarray
+    """(...,) int8 :class:`Status`: OK if any slot is valid, else JOINT_LIMIT (solutions exist, none
+    within the limits), UNREACHABLE (no solution: every slot NaN) or INVALID_INPUT (NaN/Inf, or a
+    pose whose rotation is not one)."""
+
+
 class Chain:
     """A serial chain of revolute and prismatic joints described by a DH table.
 
@@ -53,7 +71,7 @@ class Chain:
     computed in float64. NaN in ``q`` propagates to NaN in the result.
     """
 
-    __slots__ = ("_base", "_convention", "_core", "_limits", "_rows", "_tool")
+    __slots__ = ("_base", "_convention", "_core", "_ik", "_limits", "_rows", "_tool")
 
     def __init__(
         self,
@@ -73,6 +91,7 @@ class Chain:
         self._tool = None if tool is None else np.array(tool, dtype=np.float64)
         self._core = _core.Chain(_CONVENTIONS[convention], table, self._base, self._tool)
         self._limits = _limits(limits, table.shape[0])
+        self._ik = None
 
     @classmethod
     def from_mdh(
@@ -171,6 +190,69 @@ class Chain:
     def position_jacobian(self, q: ArrayLike, frame: Literal["base", "tool"] = "base") -> np.ndarray:
         """Top three rows of :meth:`jacobian`, d p_tool / d q: (..., 3, dof)."""
         return self._core.jacobian(q, 3, _tool_frame(frame))
+
+    # -- closed-form IK ------------------------------------------------------------------------------
+
+    def _ik_core(self):
+        if self._ik is None:
+            self._ik = _core.ChainIK(
+                _CONVENTIONS[self._convention], self._rows, self._base, self._tool, *self._limits
+            )
+        return self._ik
+
+    @property
+    def ik_kind(self) -> str:
+        """The closed form :meth:`ik_position` or :meth:`ik` uses for this chain.
+
+        3 joints: ``"3R-parallel"`` (two consecutive axes parallel: a degree-2 equation),
+        ``"3R-intersecting"`` (two consecutive axes intersect: degree 2), ``"3R-general-quartic"``
+        (both pairs skew: Pieper's quartic), or the joint pattern (``"PRR"``, ``"RPR"``, ``"RRP"``,
+        ...) for prismatic joints. 6 joints: ``"6R-spherical-wrist"`` (see :attr:`ik_position_kind`
+        for its first three joints). Raises ``ValueError``, saying which structure was found, for
+        chains without a closed form here: other joint counts, a tool point that three joints cannot
+        place in 3D (planar chains, coincident or concurrent axes), or a 6-joint chain whose last
+        three axes do not meet at one point.
+        """
+        return self._ik_core().kind
+
+    @property
+    def ik_position_kind(self) -> str:
+        """The closed form of the position part: :attr:`ik_kind` of the first three joints."""
+        return self._ik_core().position_kind
+
+    def ik_position(self, p: ArrayLike) -> ChainSolutions:
+        """Every joint solution placing the tool point at p, for a 3-joint chain.
+
+        p (..., 3) in the base frame -> :class:`ChainSolutions` with q (..., 4, 3). The
+        tool orientation is free. The closed form is Pieper's: q1 is eliminated through two
+        invariants of its joint (|f|^2 and f_z for a revolute, f_x and f_y for a prismatic),
+        q2 through a 2x2 linear system, leaving a polynomial in q3 of degree <= 4 (degree 2
+        when consecutive axes intersect or are parallel); every real root is back-substituted
+        and polished by Gauss–Newton steps on fk(q) = p. Accepted solutions satisfy
+        |fk(q) - p| <= 1e-9 s (s: the sum of the table's lengths and the tool offset, at least
+        |p|); solutions closer than 1e-6 (rad, or length / s) are merged, so a double root comes
+        back once. Slots are sorted by (q1, q2, q3). A target for which a joint is free (on a
+        joint axis) gives one representative with that joint at 0. Unreachable targets get
+        status UNREACHABLE and NaN in every slot; :meth:`fk` of the nearest configuration is
+        not attempted (use a numerical solver for a least-squares answer). The full derivation
+        is in ``spotkin.reference.ik3r``.
+        """
+        return ChainSolutions(*self._ik_core().ik_position(p))
+
+    def ik(self, T: ArrayLike) -> ChainSolutions:
+        """Every joint solution for a tool pose, for a 6R chain with a spherical wrist.
+
+        T (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw] in the base frame ->
+        :class:`ChainSolutions` with q (..., 8, 6). The wrist centre (where axes 4, 5 and 6
+        meet, detected to within 1e-9 s when the chain is built) fixes q1..q3 through
+        :meth:`ik_position`'s engine; then q5 solves e3 . B5 Rz(q5) b = w_z (Paul's type 2,
+        two roots), q4 and q6 follow from the remaining rotation. Slot 2 k + b holds the
+        position solution k and the wrist branch b: at most 4 x 2 = 8 solutions (the cap is
+        exact: the position part has at most 4, the wrist at most 2). In a wrist singularity
+        (axes 4 and 6 aligned) q4 is free and set to 0, q6 takes the whole rotation. A rotation
+        part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT.
+        """
+        return ChainSolutions(*self._ik_core().ik(T))
 
     def __reduce__(self):
         limits = None if np.isinf(self._limits).all() else np.stack(self._limits, axis=1)

@@ -1,0 +1,1013 @@
+// Closed-form IK from a DH table: every position solution of a 3-joint chain
+// (3R and its prismatic variants) and every solution of a 6R chain whose last
+// three axes meet at one point (spherical wrist).
+//
+// The derivation, the equation labels (F), (I), (L), (Q), (B), (Q'), (B') and
+// the tolerances are those of python/spotkin/reference/ik3r.py, which the tests
+// compare this against. Two changes of representation, for speed:
+//  - revolute values are carried as (cos q, sin q) until the end, so the back
+//    substitution and the Newton polish need no trigonometric call;
+//  - the quartic (Q) in e^{i q3} is solved in closed form (Ferrari) in
+//    t = tan((q3 - phi) / 2), with phi chosen so that the leading coefficient
+//    is the largest of the five samples of P (no root at t = infinity).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/SVD>
+
+#include "spotkin/arm.hpp"
+#include "spotkin/chain.hpp"
+#include "spotkin/common.hpp"
+#include "spotkin/vector_math.hpp"
+
+namespace spotkin::chain_ik {
+
+using V3 = Eigen::Vector3d;
+using M3 = Eigen::Matrix3d;
+
+// Tolerances (s = the chain's length scale, see Position3::scale).
+struct Tolerance {
+  static constexpr double angle = 1e-9;     // |sin| or |cos| between two axes
+  static constexpr double length = 1e-9;    // * s: distance between two axes counted as zero
+  static constexpr double rank = 1e-9;      // smallest singular value of the scaled position Jacobian
+  static constexpr double trim = 1e-11;     // leading coefficient / largest coefficient counted as zero
+  static constexpr double root = 1e-2;      // ||z| - 1| (revolute) or |Im x| / max(1, |x|): root tried
+  static constexpr double ratio = 1e-6;     // acos ratios within 1 + tol, discriminants within -tol s^2
+  static constexpr double residual = 1e-9;  // * s: |fk(q) - p| after polishing, a solution
+  static constexpr double merge = 1e-6;     // max joint distance (rad, or length / s): one solution
+  static constexpr double wrist = 1e-9;     // * s: the last three axes meet within this distance
+  static constexpr int newton_steps = 6;
+};
+
+enum class Kind : std::int8_t {
+  Parallel3R,       // "3R-parallel": axes 2-3 (else 1-2) parallel, degree 2 in e^{iq}
+  Intersecting3R,   // "3R-intersecting": axes 1-2 (else 2-3) intersect, degree 2
+  GeneralQuartic3R, // "3R-general-quartic": both pairs skew, degree 4
+  Prismatic,        // a pattern with prismatic joints, named by Position3::pattern
+};
+
+// A joint value: (cos q, sin q) for a revolute joint, v = q for a prismatic one.
+struct JointValue {
+  double c = 1.0, s = 0.0, v = 0.0;
+};
+
+namespace detail {
+
+inline V3 z_apply(int sigma, const JointValue& q, const V3& x) noexcept {
+  if (sigma == 0) return V3(q.c * x[0] - q.s * x[1], q.s * x[0] + q.c * x[1], x[2]);
+  return V3(x[0], x[1], x[2] + q.v);
+}
+
+// The rotation part of Z(q) applied to a direction.
+inline V3 z_rotate(int sigma, const JointValue& q, const V3& x) noexcept {
+  return sigma == 0 ? V3(q.c * x[0] - q.s * x[1], q.s * x[0] + q.c * x[1], x[2]) : x;
+}
+
+// d/dq (Z(q) x) = e3 x Z(q) x (revolute) or e3 (prismatic), given zx = Z(q) x.
+inline V3 z_tangent(int sigma, const V3& zx) noexcept {
+  return sigma == 0 ? V3(-zx[1], zx[0], 0.0) : V3(0.0, 0.0, 1.0);
+}
+
+// The unit vector of (x, y); (1, 0) at the origin (the angle is free there).
+inline void unit(double x, double y, double& c, double& s) noexcept {
+  const double r = std::sqrt(x * x + y * y);
+  if (r > 0.0) {
+    c = x / r, s = y / r;
+  } else {
+    c = 1.0, s = 0.0;
+  }
+}
+
+// Every (cos x, sin x) with a cos x + b sin x = rhs: the angle of (a, b) plus
+// or minus acos(rhs / hypot(a, b)), without trigonometric calls (seed 000
+// annex, type 2). One answer (1, 0) when a = b = 0: x is free or there is no
+// solution, and the residual test decides.
+inline int cos_sin_roots(double a, double b, double rhs, JointValue out[2]) noexcept {
+  const double r2 = a * a + b * b;
+  if (!(r2 > 0.0)) {
+    out[0] = JointValue{};
+    return r2 == 0.0 ? 1 : 0;
+  }
+  const double r = std::sqrt(r2);
+  double ratio = rhs / r;
+  if (!(std::fabs(ratio) <= 1.0 + Tolerance::ratio)) return 0;
+  ratio = std::clamp(ratio, -1.0, 1.0);
+  const double k = std::sqrt(std::max(0.0, (1.0 - ratio) * (1.0 + ratio)));
+  const double ca = a / r, sa = b / r;
+  out[0] = JointValue{ca * ratio - sa * k, sa * ratio + ca * k, 0.0};
+  out[1] = JointValue{ca * ratio + sa * k, sa * ratio - ca * k, 0.0};
+  return 2;
+}
+
+using Complex = std::complex<double>;
+
+// Roots of the monic z^2 + b z + c (real coefficients), the stable way.
+inline void quadratic_roots(double b, double c, Complex out[2]) noexcept {
+  const double disc = b * b - 4.0 * c;
+  if (disc >= 0.0) {
+    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+    out[0] = q;
+    out[1] = q != 0.0 ? c / q : 0.0;
+  } else {
+    const double im = 0.5 * std::sqrt(-disc);
+    out[0] = Complex(-0.5 * b, im);
+    out[1] = Complex(-0.5 * b, -im);
+  }
+}
+
+// Roots of the monic z^3 + b z^2 + c z + d (Cardano, trigonometric form when
+// all three are real); the first is real and the largest real root. Each real
+// root gets two Newton steps.
+inline void cubic_roots(double b, double c, double d, Complex out[3]) noexcept {
+  const double shift = b / 3.0;
+  const double P = c - b * shift, Q = (2.0 * shift * shift - c) * shift + d;  // u^3 + P u + Q
+  const double disc = 0.25 * Q * Q + P * P * P / 27.0;
+  auto polish = [&](double z) {
+    for (int k = 0; k < 2; ++k) {
+      const double f = ((z + b) * z + c) * z + d, df = (3.0 * z + 2.0 * b) * z + c;
+      if (df == 0.0) break;
+      z -= f / df;
+    }
+    return z;
+  };
+  if (disc > 0.0) {
+    const double A = -std::copysign(std::cbrt(0.5 * std::fabs(Q) + std::sqrt(disc)), Q);
+    const double B = A != 0.0 ? -P / (3.0 * A) : 0.0;
+    out[0] = polish(A + B - shift);
+    const double re = -0.5 * (A + B) - shift, im = 0.5 * std::sqrt(3.0) * (A - B);
+    out[1] = Complex(re, im);
+    out[2] = Complex(re, -im);
+  } else {
+    const double m = std::sqrt(std::max(0.0, -P / 3.0));
+    const double arg = m > 0.0 ? std::clamp(-0.5 * Q / (m * m * m), -1.0, 1.0) : 0.0;
+    const double theta = std::acos(arg) / 3.0;
+    constexpr double third = 2.0943951023931954923;  // 2 pi / 3
+    for (int k = 0; k < 3; ++k) out[k] = polish(2.0 * m * std::cos(theta - third * k) - shift);
+  }
+}
+
+// Roots of a4 z^4 + a3 z^3 + a2 z^2 + a1 z + a0, a4 != 0 (Ferrari: the
+// depressed quartic y^4 + p y^2 + q y + r splits as two quadratics
+// y^2 -+ S y + m +- q / (2 S), S^2 = 2 m - p, with m the largest root of the
+// resolvent 8 m^3 - 4 p m^2 - 8 r m + 4 p r - q^2, for which 2 m - p > 0).
+inline void quartic_roots(const double a[5], Complex out[4]) noexcept {
+  const double A = a[3] / a[4], B = a[2] / a[4], C = a[1] / a[4], D = a[0] / a[4];
+  const double shift = 0.25 * A, A2 = A * A;
+  const double p = B - 0.375 * A2;
+  const double q = C - 0.5 * A * B + 0.125 * A2 * A;
+  const double r = D - 0.25 * A * C + A2 * B / 16.0 - 3.0 * A2 * A2 / 256.0;
+  Complex resolvent[3];
+  cubic_roots(-0.5 * p, -r, 0.5 * p * r - 0.125 * q * q, resolvent);
+  const double m = resolvent[0].real(), S2 = 2.0 * m - p;
+  const double scale = std::max({std::fabs(p), std::sqrt(std::fabs(r)), 1e-300});
+  if (S2 <= 1e-14 * scale) {  // q ~ 0: biquadratic y^4 + p y^2 + r = 0
+    Complex z[2];
+    quadratic_roots(p, r, z);
+    for (int k = 0; k < 2; ++k) {
+      const Complex y = std::sqrt(z[k]);
+      out[2 * k] = y - shift;
+      out[2 * k + 1] = -y - shift;
+    }
+  } else {
+    const double S = std::sqrt(S2), h = q / (2.0 * S);
+    quadratic_roots(-S, m + h, out);
+    quadratic_roots(S, m - h, out + 2);
+    for (int k = 0; k < 4; ++k) out[k] -= shift;
+  }
+  // One Newton step per root on the original quartic, kept when it helps.
+  for (int k = 0; k < 4; ++k) {
+    const Complex z = out[k];
+    const Complex f = (((a[4] * z + a[3]) * z + a[2]) * z + a[1]) * z + a[0];
+    const Complex df = ((4.0 * a[4] * z + 3.0 * a[3]) * z + 2.0 * a[2]) * z + a[1];
+    if (std::abs(df) == 0.0) continue;
+    const Complex z1 = z - f / df;
+    const Complex f1 = (((a[4] * z1 + a[3]) * z1 + a[2]) * z1 + a[1]) * z1 + a[0];
+    if (std::abs(f1) < std::abs(f)) out[k] = z1;
+  }
+}
+
+// Roots of the polynomial sum_k a[k] z^k of degree deg in 1..4.
+inline int polynomial_roots(const double a[5], int deg, Complex out[4]) noexcept {
+  switch (deg) {
+    case 1:
+      out[0] = -a[0] / a[1];
+      return 1;
+    case 2:
+      quadratic_roots(a[1] / a[2], a[0] / a[2], out);
+      return 2;
+    case 3:
+      cubic_roots(a[2] / a[3], a[1] / a[3], a[0] / a[3], out);
+      return 3;
+    default:
+      quartic_roots(a, out);
+      return 4;
+  }
+}
+
+inline M3 rotation_z(double c, double s) {
+  M3 R;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  return R;
+}
+
+inline Rigid<double> inverse(const Rigid<double>& T) { return {T.R.transpose(), -(T.R.transpose() * T.p)}; }
+
+}  // namespace detail
+
+// The split (F) of a chain's first three joints:
+//   p = M0 Z1(q1) M1 Z2(q2) M2 Z3(q3) w,
+// with Mj = X(post_j) X(pre_{j+1}) Z(theta0, r0 of joint j+1) from the table
+// (the constant z screw commutes with Z(q)); the same for DH and DHm.
+struct Split {
+  int sigma[3];
+  Rigid<double> M0, M1, M2;
+};
+
+inline Rigid<double> x_screw(const XScrew<double>& x) {
+  Rigid<double> T;
+  x.apply(T);
+  return T;
+}
+
+inline Rigid<double> z_screw(double theta, double r) {
+  Rigid<double> T;
+  apply_z_screw(T, theta, r);
+  return T;
+}
+
+// Frame just after joint j's X(pre) and constant z screw, relative to the frame
+// after joint j-1's variable Z and X(post): X(post_{j-1}) X(pre_j) Z(theta0_j, r0_j).
+inline Rigid<double> link(const Chain<double>& chain, int j) {
+  const auto& J = chain.joints()[static_cast<std::size_t>(j)];
+  Rigid<double> T = j > 0 ? x_screw(chain.joints()[static_cast<std::size_t>(j - 1)].post) : Rigid<double>{};
+  return T * x_screw(J.pre) * z_screw(J.theta, J.r);
+}
+
+inline Split split_first_three(const Chain<double>& chain) {
+  Split s;
+  for (int j = 0; j < 3; ++j) s.sigma[j] = chain.joints()[static_cast<std::size_t>(j)].type == JointType::Revolute ? 0 : 1;
+  s.M0 = chain.base() * link(chain, 0);
+  s.M1 = link(chain, 1);
+  s.M2 = link(chain, 2);
+  return s;
+}
+
+// Position IK of the point w (in the frame after joint 3's variable Z) for
+// the first three joints of a chain: the plan is made once per chain.
+class Position3 {
+ public:
+  static constexpr int kSlots = 4;
+  static constexpr int kMaxCandidates = 8;
+
+  // Throws std::invalid_argument when no closed form applies, saying why.
+  Position3(const Split& split, const V3& w, double scale) : split_(split), w_(w), scale_(scale) {
+    for (int j = 0; j < 3; ++j) sigma_[j] = split.sigma[j];
+    check_rank();
+    plan();
+    M0_inv_ = detail::inverse(split.M0);
+    M1_inv_ = detail::inverse(split.M1);
+    M2_inv_ = detail::inverse(split.M2);
+  }
+
+  Kind kind() const noexcept { return kind_; }
+  std::string name() const {
+    switch (kind_) {
+      case Kind::Parallel3R: return "3R-parallel";
+      case Kind::Intersecting3R: return "3R-intersecting";
+      case Kind::GeneralQuartic3R: return "3R-general-quartic";
+      default: {
+        std::string s;
+        for (int j = 0; j < 3; ++j) s += sigma_[j] == 0 ? 'R' : 'P';
+        return s;
+      }
+    }
+  }
+  bool backward() const noexcept { return backward_; }
+  bool reduced() const noexcept { return reduced_; }
+  int sigma(int j) const noexcept { return sigma_[j]; }
+  double scale() const noexcept { return scale_; }
+  const Split& split() const noexcept { return split_; }
+
+  // Tool point for joint values (cos/sin or value), in the base frame.
+  V3 point(const JointValue q[3]) const noexcept {
+    const Split& S = split_;
+    V3 x = detail::z_apply(sigma_[2], q[2], w_);
+    x = S.M2.R * x + S.M2.p;
+    x = detail::z_apply(sigma_[1], q[1], x);
+    x = S.M1.R * x + S.M1.p;
+    x = detail::z_apply(sigma_[0], q[0], x);
+    return S.M0.R * x + S.M0.p;
+  }
+
+  // Every solution of point(q) = p: returns their number n <= 4 and writes
+  // q[k] for k < n, sorted by (q1, q2, q3) with revolute angles in [-pi, pi]
+  // (compared through their cosines and sines). 0 for a non-finite or an
+  // unreachable p.
+  int solve(const V3& p, JointValue q[kSlots][3]) const noexcept {
+    if (!p.allFinite()) return 0;
+    const V3 target = M0_inv_.R * p + M0_inv_.p;  // p' of (F')
+    const double s = std::max(scale_, target.norm());
+    Candidate cands[kMaxCandidates];
+    int n;
+    if (!backward_) {
+      Problem pb{{sigma_[0], sigma_[1], sigma_[2]}, target, split_.M1, split_.M2, w_, reduced_, s};
+      n = pb.candidates(cands);
+    } else {  // (F') reversed: w = Z3(-q3) M2^-1 Z2(-q2) M1^-1 Z1(-q1) p'
+      Problem pb{{sigma_[2], sigma_[1], sigma_[0]}, w_, M2_inv_, M1_inv_, target, reduced_, s};
+      n = pb.candidates(cands);
+      for (int k = 0; k < n; ++k) {
+        std::swap(cands[k].q[0], cands[k].q[2]);
+        for (auto& v : cands[k].q) v.s = -v.s, v.v = -v.v;
+      }
+    }
+    return finish(target, s, cands, n, q);
+  }
+
+ private:
+  struct Candidate {
+    JointValue q[3];
+    double residual = 0.0;
+  };
+
+  // The forward problem target = Z1(q1) M1 Z2(q2) M2 Z3(q3) w of (F').
+  struct Problem {
+    int sig[3];
+    V3 target;
+    Rigid<double> M1, M2;
+    V3 w;
+    bool reduced;
+    double s;
+
+    // g(q3) = R2 Z3(q3) w + t2
+    V3 g_of(const JointValue& q3) const noexcept { return M2.R * detail::z_apply(sig[2], q3, w) + M2.p; }
+
+    // q2 revolute, eq. (L): rows r_a, r_b and kappa(g).
+    void rows(V3& ra, V3& rb) const noexcept {
+      if (sig[0] == 0) {
+        ra = M1.R.transpose() * M1.p;      // u
+        rb = M1.R.row(2).transpose();      // v = R1^T e3
+      } else {
+        ra = M1.R.row(0).transpose();
+        rb = M1.R.row(1).transpose();
+      }
+    }
+    Eigen::Vector2d kappa(const V3& g) const noexcept {
+      if (sig[0] == 0)
+        return {(target.squaredNorm() - g.squaredNorm() - M1.p.squaredNorm()) / 2.0, target[2] - M1.p[2]};
+      return {target[0] - M1.p[0], target[1] - M1.p[1]};
+    }
+
+    // P(q3) of (Q), (Q') or the prismatic variants, and the back substitution.
+    double P(const JointValue& q3, const V3& ra, const V3& rb) const noexcept {
+      const V3 g = g_of(q3);
+      if (sig[1] == 0) {
+        const Eigen::Vector2d d = kappa(g) - Eigen::Vector2d(ra[2], rb[2]) * g[2];
+        const double a00 = ra[0], a01 = ra[1], a10 = rb[0], a11 = rb[1];
+        if (!reduced) {  // (Q) |adj(Rr) d|^2 - det(Rr)^2 (g_x^2 + g_y^2)
+          const double det = a00 * a11 - a01 * a10;
+          const double x = a11 * d[0] - a01 * d[1], y = -a10 * d[0] + a00 * d[1];
+          return x * x + y * y - det * det * (g[0] * g[0] + g[1] * g[1]);
+        }
+        const Eigen::Vector2d n = null_row(a00, a01, a10, a11);  // (Q') n . d
+        return n.dot(d);
+      }
+      const V3 u = M1.R.transpose() * M1.p, v = M1.R.row(2).transpose();
+      if (sig[0] == 0) {
+        if (!reduced) {  // RP: q2 from (I2), then (I1)
+          const double q2 = (target[2] - M1.p[2] - v.dot(g)) / v[2];
+          return (g + V3(0, 0, q2) + u).squaredNorm() - target.squaredNorm();
+        }
+        return v.dot(g) + M1.p[2] - target[2];
+      }
+      const V3 e = M1.R.col(2), k = M1.R * g + M1.p - target;  // PP
+      return e[0] * k[1] - e[1] * k[0];
+    }
+
+    // A row of adj(Rr) of largest norm: the left null vector when det Rr = 0.
+    static Eigen::Vector2d null_row(double a00, double a01, double a10, double a11) noexcept {
+      const Eigen::Vector2d n0(a11, -a01), n1(-a10, a00);
+      return n0.squaredNorm() >= n1.squaredNorm() ? n0 : n1;
+    }
+
+    // q2 values for a root q3 (eqs. (B), (B') and the prismatic forms).
+    int back(const JointValue& q3, const V3& ra, const V3& rb, JointValue out[2]) const noexcept {
+      const V3 g = g_of(q3);
+      if (sig[1] == 0) {
+        const Eigen::Vector2d d = kappa(g) - Eigen::Vector2d(ra[2], rb[2]) * g[2];
+        const double a00 = ra[0], a01 = ra[1], a10 = rb[0], a11 = rb[1];
+        if (!reduced) {  // (B): y = adj(Rr) d / det, e^{i q2} = y / (g_x + i g_y)
+          const double det = a00 * a11 - a01 * a10;
+          double y0 = (a11 * d[0] - a01 * d[1]) / det, y1 = (-a10 * d[0] + a00 * d[1]) / det;
+          double yc, ys, gc, gs;
+          detail::unit(y0, y1, yc, ys);
+          detail::unit(g[0], g[1], gc, gs);
+          out[0] = JointValue{yc * gc + ys * gs, ys * gc - yc * gs, 0.0};
+          return 1;
+        }
+        // (B'): a cos q2 + b sin q2 = d_i on the row i of Rr of largest norm
+        const bool first = a00 * a00 + a01 * a01 >= a10 * a10 + a11 * a11;
+        const double r0 = first ? a00 : a10, r1 = first ? a01 : a11;
+        const double a = r0 * g[0] + r1 * g[1], b = r1 * g[0] - r0 * g[1];
+        return detail::cos_sin_roots(a, b, first ? d[0] : d[1], out);
+      }
+      const V3 u = M1.R.transpose() * M1.p, v = M1.R.row(2).transpose();
+      if (sig[0] == 0) {
+        if (!reduced) {
+          out[0].v = (target[2] - M1.p[2] - v.dot(g)) / v[2];
+          return 1;
+        }
+        // q2^2 + 2 (g_z + u_z) q2 + |g + u|^2 - |p'|^2 = 0
+        const double b = g[2] + u[2], c = (g + u).squaredNorm() - target.squaredNorm();
+        const double disc = b * b - c;
+        if (disc < -Tolerance::ratio * s * s) return 0;
+        const double root = std::sqrt(std::max(disc, 0.0));
+        out[0].v = -b + root;
+        out[1].v = -b - root;
+        return 2;
+      }
+      const V3 e = M1.R.col(2), k = M1.R * g + M1.p - target;  // PP
+      out[0].v = -(e[0] * k[0] + e[1] * k[1]) / (e[0] * e[0] + e[1] * e[1]);
+      return 1;
+    }
+
+    // Real roots q3 of P: a trigonometric polynomial of degree <= 2 (revolute
+    // q3) or a polynomial of degree <= 4 (prismatic), recovered from 5 samples.
+    int roots(const V3& ra, const V3& rb, JointValue out[4]) const noexcept {
+      if (sig[2] == 0) {
+        // Samples at theta_k = 2 pi k / 5; the DFT gives
+        // P = a0 + a1 cos + b1 sin + a2 cos 2q + b2 sin 2q exactly.
+        static constexpr double kc[5] = {1.0, 0.30901699437494745, -0.8090169943749473, -0.8090169943749476,
+                                         0.30901699437494723};
+        static constexpr double ks[5] = {0.0, 0.9510565162951535, 0.5877852522924732, -0.587785252292473,
+                                         -0.9510565162951536};
+        double vals[5];
+        for (int k = 0; k < 5; ++k) vals[k] = P(JointValue{kc[k], ks[k], 0.0}, ra, rb);
+        double a0 = 0, a1 = 0, b1 = 0, a2 = 0, b2 = 0;
+        for (int k = 0; k < 5; ++k) {
+          const int k2 = (2 * k) % 5;
+          a0 += vals[k];
+          a1 += vals[k] * kc[k], b1 += vals[k] * ks[k];
+          a2 += vals[k] * kc[k2], b2 += vals[k] * ks[k2];
+        }
+        a0 /= 5.0, a1 *= 0.4, b1 *= 0.4, a2 *= 0.4, b2 *= 0.4;
+        // |c_m| of the complex form, m = 0, 1, 2
+        const double m1 = 0.5 * std::sqrt(a1 * a1 + b1 * b1), m2 = 0.5 * std::sqrt(a2 * a2 + b2 * b2);
+        const double top = std::max({std::fabs(a0), m1, m2});
+        if (!(top == top)) return 0;
+        if (m2 > Tolerance::trim * top) {
+          // phi = theta_k* - pi, k* the sample of largest |P|: the quartic in
+          // t = tan(theta / 2), q3 = phi + theta, has leading coefficient P(theta_k*).
+          int kmax = 0;
+          for (int k = 1; k < 5; ++k)
+            if (std::fabs(vals[k]) > std::fabs(vals[kmax])) kmax = k;
+          const double cp = -kc[kmax], sp = -ks[kmax];
+          const double c2p = cp * cp - sp * sp, s2p = 2.0 * cp * sp;
+          const double A1 = a1 * cp + b1 * sp, B1 = b1 * cp - a1 * sp;
+          const double A2 = a2 * c2p + b2 * s2p, B2 = b2 * c2p - a2 * s2p;
+          // (1 + t^2)^2 P(phi + theta), cos = (1 - t^2) / (1 + t^2), sin = 2 t / (1 + t^2)
+          const double coef[5] = {a0 + A1 + A2, 2.0 * B1 + 4.0 * B2, 2.0 * a0 - 6.0 * A2, 2.0 * B1 - 4.0 * B2,
+                                  a0 - A1 + A2};
+          detail::Complex z[4];
+          detail::quartic_roots(coef, z);
+          int n = 0;
+          for (const auto& t : z) {
+            const double re = t.real(), im = t.imag();
+            // ||e^{i theta}| - 1| ~ 2 |Im t| / (1 + |t|^2)
+            if (!(2.0 * std::fabs(im) <= Tolerance::root * (1.0 + re * re))) continue;
+            const double d = 1.0 + re * re, ct = (1.0 - re * re) / d, st = 2.0 * re / d;
+            out[n++] = JointValue{cp * ct - sp * st, sp * ct + cp * st, 0.0};
+          }
+          return n;
+        }
+        if (m1 > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
+        out[0] = JointValue{};  // P constant: q3 free or no solution; the residual test decides
+        return 1;
+      }
+      // Prismatic q3 = s x: samples at the Chebyshev extrema x_k = cos(pi k / 4).
+      static const Eigen::Matrix<double, 5, 5> inverse_vandermonde = [] {
+        Eigen::Matrix<double, 5, 5> V;
+        for (int k = 0; k < 5; ++k) {
+          const double x = std::cos(kPi<double> * k / 4.0);
+          for (int j = 0; j < 5; ++j) V(k, j) = std::pow(x, j);
+        }
+        return Eigen::Matrix<double, 5, 5>(V.inverse());
+      }();
+      Eigen::Matrix<double, 5, 1> vals;
+      for (int k = 0; k < 5; ++k) vals[k] = P(JointValue{1, 0, s * std::cos(kPi<double> * k / 4.0)}, ra, rb);
+      const Eigen::Matrix<double, 5, 1> c = inverse_vandermonde * vals;
+      const double top = c.cwiseAbs().maxCoeff();
+      if (!(top == top)) return 0;
+      int deg = 4;
+      while (deg > 0 && std::fabs(c[deg]) <= Tolerance::trim * top) --deg;
+      if (deg == 0) {
+        out[0] = JointValue{};
+        return 1;
+      }
+      detail::Complex z[4];
+      const int m = detail::polynomial_roots(c.data(), deg, z);
+      int n = 0;
+      for (int k = 0; k < m; ++k)
+        if (std::fabs(z[k].imag()) <= Tolerance::root * std::max(1.0, std::abs(z[k])))
+          out[n++] = JointValue{1, 0, s * z[k].real()};
+      return n;
+    }
+
+    // Tool point and its 3x3 Jacobian in the problem's frame.
+    V3 point(const JointValue q[3], M3* J) const noexcept {
+      const V3 h = detail::z_apply(sig[2], q[2], w);
+      const V3 g = M2.R * h + M2.p;
+      const V3 m = detail::z_apply(sig[1], q[1], g);
+      const V3 f = M1.R * m + M1.p;
+      const V3 p = detail::z_apply(sig[0], q[0], f);
+      if (J) {
+        J->col(0) = detail::z_tangent(sig[0], p);
+        J->col(1) = detail::z_rotate(sig[0], q[0], M1.R * detail::z_tangent(sig[1], m));
+        J->col(2) = detail::z_rotate(sig[0], q[0], M1.R * detail::z_rotate(sig[1], q[1], M2.R * detail::z_tangent(sig[2], h)));
+      }
+      return p;
+    }
+
+    // Candidates, each polished by Gauss-Newton on the position equations.
+    int candidates(Candidate out[kMaxCandidates]) const noexcept {
+      V3 ra = V3::Zero(), rb = V3::Zero();
+      if (sig[1] == 0) rows(ra, rb);
+      JointValue q3s[4];
+      const int n3 = roots(ra, rb, q3s);
+      int n = 0;
+      for (int i = 0; i < n3; ++i) {
+        JointValue q2s[2];
+        const int n2 = back(q3s[i], ra, rb, q2s);
+        const V3 g = g_of(q3s[i]);
+        for (int j = 0; j < n2; ++j) {
+          Candidate& c = out[n++];
+          c.q[2] = q3s[i];
+          c.q[1] = q2s[j];
+          const V3 f = M1.R * detail::z_apply(sig[1], q2s[j], g) + M1.p;
+          if (sig[0] == 0) {  // (I) q1 = angle(p'_xy) - angle(f_xy)
+            double tc, ts, fc, fs;
+            detail::unit(target[0], target[1], tc, ts);
+            detail::unit(f[0], f[1], fc, fs);
+            c.q[0] = JointValue{tc * fc + ts * fs, ts * fc - tc * fs, 0.0};
+          } else {
+            c.q[0].v = target[2] - f[2];
+          }
+          polish(c);
+        }
+      }
+      return n;
+    }
+
+    void polish(Candidate& c) const noexcept {
+      M3 J;
+      V3 r = point(c.q, &J) - target;
+      double res = r.norm();
+      const double done = 4.0 * std::numeric_limits<double>::epsilon() * s;
+      for (int step = 0; step < Tolerance::newton_steps && res > done; ++step) {
+        // Gauss-Newton step J delta = -r (least squares when J is singular)
+        V3 delta;
+        const M3 adj = (M3() << J.col(1).cross(J.col(2)).transpose(), J.col(2).cross(J.col(0)).transpose(),
+                        J.col(0).cross(J.col(1)).transpose())
+                           .finished();
+        const double det = J.col(0).dot(J.col(1).cross(J.col(2)));
+        const double norms = J.col(0).norm() * J.col(1).norm() * J.col(2).norm();
+        if (std::fabs(det) > 1e-8 * norms) {
+          delta = -(adj * r) / det;
+        } else {
+          Eigen::JacobiSVD<M3> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+          delta = -svd.solve(r);
+        }
+        Candidate next = c;
+        for (int j = 0; j < 3; ++j) advance(sig[j], delta[j], next.q[j]);
+        M3 J_next;
+        const V3 r_next = point(next.q, &J_next) - target;
+        const double res_next = r_next.norm();
+        if (!(res_next < res)) break;
+        c = next, r = r_next, res = res_next, J = J_next;
+      }
+      c.residual = res;
+    }
+
+    static void advance(int sigma, double delta, JointValue& q) noexcept {
+      if (sigma == 1) {
+        q.v += delta;
+        return;
+      }
+      double sd, cd;
+      if (std::fabs(delta) < 0.05) {  // Taylor to the 9th order: exact to 1e-16 here
+        const double d2 = delta * delta;
+        sd = delta * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0 * (1.0 - d2 / 72.0))));
+        cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0)));
+      } else {
+        sd = std::sin(delta), cd = std::cos(delta);
+      }
+      const double c = q.c * cd - q.s * sd, s = q.s * cd + q.c * sd;
+      const double norm = std::sqrt(c * c + s * s);
+      q.c = c / norm, q.s = s / norm;
+    }
+  };
+
+  // Residual test, merging of near-equal solutions, angles, sorting.
+  int finish(const V3& target, double s, Candidate* cands, int n, JointValue q[kSlots][3]) const noexcept {
+    const Problem forward{{sigma_[0], sigma_[1], sigma_[2]}, target, split_.M1, split_.M2, w_, reduced_, s};
+    auto distance = [&](const Candidate& a, const Candidate& b) {
+      double worst = 0.0;
+      for (int j = 0; j < 3; ++j)
+        worst = std::max(worst, sigma_[j] == 0 ? std::hypot(a.q[j].c - b.q[j].c, a.q[j].s - b.q[j].s)
+                                               : std::fabs(a.q[j].v - b.q[j].v) / s);
+      return worst;
+    };
+    // accepted candidates, best residual first
+    int order[kMaxCandidates], m = 0;
+    for (int k = 0; k < n; ++k)
+      if (cands[k].residual <= Tolerance::residual * s) order[m++] = k;
+    std::sort(order, order + m, [&](int a, int b) { return cands[a].residual < cands[b].residual; });
+    Candidate merged[kMaxCandidates];
+    int groups = 0;
+    bool used[kMaxCandidates] = {};
+    for (int a = 0; a < m; ++a) {
+      if (used[a]) continue;
+      const Candidate& lead = cands[order[a]];
+      Candidate mean;
+      double c[3] = {}, sn[3] = {}, v[3] = {};
+      int count = 0;
+      for (int b = a; b < m; ++b) {
+        if (used[b] || distance(lead, cands[order[b]]) > Tolerance::merge) continue;
+        used[b] = true;
+        ++count;
+        for (int j = 0; j < 3; ++j)
+          c[j] += cands[order[b]].q[j].c, sn[j] += cands[order[b]].q[j].s, v[j] += cands[order[b]].q[j].v;
+      }
+      for (int j = 0; j < 3; ++j) {
+        detail::unit(c[j], sn[j], mean.q[j].c, mean.q[j].s);
+        mean.q[j].v = v[j] / count;
+      }
+      mean.residual = (forward.point(mean.q, nullptr) - target).norm();
+      merged[groups++] = (count == 1 || !(mean.residual <= Tolerance::residual * s)) ? lead : mean;
+    }
+    // keep the kSlots best residuals (more never seen), then sort by (q1, q2, q3)
+    std::sort(merged, merged + groups, [](const Candidate& a, const Candidate& b) { return a.residual < b.residual; });
+    groups = std::min(groups, kSlots);
+    // (q1, q2, q3) order; a revolute angle compares through the pseudo-angle
+    // s >= 0 ? 1 - c : c - 1, increasing with the angle over [-pi, pi].
+    auto key = [&](const Candidate& x, int j) {
+      if (sigma_[j] == 1) return x.q[j].v;
+      return x.q[j].s >= 0.0 ? 1.0 - x.q[j].c : x.q[j].c - 1.0;
+    };
+    std::sort(merged, merged + groups, [&](const Candidate& a, const Candidate& b) {
+      for (int j = 0; j < 3; ++j)
+        if (key(a, j) != key(b, j)) return key(a, j) < key(b, j);
+      return false;
+    });
+    for (int k = 0; k < groups; ++k)
+      for (int j = 0; j < 3; ++j) q[k][j] = merged[k].q[j];
+    return groups;
+  }
+
+  // ValueError unless the position Jacobian has rank 3 somewhere (3 probes).
+  void check_rank() const {
+    static constexpr double probes[3][3] = {{0.7, -1.9, 2.4}, {-2.2, 0.5, -0.8}, {1.3, 2.9, -2.6}};
+    double best = 0.0;
+    for (const auto& probe : probes) {
+      JointValue q[3];
+      for (int j = 0; j < 3; ++j) q[j] = sigma_[j] == 0 ? JointValue{std::cos(probe[j]), std::sin(probe[j]), 0.0}
+                                                        : JointValue{1, 0, probe[j] * scale_};
+      const Problem pb{{sigma_[0], sigma_[1], sigma_[2]}, V3::Zero(), split_.M1, split_.M2, w_, false, scale_};
+      M3 J;
+      pb.point(q, &J);
+      for (int j = 0; j < 3; ++j)
+        if (sigma_[j] == 0) J.col(j) /= scale_;  // revolute columns carry a length
+      best = std::max(best, Eigen::JacobiSVD<M3>(J).singularValues()[2]);
+    }
+    if (!(best > Tolerance::rank))
+      throw std::invalid_argument(
+          "no closed form: the tool point of this " + pattern() +
+          " chain cannot be placed in 3D (position Jacobian of rank < 3 at every probe configuration: "
+          "e.g. a planar chain, coincident or concurrent axes, or the tool point on the last axis)");
+  }
+
+  std::string pattern() const {
+    std::string s;
+    for (int j = 0; j < 3; ++j) s += sigma_[j] == 0 ? 'R' : 'P';
+    return s;
+  }
+
+  enum class Relation { Coincident, Parallel, Intersecting, Skew };
+
+  // Axis z of the current frame vs axis z of frame M.
+  Relation relation(const Rigid<double>& M) const noexcept {
+    const V3 t = M.p, z = M.R.col(2);
+    const V3 cross(-z[1], z[0], 0.0);  // e3 x z
+    const double sin = cross.norm();
+    if (sin <= Tolerance::angle)
+      return std::hypot(t[0], t[1]) <= Tolerance::length * scale_ ? Relation::Coincident : Relation::Parallel;
+    return std::fabs(t.dot(cross)) / sin <= Tolerance::length * scale_ ? Relation::Intersecting : Relation::Skew;
+  }
+
+  // Whether the pair (joint a, next joint b) gives the reduced equation (Q').
+  bool reduces(int sa, int sb, const Rigid<double>& M) const noexcept {
+    if (sa == 1 && sb == 1) return true;                           // PP: degree <= 2
+    if (sa != sb) return std::fabs(M.R(2, 2)) <= Tolerance::angle;  // PR / RP: perpendicular axes
+    const Relation r = relation(M);
+    return r == Relation::Parallel || r == Relation::Intersecting;
+  }
+
+  void plan() {
+    const Rigid<double> M2_inv = detail::inverse(split_.M2);
+    if (sigma_[0] == 0 && sigma_[1] == 0 && sigma_[2] == 0) {
+      const Relation r12 = relation(split_.M1), r23 = relation(split_.M2);
+      if (r23 == Relation::Parallel) {
+        kind_ = Kind::Parallel3R, backward_ = true, reduced_ = true;
+      } else if (r12 == Relation::Parallel) {
+        kind_ = Kind::Parallel3R, backward_ = false, reduced_ = true;
+      } else if (r12 == Relation::Intersecting) {
+        kind_ = Kind::Intersecting3R, backward_ = false, reduced_ = true;
+      } else if (r23 == Relation::Intersecting) {
+        kind_ = Kind::Intersecting3R, backward_ = true, reduced_ = true;
+      } else {
+        kind_ = Kind::GeneralQuartic3R, backward_ = false, reduced_ = false;
+      }
+      return;
+    }
+    kind_ = Kind::Prismatic;
+    if (reduces(sigma_[0], sigma_[1], split_.M1)) {
+      backward_ = false, reduced_ = true;
+    } else if (reduces(sigma_[2], sigma_[1], M2_inv)) {
+      backward_ = true, reduced_ = true;
+    } else {
+      backward_ = false, reduced_ = false;
+    }
+  }
+
+  Split split_;
+  V3 w_;
+  double scale_;
+  int sigma_[3];
+  Kind kind_ = Kind::GeneralQuartic3R;
+  bool backward_ = false, reduced_ = false;
+  Rigid<double> M0_inv_, M1_inv_, M2_inv_;
+};
+
+
+// Joint limits of a chain: a revolute value is shifted by 0, -2 pi or +2 pi
+// (the first that fits, as the leg and arm solvers do); a prismatic one is not.
+struct Limits {
+  static constexpr double kTolerance = 1e-12;
+  std::vector<double> lower, upper;
+  std::vector<int> sigma;
+
+  // In place; true if every joint fits.
+  bool wrap(double* q) const noexcept {
+    bool all = true;
+    for (std::size_t j = 0; j < sigma.size(); ++j) {
+      const double lo = lower[j] - kTolerance, hi = upper[j] + kTolerance, v = q[j];
+      if (v >= lo && v <= hi) continue;
+      if (sigma[j] == 0) {
+        const double two_pi = 2.0 * kPi<double>;
+        if (v - two_pi >= lo && v - two_pi <= hi) {
+          q[j] = v - two_pi;
+          continue;
+        }
+        if (v + two_pi >= lo && v + two_pi <= hi) {
+          q[j] = v + two_pi;
+          continue;
+        }
+      }
+      all = false;
+    }
+    return all;
+  }
+};
+
+// 6R chains whose last three axes meet at one point c (a spherical wrist):
+// c fixes q1..q3 through Position3, then
+//   W = A4^T R_A3^T R_target Tail^T = Rz(q4) B5 Rz(q5) B6 Rz(q6)
+// gives the wrist angles (Paul's method on the third column):
+//   (A)  e3 . B5 Rz(q5) b = w_z:  c5 (a_x b_x + a_y b_y) + s5 (a_y b_x - a_x b_y) = w_z - a_z b_z,
+//        a = B5^T e3, b = B6 e3, w = W e3 (type 2: two q5);
+//   (B)  Rz(q4) v = w, v = B5 Rz(q5) b:  e^{i q4} = (w_x + i w_y) / (v_x + i v_y);
+//   (C)  Rz(q6) = (Rz(q4) B5 Rz(q5) B6)^T W.
+// At most 4 x 2 = 8 solutions (the position part has at most 4, the wrist 2).
+// In a wrist singularity (axes 4 and 6 aligned, v_xy = 0) q4 is free: 0 is
+// returned and q6 takes the whole rotation.
+class SphericalWrist6 {
+ public:
+  static constexpr int kSlots = 8;
+
+  // Throws std::invalid_argument, naming the structure, when the chain is not
+  // a 6-joint chain with revolute joints 4-6 whose axes meet at one point.
+  static SphericalWrist6 make(const Chain<double>& chain, double scale) {
+    if (chain.dof() != 6)
+      throw std::invalid_argument("a spherical-wrist IK needs 6 joints, got " + std::to_string(chain.dof()));
+    for (int j = 3; j < 6; ++j)
+      if (chain.joints()[static_cast<std::size_t>(j)].type != JointType::Revolute)
+        throw std::invalid_argument("no closed form: joint " + std::to_string(j + 1) +
+                                    " is prismatic; a spherical wrist needs revolute joints 4, 5 and 6");
+    // Axes 4, 5, 6 at q = 0, in the frame A3 just after joint 3's variable.
+    const Rigid<double> L4 = link(chain, 3), L5 = link(chain, 4), L6 = link(chain, 5);
+    const Rigid<double> F5 = L4 * L5, F6 = F5 * L6;
+    const V3 o4 = L4.p, z4 = L4.R.col(2), o5 = F5.p, z5 = F5.R.col(2), o6 = F6.p, z6 = F6.R.col(2);
+    const double tol = Tolerance::wrist * scale;
+    const V3 n45 = z4.cross(z5), n56 = z5.cross(z6);
+    if (n45.norm() <= Tolerance::angle || n56.norm() <= Tolerance::angle)
+      throw std::invalid_argument(
+          "no closed form: axes " + std::string(n45.norm() <= Tolerance::angle ? "4 and 5" : "5 and 6") +
+          " are parallel, so the last three axes do not form a spherical wrist");
+    // c: the point of axis 4 closest to axis 5
+    const double h = (o5 - o4).cross(z5).dot(n45) / n45.squaredNorm();
+    const V3 c = o4 + h * z4;
+    const double d45 = std::fabs((o5 - o4).dot(n45)) / n45.norm();
+    const double d6 = (c - o6).cross(z6).norm();
+    if (d45 > tol || d6 > tol)
+      throw std::invalid_argument(
+          "no closed form: the last three axes do not meet at one point (axes 4-5 " + std::to_string(d45) +
+          ", axis 6 " + std::to_string(d6) + " from their meeting point; tolerance " + std::to_string(tol) +
+          "); a 6R closed form here needs a spherical wrist");
+    SphericalWrist6 wrist{Position3(split_first_three(chain), c, scale)};
+    wrist.A4_ = L4.R;
+    wrist.B5_ = L5.R;
+    wrist.B6_ = L6.R;
+    const Rigid<double> tail = x_screw(chain.joints()[5].post) * chain.tool();
+    wrist.tail_R_T_ = tail.R.transpose();
+    // c in the tool frame: F6^-1 c in frame 6, then Tail^-1
+    const Rigid<double> tail_inv = detail::inverse(tail), F6_inv = detail::inverse(F6);
+    wrist.c_tool_ = tail_inv.R * (F6_inv.R * c + F6_inv.p) + tail_inv.p;
+    return wrist;
+  }
+
+  const Position3& position() const noexcept { return position_; }
+
+  // Every solution for a target pose: returns 1 if the position part has any
+  // solution; q[slot] = (cos, sin) of the 6 angles, exists[slot] per slot.
+  // Slot 2 k + b: position solution k (as Position3 orders them), wrist branch b.
+  void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots]) const noexcept {
+    M3 R;
+    V3 p;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) R(i, j) = target.R[i][j];
+      p[i] = target.p[i];
+    }
+    for (int k = 0; k < kSlots; ++k) exists[k] = false;
+    JointValue arm[Position3::kSlots][3];
+    const int n = position_.solve(R * c_tool_ + p, arm);
+    const M3 R_F6 = R * tail_R_T_;
+    const Split& S = position_.split();
+    for (int k = 0; k < n; ++k) {
+      // R_A3 = R0 Rz1 R1 Rz2 R2 Rz3 (prismatic joints do not rotate)
+      M3 R_A3 = S.M0.R;
+      const Rigid<double>* M[3] = {&S.M1, &S.M2, nullptr};
+      for (int j = 0; j < 3; ++j) {
+        if (position_.sigma(j) == 0) R_A3 = R_A3 * detail::rotation_z(arm[k][j].c, arm[k][j].s);
+        if (M[j]) R_A3 = R_A3 * M[j]->R;
+      }
+      const M3 W = A4_.transpose() * R_A3.transpose() * R_F6;
+      const V3 a = B5_.row(2).transpose(), b = B6_.col(2), w = W.col(2);
+      JointValue q5[2];
+      const int m = detail::cos_sin_roots(a[0] * b[0] + a[1] * b[1], a[1] * b[0] - a[0] * b[1], w[2] - a[2] * b[2], q5);
+      for (int branch = 0; branch < m; ++branch) {
+        const int slot = 2 * k + branch;
+        const M3 Rz5 = detail::rotation_z(q5[branch].c, q5[branch].s);
+        const V3 v = B5_ * (Rz5 * b);
+        JointValue q4, q6;
+        double wc, ws, vc, vs;
+        detail::unit(w[0], w[1], wc, ws);
+        detail::unit(v[0], v[1], vc, vs);
+        if (v[0] * v[0] + v[1] * v[1] <= 1e-24) wc = 1.0, ws = 0.0, vc = 1.0, vs = 0.0;  // q4 free: 0
+        q4.c = wc * vc + ws * vs, q4.s = ws * vc - wc * vs;
+        const M3 N = (detail::rotation_z(q4.c, q4.s) * B5_ * Rz5 * B6_).transpose() * W;
+        detail::unit(N(0, 0), N(1, 0), q6.c, q6.s);
+        for (int j = 0; j < 3; ++j) q[slot][j] = arm[k][j];
+        q[slot][3] = q4, q[slot][4] = q5[branch], q[slot][5] = q6;
+        exists[slot] = true;
+      }
+    }
+  }
+
+ private:
+  explicit SphericalWrist6(Position3 position) : position_(std::move(position)) {}
+
+  Position3 position_;
+  M3 A4_, B5_, B6_, tail_R_T_;
+  V3 c_tool_;
+};
+
+// -- batches ------------------------------------------------------------------
+
+constexpr std::ptrdiff_t kBlock = 64;
+
+// Revolute (cos, sin) to angles, vectorised over a block: angle[k] = atan2(s[k], c[k]).
+SPOTKIN_VECTOR_KERNEL inline void block_atan2(const double* __restrict s, const double* __restrict c,
+                                              double* __restrict angle, std::ptrdiff_t n) noexcept {
+  for (std::ptrdiff_t k = 0; k < n; ++k) angle[k] = vector_math::atan2(s[k], c[k]);
+}
+
+// Writes one sample's slots: angles (or prismatic values), NaN padding, the
+// limit check, and the status.
+template <typename T>
+SPOTKIN_INLINE void write_slots(const Limits& limits, int dof, int slots, const double* values, const bool* exists,
+                                bool input_ok, T* q, std::uint8_t* valid, std::uint8_t* exist, std::int8_t* status) {
+  bool any_exists = false, any_valid = false;
+  for (int k = 0; k < slots; ++k) {
+    double row[6];
+    for (int j = 0; j < dof; ++j) row[j] = values[k * dof + j];
+    const bool ok = input_ok && exists[k];
+    const bool fits = ok && limits.wrap(row);
+    for (int j = 0; j < dof; ++j) q[k * dof + j] = ok ? T(row[j]) : quiet_nan<T>();
+    exist[k] = ok, valid[k] = fits;
+    any_exists |= ok, any_valid |= fits;
+  }
+  *status = static_cast<std::int8_t>(!input_ok     ? Status::InvalidInput
+                                     : any_valid   ? Status::Ok
+                                     : any_exists  ? Status::JointLimit
+                                                   : Status::Unreachable);
+}
+
+// Position IK for count targets p (count, 3): q (count, 4, 3), valid and
+// exists (count, 4), status (count).
+template <typename T>
+SPOTKIN_INLINE void ik_position(const Position3& solver, const Limits& limits, const T* points, T* q,
+                                std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
+                                std::ptrdiff_t count) noexcept {
+  constexpr int S = Position3::kSlots, W = S * 3;
+  double c[W * kBlock], s[W * kBlock], angle[W * kBlock], values[W * kBlock];
+  bool found[S * kBlock], input_ok[kBlock];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      const T* point = points + 3 * (b0 + i);
+      const V3 p{double(point[0]), double(point[1]), double(point[2])};
+      input_ok[i] = p.allFinite();
+      JointValue sol[S][3];
+      const int n = solver.solve(p, sol);
+      for (int k = 0; k < S; ++k) {
+        found[S * i + k] = k < n;
+        for (int j = 0; j < 3; ++j) {
+          const JointValue v = k < n ? sol[k][j] : JointValue{};
+          c[W * i + 3 * k + j] = v.c, s[W * i + 3 * k + j] = v.s, values[W * i + 3 * k + j] = v.v;
+        }
+      }
+    }
+    block_atan2(s, c, angle, W * m);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      for (int k = 0; k < S; ++k)
+        for (int j = 0; j < 3; ++j)
+          if (solver.sigma(j) == 0) values[W * i + 3 * k + j] = angle[W * i + 3 * k + j];
+      const std::ptrdiff_t at = b0 + i;
+      write_slots(limits, 3, S, values + W * i, found + S * i, input_ok[i], q + W * at, valid + S * at,
+                  exists + S * at, status + at);
+    }
+  }
+}
+
+// 6R IK for count poses ((count, 16) matrices or (count, 7) position +
+// quaternion): q (count, 8, 6), valid and exists (count, 8), status (count).
+template <PoseFormat Format, typename T>
+SPOTKIN_INLINE void ik_wrist(const SphericalWrist6& solver, const Limits& limits, const T* poses, T* q,
+                             std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
+                             std::ptrdiff_t count) noexcept {
+  constexpr int S = SphericalWrist6::kSlots, W = S * 6;
+  constexpr std::ptrdiff_t stride = Format == PoseFormat::Matrix ? 16 : 7;
+  constexpr std::ptrdiff_t block = kBlock / 4;
+  double c[W * block], s[W * block], angle[W * block], values[W * block];
+  bool found[S * block], input_ok[block];
+  const Position3& position = solver.position();
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += block) {
+    const std::ptrdiff_t m = std::min(block, count - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      double in[16];
+      for (std::ptrdiff_t k = 0; k < stride; ++k) in[k] = double(poses[stride * (b0 + i) + k]);
+      Arm::Pose pose;
+      input_ok[i] = Arm::read_pose<Format>(in, pose) != 0.0;
+      JointValue sol[S][6];
+      bool ok[S];
+      if (input_ok[i]) {
+        solver.solve(pose, sol, ok);
+      } else {
+        for (int k = 0; k < S; ++k) ok[k] = false;
+      }
+      for (int k = 0; k < S; ++k) {
+        found[S * i + k] = ok[k];
+        for (int j = 0; j < 6; ++j) {
+          const JointValue v = ok[k] ? sol[k][j] : JointValue{};
+          c[W * i + 6 * k + j] = v.c, s[W * i + 6 * k + j] = v.s, values[W * i + 6 * k + j] = v.v;
+        }
+      }
+    }
+    block_atan2(s, c, angle, W * m);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      for (int k = 0; k < S; ++k)
+        for (int j = 0; j < 6; ++j)
+          if (j >= 3 || position.sigma(j) == 0) values[W * i + 6 * k + j] = angle[W * i + 6 * k + j];
+      const std::ptrdiff_t at = b0 + i;
+      write_slots(limits, 6, S, values + W * i, found + S * i, input_ok[i], q + W * at, valid + S * at,
+                  exists + S * at, status + at);
+    }
+  }
+}
+
+}  // namespace spotkin::chain_ik
