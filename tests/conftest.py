@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
+import spotkin as sk
+
 settings.register_profile(
     "spotkin", max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow]
 )
@@ -47,3 +49,35 @@ def random_table(rng: np.random.Generator, n: int, prismatic: bool = True) -> np
 
 def vee_so3(W: np.ndarray) -> np.ndarray:
     return np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]]) / 2
+
+
+def joint_distance(qa, qb, sigma) -> float:
+    """max over joints: wrapped angle difference (revolute) or plain difference (prismatic)."""
+    d = np.asarray(qa, dtype=float) - np.asarray(qb, dtype=float)
+    d = np.where(np.asarray(sigma) == 0, np.abs(np.mod(d + np.pi, 2 * np.pi) - np.pi), np.abs(d))
+    return float(np.max(d))
+
+
+def newton_oracle(chain: sk.Chain, p, rng, starts=400, iters=60) -> list[np.ndarray]:
+    """Brute force: damped Gauss-Newton (Levenberg-Marquardt) from many random starts, deduplicated."""
+    sigma = chain.sigma
+    Q = rng.uniform(-np.pi, np.pi, (starts, 3))
+    Q[:, sigma == 1] *= 2.0
+    lam = np.full(starts, 1e-2)
+    r = chain.fk(Q)[:, :3, 3] - p
+    cost = np.einsum("ki,ki->k", r, r)
+    for _ in range(iters):
+        J = chain.position_jacobian(Q)
+        A = np.einsum("kij,kil->kjl", J, J) + lam[:, None, None] * np.eye(3)
+        step = np.linalg.solve(A, np.einsum("kij,ki->kj", J, r)[:, :, None])[:, :, 0]
+        Qn = Q - step
+        rn = chain.fk(Qn)[:, :3, 3] - p
+        cn = np.einsum("ki,ki->k", rn, rn)
+        ok = cn < cost
+        Q[ok], r[ok], cost[ok] = Qn[ok], rn[ok], cn[ok]
+        lam = np.where(ok, np.maximum(lam / 5, 1e-12), lam * 4)
+    found: list[np.ndarray] = []
+    for q in Q[np.sqrt(cost) < 1e-11]:
+        if all(joint_distance(q, f, sigma) > 1e-6 for f in found):
+            found.append(q)
+    return found

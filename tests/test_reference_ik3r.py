@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from conftest import random_rigid, random_table
+from conftest import joint_distance, newton_oracle, random_rigid, random_table
 from spotkin.reference import ik3r
 from spotkin.reference import leg as ref_leg
 
@@ -16,13 +16,6 @@ H1, H2, H3 = 0.110945, 0.3205, 0.3365
 SPOT_ROWS = [(0, 0.0, -np.pi / 2, 0.0, 0.0), (0, 0.0, np.pi / 2, H1, 0.0), (0, H2, 0.0, 0.0, 0.0)]
 SPOT_TOOL = sk.translation([H3, 0.0, 0.0])
 RRR_KINDS = {"3R-general-quartic", "3R-intersecting", "3R-parallel"}
-
-
-def joint_distance(qa, qb, sigma) -> float:
-    """max over joints: wrapped angle difference (revolute) or plain difference (prismatic)."""
-    d = np.asarray(qa, dtype=float) - np.asarray(qb, dtype=float)
-    d = np.where(np.asarray(sigma) == 0, np.abs(np.mod(d + np.pi, 2 * np.pi) - np.pi), np.abs(d))
-    return float(np.max(d))
 
 
 def solve(chain: sk.Chain, p) -> tuple[np.ndarray, str]:
@@ -49,31 +42,6 @@ def rank_deficient(chain: sk.Chain, rng: np.random.Generator) -> bool:
     q = rng.uniform(-np.pi, np.pi, (50, 3))
     sv = np.linalg.svd(chain.position_jacobian(q), compute_uv=False)
     return bool(np.max(sv[:, -1]) < 1e-9)
-
-
-def newton_oracle(chain: sk.Chain, p, rng, starts=400, iters=60) -> list[np.ndarray]:
-    """Brute force: damped Gauss-Newton (Levenberg-Marquardt) from many random starts, deduplicated."""
-    sigma = chain.sigma
-    Q = rng.uniform(-np.pi, np.pi, (starts, 3))
-    Q[:, sigma == 1] *= 2.0
-    lam = np.full(starts, 1e-2)
-    r = chain.fk(Q)[:, :3, 3] - p
-    cost = np.einsum("ki,ki->k", r, r)
-    for _ in range(iters):
-        J = chain.position_jacobian(Q)
-        A = np.einsum("kij,kil->kjl", J, J) + lam[:, None, None] * np.eye(3)
-        step = np.linalg.solve(A, np.einsum("kij,ki->kj", J, r)[:, :, None])[:, :, 0]
-        Qn = Q - step
-        rn = chain.fk(Qn)[:, :3, 3] - p
-        cn = np.einsum("ki,ki->k", rn, rn)
-        ok = cn < cost
-        Q[ok], r[ok], cost[ok] = Qn[ok], rn[ok], cn[ok]
-        lam = np.where(ok, np.maximum(lam / 5, 1e-12), lam * 4)
-    found: list[np.ndarray] = []
-    for q in Q[np.sqrt(cost) < 1e-11]:
-        if all(joint_distance(q, f, sigma) > 1e-6 for f in found):
-            found.append(q)
-    return found
 
 
 @pytest.mark.parametrize("convention", ["mdh", "dh"])

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'Convention', 'Leg', 'get_num_threads', 'paul_type2', 'paul_type3', 'paul_type6', 'set_num_threads']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'Leg', 'get_num_threads', 'paul_type2', 'paul_type3', 'paul_type6', 'set_num_threads']
 class Convention:
     """
     Members:
@@ -109,6 +109,19 @@ class Body:
     def ik(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, sequence: typing.SupportsInt | typing.SupportsIndex, feet: typing.Any, seed: typing.Any) -> typing.Any:
         ...
     def jacobian(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, sequence: typing.SupportsInt | typing.SupportsIndex, q12: typing.Any) -> typing.Any:
+        ...
+class ChainIK:
+    def __init__(self, convention: Convention, rows: typing.Any, base: typing.Any, tool: typing.Any, lower: typing.Any, upper: typing.Any) -> None:
+        ...
+    def ik(self, T: typing.Any) -> typing.Any:
+        ...
+    def ik_position(self, p: typing.Any) -> typing.Any:
+        ...
+    @property
+    def kind(self) -> str:
+        ...
+    @property
+    def position_kind(self) -> str:
         ...
 def _register_status(members: typing.Any) -> None:
     ...

@@ -76,30 +76,43 @@ inline V3 z_tangent(int sigma, const V3& zx) noexcept {
 
 // The unit vector of (x, y); (1, 0) at the origin (the angle is free there).
 inline void unit(double x, double y, double& c, double& s) noexcept {
-  const double r = std::sqrt(x * x + y * y);
-  if (r > 0.0) {
-    c = x / r, s = y / r;
+  const double r2 = x * x + y * y;
+  if (r2 > 0.0) {
+    const double inv = 1.0 / std::sqrt(r2);
+    c = x * inv, s = y * inv;
   } else {
     c = 1.0, s = 0.0;
   }
+}
+
+// (cos, sin) of angle(x1, y1) - angle(x2, y2), with angle(0, 0) = 0: one
+// square root and one division (these latencies dominate the back substitution).
+inline JointValue angle_difference(double x1, double y1, double x2, double y2) noexcept {
+  double r1 = x1 * x1 + y1 * y1, r2 = x2 * x2 + y2 * y2;
+  if (!(r1 > 0.0)) x1 = 1.0, y1 = 0.0, r1 = 1.0;
+  if (!(r2 > 0.0)) x2 = 1.0, y2 = 0.0, r2 = 1.0;
+  const double inv = 1.0 / std::sqrt(r1 * r2);
+  return JointValue{(x1 * x2 + y1 * y2) * inv, (y1 * x2 - x1 * y2) * inv, 0.0};
 }
 
 // Every (cos x, sin x) with a cos x + b sin x = rhs: the angle of (a, b) plus
 // or minus acos(rhs / hypot(a, b)), without trigonometric calls (seed 000
 // annex, type 2). One answer (1, 0) when a = b = 0: x is free or there is no
 // solution, and the residual test decides.
-inline int cos_sin_roots(double a, double b, double rhs, JointValue out[2]) noexcept {
+// With sin_alpha >= 0 given, it is used for the half-angle's sine times
+// hypot(a, b) (when the caller has an accurate form of it).
+inline int cos_sin_roots(double a, double b, double rhs, JointValue out[2], double sin_alpha = -1.0) noexcept {
   const double r2 = a * a + b * b;
   if (!(r2 > 0.0)) {
     out[0] = JointValue{};
     return r2 == 0.0 ? 1 : 0;
   }
-  const double r = std::sqrt(r2);
-  double ratio = rhs / r;
+  const double inv = 1.0 / std::sqrt(r2);
+  double ratio = rhs * inv;
   if (!(std::fabs(ratio) <= 1.0 + Tolerance::ratio)) return 0;
   ratio = std::clamp(ratio, -1.0, 1.0);
-  const double k = std::sqrt(std::max(0.0, (1.0 - ratio) * (1.0 + ratio)));
-  const double ca = a / r, sa = b / r;
+  const double k = sin_alpha >= 0.0 ? std::min(1.0, sin_alpha * inv) : std::sqrt(std::max(0.0, (1.0 - ratio) * (1.0 + ratio)));
+  const double ca = a * inv, sa = b * inv;
   out[0] = JointValue{ca * ratio - sa * k, sa * ratio + ca * k, 0.0};
   out[1] = JointValue{ca * ratio + sa * k, sa * ratio - ca * k, 0.0};
   return 2;
@@ -179,16 +192,6 @@ inline void quartic_roots(const double a[5], Complex out[4]) noexcept {
     quadratic_roots(-S, m + h, out);
     quadratic_roots(S, m - h, out + 2);
     for (int k = 0; k < 4; ++k) out[k] -= shift;
-  }
-  // One Newton step per root on the original quartic, kept when it helps.
-  for (int k = 0; k < 4; ++k) {
-    const Complex z = out[k];
-    const Complex f = (((a[4] * z + a[3]) * z + a[2]) * z + a[1]) * z + a[0];
-    const Complex df = ((4.0 * a[4] * z + 3.0 * a[3]) * z + 2.0 * a[2]) * z + a[1];
-    if (std::abs(df) == 0.0) continue;
-    const Complex z1 = z - f / df;
-    const Complex f1 = (((a[4] * z1 + a[3]) * z1 + a[2]) * z1 + a[1]) * z1 + a[0];
-    if (std::abs(f1) < std::abs(f)) out[k] = z1;
   }
 }
 
@@ -403,11 +406,8 @@ class Position3 {
         const double a00 = ra[0], a01 = ra[1], a10 = rb[0], a11 = rb[1];
         if (!reduced) {  // (B): y = adj(Rr) d / det, e^{i q2} = y / (g_x + i g_y)
           const double det = a00 * a11 - a01 * a10;
-          double y0 = (a11 * d[0] - a01 * d[1]) / det, y1 = (-a10 * d[0] + a00 * d[1]) / det;
-          double yc, ys, gc, gs;
-          detail::unit(y0, y1, yc, ys);
-          detail::unit(g[0], g[1], gc, gs);
-          out[0] = JointValue{yc * gc + ys * gs, ys * gc - yc * gs, 0.0};
+          const double y0 = (a11 * d[0] - a01 * d[1]) / det, y1 = (-a10 * d[0] + a00 * d[1]) / det;
+          out[0] = detail::angle_difference(y0, y1, g[0], g[1]);
           return 1;
         }
         // (B'): a cos q2 + b sin q2 = d_i on the row i of Rr of largest norm
@@ -439,6 +439,21 @@ class Position3 {
     // Real roots q3 of P: a trigonometric polynomial of degree <= 2 (revolute
     // q3) or a polynomial of degree <= 4 (prismatic), recovered from 5 samples.
     int roots(const V3& ra, const V3& rb, JointValue out[4]) const noexcept {
+      if (sig[2] == 0 && reduced) {
+        // (Q') is of degree 1 in (cos q3, sin q3): three samples at 2 pi k / 3
+        // give P = a0 + a1 cos + b1 sin exactly.
+        static constexpr double kc[3] = {1.0, -0.5, -0.5}, ks[3] = {0.0, 0.8660254037844386, -0.8660254037844386};
+        double vals[3];
+        for (int k = 0; k < 3; ++k) vals[k] = P(JointValue{kc[k], ks[k], 0.0}, ra, rb);
+        const double a0 = (vals[0] + vals[1] + vals[2]) / 3.0;
+        const double a1 = (2.0 / 3.0) * (vals[0] * kc[0] + vals[1] * kc[1] + vals[2] * kc[2]);
+        const double b1 = (2.0 / 3.0) * (vals[1] * ks[1] + vals[2] * ks[2]);
+        const double top = std::max(std::fabs(a0), 0.5 * std::sqrt(a1 * a1 + b1 * b1));
+        if (!(top == top)) return 0;
+        if (0.5 * std::sqrt(a1 * a1 + b1 * b1) > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
+        out[0] = JointValue{};  // P constant: q3 free or no solution; the residual test decides
+        return 1;
+      }
       if (sig[2] == 0) {
         // Samples at theta_k = 2 pi k / 5; the DFT gives
         // P = a0 + a1 cos + b1 sin + a2 cos 2q + b2 sin 2q exactly.
@@ -513,7 +528,7 @@ class Position3 {
       const int m = detail::polynomial_roots(c.data(), deg, z);
       int n = 0;
       for (int k = 0; k < m; ++k)
-        if (std::fabs(z[k].imag()) <= Tolerance::root * std::max(1.0, std::abs(z[k])))
+        if (std::fabs(z[k].imag()) <= Tolerance::root * std::max(1.0, std::sqrt(std::norm(z[k]))))
           out[n++] = JointValue{1, 0, s * z[k].real()};
       return n;
     }
@@ -550,10 +565,7 @@ class Position3 {
           c.q[1] = q2s[j];
           const V3 f = M1.R * detail::z_apply(sig[1], q2s[j], g) + M1.p;
           if (sig[0] == 0) {  // (I) q1 = angle(p'_xy) - angle(f_xy)
-            double tc, ts, fc, fs;
-            detail::unit(target[0], target[1], tc, ts);
-            detail::unit(f[0], f[1], fc, fs);
-            c.q[0] = JointValue{tc * fc + ts * fs, ts * fc - tc * fs, 0.0};
+            c.q[0] = detail::angle_difference(target[0], target[1], f[0], f[1]);
           } else {
             c.q[0].v = target[2] - f[2];
           }
@@ -564,10 +576,12 @@ class Position3 {
     }
 
     void polish(Candidate& c) const noexcept {
-      M3 J;
-      V3 r = point(c.q, &J) - target;
+      // Steps stop once |fk(q) - p| <= 64 eps s (5 orders below Tolerance::residual).
+      const double done = 64.0 * std::numeric_limits<double>::epsilon() * s;
+      V3 r = point(c.q, nullptr) - target;
       double res = r.norm();
-      const double done = 4.0 * std::numeric_limits<double>::epsilon() * s;
+      M3 J;
+      if (res > done) point(c.q, &J);
       for (int step = 0; step < Tolerance::newton_steps && res > done; ++step) {
         // Gauss-Newton step J delta = -r (least squares when J is singular)
         V3 delta;
@@ -615,57 +629,68 @@ class Position3 {
   // Residual test, merging of near-equal solutions, angles, sorting.
   int finish(const V3& target, double s, Candidate* cands, int n, JointValue q[kSlots][3]) const noexcept {
     const Problem forward{{sigma_[0], sigma_[1], sigma_[2]}, target, split_.M1, split_.M2, w_, reduced_, s};
-    auto distance = [&](const Candidate& a, const Candidate& b) {
+    // squared joint distance: chord^2 (revolute) or (dv / s)^2 (prismatic)
+    auto distance2 = [&](const Candidate& a, const Candidate& b) {
       double worst = 0.0;
-      for (int j = 0; j < 3; ++j)
-        worst = std::max(worst, sigma_[j] == 0 ? std::hypot(a.q[j].c - b.q[j].c, a.q[j].s - b.q[j].s)
-                                               : std::fabs(a.q[j].v - b.q[j].v) / s);
+      for (int j = 0; j < 3; ++j) {
+        const double dc = a.q[j].c - b.q[j].c, ds = a.q[j].s - b.q[j].s, dv = (a.q[j].v - b.q[j].v) / s;
+        worst = std::max(worst, sigma_[j] == 0 ? dc * dc + ds * ds : dv * dv);
+      }
       return worst;
     };
-    // accepted candidates, best residual first
+    // accepted candidates, best residual first (insertion sort: at most 8)
     int order[kMaxCandidates], m = 0;
-    for (int k = 0; k < n; ++k)
-      if (cands[k].residual <= Tolerance::residual * s) order[m++] = k;
-    std::sort(order, order + m, [&](int a, int b) { return cands[a].residual < cands[b].residual; });
+    for (int k = 0; k < n; ++k) {
+      if (!(cands[k].residual <= Tolerance::residual * s)) continue;
+      int at = m++;
+      for (; at > 0 && cands[order[at - 1]].residual > cands[k].residual; --at) order[at] = order[at - 1];
+      order[at] = k;
+    }
+    // merge solutions within Tolerance::merge into their mean (kept if it is a solution)
     Candidate merged[kMaxCandidates];
     int groups = 0;
     bool used[kMaxCandidates] = {};
     for (int a = 0; a < m; ++a) {
       if (used[a]) continue;
       const Candidate& lead = cands[order[a]];
-      Candidate mean;
-      double c[3] = {}, sn[3] = {}, v[3] = {};
-      int count = 0;
-      for (int b = a; b < m; ++b) {
-        if (used[b] || distance(lead, cands[order[b]]) > Tolerance::merge) continue;
+      Candidate mean = lead;
+      int count = 1;
+      for (int b = a + 1; b < m; ++b) {
+        if (used[b] || distance2(lead, cands[order[b]]) > Tolerance::merge * Tolerance::merge) continue;
         used[b] = true;
         ++count;
         for (int j = 0; j < 3; ++j)
-          c[j] += cands[order[b]].q[j].c, sn[j] += cands[order[b]].q[j].s, v[j] += cands[order[b]].q[j].v;
+          mean.q[j].c += cands[order[b]].q[j].c, mean.q[j].s += cands[order[b]].q[j].s,
+              mean.q[j].v += cands[order[b]].q[j].v;
       }
-      for (int j = 0; j < 3; ++j) {
-        detail::unit(c[j], sn[j], mean.q[j].c, mean.q[j].s);
-        mean.q[j].v = v[j] / count;
+      if (count > 1) {
+        for (int j = 0; j < 3; ++j) {
+          detail::unit(mean.q[j].c, mean.q[j].s, mean.q[j].c, mean.q[j].s);
+          mean.q[j].v /= count;
+        }
+        mean.residual = (forward.point(mean.q, nullptr) - target).norm();
       }
-      mean.residual = (forward.point(mean.q, nullptr) - target).norm();
-      merged[groups++] = (count == 1 || !(mean.residual <= Tolerance::residual * s)) ? lead : mean;
+      merged[groups++] = mean.residual <= Tolerance::residual * s ? mean : lead;
     }
-    // keep the kSlots best residuals (more never seen), then sort by (q1, q2, q3)
-    std::sort(merged, merged + groups, [](const Candidate& a, const Candidate& b) { return a.residual < b.residual; });
+    // the kSlots best residuals (merged keeps the residual order; more than 4 never seen)
     groups = std::min(groups, kSlots);
     // (q1, q2, q3) order; a revolute angle compares through the pseudo-angle
     // s >= 0 ? 1 - c : c - 1, increasing with the angle over [-pi, pi].
-    auto key = [&](const Candidate& x, int j) {
-      if (sigma_[j] == 1) return x.q[j].v;
-      return x.q[j].s >= 0.0 ? 1.0 - x.q[j].c : x.q[j].c - 1.0;
-    };
-    std::sort(merged, merged + groups, [&](const Candidate& a, const Candidate& b) {
-      for (int j = 0; j < 3; ++j)
-        if (key(a, j) != key(b, j)) return key(a, j) < key(b, j);
-      return false;
-    });
+    double keys[kSlots][3];
+    int rank[kSlots];
+    for (int k = 0; k < groups; ++k) {
+      for (int j = 0; j < 3; ++j) {
+        const JointValue& v = merged[k].q[j];
+        keys[k][j] = sigma_[j] == 1 ? v.v : (v.s >= 0.0 ? 1.0 - v.c : v.c - 1.0);
+      }
+      int at = k;
+      for (; at > 0 && std::lexicographical_compare(keys[k], keys[k] + 3, keys[rank[at - 1]], keys[rank[at - 1]] + 3);
+           --at)
+        rank[at] = rank[at - 1];
+      rank[at] = k;
+    }
     for (int k = 0; k < groups; ++k)
-      for (int j = 0; j < 3; ++j) q[k][j] = merged[k].q[j];
+      for (int j = 0; j < 3; ++j) q[k][j] = merged[rank[k]].q[j];
     return groups;
   }
 
@@ -855,32 +880,42 @@ class SphericalWrist6 {
     for (int k = 0; k < kSlots; ++k) exists[k] = false;
     JointValue arm[Position3::kSlots][3];
     const int n = position_.solve(R * c_tool_ + p, arm);
-    const M3 R_F6 = R * tail_R_T_;
+    // Columns 1 and 3 of R_F6 = R Tail^T: all of W that (A)-(C) need.
+    const V3 x_F6 = R * tail_R_T_.col(0), z_F6 = R * tail_R_T_.col(2);
     const Split& S = position_.split();
+    const V3 a = B5_.row(2).transpose(), b = B6_.col(2);
     for (int k = 0; k < n; ++k) {
-      // R_A3 = R0 Rz1 R1 Rz2 R2 Rz3 (prismatic joints do not rotate)
-      M3 R_A3 = S.M0.R;
-      const Rigid<double>* M[3] = {&S.M1, &S.M2, nullptr};
-      for (int j = 0; j < 3; ++j) {
-        if (position_.sigma(j) == 0) R_A3 = R_A3 * detail::rotation_z(arm[k][j].c, arm[k][j].s);
-        if (M[j]) R_A3 = R_A3 * M[j]->R;
-      }
-      const M3 W = A4_.transpose() * R_A3.transpose() * R_F6;
-      const V3 a = B5_.row(2).transpose(), b = B6_.col(2), w = W.col(2);
+      // W e = A4^T Rz3^T R2^T Rz2^T R1^T Rz1^T R0^T (R_F6 e), vector by vector
+      auto to_wrist = [&](V3 x) {
+        x = S.M0.R.transpose() * x;
+        x = detail::z_rotate(position_.sigma(0), conjugate(arm[k][0]), x);
+        x = S.M1.R.transpose() * x;
+        x = detail::z_rotate(position_.sigma(1), conjugate(arm[k][1]), x);
+        x = S.M2.R.transpose() * x;
+        x = detail::z_rotate(position_.sigma(2), conjugate(arm[k][2]), x);
+        return V3(A4_.transpose() * x);
+      };
+      const V3 w = to_wrist(z_F6), wx = to_wrist(x_F6);
+      // (A) with sin(alpha) from the Gram determinant written as
+      // |w_xy|^2 (1 - b_z^2) - (a_z - b_z w_z)^2, which keeps its accuracy where
+      // axes 4 and 6 align (1 - ratio^2 would lose half the digits there).
       JointValue q5[2];
-      const int m = detail::cos_sin_roots(a[0] * b[0] + a[1] * b[1], a[1] * b[0] - a[0] * b[1], w[2] - a[2] * b[2], q5);
+      const double gram = (w[0] * w[0] + w[1] * w[1]) * (1.0 - b[2] * b[2]) - (a[2] - b[2] * w[2]) * (a[2] - b[2] * w[2]);
+      const int m = detail::cos_sin_roots(a[0] * b[0] + a[1] * b[1], a[1] * b[0] - a[0] * b[1], w[2] - a[2] * b[2], q5,
+                                          std::sqrt(std::max(gram, 0.0)));
       for (int branch = 0; branch < m; ++branch) {
         const int slot = 2 * k + branch;
-        const M3 Rz5 = detail::rotation_z(q5[branch].c, q5[branch].s);
-        const V3 v = B5_ * (Rz5 * b);
-        JointValue q4, q6;
-        double wc, ws, vc, vs;
-        detail::unit(w[0], w[1], wc, ws);
-        detail::unit(v[0], v[1], vc, vs);
-        if (v[0] * v[0] + v[1] * v[1] <= 1e-24) wc = 1.0, ws = 0.0, vc = 1.0, vs = 0.0;  // q4 free: 0
-        q4.c = wc * vc + ws * vs, q4.s = ws * vc - wc * vs;
-        const M3 N = (detail::rotation_z(q4.c, q4.s) * B5_ * Rz5 * B6_).transpose() * W;
-        detail::unit(N(0, 0), N(1, 0), q6.c, q6.s);
+        const V3 v = B5_ * detail::z_rotate(0, q5[branch], b);
+        // (B); q4 free (set to 0) where axes 4 and 6 align
+        const JointValue q4 =
+            v[0] * v[0] + v[1] * v[1] <= 1e-24 ? JointValue{} : detail::angle_difference(w[0], w[1], v[0], v[1]);
+        // (C) first column of Rz(q6) = B6^T Rz5^T B5^T Rz4^T (W e1); unit up to
+        // rounding, and only its angle is used
+        V3 x = detail::z_rotate(0, conjugate(q4), wx);
+        x = B5_.transpose() * x;
+        x = detail::z_rotate(0, conjugate(q5[branch]), x);
+        x = B6_.transpose() * x;
+        const JointValue q6{x[0], x[1], 0.0};
         for (int j = 0; j < 3; ++j) q[slot][j] = arm[k][j];
         q[slot][3] = q4, q[slot][4] = q5[branch], q[slot][5] = q6;
         exists[slot] = true;
@@ -889,6 +924,8 @@ class SphericalWrist6 {
   }
 
  private:
+  static JointValue conjugate(const JointValue& q) noexcept { return JointValue{q.c, -q.s, -q.v}; }
+
   explicit SphericalWrist6(Position3 position) : position_(std::move(position)) {}
 
   Position3 position_;
