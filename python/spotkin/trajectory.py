@@ -56,6 +56,7 @@ __all__ = ["PROFILES", "CartesianPath", "PointToPoint", "linear", "point_to_poin
 PROFILES = ("cubic", "quintic", "trapezoid")
 _FORMS = {"matrix": 0, "quaternion": 1}
 _HALF_TURN_TOL = 1e-12
+_REPEAT_TOL = 1e-12  # rad: a waypoint at the same position and within this rotation is a repeat
 
 
 class PointToPoint:
@@ -87,7 +88,8 @@ class PointToPoint:
         return self._core.sample(t)
 
     def __repr__(self) -> str:
-        return f"PointToPoint(profile={self.profile!r}, axes={self.q0.shape[0]}, duration={self.duration:.6g})"
+        axes = self.q0.shape[0]
+        return f"PointToPoint(profile={self.profile!r}, axes={axes}, duration={self.duration:.6g})"
 
 
 def point_to_point(
@@ -244,7 +246,7 @@ def _plan(
     rotvecs = []
     for T in poses[1:]:
         phi, q = _relative_rotation(quats[-1], _quaternion(T[:3, :3]))
-        if np.array_equal(T[:3, 3], kept[-1][:3, 3]) and not phi.any():
+        if np.array_equal(T[:3, 3], kept[-1][:3, 3]) and np.linalg.norm(phi) <= _REPEAT_TOL:
             continue  # a repeated waypoint
         kept.append(T)
         quats.append(q)
@@ -342,7 +344,7 @@ def via_points(
     max(|v_{k-1}|, |v_k|) b_k / 2 of P_k. The angular acceleration in a blend is
     |dw| / b_k plus a gyroscopic term at most |w_{k-1}| |w_k| / 4 (so alphamax is
     exact on straight segments and when the rotation axes agree). Repeated consecutive
-    poses are dropped.
+    poses (same position, rotation within 1e-12 rad) are dropped.
     """
     arr = np.asarray(poses, dtype=np.float64)
     if arr.ndim not in (2, 3) or arr.shape[0] < 2 or arr.shape[1:] not in ((4, 4), (7,), (6,)):

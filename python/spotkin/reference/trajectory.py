@@ -168,7 +168,7 @@ def blended(times, blends, positions, rotations, linear_velocity, angular_veloci
     k = max(i for i in range(W) if times[i] - blends[i] / 2 <= t) if t > 0 else 0
     tau = t - times[k]
     b = blends[k]
-    if b > 0 and tau <= b / 2 or k == W - 1:
+    if (b > 0 and tau <= b / 2) or k == W - 1:
         v0 = linear_velocity[k - 1] if k > 0 else zero
         w0 = angular_velocity[k - 1] if k > 0 else zero
         v1 = linear_velocity[k] if k < W - 1 else zero
