@@ -156,6 +156,12 @@ class WaypointPathCore {
     angular_ = rows(angular, "angular", W - 1, 3);
     for (const auto* v : {&times_, &blends_, &positions_, &quaternions_, &linear_, &angular_})
       require_finite(*v, "waypoint path data");
+    for (std::size_t k = 0; k + 1 < times_.size(); ++k) {
+      const double* w = angular_.data() + 3 * k;
+      const double rate = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+      rates_.push_back(rate);
+      for (int c = 0; c < 3; ++c) axes_.push_back(rate > 0.0 ? w[c] / rate : 0.0);
+    }
     blend_starts_.resize(times_.size());
     for (std::size_t k = 0; k < times_.size(); ++k) {
       if (blends_[k] < 0.0) throw py::value_error("blends must be >= 0");
@@ -176,6 +182,8 @@ class WaypointPathCore {
                                 quaternions_.data(),
                                 linear_.data(),
                                 angular_.data(),
+                                axes_.data(),
+                                rates_.data(),
                                 duration_};
     const auto pose_form = static_cast<tj::PoseForm>(form);
     return map_times(t_obj, [&](auto tag, const Shape& leading, const auto* td) -> py::object {
@@ -199,7 +207,7 @@ class WaypointPathCore {
   }
 
   double duration_;
-  std::vector<double> times_, blends_, blend_starts_, positions_, quaternions_, linear_, angular_;
+  std::vector<double> times_, blends_, blend_starts_, positions_, quaternions_, linear_, angular_, axes_, rates_;
 
  private:
   static std::vector<double> rows(py::handle obj, const char* name, py::ssize_t n, py::ssize_t width) {

@@ -159,20 +159,10 @@ inline Quat<Scalar> operator*(const Quat<Scalar>& a, const Quat<Scalar>& b) noex
           a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
 }
 
-// exp of a rotation vector phi: [sin(|phi|/2) phi/|phi|, cos(|phi|/2)]; Taylor near 0.
-template <typename Scalar>
-inline Quat<Scalar> quat_exp(Scalar px, Scalar py, Scalar pz) noexcept {
-  const Scalar theta2 = px * px + py * py + pz * pz;
-  Scalar k, c;
-  if (theta2 < Scalar(1e-8)) {
-    k = Scalar(0.5) - theta2 / Scalar(48);  // sin(theta/2)/theta
-    c = Scalar(1) - theta2 / Scalar(8);
-  } else {
-    const Scalar theta = std::sqrt(theta2);
-    k = std::sin(Scalar(0.5) * theta) / theta;
-    c = std::cos(Scalar(0.5) * theta);
-  }
-  return {k * px, k * py, k * pz, c};
+// exp of the rotation by `angle` about the unit `axis`; the identity for a zero axis.
+inline Quat<double> axis_angle(const double* axis, double angle) noexcept {
+  const double half = 0.5 * angle, sh = std::sin(half), ch = std::cos(half);
+  return {sh * axis[0], sh * axis[1], sh * axis[2], ch};
 }
 
 // v rotated by the unit quaternion q: v + 2 w (u x v) + 2 u x (u x v).
@@ -205,6 +195,8 @@ struct WaypointPath {
   const double* quaternions;    // Q_k (W, 4), consecutive ones in the same hemisphere
   const double* linear;         // v_k (W-1, 3)
   const double* angular;        // w_k (W-1, 3)
+  const double* axes;           // w_k / |w_k| (W-1, 3), zero for w_k = 0
+  const double* rates;          // |w_k| (W-1)
   double duration;
 };
 
@@ -253,8 +245,10 @@ void sample(const WaypointPath& path, PoseForm form, const Scalar* t, Scalar* po
         const double u = std::min(std::max(tau + 0.5 * b, 0.0), b);
         const double f2 = b > 0.0 ? 0.5 * u * u / b : 0.0, f1 = tau - f2;
         const double g2 = b > 0.0 ? u / b : 0.0, g1 = 1.0 - g2;
-        const Quat<double> A = quat_exp(w0[0] * f1, w0[1] * f1, w0[2] * f1);
-        q = A * quat_exp(w1[0] * f2, w1[1] * f2, w1[2] * f2) * Qk;
+        // exp(w f) = rotation by |w| f about w / |w|; the end blends have one zero factor
+        const Quat<double> A = k > 0 ? axis_angle(path.axes + 3 * (k - 1), path.rates[k - 1] * f1)
+                                     : Quat<double>{0, 0, 0, 1};
+        q = k < W - 1 ? A * axis_angle(path.axes + 3 * k, path.rates[k] * f2) * Qk : A * Qk;
         double w1_rot[3];
         rotate(A, w1, w1_rot);
         for (int c = 0; c < 3; ++c) {
@@ -265,7 +259,7 @@ void sample(const WaypointPath& path, PoseForm form, const Scalar* t, Scalar* po
       } else {  // straight segment k
         const double* v = path.linear + 3 * k;
         const double* w = path.angular + 3 * k;
-        q = quat_exp(w[0] * tau, w[1] * tau, w[2] * tau) * Qk;
+        q = axis_angle(path.axes + 3 * k, path.rates[k] * tau) * Qk;
         for (int c = 0; c < 3; ++c) {
           p[c] = P[c] + v[c] * tau;
           vel[c] = v[c];
