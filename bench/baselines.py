@@ -214,3 +214,53 @@ def body_jacobian(poses: np.ndarray, q12: np.ndarray, hips: np.ndarray, legs: li
         J[:, rows, 3:6] = skew
         J[:, rows, 6 + 3 * i : 9 + 3 * i] = R @ leg_jacobian(qi, *params)
     return J
+
+
+# -- Trajectories (spotkin.trajectory), vectorised over the time samples ----------------------------------
+
+
+def p2p_quintic(t: np.ndarray, q0: np.ndarray, qf: np.ndarray, tf: float):
+    """q, qd, qdd (N, n): q = q0 + D s(tau), s = 10 tau^3 - 15 tau^4 + 6 tau^5, at rest outside [0, tf]."""
+    tau = np.clip(t / tf, 0.0, 1.0)[:, None]
+    D = qf - q0
+    s = tau**3 * (10 + tau * (-15 + 6 * tau))
+    ds = 30 * tau**2 * (1 - tau) ** 2 / tf
+    dds = 60 * tau * (1 - tau) * (1 - 2 * tau) / tf**2
+    return q0 + D * s, D * ds, D * dds
+
+
+def p2p_trapezoid(t: np.ndarray, q0: np.ndarray, qf: np.ndarray, a: np.ndarray, v: np.ndarray,
+                  ta: np.ndarray, tf: float):
+    """q, qd, qdd (N, n) of bang-coast-bang axes with signed acceleration a, cruise v and ramp ta."""
+    tc = np.clip(t, 0.0, tf)[:, None]
+    r = tf - tc
+    acc, dec = tc < ta, tc > tf - ta
+    q = np.where(acc, q0 + 0.5 * a * tc**2, np.where(dec, qf - 0.5 * a * r**2, q0 + v * (tc - 0.5 * ta)))
+    qd = np.where(acc, a * tc, np.where(dec, a * r, v))
+    qdd = np.where(acc, a, np.where(dec, -a, 0.0))
+    return q, qd, qdd
+
+
+def linear_path(t: np.ndarray, p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray,
+                V: float, A: float, tf: float) -> np.ndarray:
+    """(N, 4, 4) poses of a straight line with a trapezoidal s(t) (cruise V, acceleration A) and slerp."""
+    tc = np.clip(t, 0.0, tf)
+    ta = V / A
+    cruise = V * (tc - 0.5 * ta)
+    s = np.where(tc < ta, 0.5 * A * tc**2, np.where(tc > tf - ta, 1 - 0.5 * A * (tf - tc) ** 2, cruise))
+    omega = np.arccos(np.clip(q0 @ q1, -1.0, 1.0))
+    q = (np.sin((1 - s) * omega)[:, None] * q0 + np.sin(s * omega)[:, None] * q1) / np.sin(omega)
+    x, y, z, w = q.T
+    T = np.empty((t.shape[0], 4, 4))
+    T[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    T[:, 0, 1] = 2 * (x * y - w * z)
+    T[:, 0, 2] = 2 * (x * z + w * y)
+    T[:, 1, 0] = 2 * (x * y + w * z)
+    T[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    T[:, 1, 2] = 2 * (y * z - w * x)
+    T[:, 2, 0] = 2 * (x * z - w * y)
+    T[:, 2, 1] = 2 * (y * z + w * x)
+    T[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    T[:, :3, 3] = p0 + s[:, None] * (p1 - p0)
+    T[:, 3] = [0, 0, 0, 1]
+    return T

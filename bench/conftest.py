@@ -57,9 +57,11 @@ def pytest_terminal_summary(terminalreporter):
     write("spotkin benchmark summary (medians; speed-up = baseline time / spotkin time, same run)")
     write(f"{'operation':<28}{'N':>9}  {'impl':<22}{'time/item':>12}{'items/s':>12}{'speed-up':>10}")
     for (op, n), impls in sorted(_RESULTS.items()):
-        base = next((t for name, t in impls.items() if name.startswith(("numpy", "eaik"))), None)
+        # the baseline: a NumPy implementation, EAIK, or a named reference point ("ref:...")
+        baselines = ("numpy", "eaik", "ref:")
+        base = next((t for name, t in impls.items() if name.startswith(baselines)), None)
         for impl, t in sorted(impls.items(), key=lambda kv: kv[1]):
             per = t / n
-            ratio = f"{base / t:9.1f}x" if base and not impl.startswith(("numpy", "eaik")) else ""
+            ratio = f"{base / t:9.2f}x" if base and not impl.startswith(baselines) else ""
             unit = f"{per * 1e9:9.1f} ns" if per < 1e-6 else f"{per * 1e6:9.2f} us"
             write(f"{op:<28}{n:>9}  {impl:<22}{unit:>12}{1 / per:>12.3g}{ratio:>10}")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import paul
+from . import paul, trajectory
 from ._runtime import get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
@@ -34,6 +34,7 @@ __all__ = [
     "rotation_y",
     "rotation_z",
     "set_num_threads",
+    "trajectory",
     "transform",
     "translation",
 ]

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'Leg', 'get_num_threads', 'paul_type2', 'paul_type3', 'paul_type6', 'set_num_threads']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'Leg', 'PointToPoint', 'WaypointPath', 'get_num_threads', 'paul_type2', 'paul_type3', 'paul_type6', 'set_num_threads', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -123,6 +123,34 @@ class ChainIK:
     @property
     def position_kind(self) -> str:
         ...
+class PointToPoint:
+    def __init__(self, q0: typing.Any, qf: typing.Any, vmax: typing.Any, amax: typing.Any, profile: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def sample(self, t: typing.Any) -> typing.Any:
+        ...
+    @property
+    def acceleration(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def axis_durations(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def cruise_velocity(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def duration(self) -> float:
+        ...
+    @property
+    def ramp_time(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+class WaypointPath:
+    def __init__(self, times: typing.Any, blends: typing.Any, positions: typing.Any, quaternions: typing.Any, linear: typing.Any, angular: typing.Any) -> None:
+        ...
+    def sample(self, t: typing.Any, form: typing.SupportsInt | typing.SupportsIndex, twist: bool) -> typing.Any:
+        ...
+    @property
+    def duration(self) -> float:
+        ...
 def _register_status(members: typing.Any) -> None:
     ...
 def get_num_threads() -> int:
@@ -134,4 +162,6 @@ def paul_type3(X1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Y1: 
 def paul_type6(W: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], X: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Y: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], Z2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> tuple:
     ...
 def set_num_threads(n: typing.SupportsInt | typing.SupportsIndex) -> None:
+    ...
+def trajectory_min_duration(profile: typing.SupportsInt | typing.SupportsIndex, distance: typing.SupportsFloat | typing.SupportsIndex, vmax: typing.SupportsFloat | typing.SupportsIndex, amax: typing.SupportsFloat | typing.SupportsIndex) -> float:
     ...

@@ -1,0 +1,251 @@
+// Bindings for spotkin::trajectory: a planned point-to-point joint trajectory and a
+// Cartesian waypoint path, each sampled in batches over time with the GIL released.
+#include "spotkin/trajectory.hpp"
+
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bindings.hpp"
+#include "numpy_boundary.hpp"
+#include "spotkin/parallel.hpp"
+
+namespace spotkin::bindings {
+
+namespace {
+
+namespace tj = spotkin::trajectory;
+
+constexpr std::ptrdiff_t kMinPerThreadJoint = min_chunk(10.0);  // ~10 ns per 6-axis sample
+constexpr std::ptrdiff_t kMinPerThreadPath = min_chunk(60.0);   // two quaternion exps per sample
+
+Shape shape_of(const py::array& arr) { return Shape(arr.shape(), arr.shape() + arr.ndim()); }
+
+// A 1-D float64 vector of `n` entries (n < 0: any length); a scalar broadcasts when allowed.
+std::vector<double> vector_arg(py::handle obj, const char* name, py::ssize_t n, bool scalar_ok) {
+  py::array arr = contiguous<double>(as_real_array(obj, name));
+  std::vector<double> out;
+  if (arr.ndim() == 0 && scalar_ok && n >= 0) {
+    out.assign(static_cast<std::size_t>(n), *static_cast<const double*>(arr.data()));
+  } else if (arr.ndim() == 1 && (n < 0 || arr.shape(0) == n)) {
+    const auto* d = static_cast<const double*>(arr.data());
+    out.assign(d, d + arr.shape(0));
+  } else {
+    std::string expected = n < 0 ? "(n,)" : format_shape({n});
+    if (scalar_ok) expected = "a scalar or " + expected;
+    throw py::value_error(std::string(name) + " must be " + expected + ", got shape " +
+                          format_shape(shape_of(arr)));
+  }
+  return out;
+}
+
+void require_finite(const std::vector<double>& v, const char* name) {
+  for (double x : v)
+    if (!std::isfinite(x)) throw py::value_error(std::string(name) + " must be finite (no NaN or inf)");
+}
+
+void require_positive(const std::vector<double>& v, const char* name) {
+  for (double x : v)
+    if (!(x > 0.0) || !std::isfinite(x))
+      throw py::value_error(std::string(name) + " must be positive and finite, got " + std::to_string(x));
+}
+
+// t (...) of any real dtype -> a tuple of new arrays, kernel(t, outputs..., count) on thread chunks.
+template <typename Body>
+py::object map_times(py::handle t_obj, Body&& body) {
+  return dispatch_real(t_obj, "t", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    auto t = contiguous<T>(arr);
+    return body(tag, shape_of(arr), t.data());
+  });
+}
+
+class PointToPointCore {
+ public:
+  PointToPointCore(py::handle q0_obj, py::handle qf_obj, py::handle vmax_obj, py::handle amax_obj,
+                   int profile)
+      : profile_(static_cast<tj::Profile>(profile)) {
+    if (profile < 0 || profile > 2) throw py::value_error("profile must be 0 (cubic), 1 (quintic) or 2 (trapezoid)");
+    q0_ = vector_arg(q0_obj, "q0", -1, false);
+    const auto n = static_cast<py::ssize_t>(q0_.size());
+    {
+      py::array qf_arr = as_real_array(qf_obj, "qf");
+      if (qf_arr.ndim() != 1 || qf_arr.shape(0) != n)
+        throw py::value_error("qf must have the shape of q0, " + format_shape({n}) + ", got " +
+                              format_shape(shape_of(qf_arr)));
+    }
+    qf_ = vector_arg(qf_obj, "qf", n, false);
+    vmax_ = vector_arg(vmax_obj, "vmax", n, true);
+    amax_ = vector_arg(amax_obj, "amax", n, true);
+    require_finite(q0_, "q0");
+    require_finite(qf_, "qf");
+    require_positive(vmax_, "vmax");
+    require_positive(amax_, "amax");
+    axis_durations_.resize(q0_.size());
+    duration_ = 0.0;
+    for (std::size_t j = 0; j < q0_.size(); ++j) {
+      axis_durations_[j] = tj::min_duration(profile_, std::fabs(qf_[j] - q0_[j]), vmax_[j], amax_[j]);
+      duration_ = std::max(duration_, axis_durations_[j]);
+    }
+    accel_.assign(q0_.size(), 0.0);
+    cruise_.assign(q0_.size(), 0.0);
+    ramp_.assign(q0_.size(), 0.0);
+    if (profile_ == tj::Profile::Trapezoid) {
+      for (std::size_t j = 0; j < q0_.size(); ++j) {
+        const double D = qf_[j] - q0_[j];
+        const double v = tj::stretched_cruise_speed(std::fabs(D), amax_[j], duration_);
+        if (v > 0.0) {
+          accel_[j] = std::copysign(amax_[j], D);
+          cruise_[j] = std::copysign(v, D);
+          ramp_[j] = std::min(v / amax_[j], 0.5 * duration_);
+        }
+      }
+    }
+  }
+
+  py::object sample(py::handle t_obj) const {
+    return map_times(t_obj, [&](auto tag, const Shape& leading, const auto* td) -> py::object {
+      using T = decltype(tag);
+      const auto n = static_cast<py::ssize_t>(q0_.size());
+      auto q = new_array<T>(leading, {n});
+      auto qd = new_array<T>(leading, {n});
+      auto qdd = new_array<T>(leading, {n});
+      std::vector<T> params[5];
+      for (auto [i, src] : {std::pair{0, &q0_}, {1, &qf_}, {2, &accel_}, {3, &cruise_}, {4, &ramp_}})
+        params[i].assign(src->begin(), src->end());
+      const tj::PointToPoint<T> traj{profile_,           static_cast<int>(n), static_cast<T>(duration_),
+                                     params[0].data(),   params[1].data(),    params[2].data(),
+                                     params[3].data(),   params[4].data()};
+      T* qp = q.mutable_data();
+      T* qdp = qd.mutable_data();
+      T* qddp = qdd.mutable_data();
+      {
+        ReleaseGilFor release(count(leading));
+        parallel_for(count(leading), kMinPerThreadJoint, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+          tj::sample(traj, td + b, qp + n * b, qdp + n * b, qddp + n * b, e - b);
+        });
+      }
+      return py::make_tuple(q, qd, qdd);
+    });
+  }
+
+  double duration_;
+  tj::Profile profile_;
+  std::vector<double> q0_, qf_, vmax_, amax_, axis_durations_, accel_, cruise_, ramp_;
+};
+
+py::array_t<double> to_array(const std::vector<double>& v) {
+  py::array_t<double> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+// The timing and geometry are planned by the Python façade (spotkin.trajectory).
+class WaypointPathCore {
+ public:
+  WaypointPathCore(py::handle times, py::handle blends, py::handle positions, py::handle quaternions,
+                   py::handle linear, py::handle angular) {
+    times_ = vector_arg(times, "times", -1, false);
+    const auto W = static_cast<py::ssize_t>(times_.size());
+    if (W < 1) throw py::value_error("times must hold at least one waypoint");
+    blends_ = vector_arg(blends, "blends", W, false);
+    positions_ = rows(positions, "positions", W, 3);
+    quaternions_ = rows(quaternions, "quaternions", W, 4);
+    linear_ = rows(linear, "linear", W - 1, 3);
+    angular_ = rows(angular, "angular", W - 1, 3);
+    for (const auto* v : {&times_, &blends_, &positions_, &quaternions_, &linear_, &angular_})
+      require_finite(*v, "waypoint path data");
+    for (std::size_t k = 0; k + 1 < times_.size(); ++k) {
+      const double* w = angular_.data() + 3 * k;
+      const double rate = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+      rates_.push_back(rate);
+      for (int c = 0; c < 3; ++c) axes_.push_back(rate > 0.0 ? w[c] / rate : 0.0);
+    }
+    blend_starts_.resize(times_.size());
+    for (std::size_t k = 0; k < times_.size(); ++k) {
+      if (blends_[k] < 0.0) throw py::value_error("blends must be >= 0");
+      blend_starts_[k] = times_[k] - 0.5 * blends_[k];
+      if (k > 0 && blend_starts_[k] < blend_starts_[k - 1])
+        throw py::value_error("blends must not overlap");
+    }
+    duration_ = times_.back() + 0.5 * blends_.back();
+  }
+
+  py::object sample(py::handle t_obj, int form, bool with_twist) const {
+    if (form != 0 && form != 1) throw py::value_error("form must be 0 (matrix) or 1 (quaternion)");
+    const tj::WaypointPath path{static_cast<std::ptrdiff_t>(times_.size()),
+                                times_.data(),
+                                blends_.data(),
+                                blend_starts_.data(),
+                                positions_.data(),
+                                quaternions_.data(),
+                                linear_.data(),
+                                angular_.data(),
+                                axes_.data(),
+                                rates_.data(),
+                                duration_};
+    const auto pose_form = static_cast<tj::PoseForm>(form);
+    return map_times(t_obj, [&](auto tag, const Shape& leading, const auto* td) -> py::object {
+      using T = decltype(tag);
+      const Shape trailing = form == 0 ? Shape{4, 4} : Shape{7};
+      const std::ptrdiff_t width = form == 0 ? 16 : 7;
+      auto pose = new_array<T>(leading, trailing);
+      py::array_t<T> twist;
+      if (with_twist) twist = new_array<T>(leading, {6});
+      T* pd = pose.mutable_data();
+      T* wd = with_twist ? twist.mutable_data() : nullptr;
+      {
+        ReleaseGilFor release(count(leading));
+        parallel_for(count(leading), kMinPerThreadPath, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+          tj::sample(path, pose_form, td + b, pd + width * b, wd ? wd + 6 * b : nullptr, e - b);
+        });
+      }
+      if (with_twist) return py::make_tuple(pose, twist);
+      return std::move(pose);
+    });
+  }
+
+  double duration_;
+  std::vector<double> times_, blends_, blend_starts_, positions_, quaternions_, linear_, angular_, axes_, rates_;
+
+ private:
+  static std::vector<double> rows(py::handle obj, const char* name, py::ssize_t n, py::ssize_t width) {
+    py::array arr = contiguous<double>(as_real_array(obj, name));
+    if (arr.ndim() != 2 || arr.shape(0) != n || arr.shape(1) != width)
+      throw py::value_error(std::string(name) + " must have shape " + format_shape({n, width}) + ", got " +
+                            format_shape(shape_of(arr)));
+    const auto* d = static_cast<const double*>(arr.data());
+    return std::vector<double>(d, d + n * width);
+  }
+};
+
+}  // namespace
+
+void bind_trajectory(py::module_& m) {
+  py::class_<PointToPointCore>(m, "PointToPoint")
+      .def(py::init<py::handle, py::handle, py::handle, py::handle, int>(), py::arg("q0"), py::arg("qf"),
+           py::arg("vmax"), py::arg("amax"), py::arg("profile"))
+      .def_readonly("duration", &PointToPointCore::duration_)
+      .def_property_readonly("axis_durations", [](const PointToPointCore& p) { return to_array(p.axis_durations_); })
+      .def_property_readonly("acceleration", [](const PointToPointCore& p) { return to_array(p.accel_); })
+      .def_property_readonly("cruise_velocity", [](const PointToPointCore& p) { return to_array(p.cruise_); })
+      .def_property_readonly("ramp_time", [](const PointToPointCore& p) { return to_array(p.ramp_); })
+      .def("sample", &PointToPointCore::sample, py::arg("t"));
+
+  py::class_<WaypointPathCore>(m, "WaypointPath")
+      .def(py::init<py::handle, py::handle, py::handle, py::handle, py::handle, py::handle>(), py::arg("times"),
+           py::arg("blends"), py::arg("positions"), py::arg("quaternions"), py::arg("linear"),
+           py::arg("angular"))
+      .def_readonly("duration", &WaypointPathCore::duration_)
+      .def("sample", &WaypointPathCore::sample, py::arg("t"), py::arg("form"), py::arg("twist"));
+
+  m.def("trajectory_min_duration",
+        [](int profile, double distance, double vmax, double amax) {
+          if (profile < 0 || profile > 2) throw py::value_error("profile must be 0, 1 or 2");
+          return tj::min_duration(static_cast<tj::Profile>(profile), distance, vmax, amax);
+        },
+        py::arg("profile"), py::arg("distance"), py::arg("vmax"), py::arg("amax"));
+}
+
+}  // namespace spotkin::bindings

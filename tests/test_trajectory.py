@@ -1,0 +1,516 @@
+"""Trajectories: point-to-point profiles and Cartesian paths against the per-sample reference,
+finite differences, limits, boundary conditions, bad input and the body IK round trip."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import spotkin as sk
+from conftest import BATCH_SHAPES, TOLERANCE
+from spotkin import _core
+from spotkin.reference import trajectory as ref
+
+PROFILES = sk.trajectory.PROFILES
+
+
+def reference_rows(q0, qf, vmax, amax, profile, times):
+    rows = [ref.point_to_point(list(q0), list(qf), vmax, amax, profile, float(t)) for t in np.ravel(times)]
+    n = len(q0)
+    return tuple(np.array([r[i] for r in rows]).reshape((*np.shape(times), n)) for i in range(3))
+
+
+# ---- per-axis minimum durations, from hand-worked numbers ----------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("profile", "D", "vmax", "amax", "expected"),
+    [
+        ("cubic", 2.0, 1.0, 1e6, 3.0),  # 3 D / (2 Kv)
+        ("cubic", 6.0, 1e6, 1.0, 6.0),  # sqrt(6 D / Ka)
+        ("quintic", 8.0, 1.0, 1e6, 15.0),  # 15 D / (8 Kv)
+        ("quintic", 0.4 * math.sqrt(3), 1e6, 1.0, 2.0),  # sqrt(10 D / (sqrt(3) Ka))
+        ("trapezoid", 10.0, 2.0, 1.0, 7.0),  # D / Kv + Kv / Ka
+        ("trapezoid", 1.0, 2.0, 1.0, 2.0),  # triangular: 2 sqrt(D / Ka)
+        ("trapezoid", 4.0, 2.0, 1.0, 4.0),  # the boundary case D = Kv^2 / Ka: both formulas agree
+        ("quintic", 0.0, 1.0, 1.0, 0.0),
+    ],
+)
+def test_min_duration(profile, D, vmax, amax, expected):
+    code = PROFILES.index(profile)
+    assert _core.trajectory_min_duration(code, D, vmax, amax) == pytest.approx(expected, rel=1e-14)
+    assert ref.min_duration(profile, D, vmax, amax) == pytest.approx(expected, rel=1e-14)
+    traj = sk.trajectory.point_to_point([0.0, 0.0], [D, -D / 2], vmax, amax, profile)
+    assert traj.duration == pytest.approx(expected, rel=1e-14)
+
+
+# ---- sampling against the reference ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("profile", PROFILES)
+@pytest.mark.parametrize("scalar_limits", [True, False])
+def test_sample_matches_reference(rng, profile, scalar_limits):
+    for _ in range(5):
+        n = 6
+        q0, qf = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
+        qf[2] = q0[2]  # one axis that does not move
+        vmax = 1.5 if scalar_limits else rng.uniform(0.2, 3, n)
+        amax = 2.0 if scalar_limits else rng.uniform(0.2, 5, n)
+        traj = sk.trajectory.point_to_point(q0, qf, vmax, amax, profile)
+        T = traj.duration
+        t = np.concatenate([[-1.0, 0.0, T, T + 1.0], rng.uniform(0, T, 200)])
+        got = traj.sample(t)
+        want = reference_rows(q0, qf, vmax, amax, profile, t)
+        for g, w in zip(got, want):
+            np.testing.assert_allclose(g, w, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("profile", PROFILES)
+def test_finite_differences(rng, profile):
+    q0, qf = rng.uniform(-2, 2, 4), rng.uniform(-2, 2, 4)
+    traj = sk.trajectory.point_to_point(q0, qf, rng.uniform(0.5, 2, 4), rng.uniform(0.5, 2, 4), profile)
+    T, h = traj.duration, 1e-6
+    t = rng.uniform(0.01 * T, 0.99 * T, 500)
+    _, qd, qdd = traj.sample(t)
+    qp, qdp, _ = traj.sample(t + h)
+    qm, qdm, _ = traj.sample(t - h)
+    np.testing.assert_allclose((qp - qm) / (2 * h), qd, atol=1e-7)
+    # the trapezoid's acceleration jumps at the ramp ends: skip samples within h of a switch
+    switches = np.concatenate([traj.ramp_time, T - traj.ramp_time])
+    far = (np.abs(t[:, None] - switches[None, :]) > 2 * h).all(axis=1)
+    assert far.sum() > 400
+    np.testing.assert_allclose(((qdp - qdm) / (2 * h))[far], qdd[far], atol=1e-6)
+
+
+# ---- limits: respected on every axis, reached on the slowest --------------------------------------
+
+
+@pytest.mark.parametrize("profile", PROFILES)
+@pytest.mark.parametrize("bound", ["velocity", "acceleration"])
+def test_limits_met_and_reached(rng, profile, bound):
+    n = 5
+    q0, qf = rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)
+    vmax, amax = rng.uniform(0.5, 1.5, n), rng.uniform(0.5, 1.5, n)
+    if bound == "velocity":
+        amax = amax * 1e3
+    else:
+        vmax = vmax * 1e3
+    traj = sk.trajectory.point_to_point(q0, qf, vmax, amax, profile)
+    T = traj.duration
+    # the peaks: velocity at T/2 (and on the cruise); acceleration at the ends (cubic, trapezoid)
+    # or at tau = 1/2 -+ sqrt(3)/6 (quintic)
+    peaks = T * np.array([0.5, 0.5 - math.sqrt(3) / 6, 0.5 + math.sqrt(3) / 6])
+    t = np.concatenate([np.linspace(0, T, 200_001), peaks])
+    _, qd, qdd = traj.sample(t)
+    peak_v, peak_a = np.abs(qd).max(axis=0), np.abs(qdd).max(axis=0)
+    assert (peak_v <= vmax * (1 + 1e-12)).all()
+    assert (peak_a <= amax * (1 + 1e-12)).all()
+    slow = int(np.argmax(np.abs(qf - q0) / (vmax if bound == "velocity" else np.sqrt(amax))))
+    assert traj.axis_durations[slow] == T
+    if bound == "velocity":
+        assert peak_v[slow] == pytest.approx(vmax[slow], rel=1e-12)
+    else:
+        assert peak_a[slow] == pytest.approx(amax[slow], rel=1e-12)
+
+
+def test_triangular_trapezoid():
+    # D = 1 < vmax^2 / amax = 100: never cruises; t_f = 2 sqrt(D / a) = 2, peak speed sqrt(D a) = 1 at t = 1
+    traj = sk.trajectory.point_to_point([0.0], [1.0], 10.0, 1.0, "trapezoid")
+    assert traj.duration == pytest.approx(2.0, rel=1e-15)
+    q, qd, qdd = traj.sample(np.array([0.5, 1.0, 1.5]))
+    np.testing.assert_allclose(q[:, 0], [0.125, 0.5, 0.875], atol=1e-15)
+    np.testing.assert_allclose(qd[:, 0], [0.5, 1.0, 0.5], atol=1e-15)
+    np.testing.assert_allclose(qdd[[0, 2], 0], [1.0, -1.0], atol=1e-15)  # t = 1 is the switch
+
+
+def test_trapezoid_with_cruise():
+    # D = 10, vmax = 2, amax = 1: ramps of 2 s, t_f = 7, q(2) = 2, q(3.5) = 5
+    traj = sk.trajectory.point_to_point([1.0], [11.0], 2.0, 1.0, "trapezoid")
+    assert traj.duration == pytest.approx(7.0, rel=1e-15)
+    q, qd, qdd = traj.sample(np.array([1.0, 2.0, 3.5, 6.0]))
+    np.testing.assert_allclose(q[:, 0], [1.5, 3.0, 6.0, 10.5], atol=1e-14)
+    np.testing.assert_allclose(qd[:, 0], [1.0, 2.0, 2.0, 1.0], atol=1e-14)
+    np.testing.assert_allclose(qdd[:, 0], [1.0, 0.0, 0.0, -1.0], atol=1e-14)
+
+
+@pytest.mark.parametrize("profile", PROFILES)
+def test_boundary_conditions_and_synchronisation(rng, profile):
+    q0, qf = rng.uniform(-2, 2, 6), rng.uniform(-2, 2, 6)
+    traj = sk.trajectory.point_to_point(q0, qf, rng.uniform(0.5, 2, 6), rng.uniform(0.5, 2, 6), profile)
+    T = traj.duration
+    assert T == traj.axis_durations.max()
+    assert (traj.axis_durations < T).sum() == 5  # the other axes are stretched
+    q, qd, qdd = traj.sample(np.array([0.0, T]))
+    np.testing.assert_allclose(q[0], q0, atol=1e-15)
+    np.testing.assert_allclose(q[1], qf, atol=1e-15)
+    np.testing.assert_array_equal(qd, 0.0)
+    if profile == "quintic":
+        np.testing.assert_array_equal(qdd, 0.0)
+    # every axis is still moving just before t_f, and has arrived at t_f: all end together
+    _, qd_late, _ = traj.sample(T * (1 - 1e-3))
+    assert (np.abs(qd_late) > 0).all()
+    # outside [0, t_f]: at rest at the end states
+    q, qd, qdd = traj.sample(np.array([-5.0, T + 5.0]))
+    np.testing.assert_array_equal(q, [q0, qf])
+    np.testing.assert_array_equal(qd, 0.0)
+    np.testing.assert_array_equal(qdd, 0.0)
+
+
+def test_stretched_trapezoid_axes_keep_their_acceleration(rng):
+    q0, qf = np.zeros(3), np.array([4.0, 1.0, -0.5])
+    traj = sk.trajectory.point_to_point(q0, qf, 1.0, 1.0, "trapezoid")
+    assert traj.duration == pytest.approx(5.0, rel=1e-15)
+    np.testing.assert_allclose(np.abs(traj.acceleration), 1.0)
+    # axis j: v^2 - a t_f v + a |D_j| = 0: v^2 - 5 v + 1 = 0 and v^2 - 5 v + 0.5 = 0
+    assert traj.cruise_velocity[1] == pytest.approx((5 - math.sqrt(21)) / 2, rel=1e-14)
+    assert traj.cruise_velocity[2] == pytest.approx(-(5 - math.sqrt(23)) / 2, rel=1e-14)
+
+
+def test_zero_length(recwarn):
+    q0 = np.array([0.3, -1.0, 2.0])
+    for profile in PROFILES:
+        traj = sk.trajectory.point_to_point(q0, q0.copy(), 1.0, 1.0, profile)
+        assert traj.duration == 0.0
+        q, qd, qdd = traj.sample(np.array([-1.0, 0.0, 0.5, 1.0]))
+        np.testing.assert_array_equal(q, np.broadcast_to(q0, (4, 3)))
+        np.testing.assert_array_equal(qd, 0.0)
+        np.testing.assert_array_equal(qdd, 0.0)
+    assert len(recwarn) == 0
+
+
+def test_one_moving_axis_among_still_ones():
+    traj = sk.trajectory.point_to_point([0.0, 1.0], [1.0, 1.0], 1.0, 1.0, "trapezoid")
+    q, qd, qdd = traj.sample(np.linspace(0, traj.duration, 11))
+    assert np.isfinite(q).all()
+    np.testing.assert_array_equal(q[:, 1], 1.0)
+    np.testing.assert_array_equal(qd[:, 1], 0.0)
+    np.testing.assert_array_equal(qdd[:, 1], 0.0)
+
+
+# ---- bad input ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["vmax", "amax"])
+@pytest.mark.parametrize("value", [0.0, -1.0, math.nan, math.inf, [1.0, 0.0, 1.0]])
+def test_bad_limits(name, value):
+    kwargs = {"vmax": 1.0, "amax": 1.0, name: value}
+    with pytest.raises(ValueError, match=name):
+        sk.trajectory.point_to_point([0, 0, 0.0], [1, 1, 1.0], **kwargs)
+
+
+@pytest.mark.parametrize("name", ["q0", "qf"])
+def test_nan_positions(name):
+    kwargs = {"q0": [0.0, 0.0], "qf": [1.0, 1.0], name: [0.0, math.nan]}
+    with pytest.raises(ValueError, match=f"{name} must be finite"):
+        sk.trajectory.point_to_point(vmax=1.0, amax=1.0, **kwargs)
+
+
+def test_shape_mismatch():
+    with pytest.raises(ValueError, match=r"qf must have the shape of q0, \(3,\), got \(2,\)"):
+        sk.trajectory.point_to_point([0, 0, 0.0], [1, 1.0], 1.0, 1.0)
+    with pytest.raises(ValueError, match=r"vmax must be a scalar or \(3,\), got shape \(2,\)"):
+        sk.trajectory.point_to_point([0, 0, 0.0], [1, 1, 1.0], [1.0, 1.0], 1.0)
+    with pytest.raises(ValueError, match=r"q0 must be \(n,\), got shape \(2, 2\)"):
+        sk.trajectory.point_to_point(np.zeros((2, 2)), np.ones((2, 2)), 1.0, 1.0)
+    with pytest.raises(ValueError, match="profile"):
+        sk.trajectory.point_to_point([0.0], [1.0], 1.0, 1.0, "septic")
+    traj = sk.trajectory.point_to_point([0.0], [1.0], 1.0, 1.0)
+    with pytest.raises(TypeError, match="t must be a real numeric array"):
+        traj.sample("soon")
+
+
+# ---- batching, dtypes, layouts ---------------------------------------------------------------------
+
+
+TRAJ6 = {p: sk.trajectory.point_to_point(np.zeros(6), np.linspace(-1, 2, 6), 1.0, 2.0, p) for p in PROFILES}
+
+
+@given(
+    shape=st.sampled_from(BATCH_SHAPES),
+    dtype=st.sampled_from([np.float32, np.float64]),
+    profile=st.sampled_from(PROFILES),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_sample_batch_shapes_and_dtypes(shape, dtype, profile, seed):
+    traj = TRAJ6[profile]
+    t = np.random.default_rng(seed).uniform(-0.2, traj.duration + 0.2, shape).astype(dtype)
+    got = traj.sample(t)
+    want = reference_rows(traj.q0, traj.qf, 1.0, 2.0, profile, t.astype(np.float64))
+    for g, w in zip(got, want):
+        assert g.shape == (*shape, 6)
+        assert g.dtype == dtype
+        np.testing.assert_allclose(g, w, rtol=0, atol=TOLERANCE[dtype] * 10)
+
+
+def test_sample_layouts_and_empty():
+    traj = TRAJ6["quintic"]
+    t = np.linspace(0, traj.duration, 24).reshape(4, 6)
+    q_full = traj.sample(t)[0]
+    np.testing.assert_array_equal(traj.sample(t.T)[0], q_full.transpose(1, 0, 2))
+    np.testing.assert_array_equal(traj.sample(t[:, ::2])[0], q_full[:, ::2])
+    ints = np.arange(3, dtype=np.int64)
+    np.testing.assert_array_equal(traj.sample(ints)[0], traj.sample(ints * 1.0)[0])
+    for shape in [(0,), (2, 0)]:
+        q, qd, qdd = traj.sample(np.zeros(shape))
+        assert q.shape == qd.shape == qdd.shape == (*shape, 6)
+    assert traj.sample(0.5)[0].shape == (6,)
+
+
+def test_nan_time_gives_nan_rows():
+    traj = TRAJ6["trapezoid"]
+    q, qd, qdd = traj.sample(np.array([0.5, math.nan, 1.0]))
+    for a in (q, qd, qdd):
+        assert np.isnan(a[1]).all()
+        assert np.isfinite(a[[0, 2]]).all()
+
+
+# ---- Cartesian paths ---------------------------------------------------------------------------------
+
+
+def random_quaternion(rng) -> np.ndarray:
+    q = rng.normal(size=4)
+    return q / np.linalg.norm(q)
+
+
+def pose7(p, q) -> np.ndarray:
+    return np.concatenate([p, q])
+
+
+def test_linear_matches_reference(rng):
+    for _ in range(10):
+        p0, p1 = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+        q0, q1 = random_quaternion(rng), random_quaternion(rng)
+        limits = dict(vmax=rng.uniform(0.2, 2), amax=rng.uniform(0.2, 2), wmax=rng.uniform(0.2, 2),
+                      alphamax=rng.uniform(0.2, 2))
+        path = sk.trajectory.linear(pose7(p0, q0), pose7(p1, q1), **limits)
+        t = np.concatenate([[0.0, path.duration], rng.uniform(0, path.duration, 100)])
+        T, twist = path.sample(t, twist=True)
+        for i, ti in enumerate(t):
+            p, q, v, w = ref.linear(p0, q0, p1, q1, t=ti, **limits)
+            np.testing.assert_allclose(T[i, :3, 3], p, atol=1e-12)
+            np.testing.assert_allclose(T[i, :3, :3], ref.quaternion_to_matrix(q), atol=1e-12)
+            np.testing.assert_allclose(twist[i], np.concatenate([v, w]), atol=1e-12)
+            np.testing.assert_array_equal(T[i, 3], [0, 0, 0, 1])
+
+
+def test_linear_limits_and_slerp(rng):
+    T0 = sk.transform(np.eye(3), [0.0, 0.0, 0.5])
+    R1 = sk.rotation_z(0.8)[:3, :3] @ sk.rotation_x(0.3)[:3, :3]
+    T1 = sk.transform(R1, [0.4, -0.2, 0.6])
+    vmax, amax, wmax, alphamax = 0.3, 0.5, 2.0, 2.0
+    path = sk.trajectory.linear(T0, T1, vmax, amax, wmax, alphamax)
+    t = np.linspace(0, path.duration, 20_001)
+    poses, twist = path.sample(t, form="quaternion", twist=True)
+    np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0, atol=1e-15)
+    speed, rate = np.linalg.norm(twist[:, :3], axis=1), np.linalg.norm(twist[:, 3:], axis=1)
+    assert speed.max() <= vmax * (1 + 1e-12)
+    assert rate.max() <= wmax * (1 + 1e-12)
+    # here the translation is the tighter speed limit (L / vmax > theta / wmax): reached on the cruise
+    L = np.linalg.norm(T1[:3, 3] - T0[:3, 3])
+    angle = math.acos((np.trace(R1) - 1) / 2)
+    assert L / vmax > angle / wmax
+    assert speed.max() == pytest.approx(vmax, rel=1e-12)
+    dt = t[1] - t[0]
+    accel = np.linalg.norm(np.diff(twist[:, :3], axis=0), axis=1) / dt
+    assert accel.max() <= amax * (1 + 1e-9)
+    assert accel.max() == pytest.approx(amax, rel=1e-9)
+    # the translation stays on the segment, the orientation turns about one fixed axis
+    d = T1[:3, 3] - T0[:3, 3]
+    rel = poses[:, :3] - T0[:3, 3]
+    np.testing.assert_allclose(np.cross(rel, d), 0.0, atol=1e-15)
+    cruise = speed > vmax * (1 - 1e-12)
+    assert cruise.sum() > 1000
+    w = twist[cruise, 3:]
+    np.testing.assert_allclose(w, np.broadcast_to(w[0], w.shape), atol=1e-14)  # constant angular rate
+    # equal time steps in the cruise turn by equal angles
+    Ts = path.sample(t[cruise][::100])
+    steps = [math.acos(min(1.0, (np.trace(A[:3, :3].T @ B[:3, :3]) - 1) / 2)) for A, B in zip(Ts, Ts[1:])]
+    np.testing.assert_allclose(steps, steps[0], atol=1e-9)
+    # endpoints exactly (at rest)
+    ends, ends_twist = path.sample(np.array([0.0, path.duration]), twist=True)
+    np.testing.assert_allclose(ends[0], T0, atol=1e-15)
+    np.testing.assert_allclose(ends[1], T1, atol=1e-15)
+    np.testing.assert_array_equal(ends_twist, 0.0)
+
+
+def test_linear_triangular_and_angular_limit():
+    # a pure rotation by 1 rad with wmax = 10, alphamax = 1: triangular, t_f = 2 sqrt(1 / 1) = 2
+    T0 = sk.transform(np.eye(3), [0.0, 0.0, 0.5])
+    T1 = sk.transform(sk.rotation_y(1.0)[:3, :3], [0.0, 0.0, 0.5])
+    path = sk.trajectory.linear(T0, T1, vmax=1.0, amax=1.0, wmax=10.0, alphamax=1.0)
+    assert path.duration == pytest.approx(2.0, rel=1e-14)
+    _, twist = path.sample(np.array([0.5, 1.0, 1.5]), twist=True)
+    np.testing.assert_allclose(twist[:, 4], [0.5, 1.0, 0.5], atol=1e-14)
+    np.testing.assert_array_equal(twist[:, [0, 1, 2, 3, 5]], 0.0)
+
+
+def test_linear_half_turn_axis_choice():
+    T0 = np.eye(4)
+    T1 = sk.transform(sk.rotation_x(math.pi)[:3, :3], [0.0, 0.0, 0.0])
+    path = sk.trajectory.linear(T0, T1, vmax=1.0, amax=1.0, wmax=1.0, alphamax=1.0)
+    T, twist = path.sample(np.array([path.duration / 2, path.duration]), twist=True)
+    assert twist[0, 3] > 0 and np.allclose(twist[0, [4, 5]], 0)  # about +x, the documented choice
+    np.testing.assert_allclose(T[1], T1, atol=1e-15)
+    np.testing.assert_allclose(T[0][:3, :3], sk.rotation_x(math.pi / 2)[:3, :3], atol=1e-12)
+
+
+def test_linear_zero_length_and_bad_input():
+    T0 = sk.transform(np.eye(3), [0.1, 0.2, 0.5])
+    path = sk.trajectory.linear(T0, T0, vmax=1.0, amax=1.0)
+    assert path.duration == 0.0
+    T, twist = path.sample(np.array([0.0, 1.0]), twist=True)
+    np.testing.assert_allclose(T, np.broadcast_to(T0, (2, 4, 4)), atol=1e-15)
+    np.testing.assert_array_equal(twist, 0.0)
+    T1 = sk.transform(np.eye(3), [1.0, 0.2, 0.5])
+    for kwargs, name in [({"vmax": 0.0}, "vmax"), ({"amax": -1.0}, "amax"), ({"vmax": math.nan}, "vmax")]:
+        with pytest.raises(ValueError, match=name):
+            sk.trajectory.linear(T0, T1, **{"vmax": 1.0, "amax": 1.0, **kwargs})
+    with pytest.raises(ValueError, match="wmax and alphamax"):
+        sk.trajectory.linear(T0, T1, vmax=1.0, amax=1.0, wmax=1.0)
+    with pytest.raises(ValueError, match="T1 must be finite"):
+        sk.trajectory.linear(T0, np.full((4, 4), math.nan), vmax=1.0, amax=1.0)
+    with pytest.raises(ValueError, match=r"T0 must have shape \(4, 4\), \(7,\) or \(6,\), got \(3, 3\)"):
+        sk.trajectory.linear(np.eye(3), T1, vmax=1.0, amax=1.0)
+    with pytest.raises(ValueError, match="rigid transform"):
+        sk.trajectory.linear(2 * np.eye(4), T1, vmax=1.0, amax=1.0)
+    with pytest.raises(ValueError, match="pure rotation"):
+        sk.trajectory.linear(T0, sk.transform(sk.rotation_z(1.0)[:3, :3], T0[:3, 3]), vmax=1.0, amax=1.0)
+    with pytest.raises(ValueError, match="form"):
+        path.sample(0.0, form="euler")
+
+
+def waypoint_poses(rng, n=5):
+    poses = []
+    for i in range(n):
+        p = np.array([0.1 * i, 0.05 * (-1) ** i, 0.5 + 0.02 * i]) + rng.uniform(-0.02, 0.02, 3)
+        euler = rng.uniform(-0.15, 0.15, 3)
+        poses.append(np.concatenate([p, euler]))
+    return np.array(poses)
+
+
+def test_via_points_matches_reference(rng):
+    poses = waypoint_poses(rng)
+    path = sk.trajectory.via_points(poses, vmax=0.2, amax=0.5, wmax=0.5, alphamax=2.0)
+    mats = sk.body_transform(poses)
+    t = np.concatenate([[0.0, path.duration], path.times, rng.uniform(0, path.duration, 300)])
+    T, twist = path.sample(t, twist=True)
+    for i, ti in enumerate(t):
+        T_ref, twist_ref = ref.blended(path.times, path.blends, mats[:, :3, 3], mats[:, :3, :3],
+                                       path.linear_velocity, path.angular_velocity, float(ti))
+        np.testing.assert_allclose(T[i], T_ref, atol=1e-12)
+        np.testing.assert_allclose(twist[i], twist_ref, atol=1e-12)
+    # segments run straight from waypoint to waypoint: d_k v_k = P_{k+1} - P_k, exp(d_k w_k) R_k = R_{k+1}
+    d = np.diff(path.times)
+    np.testing.assert_allclose(path.linear_velocity * d[:, None], np.diff(mats[:, :3, 3], axis=0), atol=1e-14)
+    for k in range(len(d)):
+        R_next = ref.rodrigues(path.angular_velocity[k] * d[k]) @ mats[k, :3, :3]
+        np.testing.assert_allclose(R_next, mats[k + 1, :3, :3], atol=1e-13)
+
+
+def test_via_points_blends(rng):
+    poses = waypoint_poses(rng, 6)
+    vmax, amax = 0.2, 0.5
+    path = sk.trajectory.via_points(poses, vmax=vmax, amax=amax, blend=0.2)
+    mats = sk.body_transform(poses)
+    P = mats[:, :3, 3]
+    t = np.linspace(0, path.duration, 200_001)
+    T, twist = path.sample(t, twist=True)
+    # ends exactly at the first and last poses, at rest
+    np.testing.assert_allclose(T[0], mats[0], atol=1e-15)
+    np.testing.assert_allclose(T[-1], mats[-1], atol=1e-15)
+    np.testing.assert_array_equal(twist[[0, -1]], 0.0)
+    # continuous velocity, and the acceleration (difference quotient) within amax
+    dt = t[1] - t[0]
+    accel = np.linalg.norm(np.diff(twist[:, :3], axis=0), axis=1) / dt
+    assert accel.max() <= amax * (1 + 1e-9)
+    assert np.linalg.norm(twist[:, :3], axis=1).max() <= vmax * (1 + 1e-12)
+    v = np.vstack([np.zeros(3), path.linear_velocity, np.zeros(3)])
+    for k in range(1, len(P) - 1):
+        b, tk = path.blends[k], path.times[k]
+        assert b >= 0.2
+        inside = np.abs(t - tk) <= b / 2
+        bound = max(np.linalg.norm(v[k]), np.linalg.norm(v[k + 1])) * b / 2
+        assert np.linalg.norm(T[inside, :3, 3] - P[k], axis=1).max() <= bound * (1 + 1e-12)
+        # near, not through: at t_k the path is at P_k + (v_k - v_{k-1}) b / 8
+        at_k = path.sample(tk)[:3, 3]
+        np.testing.assert_allclose(at_k, P[k] + (v[k + 1] - v[k]) * b / 8, atol=1e-14)
+        # velocity entering and leaving the blend equals the segment velocities
+        _, tw = path.sample(np.array([tk - b / 2, tk + b / 2]), twist=True)
+        np.testing.assert_allclose(tw[:, :3], [v[k], v[k + 1]], atol=1e-14)
+    # the whole path is time-consistent: finite differences of the pose give the twist
+    h = 1e-6
+    ts = rng.uniform(h, path.duration - h, 200)
+    Tp, Tm = path.sample(ts + h), path.sample(ts - h)
+    _, tw = path.sample(ts, twist=True)
+    np.testing.assert_allclose((Tp[:, :3, 3] - Tm[:, :3, 3]) / (2 * h), tw[:, :3], atol=1e-8)
+    dR = np.einsum("nij,nkj->nik", Tp[:, :3, :3] - Tm[:, :3, :3], path.sample(ts)[:, :3, :3]) / (2 * h)
+    w_fd = np.stack([dR[:, 2, 1], dR[:, 0, 2], dR[:, 1, 0]], axis=1)
+    np.testing.assert_allclose(w_fd, tw[:, 3:], atol=1e-7)
+
+
+def test_via_points_bad_input(rng):
+    poses = waypoint_poses(rng, 3)
+    with pytest.raises(ValueError, match=r"poses must have shape .* got \(1, 6\)"):
+        sk.trajectory.via_points(poses[:1], vmax=1.0, amax=1.0)
+    with pytest.raises(ValueError, match="amax"):
+        sk.trajectory.via_points(poses, vmax=1.0, amax=0.0)
+    with pytest.raises(ValueError, match="blend"):
+        sk.trajectory.via_points(poses, vmax=1.0, amax=1.0, blend=-1.0)
+    bad = poses.copy()
+    bad[1, 0] = math.nan
+    with pytest.raises(ValueError, match=r"poses\[1\] must be finite"):
+        sk.trajectory.via_points(bad, vmax=1.0, amax=1.0)
+    # repeated waypoints are dropped, not divided by zero
+    path = sk.trajectory.via_points(np.repeat(poses, 2, axis=0), vmax=1.0, amax=1.0)
+    assert len(path.times) == 3
+
+
+@given(
+    shape=st.sampled_from(BATCH_SHAPES),
+    dtype=st.sampled_from([np.float32, np.float64]),
+    form=st.sampled_from(["matrix", "quaternion"]),
+)
+def test_path_sample_batch_shapes_and_dtypes(shape, dtype, form):
+    path = PATH
+    t = np.random.default_rng(len(shape)).uniform(-0.1, path.duration + 0.1, shape).astype(dtype)
+    poses, twist = path.sample(t, form=form, twist=True)
+    assert poses.shape == (*shape, *((4, 4) if form == "matrix" else (7,)))
+    assert twist.shape == (*shape, 6)
+    assert poses.dtype == twist.dtype == dtype
+    want, want_twist = path.sample(t.astype(np.float64), form=form, twist=True)
+    np.testing.assert_allclose(poses, want, atol=TOLERANCE[dtype])
+    np.testing.assert_allclose(twist, want_twist, atol=TOLERANCE[dtype])
+
+
+PATH = sk.trajectory.via_points(waypoint_poses(np.random.default_rng(1), 4), vmax=0.3, amax=1.0, wmax=1.0,
+                                alphamax=3.0)
+
+
+def test_path_nan_and_empty_times():
+    poses = PATH.sample(np.array([0.1, math.nan]), form="quaternion")
+    assert np.isnan(poses[1]).all() and np.isfinite(poses[0]).all()
+    assert PATH.sample(np.zeros((0, 3))).shape == (0, 3, 4, 4)
+
+
+# ---- through the whole-body IK ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("form", ["matrix", "quaternion"])
+def test_body_ik_round_trip(rng, form):
+    spot = sk.Spot()
+    feet = spot.stance_feet(height=0.5)
+    poses = np.array([[0.0, 0.0, 0.5, 0.0, 0.0, 0.0], [0.05, 0.02, 0.45, 0.05, -0.1, 0.2],
+                      [-0.03, 0.04, 0.52, -0.08, 0.05, -0.1]])
+    for path in (sk.trajectory.linear(poses[0], poses[1], vmax=0.2, amax=0.5, wmax=0.5, alphamax=1.0),
+                 sk.trajectory.via_points(poses, vmax=0.2, amax=0.5, wmax=0.5, alphamax=1.0)):
+        t = np.linspace(0, path.duration, 101).reshape(1, 101)
+        body = path.sample(t, form=form)
+        res = spot.body_ik(body, feet)
+        assert res.q.shape == (1, 101, 12)
+        assert (np.asarray(res.status) == 0).all()
+        feet_back = spot.body_fk(body, res.q)
+        np.testing.assert_allclose(feet_back, np.broadcast_to(feet, (1, 101, 4, 3)), atol=1e-9)
