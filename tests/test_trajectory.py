@@ -284,8 +284,12 @@ def test_linear_matches_reference(rng):
     for _ in range(10):
         p0, p1 = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
         q0, q1 = random_quaternion(rng), random_quaternion(rng)
-        limits = dict(vmax=rng.uniform(0.2, 2), amax=rng.uniform(0.2, 2), wmax=rng.uniform(0.2, 2),
-                      alphamax=rng.uniform(0.2, 2))
+        limits = dict(
+            vmax=rng.uniform(0.2, 2),
+            amax=rng.uniform(0.2, 2),
+            wmax=rng.uniform(0.2, 2),
+            alphamax=rng.uniform(0.2, 2),
+        )
         path = sk.trajectory.linear(pose7(p0, q0), pose7(p1, q1), **limits)
         t = np.concatenate([[0.0, path.duration], rng.uniform(0, path.duration, 100)])
         T, twist = path.sample(t, twist=True)
@@ -399,8 +403,15 @@ def test_via_points_matches_reference(rng):
     t = np.concatenate([[0.0, path.duration], path.times, rng.uniform(0, path.duration, 300)])
     T, twist = path.sample(t, twist=True)
     for i, ti in enumerate(t):
-        T_ref, twist_ref = ref.blended(path.times, path.blends, mats[:, :3, 3], mats[:, :3, :3],
-                                       path.linear_velocity, path.angular_velocity, float(ti))
+        T_ref, twist_ref = ref.blended(
+            path.times,
+            path.blends,
+            mats[:, :3, 3],
+            mats[:, :3, :3],
+            path.linear_velocity,
+            path.angular_velocity,
+            float(ti),
+        )
         np.testing.assert_allclose(T[i], T_ref, atol=1e-12)
         np.testing.assert_allclose(twist[i], twist_ref, atol=1e-12)
     # segments run straight from waypoint to waypoint: d_k v_k = P_{k+1} - P_k, exp(d_k w_k) R_k = R_{k+1}
@@ -486,8 +497,9 @@ def test_path_sample_batch_shapes_and_dtypes(shape, dtype, form):
     np.testing.assert_allclose(twist, want_twist, atol=TOLERANCE[dtype])
 
 
-PATH = sk.trajectory.via_points(waypoint_poses(np.random.default_rng(1), 4), vmax=0.3, amax=1.0, wmax=1.0,
-                                alphamax=3.0)
+PATH = sk.trajectory.via_points(
+    waypoint_poses(np.random.default_rng(1), 4), vmax=0.3, amax=1.0, wmax=1.0, alphamax=3.0
+)
 
 
 def test_path_nan_and_empty_times():
@@ -503,10 +515,17 @@ def test_path_nan_and_empty_times():
 def test_body_ik_round_trip(rng, form):
     spot = sk.Spot()
     feet = spot.stance_feet(height=0.5)
-    poses = np.array([[0.0, 0.0, 0.5, 0.0, 0.0, 0.0], [0.05, 0.02, 0.45, 0.05, -0.1, 0.2],
-                      [-0.03, 0.04, 0.52, -0.08, 0.05, -0.1]])
-    for path in (sk.trajectory.linear(poses[0], poses[1], vmax=0.2, amax=0.5, wmax=0.5, alphamax=1.0),
-                 sk.trajectory.via_points(poses, vmax=0.2, amax=0.5, wmax=0.5, alphamax=1.0)):
+    poses = np.array(
+        [
+            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
+            [0.05, 0.02, 0.45, 0.05, -0.1, 0.2],
+            [-0.03, 0.04, 0.52, -0.08, 0.05, -0.1],
+        ]
+    )
+    for path in (
+        sk.trajectory.linear(poses[0], poses[1], vmax=0.2, amax=0.5, wmax=0.5, alphamax=1.0),
+        sk.trajectory.via_points(poses, vmax=0.2, amax=0.5, wmax=0.5, alphamax=1.0),
+    ):
         t = np.linspace(0, path.duration, 101).reshape(1, 101)
         body = path.sample(t, form=form)
         res = spot.body_ik(body, feet)
@@ -514,3 +533,43 @@ def test_body_ik_round_trip(rng, form):
         assert (np.asarray(res.status) == 0).all()
         feet_back = spot.body_fk(body, res.q)
         np.testing.assert_allclose(feet_back, np.broadcast_to(feet, (1, 101, 4, 3)), atol=1e-9)
+
+
+# -- holding an IK branch along a path ---------------------------------------------------------------------
+
+
+def test_hold_branch_reports_the_wrist_flip():
+    arm = sk.Spot().arm
+    t = np.linspace(-1.0, 1.0, 201)
+    q = np.tile([0.2, -1.0, 1.6, 0.3, 0.0, 0.5], (len(t), 1))
+    q[:, 4] = 0.4 * t  # wr0 crosses 0: a wrist singularity
+    sol = arm.ik_all(arm.fk(q))
+    branch = int(np.argmin(np.abs(sol.q[0] - q[0]).max(axis=-1)))
+    held = sk.trajectory.hold_branch(sol.q, sol.valid, branch)
+    assert len(held.jumps) >= 1  # the held slot flips the wrist where wr0 changes sign
+    k = held.jumps[0]
+    assert abs(t[k]) < 0.05  # at the crossing (the slot may vanish exactly there, or jump)
+    later = k + 10
+    assert not np.allclose(held.q[later], q[later], atol=0.1)  # the slot now holds the flipped wrist
+    assert held.ok[:k].all() and not held.ok[k:].any()
+    np.testing.assert_allclose(held.q[:k], q[:k], atol=1e-9)  # before the jump: the generating path
+
+
+def test_hold_branch_continuous_path_and_bad_input():
+    leg = sk.Spot().leg("fl")
+    t = np.linspace(0.0, 1.0, 101)
+    q = np.stack([0.1 * t, 0.9 + 0.2 * t, -1.6 - 0.2 * t], -1)
+    sol = leg.ik_all(leg.fk(q))
+    held = sk.trajectory.hold_branch(sol.q, sol.valid, 0)
+    assert held.ok.all() and len(held.jumps) == 0
+    np.testing.assert_allclose(held.q, q, atol=1e-12)
+    valid = sol.valid.copy()
+    valid[50, 0] = False  # the branch vanishes for one sample: reported, and the rest is not ok
+    held = sk.trajectory.hold_branch(sol.q, valid, 0)
+    assert held.jumps.tolist() == [50, 51] and held.ok[:50].all() and not held.ok[50:].any()
+    with pytest.raises(ValueError, match="branch"):
+        sk.trajectory.hold_branch(sol.q, sol.valid, 4)
+    with pytest.raises(ValueError, match="max_step"):
+        sk.trajectory.hold_branch(sol.q, sol.valid, 0, max_step=0.0)
+    with pytest.raises(ValueError, match="q_slots"):
+        sk.trajectory.hold_branch(sol.q[0], sol.valid, 0)

@@ -16,6 +16,7 @@ from .body import body_transform
 from .chain import Chain
 from .leg import SLOT_NAMES
 from .spot import Spot
+from .trajectory import hold_branch, via_points
 
 # Seed 000 Q1.2: the exam's DHm leg, (sigma, d, alpha, r, theta), with Spot's lengths.
 _H1, _H2, _H3 = 0.110945, 0.3205, 0.3365
@@ -39,6 +40,8 @@ def demo(samples: int = 1_000_000) -> int:
     print(f"spotkin {__version__} demo: the built-in Spot model")
     print()
     _demo_body(samples)
+    print()
+    _demo_path()
     print()
     _demo_leg(samples)
     print()
@@ -91,6 +94,51 @@ def _demo_body(samples: int) -> None:
         f"  arm holding a world-fixed hand target at {np.round(target[:3, 3], 3)} m on "
         f"{len(reached):,} of those poses: {int(reached.sum()):,} solved within limits, "
         f"worst hand pose error {hand_error:.1e}"
+    )
+
+
+def _demo_path(rate: float = 1000.0) -> None:
+    """The body on a timed via-point path (trapezoidal speed, blends) while the hand holds its pose."""
+    spot = Spot()
+    feet = spot.stance_feet(height=0.5)
+    waypoints = np.array(
+        [  # [x, y, z, roll, pitch, yaw]
+            [0.00, 0.00, 0.50, 0.00, 0.00, 0.00],
+            [0.05, 0.06, 0.46, 0.10, -0.08, 0.12],
+            [-0.04, 0.05, 0.44, -0.05, 0.12, -0.10],
+            [0.00, -0.06, 0.48, 0.08, 0.05, 0.05],
+            [0.00, 0.00, 0.50, 0.00, 0.00, 0.00],
+        ]
+    )
+    path = via_points(waypoints, vmax=0.1, amax=0.5, wmax=0.4, alphamax=2.0, blend=0.3)
+    t = np.arange(0.0, path.duration, 1.0 / rate)
+    print(
+        f"Timed body path: {len(waypoints)} via points, blends, |v| <= 0.1 m/s, |a| <= 0.5 m/s^2: "
+        f"{path.duration:.2f} s sampled at {rate:.0f} Hz ({len(t):,} poses)"
+    )
+    start = time.perf_counter()
+    poses = path.sample(t, form="quaternion")  # (K, 7) [x, y, z, qx, qy, qz, qw]
+    legs = spot.body_ik(poses, feet)
+    T_body = path.sample(t)  # (K, 4, 4) world <- body
+    arm_q0 = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
+    hand = T_body[0] @ spot.arm.fk(arm_q0)  # held fixed in the world
+    T_arm = np.linalg.solve(T_body, hand)  # the hand target in the moving body frame
+    arm = spot.arm.ik_all(T_arm)
+    seconds = time.perf_counter() - start
+    branch = int(np.argmin(np.abs(np.angle(np.exp(1j * (arm.q[0] - arm_q0)))).max(axis=-1)))
+    held = hold_branch(arm.q, arm.valid, branch)
+    reached = np.isfinite(held.q).all(axis=-1)
+    hand_error = np.abs(T_body[reached] @ spot.arm.fk(held.q[reached]) - hand).max(initial=0.0)
+    foot_error = np.abs(spot.body_fk(poses, legs.q) - feet)[legs.status == Status.OK].max(initial=0.0)
+    counts = {s.name: int((legs.status == s).sum()) for s in Status}
+    print(
+        f"  path sampling + body_ik + arm ik_all for every sample: {seconds * 1e3:.1f} ms; "
+        f"leg statuses {counts}; worst foot error {foot_error:.1e} m"
+    )
+    print(
+        f"  hand held in the world on arm branch {branch}: {int(held.ok.sum()):,} of {len(t):,} samples "
+        f"continuous, worst hand pose error {hand_error:.1e}, branch jumps at samples "
+        f"{held.jumps.tolist() or 'none'}"
     )
 
 
@@ -181,6 +229,16 @@ def _demo_chain(samples: int) -> None:
         )
     worst = _fd_error(leg, batch[:1000])
     print(f"  worst |J - central finite differences| over 1,000 samples: {worst:.1e}")
+    targets = leg.fk(batch)[:, :3, 3]
+    seconds = _throughput(leg.ik_position, targets)
+    sol = leg.ik_position(targets)
+    found = sol.q[sol.exists]
+    error = np.abs(leg.fk(found)[:, :3, 3] - np.repeat(targets, sol.exists.sum(-1), axis=0)).max()
+    print(
+        f"  closed-form IK from the table ({leg.ik_kind}): {samples:,} targets in {seconds * 1e3:.1f} ms "
+        f"({seconds / samples * 1e9:.0f} ns each), {sol.exists.sum(-1).mean():.2f} solutions per target, "
+        f"worst |fk(q) - p| {error:.1e} m"
+    )
 
 
 def _fd_error(chain: Chain, q: np.ndarray, step: float = 1e-6) -> float:

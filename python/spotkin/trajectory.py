@@ -44,6 +44,7 @@ there: they jump from rest). A NaN time gives a row of NaN.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -51,7 +52,16 @@ from numpy.typing import ArrayLike
 from . import _core
 from .body import body_transform
 
-__all__ = ["PROFILES", "CartesianPath", "PointToPoint", "linear", "point_to_point", "via_points"]
+__all__ = [
+    "PROFILES",
+    "BranchPath",
+    "CartesianPath",
+    "PointToPoint",
+    "hold_branch",
+    "linear",
+    "point_to_point",
+    "via_points",
+]
 
 PROFILES = ("cubic", "quintic", "trapezoid")
 _FORMS = {"matrix": 0, "quaternion": 1}
@@ -186,8 +196,15 @@ class CartesianPath:
     waypoints are passed near, not through (see :func:`via_points`).
     """
 
-    def __init__(self, waypoints: np.ndarray, times: np.ndarray, blends: np.ndarray,
-                 quaternions: np.ndarray, linear_velocity: np.ndarray, angular_velocity: np.ndarray):
+    def __init__(
+        self,
+        waypoints: np.ndarray,
+        times: np.ndarray,
+        blends: np.ndarray,
+        quaternions: np.ndarray,
+        linear_velocity: np.ndarray,
+        angular_velocity: np.ndarray,
+    ):
         self.waypoints = waypoints
         self.times = times
         self.blends = blends
@@ -226,8 +243,12 @@ def _positive(value: float | None, name: str, optional: bool = False) -> float:
 def _limits(vmax, amax, wmax, alphamax) -> tuple[float, float, float, float]:
     if (wmax is None) != (alphamax is None):
         raise ValueError("wmax and alphamax go together: give both or neither")
-    return (_positive(vmax, "vmax"), _positive(amax, "amax"), _positive(wmax, "wmax", optional=True),
-            _positive(alphamax, "alphamax", optional=True))
+    return (
+        _positive(vmax, "vmax"),
+        _positive(amax, "amax"),
+        _positive(wmax, "wmax", optional=True),
+        _positive(alphamax, "alphamax", optional=True),
+    )
 
 
 def _plan(
@@ -266,8 +287,10 @@ def _plan(
         w = np.zeros((W + 1, 3))
         v[1:W] = dp / d[:, None]
         w[1:W] = phis / d[:, None]
-        b = np.maximum(np.linalg.norm(np.diff(v, axis=0), axis=1) / amax,
-                       np.linalg.norm(np.diff(w, axis=0), axis=1) / alphamax)
+        b = np.maximum(
+            np.linalg.norm(np.diff(v, axis=0), axis=1) / amax,
+            np.linalg.norm(np.diff(w, axis=0), axis=1) / alphamax,
+        )
         b[1:-1] = np.maximum(b[1:-1], min_blend)
         return b
 
@@ -298,8 +321,14 @@ def _plan(
         raise RuntimeError("via_points: blend planning did not converge")
     b = blends_for(d)
     times = b[0] / 2 + np.concatenate([[0.0], np.cumsum(d)])
-    return CartesianPath(np.array(kept), times, b, np.array(quats),
-                         (dp / d[:, None]).reshape(-1, 3), (phis / d[:, None]).reshape(-1, 3))
+    return CartesianPath(
+        np.array(kept),
+        times,
+        b,
+        np.array(quats),
+        (dp / d[:, None]).reshape(-1, 3),
+        (phis / d[:, None]).reshape(-1, 3),
+    )
 
 
 def linear(
@@ -354,3 +383,53 @@ def via_points(
     vmax_, amax_, wmax_, alphamax_ = _limits(vmax, amax, wmax, alphamax)
     mats = [_pose_matrix(p, f"poses[{i}]") for i, p in enumerate(arr)]
     return _plan(mats, vmax_, amax_, wmax_, alphamax_, float(blend))
+
+
+class BranchPath(NamedTuple):
+    """One IK branch held along a sampled path, from :func:`hold_branch`."""
+
+    q: np.ndarray
+    """(K, n) the held slot's joint values; NaN where the branch does not exist or is invalid."""
+    ok: np.ndarray
+    """(K,) bool: the branch is valid at this sample and reached continuously from the previous one."""
+    jumps: np.ndarray
+    """(J,) indices k where the branch is discontinuous between samples k - 1 and k (a joint moves
+    more than ``max_step``), appears or disappears: never taken silently."""
+    max_step: np.ndarray
+    """(K,) the largest joint move from the previous sample (0 at k = 0; revolute moves wrapped)."""
+
+
+def hold_branch(q_slots: ArrayLike, valid: ArrayLike, branch: int, max_step: float = 0.2) -> BranchPath:
+    """Hold IK slot ``branch`` along a path and report every jump.
+
+    ``q_slots`` (K, S, n) and ``valid`` (K, S) are the ``q`` and ``valid`` (or ``exists``) of an
+    ``ik_all``-style result over K consecutive path samples: :meth:`Leg.ik_all`, :meth:`SpotArm.ik_all`
+    (slots with a fixed branch meaning). :meth:`Chain.ik` and :meth:`Chain.ik_position` sort their
+    slots by joint value, so a slot there is not a branch: hold one only where the sort order is
+    stable. A jump is a sample where the branch vanishes or reappears, or where a joint moves by more
+    than ``max_step`` (rad or length units; revolute moves measured on the circle) from the previous
+    sample: typically a singularity crossing (the wrist flipping, the elbow stretching), where the
+    solver's slots swap meaning. Sample the path finely enough that real motion stays below
+    ``max_step``. Vectorised over the path.
+    """
+    q = np.asarray(q_slots, dtype=np.float64)
+    ok_slot = np.asarray(valid, dtype=bool)
+    if q.ndim != 3 or ok_slot.shape != q.shape[:2]:
+        raise ValueError(f"q_slots must be (K, S, n) and valid (K, S), got {q.shape} and {ok_slot.shape}")
+    if not 0 <= branch < q.shape[1]:
+        raise ValueError(f"branch must be a slot index in [0, {q.shape[1]}), got {branch}")
+    if not (np.isfinite(max_step) and max_step > 0):
+        raise ValueError(f"max_step must be positive and finite, got {max_step}")
+    held = np.where(ok_slot[:, branch, None], q[:, branch], np.nan)
+    step = np.zeros(len(held))
+    if len(held) > 1:
+        delta = np.diff(held, axis=0)
+        wrapped = np.abs(np.mod(delta + np.pi, 2 * np.pi) - np.pi)  # revolute joints: on the circle
+        step[1:] = np.max(np.minimum(wrapped, np.abs(delta)), axis=-1)
+    present = ok_slot[:, branch]
+    jump = np.zeros(len(held), dtype=bool)
+    jump[1:] = (present[1:] != present[:-1]) | (present[1:] & present[:-1] & ~(step[1:] <= max_step))
+    ok = present & ~jump
+    if len(ok) > 1:  # after a jump the branch is no longer the one chosen: not ok until the end
+        ok &= np.cumsum(jump) == 0
+    return BranchPath(held, ok, np.nonzero(jump)[0], step)

@@ -58,7 +58,7 @@ void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) 
   // that runs faster (cores of a VM often differ) takes more of the batch
   // instead of waiting for the slowest; each chunk starts on a block boundary.
   std::ptrdiff_t grain = std::max<std::ptrdiff_t>(min_per_thread / 4, n / (8 * threads));
-  grain = (grain + kChunkAlignment - 1) / kChunkAlignment * kChunkAlignment;
+  grain = std::max<std::ptrdiff_t>(1, (grain + kChunkAlignment - 1) / kChunkAlignment) * kChunkAlignment;
   std::atomic<std::ptrdiff_t> next{0};
   auto work = [&] {
     for (;;) {
