@@ -10,4 +10,5 @@ void bind_leg(pybind11::module_& m);
 void bind_arm(pybind11::module_& m);
 void bind_body(pybind11::module_& m);
 void bind_paul(pybind11::module_& m);
+void bind_differential(pybind11::module_& m);
 }  // namespace spotkin::bindings

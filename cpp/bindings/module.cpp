@@ -11,4 +11,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_arm(m);
   spotkin::bindings::bind_body(m);
   spotkin::bindings::bind_paul(m);
+  spotkin::bindings::bind_differential(m);
 }

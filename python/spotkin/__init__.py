@@ -8,7 +8,8 @@ from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
-from .chain import Chain
+from .chain import Chain, IKDifferentialInfo
+from .differential import dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .leg import Leg, LegSolutions
 from .spot import BodyFrames, BodyIK, BodyRates, Spot
 
@@ -20,19 +21,26 @@ __all__ = [
     "BodyIK",
     "BodyRates",
     "Chain",
+    "IKDifferentialInfo",
     "Leg",
     "LegSolutions",
     "Spot",
     "SpotArm",
     "Status",
     "body_transform",
+    "dls",
     "get_num_threads",
+    "manipulability",
+    "nullspace_projector",
     "paul",
+    "pinv",
     "pose_from",
+    "rank",
     "rotation_x",
     "rotation_y",
     "rotation_z",
     "set_num_threads",
+    "singular_values",
     "transform",
     "translation",
 ]
