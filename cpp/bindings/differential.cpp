@@ -77,7 +77,8 @@ JacobianArg jacobian_arg(py::handle obj) {
 // Rough single-thread cost per sample, ns, for the chunking thresholds.
 std::ptrdiff_t min_per_thread(int m, int n, bool svd) {
   const double cubic = double(m) * n * std::min(m, n);
-  return std::max<std::ptrdiff_t>(1, min_chunk((svd ? 25.0 : 1.0) * cubic + 20.0));
+  // at least 4: parallel_for's chunk (min_per_thread / 4, rounded up to a block) must not be 0
+  return std::max<std::ptrdiff_t>(4, min_chunk((svd ? 25.0 : 1.0) * cubic + 20.0));
 }
 
 py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z_obj) {

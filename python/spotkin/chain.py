@@ -238,7 +238,7 @@ class Chain:
             raise ValueError(f"q0 must have shape (..., {self.dof}), got {q0_arr.shape}")
         # a single target per sample when T_targets has no more leading dimensions than q0
         single = targets.ndim - 2 <= q0_arr.ndim - 1
-        path = targets[..., None, :, :, :] if single else targets
+        path = targets[..., None, :, :] if single else targets
         try:
             lead = np.broadcast_shapes(path.shape[:-3], q0_arr.shape[:-1])
         except ValueError:

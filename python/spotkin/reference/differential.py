@@ -11,12 +11,18 @@ import numpy as np
 
 
 def dls(J: np.ndarray, dx: np.ndarray, damping: float, z: np.ndarray | None = None) -> np.ndarray:
-    """dq = J^T (J J^T + damping^2 I)^-1 dx  [+ (I - J^+ J) z]   (damping = 0: J^+ dx)."""
+    """dq = J^T (J J^T + damping^2 I)^-1 dx  [+ (I - J^+ J) z]   (damping = 0: J^+ dx).
+
+    For m > n the same vector as (J^T J + damping^2 I)^-1 J^T dx, since
+    (J^T J + l^2 I) J^T = J^T (J J^T + l^2 I); the n x n system is the well-conditioned one.
+    """
     J = np.asarray(J, dtype=np.float64)
     dx = np.asarray(dx, dtype=np.float64)
-    m = J.shape[0]
-    if damping > 0:
+    m, n = J.shape
+    if damping > 0 and m <= n:
         dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(m), dx)
+    elif damping > 0:
+        dq = np.linalg.solve(J.T @ J + damping**2 * np.eye(n), J.T @ dx)
     else:
         dq = pinv(J) @ dx
     if z is not None:
