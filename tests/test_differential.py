@@ -146,7 +146,10 @@ def test_rank_spot_leg_and_arm_singularities():
     spot = sk.Spot()
     leg = spot.legs[0]
     assert sk.rank(leg.jacobian([0.1, 0.4, 0.7])) == 3
-    assert sk.rank(leg.jacobian([0.1, 0.4, 0.0])) == 2  # stretched knee (theta3 = 0)
+    # stretched knee: with the 0.025 m knee offset at kn = -atan2(knee_offset, upper), not at 0
+    stretched = -np.arctan2(leg.knee_offset, leg.upper)
+    assert sk.rank(leg.jacobian([0.1, 0.4, stretched])) == 2
+    assert sk.rank(leg.jacobian([0.1, 0.4, 0.0])) == 3
     arm = spot.arm
     q = np.array([0.3, -0.7, 1.6, 0.4, 0.0, -0.2])  # wr0 = 0: el1 and wr1 aligned
     assert arm.singularity(q).wrist < 1e-12
