@@ -4,6 +4,8 @@
 
 #include <type_traits>
 
+#include "spotkin/differential.hpp"
+
 #include "bindings.hpp"
 #include "dispatch.hpp"
 #include "numpy_boundary.hpp"
@@ -86,6 +88,72 @@ py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_
                    });
 }
 
+// Closed-loop differential IK (spotkin::differential::ik_differential), always
+// in float64: targets (..., K, 4, 4) and q0 (..., dof) with equal leading shapes.
+py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::handle q0_obj, py::handle lower_obj,
+                          py::handle upper_obj, double damping, double position_tolerance,
+                          double orientation_tolerance, double max_step, int max_iterations, int rows) {
+  const int n = chain.f64.dof();
+  py::array targets_arr = as_real_array(targets_obj, "T_targets");
+  const Shape t_lead = leading_shape(targets_arr, "T_targets", {4, 4});
+  if (t_lead.empty()) throw py::value_error("T_targets must have shape (..., K, 4, 4)");
+  const Shape lead(t_lead.begin(), t_lead.end() - 1);
+  const py::ssize_t K = t_lead.back();
+  py::array q0_arr = as_real_array(q0_obj, "q0");
+  if (leading_shape(q0_arr, "q0", {n}) != lead)
+    throw py::value_error("q0 must have shape " + format_shape(lead) + " + (" + std::to_string(n) + ",)");
+  auto lower = contiguous<double>(as_real_array(lower_obj, "lower"));
+  auto upper = contiguous<double>(as_real_array(upper_obj, "upper"));
+  if (lower.size() != n || upper.size() != n) throw py::value_error("lower and upper must have shape (dof,)");
+  if (!(damping > 0.0) || !std::isfinite(damping)) throw py::value_error("damping must be finite and > 0");
+  if (!(position_tolerance >= 0.0) || !(orientation_tolerance >= 0.0))
+    throw py::value_error("tolerances must be >= 0");
+  if (!(max_step > 0.0)) throw py::value_error("max_step must be > 0");
+  if (max_iterations < 0) throw py::value_error("max_iter must be >= 0");
+  if (rows != 3 && rows != 6) throw py::value_error("rows must be 3 or 6");
+  auto targets = contiguous<double>(targets_arr);
+  auto q0 = contiguous<double>(q0_arr);
+  const py::ssize_t N = count(lead);
+  auto q_path = new_array<double>(t_lead, {n});
+  py::array_t<bool> converged(t_lead);
+  py::array_t<std::int32_t> iterations(t_lead);
+  py::array_t<double> position_error(t_lead), orientation_error(t_lead);
+  std::vector<differential::IkResult> results(static_cast<std::size_t>(N * K));
+  differential::IkOptions options;
+  options.damping = damping;
+  options.position_tolerance = position_tolerance;
+  options.orientation_tolerance = orientation_tolerance;
+  options.max_step = max_step;
+  options.max_iterations = max_iterations;
+  options.rows = rows;
+  const double* td = targets.data();
+  const double* qd = q0.data();
+  const double* lo = lower.data();
+  const double* up = upper.data();
+  double* out = q_path.mutable_data();
+  differential::IkResult* res = results.data();
+  {
+    ReleaseGilFor release(N * 64);
+    parallel_for(N, 4, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+      for (std::ptrdiff_t i = b; i < e; ++i)
+        differential::ik_differential(chain.f64, lo, up, td + 16 * K * i, K, qd + n * i, options,
+                                      out + K * n * i, res + K * i);
+    });
+  }
+  bool* cd = converged.mutable_data();
+  std::int32_t* id = iterations.mutable_data();
+  double* pd = position_error.mutable_data();
+  double* od = orientation_error.mutable_data();
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    cd[i] = results[i].converged;
+    id[i] = results[i].iterations;
+    pd[i] = results[i].position_error;
+    od[i] = results[i].orientation_error;
+  }
+  return py::make_tuple(std::move(q_path), std::move(converged), std::move(iterations), std::move(position_error),
+                        std::move(orientation_error));
+}
+
 }  // namespace
 
 void bind_chain(py::module_& m) {
@@ -100,7 +168,10 @@ void bind_chain(py::module_& m) {
       .def_property_readonly("convention", [](const ChainPair& c) { return c.convention; })
       .def("fk", &fk, py::arg("q"))
       .def("frames", &frames, py::arg("q"))
-      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"));
+      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"))
+      .def("ik_differential", &ik_differential, py::arg("T_targets"), py::arg("q0"), py::arg("lower"),
+           py::arg("upper"), py::arg("damping"), py::arg("position_tolerance"), py::arg("orientation_tolerance"),
+           py::arg("max_step"), py::arg("max_iterations"), py::arg("rows"));
 }
 
 }  // namespace spotkin::bindings

@@ -13,4 +13,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_paul(m);
   spotkin::bindings::bind_chain_ik(m);
   spotkin::bindings::bind_trajectory(m);
+  spotkin::bindings::bind_differential(m);
 }

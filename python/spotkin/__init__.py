@@ -8,7 +8,8 @@ from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
-from .chain import Chain, ChainSolutions
+from .chain import Chain, ChainSolutions, IKDifferentialInfo
+from .differential import dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .leg import Leg, LegSolutions
 from .spot import BodyFrames, BodyIK, BodyRates, Spot
 
@@ -21,19 +22,26 @@ __all__ = [
     "BodyRates",
     "Chain",
     "ChainSolutions",
+    "IKDifferentialInfo",
     "Leg",
     "LegSolutions",
     "Spot",
     "SpotArm",
     "Status",
     "body_transform",
+    "dls",
     "get_num_threads",
+    "manipulability",
+    "nullspace_projector",
     "paul",
+    "pinv",
     "pose_from",
+    "rank",
     "rotation_x",
     "rotation_y",
     "rotation_z",
     "set_num_threads",
+    "singular_values",
     "trajectory",
     "transform",
     "translation",

@@ -9,7 +9,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 
-__all__ = ["Chain", "ChainSolutions"]
+__all__ = ["Chain", "ChainSolutions", "IKDifferentialInfo"]
 
 _CONVENTIONS = {
     "mdh": _core.Convention.MODIFIED_DH,
@@ -57,6 +57,19 @@ class ChainSolutions(NamedTuple):
     """(...,) int8 :class:`Status`: OK if any slot is valid, else JOINT_LIMIT (solutions exist, none
     within the limits), UNREACHABLE (no solution: every slot NaN) or INVALID_INPUT (NaN/Inf, or a
     pose whose rotation is not one)."""
+
+
+class IKDifferentialInfo(NamedTuple):
+    """Per-target outcome of :meth:`Chain.ik_differential`, each of shape (..., K) (or (...,))."""
+
+    converged: np.ndarray
+    """bool: both errors within tolerance (position only for ``task="position"``)."""
+    iterations: np.ndarray
+    """int32: DLS steps taken for this target (0 if the start already met it)."""
+    position_error: np.ndarray
+    """float64: final |p_target - p| (m); NaN for non-finite input."""
+    orientation_error: np.ndarray
+    """float64: final |log(R_target R^T)| (rad), reported for both tasks."""
 
 
 class Chain:
@@ -253,6 +266,98 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT.
         """
         return ChainSolutions(*self._ik_core().ik(T))
+    def ik_differential(
+        self,
+        T_targets: ArrayLike,
+        q0: ArrayLike,
+        *,
+        task: Literal["pose", "position"] = "pose",
+        damping: float = 1e-2,
+        position_tolerance: float = 1e-6,
+        orientation_tolerance: float = 1e-6,
+        max_iter: int = 100,
+        max_step: float = 0.5,
+    ) -> tuple[np.ndarray, IKDifferentialInfo]:
+        """Closed-loop differential IK along a path of targets.
+
+        ``T_targets`` is (..., K, 4, 4), a path of K base-frame tool poses, or a single
+        target (..., 4, 4); ``q0`` (..., dof) is the start. ``T_targets`` is read as a
+        single target per sample when it has no more leading dimensions than ``q0`` has
+        (``(4, 4)`` or ``(N, 4, 4)`` with ``q0`` (N, dof)), as a path otherwise (``(K, 4, 4)``
+        with ``q0`` (dof,); ``(N, K, 4, 4)`` with ``q0`` (N, dof)). Leading dimensions
+        broadcast. Returns ``q_path`` (..., K, dof) (or (..., dof) for a single target)
+        and an :class:`IKDifferentialInfo` of per-target arrays.
+
+        For each target in turn, starting from the previous target's result (``q0``
+        clamped into the limits for the first), iterate until converged or ``max_iter``
+        steps:
+
+        - error ``e = [p_target - p; log(R_target R^T)]`` in the base frame, the frame of
+          the base-frame geometric Jacobian J (``d p/dt = v``, ``d R/dt = [w]x R``);
+          ``task="position"`` keeps the top three rows only (for chains with fewer than
+          6 joints, or when the orientation is free);
+        - converged when ``|p_target - p| <= position_tolerance`` (m) and, for the pose
+          task, ``|log(R_target R^T)| <= orientation_tolerance`` (rad);
+        - step ``dq = J^T (J J^T + damping² I)^-1 e``, scaled down so that
+          ``max |dq_j| <= max_step``;
+        - joint limits by clamping: ``q <- clip(q + dq, lower, upper)``. A joint sitting
+          at a limit whose step points outwards is locked (its Jacobian column removed)
+          and the step re-solved, so the other joints make up for it.
+
+        Unreachable targets (out of the workspace or the limits) end with
+        ``converged=False`` and the final errors, after ``max_iter`` steps. Non-finite
+        input gives NaN joints and errors with ``converged=False`` for that target.
+        Computed in float64; the result is float32 when ``T_targets`` and ``q0`` both are.
+        """
+        if task not in ("pose", "position"):
+            raise ValueError(f"task must be 'pose' or 'position', got {task!r}")
+        targets = _as_real(T_targets, "T_targets")
+        q0_arr = _as_real(q0, "q0")
+        if targets.ndim < 2 or targets.shape[-2:] != (4, 4):
+            raise ValueError(f"T_targets must have shape (..., K, 4, 4) or (..., 4, 4), got {targets.shape}")
+        if q0_arr.ndim < 1 or q0_arr.shape[-1] != self.dof:
+            raise ValueError(f"q0 must have shape (..., {self.dof}), got {q0_arr.shape}")
+        # a single target per sample when T_targets has no more leading dimensions than q0
+        single = targets.ndim - 2 <= q0_arr.ndim - 1
+        path = targets[..., None, :, :] if single else targets
+        try:
+            lead = np.broadcast_shapes(path.shape[:-3], q0_arr.shape[:-1])
+        except ValueError:
+            raise ValueError(
+                f"T_targets {targets.shape} and q0 {q0_arr.shape} do not broadcast over their "
+                "leading dimensions"
+            ) from None
+        path = np.broadcast_to(path, (*lead, *path.shape[-3:]))
+        start = np.broadcast_to(q0_arr, (*lead, self.dof))
+        for name, value in (
+            ("damping", damping),
+            ("position_tolerance", position_tolerance),
+            ("orientation_tolerance", orientation_tolerance),
+            ("max_step", max_step),
+        ):
+            if not isinstance(value, (int, float, np.floating, np.integer)) or not np.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
+        if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
+            raise ValueError(f"max_iter must be an int >= 0, got {max_iter!r}")
+        q_path, converged, iterations, position_error, orientation_error = self._core.ik_differential(
+            path,
+            start,
+            self._limits[0],
+            self._limits[1],
+            float(damping),
+            float(position_tolerance),
+            float(orientation_tolerance),
+            float(max_step),
+            int(max_iter),
+            6 if task == "pose" else 3,
+        )
+        if targets.dtype == np.float32 and q0_arr.dtype == np.float32:
+            q_path = q_path.astype(np.float32)
+        info = IKDifferentialInfo(converged, iterations, position_error, orientation_error)
+        if single:
+            q_path = q_path[..., 0, :]
+            info = IKDifferentialInfo(*(_scalar(field[..., 0]) for field in info))
+        return q_path, info
 
     def __reduce__(self):
         limits = None if np.isinf(self._limits).all() else np.stack(self._limits, axis=1)
@@ -265,6 +370,17 @@ class Chain:
 
 def _rebuild(rows, convention, base, tool, limits) -> Chain:
     return Chain(rows, convention=convention, base=base, tool=tool, limits=limits)
+
+
+def _as_real(value: ArrayLike, name: str) -> np.ndarray:
+    array = np.asarray(value)
+    if array.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be a real numeric array, got dtype {array.dtype}")
+    return array
+
+
+def _scalar(array: np.ndarray):
+    return array[()] if array.ndim == 0 else array
 
 
 def _tool_frame(frame: str) -> bool:

@@ -1,0 +1,108 @@
+"""Differential inverse kinematics: damped least squares, pseudo-inverse, null space, rank.
+
+Every function takes a batch of Jacobians ``J`` of shape ``(..., m, n)`` (m task
+rows, n joints; 1 <= m, n <= 64) and works per matrix, in C++. Leading
+dimensions of ``J`` and the vectors broadcast (NumPy rules); a single ``(m, n)``
+input gives a single output. The result is float32 when every input is
+float32, float64 otherwise. A matrix or vector with a NaN or infinity gives an
+all-NaN result for that sample (``rank`` gives -1), never an exception.
+
+Formulas (J^+ is the Moore–Penrose pseudo-inverse):
+
+- damped least squares: ``dq = J^T (J J^T + λ² I)^-1 dx`` (λ = ``damping``), which
+  minimises ``|J dq - dx|² + λ² |dq|²``; λ → 0 gives ``J^+ dx``;
+- with a secondary task ``z`` (``nullspace``): ``dq = J^T (J J^T + λ² I)^-1 dx + (I - J^+ J) z``.
+  ``J (I - J^+ J) = 0``, so the primary task motion ``J dq`` does not depend on ``z``;
+- rank: the number of singular values above ``tol``, by default
+  ``max(m, n) · eps · σ_max`` (as ``numpy.linalg.matrix_rank``; eps of the working dtype);
+- manipulability (Yoshikawa): ``sqrt(det(J J^T)) = σ_1 ··· σ_m`` for m <= n. For m > n
+  (more task rows than joints) ``J J^T`` is singular and the result is 0; use
+  ``np.prod(singular_values(J), -1)`` (= ``sqrt(det(J^T J))``) for that case.
+
+Decompositions (measured, see ``cpp/include/spotkin/differential.hpp``): damping > 0
+solves the damped normal equations by Cholesky (symmetric positive definite by
+construction); the pseudo-inverse (``pinv``, ``damping=0``, the null-space projector)
+uses a complete orthogonal decomposition (column-pivoted QR, pivots below
+``max(m, n) · eps · |r_11|`` count as zero, which agrees with the singular-value
+rank except within rounding of the threshold); ``singular_values``, ``rank`` and
+``manipulability`` use a two-sided Jacobi SVD.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _core
+
+__all__ = ["dls", "manipulability", "nullspace_projector", "pinv", "rank", "singular_values"]
+
+
+def _scalar(out: np.ndarray):
+    return out[()] if out.ndim == 0 else out
+
+
+def dls(J: ArrayLike, dx: ArrayLike, damping: float = 1e-3, nullspace: ArrayLike | None = None) -> np.ndarray:
+    """Damped least-squares step: J (..., m, n), dx (..., m) -> dq (..., n).
+
+    ``dq = J^T (J J^T + damping² I)^-1 dx``, plus ``(I - J^+ J) nullspace`` when a
+    secondary joint-space motion ``nullspace`` (..., n) is given. ``damping = 0`` gives
+    the minimum-norm least-squares solution ``J^+ dx``. ``damping`` must be finite and
+    >= 0 (ValueError otherwise).
+    """
+    damping = _nonnegative(damping, "damping")
+    return _core.dls(J, dx, damping, nullspace)
+
+
+def pinv(J: ArrayLike) -> np.ndarray:
+    """Moore–Penrose pseudo-inverse: J (..., m, n) -> J^+ (..., n, m).
+
+    Directions with singular values below about ``max(m, n) · eps · σ_max`` are
+    treated as exactly singular (see the module docstring).
+    """
+    return _core.pinv(J)
+
+
+def nullspace_projector(J: ArrayLike) -> np.ndarray:
+    """Orthogonal projector onto the null space of J: (..., m, n) -> ``I - J^+ J`` (..., n, n).
+
+    Symmetric and idempotent, with ``J P = 0``; the zero matrix when J has full column rank.
+    """
+    return _core.nullspace_projector(J)
+
+
+def singular_values(J: ArrayLike) -> np.ndarray:
+    """Singular values, descending: J (..., m, n) -> (..., min(m, n))."""
+    return _core.singular_values(J)
+
+
+def rank(J: ArrayLike, tol: float | None = None):
+    """Numerical rank: the number of singular values ``> tol``, (...,) int64.
+
+    ``tol=None`` uses ``max(m, n) · eps · σ_max`` with eps of the working dtype (2.2e-16
+    for float64, 1.2e-7 for float32), as ``numpy.linalg.matrix_rank``; a given ``tol``
+    (finite, >= 0) is absolute. A non-finite J gives -1.
+    """
+    tol = -1.0 if tol is None else _nonnegative(tol, "tol")
+    return _scalar(_core.rank(J, tol))
+
+
+def manipulability(J: ArrayLike):
+    """Yoshikawa manipulability ``sqrt(det(J J^T))``: J (..., m, n) -> (...,).
+
+    The product of the singular values for m <= n; 0 for m > n (``J J^T`` is then
+    singular; see the module docstring).
+    """
+    return _scalar(_core.manipulability(J))
+
+
+def _nonnegative(value: float, name: str) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__}") from None
+    if not math.isfinite(value) or value < 0:
+        raise ValueError(f"{name} must be finite and >= 0, got {value}")
+    return value
