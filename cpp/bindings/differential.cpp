@@ -117,8 +117,35 @@ py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z
                 od + i * n);
         });
       };
+      // The fixed shapes without a null-space task: blocks of samples, vectorised.
+      auto solve_blocks = [&](auto M, auto N) {
+        constexpr int Mv = decltype(M)::value, Nv = decltype(N)::value, B = diff::kDlsBlock;
+        parallel_for(count(batch), min_per_thread(m, n, false), [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+          T Js[Mv * Nv][B], dxs[Mv][B], dqs[Nv][B];
+          bool finite[B];
+          for (std::ptrdiff_t b0 = b; b0 < e; b0 += B) {
+            const int k = static_cast<int>(std::min<std::ptrdiff_t>(B, e - b0));
+            for (int i = 0; i < B; ++i) {
+              const T* Ji = i < k ? jd + j_index(b0 + i) * Mv * Nv : nullptr;
+              const T* di = i < k ? dd + dx_index(b0 + i) * Mv : nullptr;
+              finite[i] = i < k && diff::all_finite(Ji, Mv * Nv) && diff::all_finite(di, Mv);
+              for (int r = 0; r < Mv * Nv; ++r) Js[r][i] = finite[i] ? Ji[r] : T(0);
+              for (int r = 0; r < Mv; ++r) dxs[r][i] = finite[i] ? di[r] : T(0);
+            }
+            diff::dls_block<T, Mv, Nv>(Js, dxs, lambda2, dqs);
+            for (int i = 0; i < k; ++i)
+              for (int c = 0; c < Nv; ++c) od[(b0 + i) * Nv + c] = finite[i] ? dqs[c][i] : quiet_nan<T>();
+          }
+        });
+      };
       if (has_z || damping == 0.0)  // decomposition-bound: no fixed-size path
         solve(std::integral_constant<int, diff::Dyn>{}, std::integral_constant<int, diff::Dyn>{});
+      else if (m == 6 && n == 6)
+        solve_blocks(std::integral_constant<int, 6>{}, std::integral_constant<int, 6>{});
+      else if (m == 3 && n == 3)
+        solve_blocks(std::integral_constant<int, 3>{}, std::integral_constant<int, 3>{});
+      else if (m == 12 && n == 18)
+        solve_blocks(std::integral_constant<int, 12>{}, std::integral_constant<int, 18>{});
       else
         diff::with_shape(m, n, solve);
     }

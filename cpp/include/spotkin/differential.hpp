@@ -109,6 +109,53 @@ SPOTKIN_INLINE void dls_damped(const S* Jp, const S* dxp, S lambda2, int m, int 
   }
 }
 
+// dls_damped for a block of kDlsBlock samples at fixed M <= N, vectorised
+// across samples (structure of arrays: J[r * N + c][i] is J_rc of sample i):
+// A = J J^T + lambda^2 I, A = L L^T (Cholesky-Banachiewicz), L y = dx,
+// L^T x = y, dq = J^T x. Padding samples (J = 0) give A = lambda^2 I.
+constexpr int kDlsBlock = 32;
+
+template <typename S, int M, int N>
+SPOTKIN_VECTOR_KERNEL void dls_block(const S (*__restrict J)[kDlsBlock], const S (*__restrict dx)[kDlsBlock], S lambda2,
+                                     S (*__restrict dq)[kDlsBlock]) noexcept {
+  constexpr int B = kDlsBlock;
+  auto at = [](int r, int c) { return r * (r + 1) / 2 + c; };  // packed lower triangle, c <= r
+  S L[M * (M + 1) / 2][B], inv[M][B], y[M][B];
+  for (int r = 0; r < M; ++r)
+    for (int c = 0; c <= r; ++c) {
+      S* out = L[at(r, c)];
+      for (int i = 0; i < B; ++i) out[i] = r == c ? lambda2 : S(0);
+      for (int k = 0; k < N; ++k)
+        for (int i = 0; i < B; ++i) out[i] += J[r * N + k][i] * J[c * N + k][i];
+    }
+  for (int j = 0; j < M; ++j) {
+    for (int k = 0; k < j; ++k)
+      for (int i = 0; i < B; ++i) L[at(j, j)][i] -= L[at(j, k)][i] * L[at(j, k)][i];
+    for (int i = 0; i < B; ++i) inv[j][i] = S(1) / std::sqrt(L[at(j, j)][i]);
+    for (int r = j + 1; r < M; ++r) {
+      for (int k = 0; k < j; ++k)
+        for (int i = 0; i < B; ++i) L[at(r, j)][i] -= L[at(r, k)][i] * L[at(j, k)][i];
+      for (int i = 0; i < B; ++i) L[at(r, j)][i] *= inv[j][i];
+    }
+  }
+  for (int r = 0; r < M; ++r) {
+    for (int i = 0; i < B; ++i) y[r][i] = dx[r][i];
+    for (int k = 0; k < r; ++k)
+      for (int i = 0; i < B; ++i) y[r][i] -= L[at(r, k)][i] * y[k][i];
+    for (int i = 0; i < B; ++i) y[r][i] *= inv[r][i];
+  }
+  for (int r = M - 1; r >= 0; --r) {
+    for (int k = r + 1; k < M; ++k)
+      for (int i = 0; i < B; ++i) y[r][i] -= L[at(k, r)][i] * y[k][i];
+    for (int i = 0; i < B; ++i) y[r][i] *= inv[r][i];
+  }
+  for (int c = 0; c < N; ++c) {
+    for (int i = 0; i < B; ++i) dq[c][i] = S(0);
+    for (int r = 0; r < M; ++r)
+      for (int i = 0; i < B; ++i) dq[c][i] += J[r * N + c][i] * y[r][i];
+  }
+}
+
 // The minimum-norm least-squares solution dq = J^+ dx (the limit lambda -> 0 of
 // dls) and, when z is given, the null-space term (I - J^+ J) z, which J maps to
 // zero, so J dq = J J^+ dx whatever z is.
