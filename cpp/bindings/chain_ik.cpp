@@ -46,9 +46,14 @@ ChainIK make_chain_ik(Convention convention, py::handle rows_obj, py::handle bas
   auto lower = contiguous<double>(as_real_array(lower_obj, "lower"));
   auto upper = contiguous<double>(as_real_array(upper_obj, "upper"));
   if (lower.size() != dof || upper.size() != dof) throw py::value_error("lower and upper must have shape (dof,)");
-  ik.limits.lower.assign(lower.data(), lower.data() + dof);
-  ik.limits.upper.assign(upper.data(), upper.data() + dof);
-  for (const auto& joint : chain.joints()) ik.limits.sigma.push_back(joint.type == JointType::Revolute ? 0 : 1);
+  if (dof <= Limits::kMaxJoints) {
+    ik.limits.dof = static_cast<int>(dof);
+    for (std::ptrdiff_t j = 0; j < dof; ++j) {
+      ik.limits.lower[j] = lower.data()[j], ik.limits.upper[j] = upper.data()[j];
+      ik.limits.sigma[j] = chain.joints()[static_cast<std::size_t>(j)].type == JointType::Revolute ? 0 : 1;
+      ik.limits.unlimited &= std::isinf(lower.data()[j]) && std::isinf(upper.data()[j]);
+    }
+  }
 
   if (dof == 3) {
     const chain_ik::V3 w = (chain_ik::x_screw(chain.joints()[2].post) * tool).p;
