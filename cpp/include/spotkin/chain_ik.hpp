@@ -17,7 +17,9 @@
 #include <cmath>
 #include <complex>
 #include <stdexcept>
+#include <limits>
 #include <string>
+#include <type_traits>
 
 #include <Eigen/SVD>
 
@@ -27,6 +29,12 @@
 #include "spotkin/vector_math.hpp"
 
 namespace spotkin::chain_ik {
+
+#if defined(__GNUC__)
+#define SPOTKIN_INLINE_LAMBDA __attribute__((always_inline))
+#else
+#define SPOTKIN_INLINE_LAMBDA
+#endif
 
 using V3 = Eigen::Vector3d;
 using M3 = Eigen::Matrix3d;
@@ -53,29 +61,33 @@ enum class Kind : std::int8_t {
 };
 
 // A joint value: (cos q, sin q) for a revolute joint, v = q for a prismatic one.
+// No default member initialisers: the solvers' scratch arrays stay
+// uninitialised (zeroing them cost a memset per sample); use joint_zero().
 struct JointValue {
-  double c = 1.0, s = 0.0, v = 0.0;
+  double c, s, v;
 };
+
+constexpr JointValue joint_zero() noexcept { return JointValue{1.0, 0.0, 0.0}; }
 
 namespace detail {
 
-inline V3 z_apply(int sigma, const JointValue& q, const V3& x) noexcept {
+SPOTKIN_INLINE V3 z_apply(int sigma, const JointValue& q, const V3& x) noexcept {
   if (sigma == 0) return V3(q.c * x[0] - q.s * x[1], q.s * x[0] + q.c * x[1], x[2]);
   return V3(x[0], x[1], x[2] + q.v);
 }
 
 // The rotation part of Z(q) applied to a direction.
-inline V3 z_rotate(int sigma, const JointValue& q, const V3& x) noexcept {
+SPOTKIN_INLINE V3 z_rotate(int sigma, const JointValue& q, const V3& x) noexcept {
   return sigma == 0 ? V3(q.c * x[0] - q.s * x[1], q.s * x[0] + q.c * x[1], x[2]) : x;
 }
 
 // d/dq (Z(q) x) = e3 x Z(q) x (revolute) or e3 (prismatic), given zx = Z(q) x.
-inline V3 z_tangent(int sigma, const V3& zx) noexcept {
+SPOTKIN_INLINE V3 z_tangent(int sigma, const V3& zx) noexcept {
   return sigma == 0 ? V3(-zx[1], zx[0], 0.0) : V3(0.0, 0.0, 1.0);
 }
 
 // The unit vector of (x, y); (1, 0) at the origin (the angle is free there).
-inline void unit(double x, double y, double& c, double& s) noexcept {
+SPOTKIN_INLINE void unit(double x, double y, double& c, double& s) noexcept {
   const double r2 = x * x + y * y;
   if (r2 > 0.0) {
     const double inv = 1.0 / std::sqrt(r2);
@@ -87,11 +99,32 @@ inline void unit(double x, double y, double& c, double& s) noexcept {
 
 // (cos, sin) of angle(x1, y1) - angle(x2, y2), with angle(0, 0) = 0: one
 // square root and one division (these latencies dominate the back substitution).
-inline JointValue angle_difference(double x1, double y1, double x2, double y2) noexcept {
+SPOTKIN_INLINE JointValue angle_difference(double x1, double y1, double x2, double y2) noexcept {
   double r1 = x1 * x1 + y1 * y1, r2 = x2 * x2 + y2 * y2;
   if (!(r1 > 0.0)) x1 = 1.0, y1 = 0.0, r1 = 1.0;
   if (!(r2 > 0.0)) x2 = 1.0, y2 = 0.0, r2 = 1.0;
   const double inv = 1.0 / std::sqrt(r1 * r2);
+  return JointValue{(x1 * x2 + y1 * y2) * inv, (y1 * x2 - x1 * y2) * inv, 0.0};
+}
+
+// y = M x and y = M^T x, written out (no inner loop: the lane loops around them vectorise).
+SPOTKIN_INLINE void multiply(const M3& M, const double* x, double* y) noexcept {
+  y[0] = M(0, 0) * x[0] + M(0, 1) * x[1] + M(0, 2) * x[2];
+  y[1] = M(1, 0) * x[0] + M(1, 1) * x[1] + M(1, 2) * x[2];
+  y[2] = M(2, 0) * x[0] + M(2, 1) * x[1] + M(2, 2) * x[2];
+}
+SPOTKIN_INLINE void multiply_transposed(const M3& M, const double* x, double* y) noexcept {
+  y[0] = M(0, 0) * x[0] + M(1, 0) * x[1] + M(2, 0) * x[2];
+  y[1] = M(0, 1) * x[0] + M(1, 1) * x[1] + M(2, 1) * x[2];
+  y[2] = M(0, 2) * x[0] + M(1, 2) * x[1] + M(2, 2) * x[2];
+}
+
+// angle_difference without branches (for loops across samples).
+SPOTKIN_INLINE JointValue angle_difference_lane(double x1, double y1, double x2, double y2) noexcept {
+  const double r1 = x1 * x1 + y1 * y1, r2 = x2 * x2 + y2 * y2;
+  const bool z1 = !(r1 > 0.0), z2 = !(r2 > 0.0);
+  x1 = z1 ? 1.0 : x1, y1 = z1 ? 0.0 : y1, x2 = z2 ? 1.0 : x2, y2 = z2 ? 0.0 : y2;
+  const double inv = 1.0 / std::sqrt((z1 ? 1.0 : r1) * (z2 ? 1.0 : r2));
   return JointValue{(x1 * x2 + y1 * y2) * inv, (y1 * x2 - x1 * y2) * inv, 0.0};
 }
 
@@ -101,10 +134,10 @@ inline JointValue angle_difference(double x1, double y1, double x2, double y2) n
 // solution, and the residual test decides.
 // With sin_alpha >= 0 given, it is used for the half-angle's sine times
 // hypot(a, b) (when the caller has an accurate form of it).
-inline int cos_sin_roots(double a, double b, double rhs, JointValue out[2], double sin_alpha = -1.0) noexcept {
+SPOTKIN_INLINE int cos_sin_roots(double a, double b, double rhs, JointValue out[2], double sin_alpha = -1.0) noexcept {
   const double r2 = a * a + b * b;
   if (!(r2 > 0.0)) {
-    out[0] = JointValue{};
+    out[0] = joint_zero();
     return r2 == 0.0 ? 1 : 0;
   }
   const double inv = 1.0 / std::sqrt(r2);
@@ -121,7 +154,7 @@ inline int cos_sin_roots(double a, double b, double rhs, JointValue out[2], doub
 using Complex = std::complex<double>;
 
 // Roots of the monic z^2 + b z + c (real coefficients), the stable way.
-inline void quadratic_roots(double b, double c, Complex out[2]) noexcept {
+SPOTKIN_INLINE void quadratic_roots(double b, double c, Complex out[2]) noexcept {
   const double disc = b * b - 4.0 * c;
   if (disc >= 0.0) {
     const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
@@ -137,7 +170,7 @@ inline void quadratic_roots(double b, double c, Complex out[2]) noexcept {
 // Roots of the monic z^3 + b z^2 + c z + d (Cardano, trigonometric form when
 // all three are real); the first is real and the largest real root. Each real
 // root gets two Newton steps.
-inline void cubic_roots(double b, double c, double d, Complex out[3]) noexcept {
+SPOTKIN_INLINE void cubic_roots(double b, double c, double d, Complex out[3]) noexcept {
   const double shift = b / 3.0;
   const double P = c - b * shift, Q = (2.0 * shift * shift - c) * shift + d;  // u^3 + P u + Q
   const double disc = 0.25 * Q * Q + P * P * P / 27.0;
@@ -169,7 +202,7 @@ inline void cubic_roots(double b, double c, double d, Complex out[3]) noexcept {
 // depressed quartic y^4 + p y^2 + q y + r splits as two quadratics
 // y^2 -+ S y + m +- q / (2 S), S^2 = 2 m - p, with m the largest root of the
 // resolvent 8 m^3 - 4 p m^2 - 8 r m + 4 p r - q^2, for which 2 m - p > 0).
-inline void quartic_roots(const double a[5], Complex out[4]) noexcept {
+SPOTKIN_INLINE void quartic_roots(const double a[5], Complex out[4]) noexcept {
   const double A = a[3] / a[4], B = a[2] / a[4], C = a[1] / a[4], D = a[0] / a[4];
   const double shift = 0.25 * A, A2 = A * A;
   const double p = B - 0.375 * A2;
@@ -276,6 +309,13 @@ class Position3 {
     M0_inv_ = detail::inverse(split.M0);
     M1_inv_ = detail::inverse(split.M1);
     M2_inv_ = detail::inverse(split.M2);
+    revolute_ = sigma_[0] == 0 && sigma_[1] == 0 && sigma_[2] == 0;
+    if (revolute_) {  // the constants of (L) for solve_block
+      P1_ = backward_ ? M2_inv_ : split.M1;
+      P2_ = backward_ ? M1_inv_ : split.M2;
+      ra_ = P1_.R.transpose() * P1_.p;
+      rb_ = P1_.R.row(2).transpose();
+    }
   }
 
   Kind kind() const noexcept { return kind_; }
@@ -312,7 +352,7 @@ class Position3 {
   // q[k] for k < n, sorted by (q1, q2, q3) with revolute angles in [-pi, pi]
   // (compared through their cosines and sines). 0 for a non-finite or an
   // unreachable p.
-  int solve(const V3& p, JointValue q[kSlots][3]) const noexcept {
+  SPOTKIN_INLINE int solve(const V3& p, JointValue q[kSlots][3]) const noexcept {
     if (!p.allFinite()) return 0;
     const V3 target = M0_inv_.R * p + M0_inv_.p;  // p' of (F')
     const double s = std::max(scale_, target.norm());
@@ -332,11 +372,257 @@ class Position3 {
     return finish(target, s, cands, n, q);
   }
 
+
+  static constexpr int kLanes = 16;
+
+  // solve() for m <= kLanes targets at once: n[i] solutions q[i][k]. The
+  // all-revolute kinds run each step of solve() across the targets (lanes),
+  // so that it vectorises; the roots of P and the rare Newton steps stay per
+  // target. Same equations and tolerances as solve().
+  SPOTKIN_INLINE void solve_block(const V3* p, int m, JointValue (*q)[kSlots][3], int* n) const noexcept {
+    if (!revolute_) {
+      for (int i = 0; i < m; ++i) n[i] = solve(p[i], q[i]);
+      return;
+    }
+    constexpr int L = kLanes, C = kSlots;  // C candidates: 4 roots q3 (Q), or 2 q3 x 2 q2 (Q')
+    // target p' of (F'), the problem's target and point (PT, PW): (p', w) or (w, p') reversed
+    double px[L], py[L], pz[L];
+    for (int i = 0; i < L; ++i) {
+      const V3 x = i < m ? p[i] : V3::Zero();
+      px[i] = x[0], py[i] = x[1], pz[i] = x[2];
+    }
+    double tx[L], ty[L], tz[L], sc[L], PTx[L], PTy[L], PTz[L], PWx[L], PWy[L], PWz[L];
+    const M3& R0 = M0_inv_.R;
+    const V3 t0 = M0_inv_.p;
+    for (int i = 0; i < L; ++i) {
+      tx[i] = R0(0, 0) * px[i] + R0(0, 1) * py[i] + R0(0, 2) * pz[i] + t0[0];
+      ty[i] = R0(1, 0) * px[i] + R0(1, 1) * py[i] + R0(1, 2) * pz[i] + t0[1];
+      tz[i] = R0(2, 0) * px[i] + R0(2, 1) * py[i] + R0(2, 2) * pz[i] + t0[2];
+      sc[i] = std::max(scale_, std::sqrt(tx[i] * tx[i] + ty[i] * ty[i] + tz[i] * tz[i]));
+      PTx[i] = backward_ ? w_[0] : tx[i], PTy[i] = backward_ ? w_[1] : ty[i], PTz[i] = backward_ ? w_[2] : tz[i];
+      PWx[i] = backward_ ? tx[i] : w_[0], PWy[i] = backward_ ? ty[i] : w_[1], PWz[i] = backward_ ? tz[i] : w_[2];
+    }
+    const M3& R1 = P1_.R;
+    const M3& R2 = P2_.R;
+    const V3 t1 = P1_.p, t2 = P2_.p;
+    const double a00 = ra_[0], a01 = ra_[1], a10 = rb_[0], a11 = rb_[1], ra2 = ra_[2], rb2 = rb_[2];
+    const double det = a00 * a11 - a01 * a10, t1_2 = t1.squaredNorm();
+    // (B') uses the row of Rr of largest norm; (Q') its left null vector
+    const bool first_row = a00 * a00 + a01 * a01 >= a10 * a10 + a11 * a11;
+    const Eigen::Vector2d null = Problem::null_row(a00, a01, a10, a11);
+    // g = R2 Z3(q3) PW + t2 and d = kappa(g) - (ra2, rb2) g_z of (L)
+    auto gd = [&](int i, double c3, double s3, double* g, double* d) SPOTKIN_INLINE_LAMBDA {
+      const double hx = c3 * PWx[i] - s3 * PWy[i], hy = s3 * PWx[i] + c3 * PWy[i], hz = PWz[i];
+      for (int r = 0; r < 3; ++r) g[r] = R2(r, 0) * hx + R2(r, 1) * hy + R2(r, 2) * hz + t2[r];
+      const double pt2 = PTx[i] * PTx[i] + PTy[i] * PTy[i] + PTz[i] * PTz[i];
+      d[0] = 0.5 * (pt2 - (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) - t1_2) - ra2 * g[2];
+      d[1] = PTz[i] - t1[2] - rb2 * g[2];
+    };
+    // roots q3 (per target)
+    double c3[C][L], s3[C][L];
+    double roots3[L];  // their number (a double: one element width in the lane loops, so that they vectorise)
+    if (reduced_) {
+      double vals[3][L];
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < L; ++i) {
+          double g[3], d[2];
+          gd(i, kCos3[k], kSin3[k], g, d);
+          vals[k][i] = null[0] * d[0] + null[1] * d[1];
+        }
+      // trig_roots3 across the lanes
+      for (int i = 0; i < L; ++i) {
+        const double a0 = (vals[0][i] + vals[1][i] + vals[2][i]) / 3.0;
+        const double a1 = (2.0 / 3.0) * (vals[0][i] * kCos3[0] + vals[1][i] * kCos3[1] + vals[2][i] * kCos3[2]);
+        const double b1 = (2.0 / 3.0) * (vals[1][i] * kSin3[1] + vals[2][i] * kSin3[2]);
+        const double r2 = a1 * a1 + b1 * b1, m1 = 0.5 * std::sqrt(r2), top = std::max(std::fabs(a0), m1);
+        const bool varying = m1 > Tolerance::trim * top;  // else P is constant: q3 = 0 (free or none)
+        const double inv = 1.0 / std::sqrt(varying ? r2 : 1.0), ratio = -a0 * inv;
+        const double clamped = std::min(1.0, std::max(-1.0, ratio));
+        const double h = std::sqrt(std::max(0.0, (1.0 - clamped) * (1.0 + clamped))), ca = a1 * inv, sa = b1 * inv;
+        c3[0][i] = varying ? ca * clamped - sa * h : 1.0, s3[0][i] = varying ? sa * clamped + ca * h : 0.0;
+        c3[1][i] = ca * clamped + sa * h, s3[1][i] = sa * clamped - ca * h;
+        roots3[i] = !(top == top) ? 0.0 : !varying ? 1.0 : std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 2.0 : 0.0;
+      }
+    } else {
+      double vals[5][L];
+      for (int k = 0; k < 5; ++k)
+        for (int i = 0; i < L; ++i) {
+          double g[3], d[2];
+          gd(i, kCos5[k], kSin5[k], g, d);
+          const double x = a11 * d[0] - a01 * d[1], y = -a10 * d[0] + a00 * d[1];
+          vals[k][i] = x * x + y * y - det * det * (g[0] * g[0] + g[1] * g[1]);
+        }
+      for (int i = 0; i < m; ++i) {
+        const double v[5] = {vals[0][i], vals[1][i], vals[2][i], vals[3][i], vals[4][i]};
+        JointValue r[4];
+        const int count = trig_roots5(v, r);
+        roots3[i] = count;
+        for (int k = 0; k < 4; ++k) c3[k][i] = k < count ? r[k].c : 1.0, s3[k][i] = k < count ? r[k].s : 0.0;
+      }
+    }
+    double roots_found[L];
+    for (int i = 0; i < L; ++i) roots_found[i] = i < m ? roots3[i] : 0.0;
+    // candidates: q2 by (B) or (B'), q1 by (I), and the residual |point - PT|
+    double q1c[C][L], q1s[C][L], q2c[C][L], q2s[C][L], q3c[C][L], q3s[C][L], res[C][L];
+    double ok[C][L];  // 1 or 0
+    // For candidate k of target i: q2 by (B) or (B'), q1 by (I), the residual
+    // |point - PT|, and whether it exists. Reduced is a compile-time copy of
+    // reduced_ (no branch in the lane loop, so that it vectorises).
+    auto candidates = [&](auto reduced_tag) SPOTKIN_INLINE_LAMBDA {
+      constexpr bool Reduced = decltype(reduced_tag)::value;
+      for (int k = 0; k < C; ++k) {
+        const int root = Reduced ? k / 2 : k;
+        const double sign = k % 2 == 0 ? 1.0 : -1.0, first = k % 2 == 0 ? 1.0 : 0.0;
+        double c3_row[L], s3_row[L];
+        std::copy(c3[root], c3[root] + L, c3_row);
+        std::copy(s3[root], s3[root] + L, s3_row);
+        for (int i = 0; i < L; ++i) {
+          const double c = c3_row[i], s = s3_row[i];
+          double g[3], d[2], cq2, sq2, exists;
+          gd(i, c, s, g, d);
+          if constexpr (!Reduced) {  // (B): e^{i q2} = (adj(Rr) d / det) / (g_x + i g_y)
+            const JointValue v = detail::angle_difference_lane((a11 * d[0] - a01 * d[1]) / det,
+                                                               (-a10 * d[0] + a00 * d[1]) / det, g[0], g[1]);
+            cq2 = v.c, sq2 = v.s;
+            exists = root < roots_found[i] ? 1.0 : 0.0;
+          } else {  // (B'): a cos q2 + b sin q2 = d_i (seed 000 annex, type 2), branch k % 2
+            const double r0 = first_row ? a00 : a10, r1 = first_row ? a01 : a11;
+            const double a = r0 * g[0] + r1 * g[1], b = r1 * g[0] - r0 * g[1], rhs = first_row ? d[0] : d[1];
+            const double r2 = a * a + b * b;
+            const bool positive = r2 > 0.0;
+            const double inv = 1.0 / std::sqrt(positive ? r2 : 1.0);
+            const double ratio = rhs * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
+            const double h = std::sqrt(std::max(0.0, (1.0 - clamped) * (1.0 + clamped))) * sign;
+            const double ca = a * inv, sa = b * inv;
+            cq2 = positive ? ca * clamped - sa * h : 1.0;
+            sq2 = positive ? sa * clamped + ca * h : 0.0;
+            // a = b = 0 exactly: the single answer q2 = 0 (free or none; the residual decides)
+            const double solvable = positive ? (std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 1.0 : 0.0)
+                                             : (r2 == 0.0 ? first : 0.0);
+            exists = (root < roots_found[i] ? 1.0 : 0.0) * solvable;
+          }
+          // f = R1 Z2(q2) g + t1; (I) q1 = angle(PT_xy) - angle(f_xy)
+          const double mx = cq2 * g[0] - sq2 * g[1], my = sq2 * g[0] + cq2 * g[1], mz = g[2];
+          double f[3];
+          for (int r = 0; r < 3; ++r) f[r] = R1(r, 0) * mx + R1(r, 1) * my + R1(r, 2) * mz + t1[r];
+          const JointValue v1 = detail::angle_difference_lane(PTx[i], PTy[i], f[0], f[1]);
+          const double ex = v1.c * f[0] - v1.s * f[1] - PTx[i], ey = v1.s * f[0] + v1.c * f[1] - PTy[i],
+                       ez = f[2] - PTz[i];
+          q1c[k][i] = v1.c, q1s[k][i] = v1.s, q2c[k][i] = cq2, q2s[k][i] = sq2, q3c[k][i] = c, q3s[k][i] = s;
+          res[k][i] = std::sqrt(ex * ex + ey * ey + ez * ez);
+          ok[k][i] = exists;
+        }
+      }
+    };
+    if (reduced_)
+      candidates(std::true_type{});
+    else
+      candidates(std::false_type{});
+    // per target: Newton steps where needed, then finish() as solve() does
+    for (int i = 0; i < m; ++i) {
+      if (!p[i].allFinite()) {
+        n[i] = 0;
+        continue;
+      }
+      const V3 target(tx[i], ty[i], tz[i]);
+      Candidate cands[C];
+      int count = 0;
+      for (int k = 0; k < C; ++k) {
+        if (ok[k][i] == 0.0) continue;
+        Candidate& cand = cands[count++];
+        // in the problem's frame; (q3, q2, q1) with negated angles when reversed
+        const double sign = backward_ ? -1.0 : 1.0;
+        const int first = backward_ ? 2 : 0;
+        cand.q[first] = JointValue{q1c[k][i], sign * q1s[k][i], 0.0};
+        cand.q[1] = JointValue{q2c[k][i], sign * q2s[k][i], 0.0};
+        cand.q[2 - first] = JointValue{q3c[k][i], sign * q3s[k][i], 0.0};
+        cand.residual = res[k][i];
+        if (res[k][i] > 1e-13 * sc[i]) {  // rare: Newton steps in the problem's frame
+          const Problem pb{{0, 0, 0}, V3(PTx[i], PTy[i], PTz[i]), P1_, P2_, V3(PWx[i], PWy[i], PWz[i]), reduced_, sc[i]};
+          Candidate raw{{JointValue{q1c[k][i], q1s[k][i], 0.0}, JointValue{q2c[k][i], q2s[k][i], 0.0},
+                         JointValue{q3c[k][i], q3s[k][i], 0.0}},
+                        res[k][i]};
+          pb.polish(raw);
+          cand.residual = raw.residual;
+          for (int j = 0; j < 3; ++j) {
+            const JointValue& v = raw.q[backward_ ? 2 - j : j];
+            cand.q[j] = JointValue{v.c, sign * v.s, 0.0};
+          }
+        }
+      }
+      n[i] = finish(target, sc[i], cands, count, q[i]);
+    }
+  }
  private:
   struct Candidate {
     JointValue q[3];
-    double residual = 0.0;
+    double residual;
   };
+
+  // Sample angles 2 pi k / 3 and 2 pi k / 5 for P's coefficients.
+  static constexpr double kCos3[3] = {1.0, -0.5, -0.5}, kSin3[3] = {0.0, 0.8660254037844386, -0.8660254037844386};
+  static constexpr double kCos5[5] = {1.0, 0.30901699437494745, -0.8090169943749473, -0.8090169943749476,
+                                      0.30901699437494723};
+  static constexpr double kSin5[5] = {0.0, 0.9510565162951535, 0.5877852522924732, -0.587785252292473,
+                                      -0.9510565162951536};
+
+  // Real roots q3 of (Q'), of degree 1 in (cos q3, sin q3), from its samples
+  // at 2 pi k / 3: P = a0 + a1 cos + b1 sin exactly.
+  static SPOTKIN_INLINE int trig_roots3(const double vals[3], JointValue out[2]) noexcept {
+    const double a0 = (vals[0] + vals[1] + vals[2]) / 3.0;
+    const double a1 = (2.0 / 3.0) * (vals[0] * kCos3[0] + vals[1] * kCos3[1] + vals[2] * kCos3[2]);
+    const double b1 = (2.0 / 3.0) * (vals[1] * kSin3[1] + vals[2] * kSin3[2]);
+    const double top = std::max(std::fabs(a0), 0.5 * std::sqrt(a1 * a1 + b1 * b1));
+    if (!(top == top)) return 0;
+    if (0.5 * std::sqrt(a1 * a1 + b1 * b1) > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
+    out[0] = joint_zero();  // P constant: q3 free or no solution; the residual test decides
+    return 1;
+  }
+
+  // Real roots q3 of (Q) from its samples at 2 pi k / 5; the DFT gives
+  // P = a0 + a1 cos + b1 sin + a2 cos 2q + b2 sin 2q exactly.
+  static SPOTKIN_INLINE int trig_roots5(const double vals[5], JointValue out[4]) noexcept {
+    double a0 = 0, a1 = 0, b1 = 0, a2 = 0, b2 = 0;
+    for (int k = 0; k < 5; ++k) {
+      const int k2 = (2 * k) % 5;
+      a0 += vals[k];
+      a1 += vals[k] * kCos5[k], b1 += vals[k] * kSin5[k];
+      a2 += vals[k] * kCos5[k2], b2 += vals[k] * kSin5[k2];
+    }
+    a0 /= 5.0, a1 *= 0.4, b1 *= 0.4, a2 *= 0.4, b2 *= 0.4;
+    // |c_m| of the complex form, m = 0, 1, 2
+    const double m1 = 0.5 * std::sqrt(a1 * a1 + b1 * b1), m2 = 0.5 * std::sqrt(a2 * a2 + b2 * b2);
+    const double top = std::max({std::fabs(a0), m1, m2});
+    if (!(top == top)) return 0;
+    if (m2 > Tolerance::trim * top) {
+      // phi = theta_k* - pi, k* the sample of largest |P|: the quartic in
+      // t = tan(theta / 2), q3 = phi + theta, has leading coefficient P(theta_k*).
+      int kmax = 0;
+      for (int k = 1; k < 5; ++k)
+        if (std::fabs(vals[k]) > std::fabs(vals[kmax])) kmax = k;
+      const double cp = -kCos5[kmax], sp = -kSin5[kmax];
+      const double c2p = cp * cp - sp * sp, s2p = 2.0 * cp * sp;
+      const double A1 = a1 * cp + b1 * sp, B1 = b1 * cp - a1 * sp;
+      const double A2 = a2 * c2p + b2 * s2p, B2 = b2 * c2p - a2 * s2p;
+      // (1 + t^2)^2 P(phi + theta), cos = (1 - t^2) / (1 + t^2), sin = 2 t / (1 + t^2)
+      const double coef[5] = {a0 + A1 + A2, 2.0 * B1 + 4.0 * B2, 2.0 * a0 - 6.0 * A2, 2.0 * B1 - 4.0 * B2,
+                              a0 - A1 + A2};
+      detail::Complex z[4];
+      detail::quartic_roots(coef, z);
+      int n = 0;
+      for (const auto& t : z) {
+        const double re = t.real(), im = t.imag();
+        // ||e^{i theta}| - 1| ~ 2 |Im t| / (1 + |t|^2)
+        if (!(2.0 * std::fabs(im) <= Tolerance::root * (1.0 + re * re))) continue;
+        const double d = 1.0 + re * re, ct = (1.0 - re * re) / d, st = 2.0 * re / d;
+        out[n++] = JointValue{cp * ct - sp * st, sp * ct + cp * st, 0.0};
+      }
+      return n;
+    }
+    if (m1 > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
+    out[0] = joint_zero();  // P constant: q3 free or no solution; the residual test decides
+    return 1;
+  }
 
   // The forward problem target = Z1(q1) M1 Z2(q2) M2 Z3(q3) w of (F').
   struct Problem {
@@ -348,10 +634,10 @@ class Position3 {
     double s;
 
     // g(q3) = R2 Z3(q3) w + t2
-    V3 g_of(const JointValue& q3) const noexcept { return M2.R * detail::z_apply(sig[2], q3, w) + M2.p; }
+    SPOTKIN_INLINE V3 g_of(const JointValue& q3) const noexcept { return M2.R * detail::z_apply(sig[2], q3, w) + M2.p; }
 
     // q2 revolute, eq. (L): rows r_a, r_b and kappa(g).
-    void rows(V3& ra, V3& rb) const noexcept {
+    SPOTKIN_INLINE void rows(V3& ra, V3& rb) const noexcept {
       if (sig[0] == 0) {
         ra = M1.R.transpose() * M1.p;      // u
         rb = M1.R.row(2).transpose();      // v = R1^T e3
@@ -360,14 +646,14 @@ class Position3 {
         rb = M1.R.row(1).transpose();
       }
     }
-    Eigen::Vector2d kappa(const V3& g) const noexcept {
+    SPOTKIN_INLINE Eigen::Vector2d kappa(const V3& g) const noexcept {
       if (sig[0] == 0)
         return {(target.squaredNorm() - g.squaredNorm() - M1.p.squaredNorm()) / 2.0, target[2] - M1.p[2]};
       return {target[0] - M1.p[0], target[1] - M1.p[1]};
     }
 
     // P(q3) of (Q), (Q') or the prismatic variants, and the back substitution.
-    double P(const JointValue& q3, const V3& ra, const V3& rb) const noexcept {
+    SPOTKIN_INLINE double P(const JointValue& q3, const V3& ra, const V3& rb) const noexcept {
       const V3 g = g_of(q3);
       if (sig[1] == 0) {
         const Eigen::Vector2d d = kappa(g) - Eigen::Vector2d(ra[2], rb[2]) * g[2];
@@ -393,13 +679,13 @@ class Position3 {
     }
 
     // A row of adj(Rr) of largest norm: the left null vector when det Rr = 0.
-    static Eigen::Vector2d null_row(double a00, double a01, double a10, double a11) noexcept {
+    static SPOTKIN_INLINE Eigen::Vector2d null_row(double a00, double a01, double a10, double a11) noexcept {
       const Eigen::Vector2d n0(a11, -a01), n1(-a10, a00);
       return n0.squaredNorm() >= n1.squaredNorm() ? n0 : n1;
     }
 
     // q2 values for a root q3 (eqs. (B), (B') and the prismatic forms).
-    int back(const JointValue& q3, const V3& ra, const V3& rb, JointValue out[2]) const noexcept {
+    SPOTKIN_INLINE int back(const JointValue& q3, const V3& ra, const V3& rb, JointValue out[2]) const noexcept {
       const V3 g = g_of(q3);
       if (sig[1] == 0) {
         const Eigen::Vector2d d = kappa(g) - Eigen::Vector2d(ra[2], rb[2]) * g[2];
@@ -419,7 +705,7 @@ class Position3 {
       const V3 u = M1.R.transpose() * M1.p, v = M1.R.row(2).transpose();
       if (sig[0] == 0) {
         if (!reduced) {
-          out[0].v = (target[2] - M1.p[2] - v.dot(g)) / v[2];
+          out[0] = JointValue{1.0, 0.0, (target[2] - M1.p[2] - v.dot(g)) / v[2]};
           return 1;
         }
         // q2^2 + 2 (g_z + u_z) q2 + |g + u|^2 - |p'|^2 = 0
@@ -427,82 +713,27 @@ class Position3 {
         const double disc = b * b - c;
         if (disc < -Tolerance::ratio * s * s) return 0;
         const double root = std::sqrt(std::max(disc, 0.0));
-        out[0].v = -b + root;
-        out[1].v = -b - root;
+        out[0] = JointValue{1.0, 0.0, -b + root};
+        out[1] = JointValue{1.0, 0.0, -b - root};
         return 2;
       }
       const V3 e = M1.R.col(2), k = M1.R * g + M1.p - target;  // PP
-      out[0].v = -(e[0] * k[0] + e[1] * k[1]) / (e[0] * e[0] + e[1] * e[1]);
+      out[0] = JointValue{1.0, 0.0, -(e[0] * k[0] + e[1] * k[1]) / (e[0] * e[0] + e[1] * e[1])};
       return 1;
     }
 
     // Real roots q3 of P: a trigonometric polynomial of degree <= 2 (revolute
     // q3) or a polynomial of degree <= 4 (prismatic), recovered from 5 samples.
-    int roots(const V3& ra, const V3& rb, JointValue out[4]) const noexcept {
+    SPOTKIN_INLINE int roots(const V3& ra, const V3& rb, JointValue out[4]) const noexcept {
       if (sig[2] == 0 && reduced) {
-        // (Q') is of degree 1 in (cos q3, sin q3): three samples at 2 pi k / 3
-        // give P = a0 + a1 cos + b1 sin exactly.
-        static constexpr double kc[3] = {1.0, -0.5, -0.5}, ks[3] = {0.0, 0.8660254037844386, -0.8660254037844386};
         double vals[3];
-        for (int k = 0; k < 3; ++k) vals[k] = P(JointValue{kc[k], ks[k], 0.0}, ra, rb);
-        const double a0 = (vals[0] + vals[1] + vals[2]) / 3.0;
-        const double a1 = (2.0 / 3.0) * (vals[0] * kc[0] + vals[1] * kc[1] + vals[2] * kc[2]);
-        const double b1 = (2.0 / 3.0) * (vals[1] * ks[1] + vals[2] * ks[2]);
-        const double top = std::max(std::fabs(a0), 0.5 * std::sqrt(a1 * a1 + b1 * b1));
-        if (!(top == top)) return 0;
-        if (0.5 * std::sqrt(a1 * a1 + b1 * b1) > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
-        out[0] = JointValue{};  // P constant: q3 free or no solution; the residual test decides
-        return 1;
+        for (int k = 0; k < 3; ++k) vals[k] = P(JointValue{kCos3[k], kSin3[k], 0.0}, ra, rb);
+        return trig_roots3(vals, out);
       }
       if (sig[2] == 0) {
-        // Samples at theta_k = 2 pi k / 5; the DFT gives
-        // P = a0 + a1 cos + b1 sin + a2 cos 2q + b2 sin 2q exactly.
-        static constexpr double kc[5] = {1.0, 0.30901699437494745, -0.8090169943749473, -0.8090169943749476,
-                                         0.30901699437494723};
-        static constexpr double ks[5] = {0.0, 0.9510565162951535, 0.5877852522924732, -0.587785252292473,
-                                         -0.9510565162951536};
         double vals[5];
-        for (int k = 0; k < 5; ++k) vals[k] = P(JointValue{kc[k], ks[k], 0.0}, ra, rb);
-        double a0 = 0, a1 = 0, b1 = 0, a2 = 0, b2 = 0;
-        for (int k = 0; k < 5; ++k) {
-          const int k2 = (2 * k) % 5;
-          a0 += vals[k];
-          a1 += vals[k] * kc[k], b1 += vals[k] * ks[k];
-          a2 += vals[k] * kc[k2], b2 += vals[k] * ks[k2];
-        }
-        a0 /= 5.0, a1 *= 0.4, b1 *= 0.4, a2 *= 0.4, b2 *= 0.4;
-        // |c_m| of the complex form, m = 0, 1, 2
-        const double m1 = 0.5 * std::sqrt(a1 * a1 + b1 * b1), m2 = 0.5 * std::sqrt(a2 * a2 + b2 * b2);
-        const double top = std::max({std::fabs(a0), m1, m2});
-        if (!(top == top)) return 0;
-        if (m2 > Tolerance::trim * top) {
-          // phi = theta_k* - pi, k* the sample of largest |P|: the quartic in
-          // t = tan(theta / 2), q3 = phi + theta, has leading coefficient P(theta_k*).
-          int kmax = 0;
-          for (int k = 1; k < 5; ++k)
-            if (std::fabs(vals[k]) > std::fabs(vals[kmax])) kmax = k;
-          const double cp = -kc[kmax], sp = -ks[kmax];
-          const double c2p = cp * cp - sp * sp, s2p = 2.0 * cp * sp;
-          const double A1 = a1 * cp + b1 * sp, B1 = b1 * cp - a1 * sp;
-          const double A2 = a2 * c2p + b2 * s2p, B2 = b2 * c2p - a2 * s2p;
-          // (1 + t^2)^2 P(phi + theta), cos = (1 - t^2) / (1 + t^2), sin = 2 t / (1 + t^2)
-          const double coef[5] = {a0 + A1 + A2, 2.0 * B1 + 4.0 * B2, 2.0 * a0 - 6.0 * A2, 2.0 * B1 - 4.0 * B2,
-                                  a0 - A1 + A2};
-          detail::Complex z[4];
-          detail::quartic_roots(coef, z);
-          int n = 0;
-          for (const auto& t : z) {
-            const double re = t.real(), im = t.imag();
-            // ||e^{i theta}| - 1| ~ 2 |Im t| / (1 + |t|^2)
-            if (!(2.0 * std::fabs(im) <= Tolerance::root * (1.0 + re * re))) continue;
-            const double d = 1.0 + re * re, ct = (1.0 - re * re) / d, st = 2.0 * re / d;
-            out[n++] = JointValue{cp * ct - sp * st, sp * ct + cp * st, 0.0};
-          }
-          return n;
-        }
-        if (m1 > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
-        out[0] = JointValue{};  // P constant: q3 free or no solution; the residual test decides
-        return 1;
+        for (int k = 0; k < 5; ++k) vals[k] = P(JointValue{kCos5[k], kSin5[k], 0.0}, ra, rb);
+        return trig_roots5(vals, out);
       }
       // Prismatic q3 = s x: samples at the Chebyshev extrema x_k = cos(pi k / 4).
       static const Eigen::Matrix<double, 5, 5> inverse_vandermonde = [] {
@@ -521,7 +752,7 @@ class Position3 {
       int deg = 4;
       while (deg > 0 && std::fabs(c[deg]) <= Tolerance::trim * top) --deg;
       if (deg == 0) {
-        out[0] = JointValue{};
+        out[0] = joint_zero();
         return 1;
       }
       detail::Complex z[4];
@@ -534,7 +765,7 @@ class Position3 {
     }
 
     // Tool point and its 3x3 Jacobian in the problem's frame.
-    V3 point(const JointValue q[3], M3* J) const noexcept {
+    SPOTKIN_INLINE V3 point(const JointValue q[3], M3* J) const noexcept {
       const V3 h = detail::z_apply(sig[2], q[2], w);
       const V3 g = M2.R * h + M2.p;
       const V3 m = detail::z_apply(sig[1], q[1], g);
@@ -549,7 +780,7 @@ class Position3 {
     }
 
     // Candidates, each polished by Gauss-Newton on the position equations.
-    int candidates(Candidate out[kMaxCandidates]) const noexcept {
+    SPOTKIN_INLINE int candidates(Candidate out[kMaxCandidates]) const noexcept {
       V3 ra = V3::Zero(), rb = V3::Zero();
       if (sig[1] == 0) rows(ra, rb);
       JointValue q3s[4];
@@ -567,7 +798,7 @@ class Position3 {
           if (sig[0] == 0) {  // (I) q1 = angle(p'_xy) - angle(f_xy)
             c.q[0] = detail::angle_difference(target[0], target[1], f[0], f[1]);
           } else {
-            c.q[0].v = target[2] - f[2];
+            c.q[0] = JointValue{1.0, 0.0, target[2] - f[2]};
           }
           polish(c);
         }
@@ -575,7 +806,7 @@ class Position3 {
       return n;
     }
 
-    void polish(Candidate& c) const noexcept {
+    SPOTKIN_INLINE void polish(Candidate& c) const noexcept {
       // Steps stop once |fk(q) - p| <= 1e-13 s (4 orders below Tolerance::residual,
       // 3 below the 1e-10 accuracy promised; a closed-form root usually starts there).
       const double done = 1e-13 * s;
@@ -608,7 +839,7 @@ class Position3 {
       c.residual = res;
     }
 
-    static void advance(int sigma, double delta, JointValue& q) noexcept {
+    static SPOTKIN_INLINE void advance(int sigma, double delta, JointValue& q) noexcept {
       if (sigma == 1) {
         q.v += delta;
         return;
@@ -628,71 +859,97 @@ class Position3 {
   };
 
   // Residual test, merging of near-equal solutions, angles, sorting.
-  int finish(const V3& target, double s, Candidate* cands, int n, JointValue q[kSlots][3]) const noexcept {
-    const Problem forward{{sigma_[0], sigma_[1], sigma_[2]}, target, split_.M1, split_.M2, w_, reduced_, s};
-    // squared joint distance: chord^2 (revolute) or (dv / s)^2 (prismatic)
-    auto distance2 = [&](const Candidate& a, const Candidate& b) {
-      double worst = 0.0;
+  SPOTKIN_INLINE int finish(const V3& target, double s, Candidate* cands, int n, JointValue q[kSlots][3]) const noexcept {
+    const double merge2 = Tolerance::merge * Tolerance::merge, length2 = s * s;
+    // joint distance within Tolerance::merge: chord (revolute) or |dv| / s (prismatic)
+    auto close = [&](const Candidate& a, const Candidate& b) SPOTKIN_INLINE_LAMBDA {
       for (int j = 0; j < 3; ++j) {
-        const double dc = a.q[j].c - b.q[j].c, ds = a.q[j].s - b.q[j].s, dv = (a.q[j].v - b.q[j].v) / s;
-        worst = std::max(worst, sigma_[j] == 0 ? dc * dc + ds * ds : dv * dv);
+        const double dc = a.q[j].c - b.q[j].c, ds = a.q[j].s - b.q[j].s, dv = a.q[j].v - b.q[j].v;
+        if (sigma_[j] == 0 ? dc * dc + ds * ds > merge2 : dv * dv > merge2 * length2) return false;
       }
-      return worst;
+      return true;
     };
-    // accepted candidates, best residual first (insertion sort: at most 8)
+    // accepted candidates, best residual first: a branch-free sorting network
+    // for up to 4 (the residuals are random), else an insertion sort (at most 8)
     int order[kMaxCandidates], m = 0;
-    for (int k = 0; k < n; ++k) {
-      if (!(cands[k].residual <= Tolerance::residual * s)) continue;
-      int at = m++;
-      for (; at > 0 && cands[order[at - 1]].residual > cands[k].residual; --at) order[at] = order[at - 1];
-      order[at] = k;
+    if (n <= 4) {
+      double key[4];
+      for (int k = 0; k < 4; ++k) {
+        const bool accepted = k < n && cands[k].residual <= Tolerance::residual * s;
+        key[k] = accepted ? cands[k].residual : std::numeric_limits<double>::infinity();
+        order[k] = k;
+        m += accepted;
+      }
+      auto exchange = [&](int x, int y) SPOTKIN_INLINE_LAMBDA {
+        const bool swap = key[order[y]] < key[order[x]];
+        const int ox = order[x], oy = order[y];
+        order[x] = swap ? oy : ox, order[y] = swap ? ox : oy;
+      };
+      exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+    } else {
+      for (int k = 0; k < n; ++k) {
+        if (!(cands[k].residual <= Tolerance::residual * s)) continue;
+        int at = m++;
+        for (; at > 0 && cands[order[at - 1]].residual > cands[k].residual; --at) order[at] = order[at - 1];
+        order[at] = k;
+      }
     }
     // merge solutions within Tolerance::merge into their mean (kept if it is a solution)
-    Candidate merged[kMaxCandidates];
-    int groups = 0;
+    const Candidate* groups[kMaxCandidates];
+    Candidate means[kMaxCandidates];
+    int count_groups = 0;
     bool used[kMaxCandidates] = {};
     for (int a = 0; a < m; ++a) {
       if (used[a]) continue;
       const Candidate& lead = cands[order[a]];
-      Candidate mean = lead;
+      Candidate& mean = means[count_groups];
       int count = 1;
       for (int b = a + 1; b < m; ++b) {
-        if (used[b] || distance2(lead, cands[order[b]]) > Tolerance::merge * Tolerance::merge) continue;
+        const Candidate& other = cands[order[b]];
+        if (used[b] || !close(lead, other)) continue;
         used[b] = true;
-        ++count;
-        for (int j = 0; j < 3; ++j)
-          mean.q[j].c += cands[order[b]].q[j].c, mean.q[j].s += cands[order[b]].q[j].s,
-              mean.q[j].v += cands[order[b]].q[j].v;
+        if (count++ == 1) mean = lead;
+        for (int j = 0; j < 3; ++j) mean.q[j].c += other.q[j].c, mean.q[j].s += other.q[j].s, mean.q[j].v += other.q[j].v;
       }
+      const Candidate* kept = &lead;
       if (count > 1) {
         for (int j = 0; j < 3; ++j) {
           detail::unit(mean.q[j].c, mean.q[j].s, mean.q[j].c, mean.q[j].s);
           mean.q[j].v /= count;
         }
+        const Problem forward{{sigma_[0], sigma_[1], sigma_[2]}, target, split_.M1, split_.M2, w_, reduced_, s};
         mean.residual = (forward.point(mean.q, nullptr) - target).norm();
+        if (mean.residual <= Tolerance::residual * s) kept = &mean;
       }
-      merged[groups++] = mean.residual <= Tolerance::residual * s ? mean : lead;
+      groups[count_groups++] = kept;
     }
-    // the kSlots best residuals (merged keeps the residual order; more than 4 never seen)
-    groups = std::min(groups, kSlots);
+    // the kSlots best residuals (groups keep the residual order; more than 4 never seen)
+    count_groups = std::min(count_groups, kSlots);
     // (q1, q2, q3) order; a revolute angle compares through the pseudo-angle
     // s >= 0 ? 1 - c : c - 1, increasing with the angle over [-pi, pi].
+    // Branch-free (the signs and the order are random): keys, then a sorting
+    // network over kSlots = 4 entries, missing ones keyed +inf.
+    static_assert(kSlots == 4, "the sorting network below is for 4 slots");
+    if (count_groups == 0) return 0;
     double keys[kSlots][3];
-    int rank[kSlots];
-    for (int k = 0; k < groups; ++k) {
+    int rank[kSlots] = {0, 1, 2, 3};
+    for (int k = 0; k < kSlots; ++k)
       for (int j = 0; j < 3; ++j) {
-        const JointValue& v = merged[k].q[j];
-        keys[k][j] = sigma_[j] == 1 ? v.v : (v.s >= 0.0 ? 1.0 - v.c : v.c - 1.0);
+        const JointValue& v = groups[std::min(k, count_groups - 1)]->q[j];
+        const double key = sigma_[j] == 1 ? v.v : (v.s >= 0.0 ? 1.0 : -1.0) * (1.0 - v.c);
+        keys[k][j] = k < count_groups ? key : std::numeric_limits<double>::infinity();
       }
-      int at = k;
-      for (; at > 0 && std::lexicographical_compare(keys[k], keys[k] + 3, keys[rank[at - 1]], keys[rank[at - 1]] + 3);
-           --at)
-        rank[at] = rank[at - 1];
-      rank[at] = k;
-    }
-    for (int k = 0; k < groups; ++k)
-      for (int j = 0; j < 3; ++j) q[k][j] = merged[rank[k]].q[j];
-    return groups;
+    auto exchange = [&](int x, int y) SPOTKIN_INLINE_LAMBDA {
+      const double* a = keys[rank[x]];
+      const double* b = keys[rank[y]];
+      const bool swap = (b[0] < a[0]) | ((b[0] == a[0]) & ((b[1] < a[1]) | ((b[1] == a[1]) & (b[2] < a[2]))));
+      const int rx = rank[x], ry = rank[y];
+      rank[x] = swap ? ry : rx, rank[y] = swap ? rx : ry;
+    };
+    exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+    for (int k = 0; k < count_groups; ++k)
+      for (int j = 0; j < 3; ++j) q[k][j] = groups[rank[k]]->q[j];
+    return count_groups;
   }
 
   // ValueError unless the position Jacobian has rank 3 somewhere (3 probes).
@@ -777,6 +1034,9 @@ class Position3 {
   Kind kind_ = Kind::GeneralQuartic3R;
   bool backward_ = false, reduced_ = false;
   Rigid<double> M0_inv_, M1_inv_, M2_inv_;
+  bool revolute_ = false;
+  Rigid<double> P1_, P2_;  // M1 and M2 of the problem solved (reversed when backward_)
+  V3 ra_ = V3::Zero(), rb_ = V3::Zero();
 };
 
 
@@ -875,7 +1135,7 @@ class SphericalWrist6 {
   // Every solution for a target pose: returns 1 if the position part has any
   // solution; q[slot] = (cos, sin) of the 6 angles, exists[slot] per slot.
   // Slot 2 k + b: position solution k (as Position3 orders them), wrist branch b.
-  void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots]) const noexcept {
+  SPOTKIN_INLINE void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots]) const noexcept {
     M3 R;
     V3 p;
     for (int i = 0; i < 3; ++i) {
@@ -913,7 +1173,7 @@ class SphericalWrist6 {
         const V3 v = B5_ * detail::z_rotate(0, q5[branch], b);
         // (B); q4 free (set to 0) where axes 4 and 6 align
         const JointValue q4 =
-            v[0] * v[0] + v[1] * v[1] <= 1e-24 ? JointValue{} : detail::angle_difference(w[0], w[1], v[0], v[1]);
+            v[0] * v[0] + v[1] * v[1] <= 1e-24 ? joint_zero() : detail::angle_difference(w[0], w[1], v[0], v[1]);
         // (C) first column of Rz(q6) = B6^T Rz5^T B5^T Rz4^T (W e1); unit up to
         // rounding, and only its angle is used
         V3 x = detail::z_rotate(0, conjugate(q4), wx);
@@ -925,6 +1185,110 @@ class SphericalWrist6 {
         q[slot][3] = q4, q[slot][4] = q5[branch], q[slot][5] = q6;
         exists[slot] = true;
       }
+    }
+  }
+
+  static constexpr int kLanes = Position3::kLanes;
+
+  // solve() for m <= kLanes poses at once (the same equations, run across the
+  // poses so that they vectorise); a pose with input_ok[i] false has no solution.
+  // Slot k of pose i goes to values [(i * kSlots + k) * 6 + j] (angles, or the
+  // value of a prismatic joint) and exists [i * kSlots + k].
+  SPOTKIN_INLINE void solve_block(const Arm::Pose* targets, const bool* input_ok, int m, double* values,
+                                  bool* exists) const noexcept {
+    constexpr int L = kLanes, K = Position3::kSlots;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    // wrist centres, and columns 1 and 3 of R_F6 = R Tail^T rotated by R0^T
+    V3 centre[L];
+    double x0[3][L] = {}, z0[3][L] = {};
+    const Split& S = position_.split();
+    const M3 xz = (M3() << tail_R_T_.col(0), tail_R_T_.col(2), V3::Zero()).finished();
+    for (int i = 0; i < m; ++i) {
+      M3 R;
+      V3 p;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) R(r, c) = targets[i].R[r][c];
+        p[r] = targets[i].p[r];
+      }
+      centre[i] = input_ok[i] ? V3(R * c_tool_ + p) : V3(nan, nan, nan);
+      const M3 F = S.M0.R.transpose() * (R * xz);
+      for (int r = 0; r < 3; ++r) x0[r][i] = F(r, 0), z0[r][i] = F(r, 1);
+    }
+    JointValue arm[L][K][3];
+    int n[L];
+    position_.solve_block(centre, m, arm, n);
+    const V3 a = B5_.row(2).transpose(), b = B6_.col(2);
+    const double A = a[0] * b[0] + a[1] * b[1], B = a[1] * b[0] - a[0] * b[1];
+    const double r2 = A * A + B * B, inv = r2 > 0.0 ? 1.0 / std::sqrt(r2) : 1.0, ca = A * inv, sa = B * inv;
+    for (int k = 0; k < K; ++k) {
+      // position solution k in lanes: (cos, sin) of q1..q3 (identity for a prismatic joint)
+      double c[3][L], sn[3][L], v[3][L], found[L];
+      for (int i = 0; i < L; ++i) {
+        const bool has = i < m && k < n[i];
+        found[i] = has ? 1.0 : 0.0;
+        for (int j = 0; j < 3; ++j) {
+          const bool rot = has && position_.sigma(j) == 0;
+          c[j][i] = rot ? arm[i][k][j].c : 1.0, sn[j][i] = rot ? arm[i][k][j].s : 0.0;
+          v[j][i] = has ? arm[i][k][j].v : 0.0;
+        }
+      }
+      double position_angle[3][L];
+      for (int j = 0; j < 3; ++j) {
+        const bool prismatic = position_.sigma(j) == 1;
+        for (int i = 0; i < L; ++i) position_angle[j][i] = prismatic ? v[j][i] : vector_math::atan2(sn[j][i], c[j][i]);
+      }
+      double out[2][3][L], solvable[2][L];  // [branch][q4, q5, q6][lane]
+      for (int i = 0; i < L; ++i) {
+        // W e = A4^T Rz3^T R2^T Rz2^T R1^T Rz1^T (R0^T R_F6 e) for e = z, x
+        double w[3] = {z0[0][i], z0[1][i], z0[2][i]}, wx[3] = {x0[0][i], x0[1][i], x0[2][i]};
+        auto back = [&](int j, const M3& M) SPOTKIN_INLINE_LAMBDA {
+          const double cj = c[j][i], sj = sn[j][i];
+          const double u[3] = {cj * w[0] + sj * w[1], -sj * w[0] + cj * w[1], w[2]};
+          const double ux[3] = {cj * wx[0] + sj * wx[1], -sj * wx[0] + cj * wx[1], wx[2]};
+          detail::multiply_transposed(M, u, w);
+          detail::multiply_transposed(M, ux, wx);
+        };
+        back(0, S.M1.R);
+        back(1, S.M2.R);
+        back(2, A4_);
+        // (A), as solve() does, with sin(alpha) from the Gram determinant
+        const double gram = (w[0] * w[0] + w[1] * w[1]) * (1.0 - b[2] * b[2]) - (a[2] - b[2] * w[2]) * (a[2] - b[2] * w[2]);
+        const double ratio = (w[2] - a[2] * b[2]) * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
+        const double h = std::min(1.0, std::sqrt(std::max(gram, 0.0)) * inv);
+        const double ok = r2 > 0.0 ? (std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 1.0 : 0.0) : 0.0;
+        auto branch = [&](int k5, double hb) SPOTKIN_INLINE_LAMBDA {
+          const double c5 = r2 > 0.0 ? ca * clamped - sa * hb : 1.0, s5 = r2 > 0.0 ? sa * clamped + ca * hb : 0.0;
+          // (B) v = B5 Rz(q5) b; q4 free (0) where axes 4 and 6 align
+          const double rb[3] = {c5 * b[0] - s5 * b[1], s5 * b[0] + c5 * b[1], b[2]};
+          double v[3];
+          detail::multiply(B5_, rb, v);
+          const bool aligned = v[0] * v[0] + v[1] * v[1] <= 1e-24;
+          const JointValue q4 = detail::angle_difference_lane(w[0], w[1], v[0], v[1]);
+          const double c4 = aligned ? 1.0 : q4.c, s4 = aligned ? 0.0 : q4.s;
+          // (C) first column of Rz(q6) = B6^T Rz5^T B5^T Rz4^T (W e1)
+          const double y[3] = {c4 * wx[0] + s4 * wx[1], -s4 * wx[0] + c4 * wx[1], wx[2]};
+          double z[3], x6[3];
+          detail::multiply_transposed(B5_, y, z);
+          const double t[3] = {c5 * z[0] + s5 * z[1], -s5 * z[0] + c5 * z[1], z[2]};
+          detail::multiply_transposed(B6_, t, x6);
+          out[k5][0][i] = vector_math::atan2(s4, c4);
+          out[k5][1][i] = vector_math::atan2(s5, c5);
+          out[k5][2][i] = vector_math::atan2(x6[1], x6[0]);
+          solvable[k5][i] = ok * found[i];
+        };
+        branch(0, h);
+        branch(1, -h);
+      }
+      for (int i = 0; i < m; ++i)
+        for (int branch = 0; branch < 2; ++branch) {
+          const int slot = kSlots * i + 2 * k + branch;
+          const bool ok = solvable[branch][i] != 0.0;
+          exists[slot] = ok;
+          for (int j = 0; j < 3; ++j) {
+            values[6 * slot + j] = position_angle[j][i];
+            values[6 * slot + 3 + j] = out[branch][j][i];
+          }
+        }
     }
   }
 
@@ -950,12 +1314,12 @@ SPOTKIN_VECTOR_KERNEL inline void block_atan2(const double* __restrict s, const 
 
 // Writes one sample's slots: angles (or prismatic values), NaN padding, the
 // limit check, and the status.
-template <typename T>
-SPOTKIN_INLINE void write_slots(const Limits& limits, int dof, int slots, const double* values, const bool* exists,
+template <int dof, typename T>
+SPOTKIN_INLINE void write_slots(const Limits& limits, int slots, const double* values, const bool* exists,
                                 bool input_ok, T* q, std::uint8_t* valid, std::uint8_t* exist, std::int8_t* status) {
   bool any_exists = false, any_valid = false;
   for (int k = 0; k < slots; ++k) {
-    double row[6];
+    double row[Limits::kMaxJoints] = {};
     for (int j = 0; j < dof; ++j) row[j] = values[k * dof + j];
     const bool ok = input_ok && exists[k];
     const bool fits = ok && limits.wrap(row);
@@ -969,6 +1333,45 @@ SPOTKIN_INLINE void write_slots(const Limits& limits, int dof, int slots, const 
                                                    : Status::Unreachable);
 }
 
+// The solves of a block of samples, compiled once per CPU level (the solvers
+// are inlined here): slot k of sample i goes to c, s, values [(i * slots + k) * dof + j]
+// and found [i * slots + k].
+__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const Position3& solver, const double* points, std::ptrdiff_t m,
+                                                 double* c, double* s, double* values, bool* found) noexcept {
+  constexpr int S = Position3::kSlots, W = S * 3, L = Position3::kLanes;
+  for (std::ptrdiff_t i0 = 0; i0 < m; i0 += L) {
+    const int lanes = static_cast<int>(std::min<std::ptrdiff_t>(L, m - i0));
+    V3 p[L];
+    for (int l = 0; l < lanes; ++l) p[l] = V3(points[3 * (i0 + l)], points[3 * (i0 + l) + 1], points[3 * (i0 + l) + 2]);
+    JointValue sol[L][S][3];
+    int n[L];
+    solver.solve_block(p, lanes, sol, n);
+    for (int l = 0; l < lanes; ++l) {
+      const std::ptrdiff_t i = i0 + l;
+      for (int k = 0; k < S; ++k) {
+        found[S * i + k] = k < n[l];
+        for (int j = 0; j < 3; ++j) {
+          const JointValue v = k < n[l] ? sol[l][k][j] : joint_zero();
+          c[W * i + 3 * k + j] = v.c, s[W * i + 3 * k + j] = v.s, values[W * i + 3 * k + j] = v.v;
+        }
+      }
+    }
+  }
+}
+
+// Slot k of pose i goes to values [(i * 8 + k) * 6 + j] (angles; values of
+// prismatic joints) and found [i * 8 + k].
+__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void wrist_block(const SphericalWrist6& solver,
+                                                                       const Arm::Pose* poses, const bool* input_ok,
+                                                                       std::ptrdiff_t m, double* values,
+                                                                       bool* found) noexcept {
+  constexpr int S = SphericalWrist6::kSlots, W = S * 6, L = SphericalWrist6::kLanes;
+  for (std::ptrdiff_t i0 = 0; i0 < m; i0 += L) {
+    const int lanes = static_cast<int>(std::min<std::ptrdiff_t>(L, m - i0));
+    solver.solve_block(poses + i0, input_ok + i0, lanes, values + W * i0, found + S * i0);
+  }
+}
+
 // Position IK for count targets p (count, 3): q (count, 4, 3), valid and
 // exists (count, 4), status (count).
 template <typename T>
@@ -976,31 +1379,20 @@ SPOTKIN_INLINE void ik_position(const Position3& solver, const Limits& limits, c
                                 std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
                                 std::ptrdiff_t count) noexcept {
   constexpr int S = Position3::kSlots, W = S * 3;
-  double c[W * kBlock], s[W * kBlock], angle[W * kBlock], values[W * kBlock];
-  bool found[S * kBlock], input_ok[kBlock];
+  double p[3 * kBlock], c[W * kBlock], s[W * kBlock], angle[W * kBlock], values[W * kBlock];
+  bool found[S * kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const T* point = points + 3 * (b0 + i);
-      const V3 p{double(point[0]), double(point[1]), double(point[2])};
-      input_ok[i] = p.allFinite();
-      JointValue sol[S][3];
-      const int n = solver.solve(p, sol);
-      for (int k = 0; k < S; ++k) {
-        found[S * i + k] = k < n;
-        for (int j = 0; j < 3; ++j) {
-          const JointValue v = k < n ? sol[k][j] : JointValue{};
-          c[W * i + 3 * k + j] = v.c, s[W * i + 3 * k + j] = v.s, values[W * i + 3 * k + j] = v.v;
-        }
-      }
-    }
+    for (std::ptrdiff_t k = 0; k < 3 * m; ++k) p[k] = double(points[3 * b0 + k]);
+    position_block(solver, p, m, c, s, values, found);
     block_atan2(s, c, angle, W * m);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       for (int k = 0; k < S; ++k)
         for (int j = 0; j < 3; ++j)
           if (solver.sigma(j) == 0) values[W * i + 3 * k + j] = angle[W * i + 3 * k + j];
       const std::ptrdiff_t at = b0 + i;
-      write_slots(limits, 3, S, values + W * i, found + S * i, input_ok[i], q + W * at, valid + S * at,
+      const bool input_ok = std::isfinite(p[3 * i]) && std::isfinite(p[3 * i + 1]) && std::isfinite(p[3 * i + 2]);
+      write_slots<3>(limits, S, values + W * i, found + S * i, input_ok, q + W * at, valid + S * at,
                   exists + S * at, status + at);
     }
   }
@@ -1015,38 +1407,20 @@ SPOTKIN_INLINE void ik_wrist(const SphericalWrist6& solver, const Limits& limits
   constexpr int S = SphericalWrist6::kSlots, W = S * 6;
   constexpr std::ptrdiff_t stride = Format == PoseFormat::Matrix ? 16 : 7;
   constexpr std::ptrdiff_t block = kBlock / 4;
-  double c[W * block], s[W * block], angle[W * block], values[W * block];
+  double values[W * block];
   bool found[S * block], input_ok[block];
-  const Position3& position = solver.position();
+  Arm::Pose pose[block];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += block) {
     const std::ptrdiff_t m = std::min(block, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       double in[16];
       for (std::ptrdiff_t k = 0; k < stride; ++k) in[k] = double(poses[stride * (b0 + i) + k]);
-      Arm::Pose pose;
-      input_ok[i] = Arm::read_pose<Format>(in, pose) != 0.0;
-      JointValue sol[S][6];
-      bool ok[S];
-      if (input_ok[i]) {
-        solver.solve(pose, sol, ok);
-      } else {
-        for (int k = 0; k < S; ++k) ok[k] = false;
-      }
-      for (int k = 0; k < S; ++k) {
-        found[S * i + k] = ok[k];
-        for (int j = 0; j < 6; ++j) {
-          const JointValue v = ok[k] ? sol[k][j] : JointValue{};
-          c[W * i + 6 * k + j] = v.c, s[W * i + 6 * k + j] = v.s, values[W * i + 6 * k + j] = v.v;
-        }
-      }
+      input_ok[i] = Arm::read_pose<Format>(in, pose[i]) != 0.0;
     }
-    block_atan2(s, c, angle, W * m);
+    wrist_block(solver, pose, input_ok, m, values, found);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      for (int k = 0; k < S; ++k)
-        for (int j = 0; j < 6; ++j)
-          if (j >= 3 || position.sigma(j) == 0) values[W * i + 6 * k + j] = angle[W * i + 6 * k + j];
       const std::ptrdiff_t at = b0 + i;
-      write_slots(limits, 6, S, values + W * i, found + S * i, input_ok[i], q + W * at, valid + S * at,
+      write_slots<6>(limits, S, values + W * i, found + S * i, input_ok[i], q + W * at, valid + S * at,
                   exists + S * at, status + at);
     }
   }
