@@ -461,6 +461,70 @@ def test_non_contiguous_and_empty(rng):
     assert three.ik_position(np.zeros((2, 0, 3))).q.shape == (2, 0, 4, 3)
 
 
+def assert_same_solutions(batch, single, sigma, tol):
+    """batch and single (per-sample calls) give the same slots, flags and statuses."""
+    np.testing.assert_array_equal(batch.exists, single.exists)
+    np.testing.assert_array_equal(batch.valid, single.valid)
+    np.testing.assert_array_equal(batch.status, single.status)
+    np.testing.assert_array_equal(np.isnan(batch.q), np.isnan(single.q))
+    both = batch.exists
+    diff = batch.q[both] - single.q[both]
+    revolute = np.asarray(sigma) == 0
+    diff[:, revolute] = np.angle(np.exp(1j * diff[:, revolute]))
+    assert np.abs(diff).max(initial=0.0) < tol
+
+
+def stack_solutions(chain, method, targets):
+    """Per-sample calls (the one-target path), stacked like a batch result."""
+    parts = [getattr(chain, method)(t) for t in targets]
+    return sk.ChainSolutions(
+        np.stack([r.q for r in parts]),
+        np.stack([r.valid for r in parts]),
+        np.stack([r.exists for r in parts]),
+        np.array([r.status for r in parts], dtype=np.int8),
+    )
+
+
+@pytest.mark.parametrize("kind", ["3R-general-quartic", "3R-parallel", "3R-intersecting"])
+def test_block_and_single_target_paths_agree(rng, kind):
+    """Batches run 16 targets at a time across lanes (with a one-by-one tail); single calls run one target.
+    Both must give the same solutions in the same slots, including merged double roots, limits, NaN and
+    unreachable targets."""
+    while True:
+        chain = chain_with_closed_form(rng, "mdh", "RRR")
+        if chain.ik_kind == kind:
+            break
+    chain = sk.Chain(chain.rows, convention="mdh", base=chain.base, tool=chain.tool,
+                     limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)])
+    q = rng.uniform(-np.pi, np.pi, (53, 3))  # 3 blocks of 16 and a tail of 5
+    p = chain.fk(q)[:, :3, 3]
+    p[7] = np.nan
+    p[20] *= 50.0  # out of reach
+    batch = chain.ik_position(p)
+    assert_same_solutions(batch, stack_solutions(chain, "ik_position", p), chain.sigma, 1e-9)
+    assert (batch.status == sk.Status.JOINT_LIMIT).any() and (batch.status == sk.Status.OK).any()
+    assert batch.status[7] == sk.Status.INVALID_INPUT and batch.status[20] == sk.Status.UNREACHABLE
+
+
+def test_block_and_single_target_paths_agree_on_merges_and_wrists(rng):
+    leg = sk.Chain.from_mdh(
+        [(0, 0.0, -np.pi / 2, 0.0, 0.0), (0, 0.0, np.pi / 2, H1, 0.0), (0, H2, 0.0, 0.0, 0.0)],
+        tool=sk.translation([H3, 0.0, 0.0]),
+    )
+    q = rng.uniform(-np.pi, np.pi, (40, 3))
+    q[::3, 2] = 0.0  # stretched knee: a double root, merged
+    p = leg.fk(q)[:, :3, 3]
+    batch = leg.ik_position(p)
+    assert_same_solutions(batch, stack_solutions(leg, "ik_position", p), leg.sigma, 1e-9)
+    arm = spot_arm_chain()
+    T = arm.fk(rng.uniform(-np.pi, np.pi, (37, 6)))
+    T[3, 0, 0] = np.nan
+    T[11, :3, 3] *= 4.0
+    batch = arm.ik(T)
+    assert_same_solutions(batch, stack_solutions(arm, "ik", T), arm.sigma, 1e-9)
+    assert batch.status[3] == sk.Status.INVALID_INPUT and batch.status[11] == sk.Status.UNREACHABLE
+
+
 def test_threads_give_identical_results(rng):
     chain = chain_with_closed_form(np.random.default_rng(5), "mdh", "RRR")
     p = chain.fk(rng.uniform(-np.pi, np.pi, (20000, 3)))[:, :3, 3]

@@ -51,7 +51,6 @@ ChainIK make_chain_ik(Convention convention, py::handle rows_obj, py::handle bas
     for (std::ptrdiff_t j = 0; j < dof; ++j) {
       ik.limits.lower[j] = lower.data()[j], ik.limits.upper[j] = upper.data()[j];
       ik.limits.sigma[j] = chain.joints()[static_cast<std::size_t>(j)].type == JointType::Revolute ? 0 : 1;
-      ik.limits.unlimited &= std::isinf(lower.data()[j]) && std::isinf(upper.data()[j]);
     }
   }
 

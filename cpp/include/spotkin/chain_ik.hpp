@@ -10,6 +10,12 @@
 //  - the quartic (Q) in e^{i q3} is solved in closed form (Ferrari) in
 //    t = tan((q3 - phi) / 2), with phi chosen so that the leading coefficient
 //    is the largest of the five samples of P (no root at t = infinity).
+// For speed, batches of all-revolute chains run each step across 16 targets
+// at once (Position3::solve_block, SphericalWrist6::solve_block), with a fixed
+// set of 4 candidates per target and branch-free selects, so that the compiler
+// vectorises across targets; only the quartic's roots, the rare Newton steps
+// and the rare merges of near-equal solutions go target by target. solve()
+// stays the one-target form (and the path of chains with prismatic joints).
 #pragma once
 
 #include <algorithm>
@@ -375,22 +381,46 @@ class Position3 {
 
   static constexpr int kLanes = 16;
 
-  // solve() for m <= kLanes targets at once: n[i] solutions q[i][k]. The
-  // all-revolute kinds run each step of solve() across the targets (lanes),
-  // so that it vectorises; the roots of P and the rare Newton steps stay per
-  // target. Same equations and tolerances as solve().
-  SPOTKIN_INLINE void solve_block(const V3* p, int m, JointValue (*q)[kSlots][3], int* n) const noexcept {
-    if (!revolute_) {
-      for (int i = 0; i < m; ++i) n[i] = solve(p[i], q[i]);
+  // Solutions of a block of targets, across the lanes: solution k of target i
+  // is (c, s, v)[k][j][i] for joint j, k < n[i].
+  struct BlockSolutions {
+    double c[kSlots][3][kLanes], s[kSlots][3][kLanes], v[kSlots][3][kLanes];
+    int n[kLanes];
+  };
+
+  // solve() for m <= kLanes targets at once, into out (same solutions, same
+  // order). The all-revolute kinds run each step across the targets (lanes),
+  // so that it vectorises; the roots of the quartic, the rare Newton steps and
+  // the rare merges stay per target. Same equations and tolerances as solve().
+  SPOTKIN_INLINE void solve_block(const V3* p, int m, BlockSolutions& out) const noexcept {
+    double px[kLanes], py[kLanes], pz[kLanes];
+    for (int i = 0; i < kLanes; ++i) {
+      const V3 x = i < m ? p[i] : V3::Zero();
+      px[i] = x[0], py[i] = x[1], pz[i] = x[2];
+    }
+    solve_block(px, py, pz, m, out);
+  }
+
+  // The same with the targets' coordinates in lanes (kLanes entries each).
+  SPOTKIN_INLINE void solve_block(const double* px, const double* py, const double* pz, int m,
+                                  BlockSolutions& out) const noexcept {
+    auto store = [&](int i, const JointValue (*q)[3], int n) {
+      out.n[i] = n;
+      for (int k = 0; k < kSlots; ++k)
+        for (int j = 0; j < 3; ++j) {
+          const JointValue v = k < n ? q[k][j] : joint_zero();
+          out.c[k][j][i] = v.c, out.s[k][j][i] = v.s, out.v[k][j][i] = v.v;
+        }
+    };
+    if (!revolute_ || m < kLanes) {  // one by one (a short block costs no more than its targets)
+      for (int i = 0; i < kLanes; ++i) {
+        JointValue q[kSlots][3];
+        store(i, q, i < m ? solve(V3(px[i], py[i], pz[i]), q) : 0);
+      }
       return;
     }
     constexpr int L = kLanes, C = kSlots;  // C candidates: 4 roots q3 (Q), or 2 q3 x 2 q2 (Q')
     // target p' of (F'), the problem's target and point (PT, PW): (p', w) or (w, p') reversed
-    double px[L], py[L], pz[L];
-    for (int i = 0; i < L; ++i) {
-      const V3 x = i < m ? p[i] : V3::Zero();
-      px[i] = x[0], py[i] = x[1], pz[i] = x[2];
-    }
     double tx[L], ty[L], tz[L], sc[L], PTx[L], PTy[L], PTz[L], PWx[L], PWy[L], PWz[L];
     const M3& R0 = M0_inv_.R;
     const V3 t0 = M0_inv_.p;
@@ -463,7 +493,7 @@ class Position3 {
     double roots_found[L];
     for (int i = 0; i < L; ++i) roots_found[i] = i < m ? roots3[i] : 0.0;
     // candidates: q2 by (B) or (B'), q1 by (I), and the residual |point - PT|
-    double q1c[C][L], q1s[C][L], q2c[C][L], q2s[C][L], q3c[C][L], q3s[C][L], res[C][L];
+    double q1c[C][L], q1s[C][L], q2c[C][L], q2s[C][L], q3c[C][L], q3s[C][L], res2[C][L];  // res2: squared residual
     double ok[C][L];  // 1 or 0
     // For candidate k of target i: q2 by (B) or (B'), q1 by (I), the residual
     // |point - PT|, and whether it exists. Reduced is a compile-time copy of
@@ -509,7 +539,7 @@ class Position3 {
           const double ex = v1.c * f[0] - v1.s * f[1] - PTx[i], ey = v1.s * f[0] + v1.c * f[1] - PTy[i],
                        ez = f[2] - PTz[i];
           q1c[k][i] = v1.c, q1s[k][i] = v1.s, q2c[k][i] = cq2, q2s[k][i] = sq2, q3c[k][i] = c, q3s[k][i] = s;
-          res[k][i] = std::sqrt(ex * ex + ey * ey + ez * ez);
+          res2[k][i] = ex * ex + ey * ey + ez * ez;
           ok[k][i] = exists;
         }
       }
@@ -518,39 +548,90 @@ class Position3 {
       candidates(std::true_type{});
     else
       candidates(std::false_type{});
-    // per target: Newton steps where needed, then finish() as solve() does
-    for (int i = 0; i < m; ++i) {
-      if (!p[i].allFinite()) {
-        n[i] = 0;
-        continue;
+    // Newton steps where a residual is above 1e-13 s (rare), in the problem's frame
+    for (int k = 0; k < C; ++k)
+      for (int i = 0; i < m; ++i) {
+        if (!(ok[k][i] != 0.0 && res2[k][i] > 1e-26 * sc[i] * sc[i])) continue;
+        const Problem pb{{0, 0, 0}, V3(PTx[i], PTy[i], PTz[i]), P1_, P2_, V3(PWx[i], PWy[i], PWz[i]), reduced_, sc[i]};
+        Candidate cand{{JointValue{q1c[k][i], q1s[k][i], 0.0}, JointValue{q2c[k][i], q2s[k][i], 0.0},
+                        JointValue{q3c[k][i], q3s[k][i], 0.0}},
+                       std::sqrt(res2[k][i])};
+        pb.polish(cand);
+        q1c[k][i] = cand.q[0].c, q1s[k][i] = cand.q[0].s, q2c[k][i] = cand.q[1].c, q2s[k][i] = cand.q[1].s;
+        q3c[k][i] = cand.q[2].c, q3s[k][i] = cand.q[2].s, res2[k][i] = cand.residual * cand.residual;
       }
-      const V3 target(tx[i], ty[i], tz[i]);
-      Candidate cands[C];
-      int count = 0;
+    // the chain's joints: (q3, q2, q1) with negated angles when the problem is reversed
+    double joint_c[C][3][L], joint_s[C][3][L];
+    const double sign = backward_ ? -1.0 : 1.0;
+    for (int k = 0; k < C; ++k)
+      for (int i = 0; i < L; ++i) {
+        joint_c[k][0][i] = backward_ ? q3c[k][i] : q1c[k][i], joint_s[k][0][i] = sign * (backward_ ? q3s[k][i] : q1s[k][i]);
+        joint_c[k][1][i] = q2c[k][i], joint_s[k][1][i] = sign * q2s[k][i];
+        joint_c[k][2][i] = backward_ ? q1c[k][i] : q3c[k][i], joint_s[k][2][i] = sign * (backward_ ? q1s[k][i] : q3s[k][i]);
+      }
+    // finish() across the lanes where no two accepted candidates are within
+    // Tolerance::merge (nothing to merge): accepted candidates sorted by their
+    // (q1, q2, q3) pseudo-angles by a sorting network. Lanes with a pair to
+    // merge go through finish() itself.
+    const double merge2 = Tolerance::merge * Tolerance::merge;
+    double accepted[C][L], key[C][3][L], merge_lane[L];
+    for (int i = 0; i < L; ++i) {
+      const bool finite = std::isfinite(px[i]) && std::isfinite(py[i]) && std::isfinite(pz[i]);
       for (int k = 0; k < C; ++k) {
-        if (ok[k][i] == 0.0) continue;
-        Candidate& cand = cands[count++];
-        // in the problem's frame; (q3, q2, q1) with negated angles when reversed
-        const double sign = backward_ ? -1.0 : 1.0;
-        const int first = backward_ ? 2 : 0;
-        cand.q[first] = JointValue{q1c[k][i], sign * q1s[k][i], 0.0};
-        cand.q[1] = JointValue{q2c[k][i], sign * q2s[k][i], 0.0};
-        cand.q[2 - first] = JointValue{q3c[k][i], sign * q3s[k][i], 0.0};
-        cand.residual = res[k][i];
-        if (res[k][i] > 1e-13 * sc[i]) {  // rare: Newton steps in the problem's frame
-          const Problem pb{{0, 0, 0}, V3(PTx[i], PTy[i], PTz[i]), P1_, P2_, V3(PWx[i], PWy[i], PWz[i]), reduced_, sc[i]};
-          Candidate raw{{JointValue{q1c[k][i], q1s[k][i], 0.0}, JointValue{q2c[k][i], q2s[k][i], 0.0},
-                         JointValue{q3c[k][i], q3s[k][i], 0.0}},
-                        res[k][i]};
-          pb.polish(raw);
-          cand.residual = raw.residual;
-          for (int j = 0; j < 3; ++j) {
-            const JointValue& v = raw.q[backward_ ? 2 - j : j];
-            cand.q[j] = JointValue{v.c, sign * v.s, 0.0};
-          }
+        const bool acc = finite && ok[k][i] != 0.0 && res2[k][i] <= Tolerance::residual * Tolerance::residual * sc[i] * sc[i];
+        accepted[k][i] = acc ? 1.0 : 0.0;
+        for (int j = 0; j < 3; ++j) {
+          const double c = joint_c[k][j][i], sn = joint_s[k][j][i];
+          key[k][j][i] = acc ? (sn >= 0.0 ? 1.0 : -1.0) * (1.0 - c) : std::numeric_limits<double>::infinity();
         }
       }
-      n[i] = finish(target, sc[i], cands, count, q[i]);
+      double near = 0.0;
+      for (int a = 0; a < C; ++a)
+        for (int b = a + 1; b < C; ++b) {
+          double worst = 0.0;
+          for (int j = 0; j < 3; ++j) {
+            const double dc = joint_c[a][j][i] - joint_c[b][j][i], ds = joint_s[a][j][i] - joint_s[b][j][i];
+            worst = std::max(worst, dc * dc + ds * ds);
+          }
+          near = std::max(near, accepted[a][i] * accepted[b][i] * (worst <= merge2 ? 1.0 : 0.0));
+        }
+      merge_lane[i] = near;
+    }
+    // the network moves keys and values together (selects, no gathers); the
+    // unsorted values stay in joint_c, joint_s for the lanes that merge
+    double sorted_c[C][3][L], sorted_s[C][3][L];
+    std::copy(&joint_c[0][0][0], &joint_c[0][0][0] + C * 3 * L, &sorted_c[0][0][0]);
+    std::copy(&joint_s[0][0][0], &joint_s[0][0][0] + C * 3 * L, &sorted_s[0][0][0]);
+    auto exchange = [&](int x, int y) SPOTKIN_INLINE_LAMBDA {
+      for (int i = 0; i < L; ++i) {
+        const double a0 = key[x][0][i], a1 = key[x][1][i], a2 = key[x][2][i];
+        const double b0 = key[y][0][i], b1 = key[y][1][i], b2 = key[y][2][i];
+        const bool swap = (b0 < a0) | ((b0 == a0) & ((b1 < a1) | ((b1 == a1) & (b2 < a2))));
+        for (int j = 0; j < 3; ++j) {
+          const double kx = key[x][j][i], ky = key[y][j][i], cx = sorted_c[x][j][i], cy = sorted_c[y][j][i];
+          const double sx = sorted_s[x][j][i], sy = sorted_s[y][j][i];
+          key[x][j][i] = swap ? ky : kx, key[y][j][i] = swap ? kx : ky;
+          sorted_c[x][j][i] = swap ? cy : cx, sorted_c[y][j][i] = swap ? cx : cy;
+          sorted_s[x][j][i] = swap ? sy : sx, sorted_s[y][j][i] = swap ? sx : sy;
+        }
+      }
+    };
+    exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+    for (int k = 0; k < C; ++k)
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < L; ++i) out.c[k][j][i] = sorted_c[k][j][i], out.s[k][j][i] = sorted_s[k][j][i], out.v[k][j][i] = 0.0;
+    for (int i = 0; i < m; ++i) {
+      if (merge_lane[i] == 0.0) {
+        out.n[i] = static_cast<int>(accepted[0][i] + accepted[1][i] + accepted[2][i] + accepted[3][i]);
+        continue;
+      }
+      Candidate cands[C];
+      for (int k = 0; k < C; ++k) {
+        for (int j = 0; j < 3; ++j) cands[k].q[j] = JointValue{joint_c[k][j][i], joint_s[k][j][i], 0.0};
+        cands[k].residual = ok[k][i] != 0.0 ? std::sqrt(res2[k][i]) : std::numeric_limits<double>::quiet_NaN();
+      }
+      JointValue q[kSlots][3];
+      store(i, q, finish(V3(tx[i], ty[i], tz[i]), sc[i], cands, C, q));
     }
   }
  private:
@@ -1046,31 +1127,22 @@ struct Limits {
   static constexpr double kTolerance = 1e-12;
   static constexpr int kMaxJoints = 6;
   int dof = 0;
-  double lower[kMaxJoints] = {}, upper[kMaxJoints] = {};
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  double lower[kMaxJoints] = {-kInf, -kInf, -kInf, -kInf, -kInf, -kInf};  // infinite: no limit
+  double upper[kMaxJoints] = {kInf, kInf, kInf, kInf, kInf, kInf};
   int sigma[kMaxJoints] = {};
-  bool unlimited = true;  // every limit infinite: nothing to check
 
-  // In place; true if every joint fits.
-  bool wrap(double* q) const noexcept {
-    if (unlimited) return true;
-    bool all = true;
-    for (int j = 0; j < dof; ++j) {
-      const double lo = lower[j] - kTolerance, hi = upper[j] + kTolerance, v = q[j];
-      if (v >= lo && v <= hi) continue;
-      if (sigma[j] == 0) {
-        const double two_pi = 2.0 * kPi<double>;
-        if (v - two_pi >= lo && v - two_pi <= hi) {
-          q[j] = v - two_pi;
-          continue;
-        }
-        if (v + two_pi >= lo && v + two_pi <= hi) {
-          q[j] = v + two_pi;
-          continue;
-        }
-      }
-      all = false;
-    }
-    return all;
+  // Joint j's value v wrapped into its limits (v, then v - 2 pi, then v + 2 pi
+  // for a revolute joint: the first that fits, as the leg and arm solvers do);
+  // fit becomes 0 if none fits. Branch-free, for loops across samples.
+  SPOTKIN_INLINE double wrap_value(int j, double v, double& fit) const noexcept {
+    const double lo = lower[j] - kTolerance, hi = upper[j] + kTolerance, two_pi = 2.0 * kPi<double>;
+    const bool revolute = sigma[j] == 0;
+    const double below = v - two_pi, above = v + two_pi;
+    const bool in = (v >= lo) & (v <= hi), in_below = revolute & (below >= lo) & (below <= hi),
+               in_above = revolute & (above >= lo) & (above <= hi);
+    fit = in | in_below | in_above ? fit : 0.0;
+    return in ? v : in_below ? below : in_above ? above : v;
   }
 };
 
@@ -1194,42 +1266,79 @@ class SphericalWrist6 {
   // poses so that they vectorise); a pose with input_ok[i] false has no solution.
   // Slot k of pose i goes to values [(i * kSlots + k) * 6 + j] (angles, or the
   // value of a prismatic joint) and exists [i * kSlots + k].
-  SPOTKIN_INLINE void solve_block(const Arm::Pose* targets, const bool* input_ok, int m, double* values,
-                                  bool* exists) const noexcept {
+  // Solutions of a block of poses, across the lanes: slot k of pose i is
+  // angle[k][j][i] for joint j (the value of a prismatic joint), and
+  // exists[k][i] is 1 or 0.
+  struct BlockSolutions {
+    double angle[kSlots][6][kLanes], exists[kSlots][kLanes];
+  };
+
+  // solve() for m <= kLanes poses at once, into out (the same equations run
+  // across the poses, so that they vectorise; a short block goes pose by pose).
+  // A pose with input_ok[i] false has no solution.
+  SPOTKIN_INLINE void solve_block(const Arm::Pose* targets, const bool* input_ok, int m,
+                                  BlockSolutions& out) const noexcept {
+    if (m < kLanes) {
+      for (int i = 0; i < kLanes; ++i) {
+        JointValue q[kSlots][6];
+        bool ok[kSlots] = {};
+        if (i < m && input_ok[i]) solve(targets[i], q, ok);
+        for (int k = 0; k < kSlots; ++k) {
+          out.exists[k][i] = ok[k] ? 1.0 : 0.0;
+          for (int j = 0; j < 6; ++j)
+            out.angle[k][j][i] = !ok[k] ? 0.0
+                                 : j < 3 && position_.sigma(j) == 1 ? q[k][j].v
+                                                                    : vector_math::atan2(q[k][j].s, q[k][j].c);
+        }
+      }
+      return;
+    }
     constexpr int L = kLanes, K = Position3::kSlots;
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    // wrist centres, and columns 1 and 3 of R_F6 = R Tail^T rotated by R0^T
-    V3 centre[L];
-    double x0[3][L] = {}, z0[3][L] = {};
+    // wrist centres c = R c_tool + p, and x0, z0 = R0^T R (columns 1 and 3 of Tail^T),
+    // the columns 1 and 3 of R_F6 = R Tail^T seen from frame M0
     const Split& S = position_.split();
-    const M3 xz = (M3() << tail_R_T_.col(0), tail_R_T_.col(2), V3::Zero()).finished();
-    for (int i = 0; i < m; ++i) {
-      M3 R;
-      V3 p;
+    double R[3][3][L], p[3][L];
+    for (int i = 0; i < L; ++i) {
+      const bool use = i < m && input_ok[i];
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R(r, c) = targets[i].R[r][c];
-        p[r] = targets[i].p[r];
+        for (int c = 0; c < 3; ++c) R[r][c][i] = use ? targets[i].R[r][c] : nan;
+        p[r][i] = use ? targets[i].p[r] : nan;
       }
-      centre[i] = input_ok[i] ? V3(R * c_tool_ + p) : V3(nan, nan, nan);
-      const M3 F = S.M0.R.transpose() * (R * xz);
-      for (int r = 0; r < 3; ++r) x0[r][i] = F(r, 0), z0[r][i] = F(r, 1);
     }
-    JointValue arm[L][K][3];
-    int n[L];
-    position_.solve_block(centre, m, arm, n);
-    const V3 a = B5_.row(2).transpose(), b = B6_.col(2);
+    const V3 t0 = tail_R_T_.col(0), t2 = tail_R_T_.col(2);
+    const M3 M0T = S.M0.R.transpose();
+    double cx[L], cy[L], cz[L], x0[3][L], z0[3][L];
+    for (int i = 0; i < L; ++i) {
+      double Rc[3], Rx[3], Rz[3];
+      for (int r = 0; r < 3; ++r) {
+        Rc[r] = R[r][0][i] * c_tool_[0] + R[r][1][i] * c_tool_[1] + R[r][2][i] * c_tool_[2] + p[r][i];
+        Rx[r] = R[r][0][i] * t0[0] + R[r][1][i] * t0[1] + R[r][2][i] * t0[2];
+        Rz[r] = R[r][0][i] * t2[0] + R[r][1][i] * t2[1] + R[r][2][i] * t2[2];
+      }
+      cx[i] = Rc[0], cy[i] = Rc[1], cz[i] = Rc[2];
+      double x[3], z[3];
+      detail::multiply(M0T, Rx, x);
+      detail::multiply(M0T, Rz, z);
+      for (int r = 0; r < 3; ++r) x0[r][i] = x[r], z0[r][i] = z[r];
+    }
+    Position3::BlockSolutions arm;
+    position_.solve_block(cx, cy, cz, m, arm);
+    // local copies: the stores to out cannot alias them (so the lane loops vectorise)
+    const M3 B5 = B5_, B6 = B6_, A4 = A4_, M1R = S.M1.R, M2R = S.M2.R;
+    const V3 a = B5.row(2).transpose(), b = B6.col(2);
     const double A = a[0] * b[0] + a[1] * b[1], B = a[1] * b[0] - a[0] * b[1];
     const double r2 = A * A + B * B, inv = r2 > 0.0 ? 1.0 / std::sqrt(r2) : 1.0, ca = A * inv, sa = B * inv;
     for (int k = 0; k < K; ++k) {
       // position solution k in lanes: (cos, sin) of q1..q3 (identity for a prismatic joint)
       double c[3][L], sn[3][L], v[3][L], found[L];
       for (int i = 0; i < L; ++i) {
-        const bool has = i < m && k < n[i];
+        const bool has = i < m && k < arm.n[i];
         found[i] = has ? 1.0 : 0.0;
         for (int j = 0; j < 3; ++j) {
           const bool rot = has && position_.sigma(j) == 0;
-          c[j][i] = rot ? arm[i][k][j].c : 1.0, sn[j][i] = rot ? arm[i][k][j].s : 0.0;
-          v[j][i] = has ? arm[i][k][j].v : 0.0;
+          c[j][i] = rot ? arm.c[k][j][i] : 1.0, sn[j][i] = rot ? arm.s[k][j][i] : 0.0;
+          v[j][i] = has ? arm.v[k][j][i] : 0.0;
         }
       }
       double position_angle[3][L];
@@ -1237,7 +1346,7 @@ class SphericalWrist6 {
         const bool prismatic = position_.sigma(j) == 1;
         for (int i = 0; i < L; ++i) position_angle[j][i] = prismatic ? v[j][i] : vector_math::atan2(sn[j][i], c[j][i]);
       }
-      double out[2][3][L], solvable[2][L];  // [branch][q4, q5, q6][lane]
+      double wrist_angle[2][3][L], solvable[2][L];  // [branch][q4, q5, q6][lane]
       for (int i = 0; i < L; ++i) {
         // W e = A4^T Rz3^T R2^T Rz2^T R1^T Rz1^T (R0^T R_F6 e) for e = z, x
         double w[3] = {z0[0][i], z0[1][i], z0[2][i]}, wx[3] = {x0[0][i], x0[1][i], x0[2][i]};
@@ -1248,9 +1357,9 @@ class SphericalWrist6 {
           detail::multiply_transposed(M, u, w);
           detail::multiply_transposed(M, ux, wx);
         };
-        back(0, S.M1.R);
-        back(1, S.M2.R);
-        back(2, A4_);
+        back(0, M1R);
+        back(1, M2R);
+        back(2, A4);
         // (A), as solve() does, with sin(alpha) from the Gram determinant
         const double gram = (w[0] * w[0] + w[1] * w[1]) * (1.0 - b[2] * b[2]) - (a[2] - b[2] * w[2]) * (a[2] - b[2] * w[2]);
         const double ratio = (w[2] - a[2] * b[2]) * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
@@ -1261,34 +1370,31 @@ class SphericalWrist6 {
           // (B) v = B5 Rz(q5) b; q4 free (0) where axes 4 and 6 align
           const double rb[3] = {c5 * b[0] - s5 * b[1], s5 * b[0] + c5 * b[1], b[2]};
           double v[3];
-          detail::multiply(B5_, rb, v);
+          detail::multiply(B5, rb, v);
           const bool aligned = v[0] * v[0] + v[1] * v[1] <= 1e-24;
           const JointValue q4 = detail::angle_difference_lane(w[0], w[1], v[0], v[1]);
           const double c4 = aligned ? 1.0 : q4.c, s4 = aligned ? 0.0 : q4.s;
           // (C) first column of Rz(q6) = B6^T Rz5^T B5^T Rz4^T (W e1)
           const double y[3] = {c4 * wx[0] + s4 * wx[1], -s4 * wx[0] + c4 * wx[1], wx[2]};
           double z[3], x6[3];
-          detail::multiply_transposed(B5_, y, z);
+          detail::multiply_transposed(B5, y, z);
           const double t[3] = {c5 * z[0] + s5 * z[1], -s5 * z[0] + c5 * z[1], z[2]};
-          detail::multiply_transposed(B6_, t, x6);
-          out[k5][0][i] = vector_math::atan2(s4, c4);
-          out[k5][1][i] = vector_math::atan2(s5, c5);
-          out[k5][2][i] = vector_math::atan2(x6[1], x6[0]);
+          detail::multiply_transposed(B6, t, x6);
+          wrist_angle[k5][0][i] = vector_math::atan2(s4, c4);
+          wrist_angle[k5][1][i] = vector_math::atan2(s5, c5);
+          wrist_angle[k5][2][i] = vector_math::atan2(x6[1], x6[0]);
           solvable[k5][i] = ok * found[i];
         };
         branch(0, h);
         branch(1, -h);
       }
-      for (int i = 0; i < m; ++i)
-        for (int branch = 0; branch < 2; ++branch) {
-          const int slot = kSlots * i + 2 * k + branch;
-          const bool ok = solvable[branch][i] != 0.0;
-          exists[slot] = ok;
-          for (int j = 0; j < 3; ++j) {
-            values[6 * slot + j] = position_angle[j][i];
-            values[6 * slot + 3 + j] = out[branch][j][i];
-          }
-        }
+      for (int k5 = 0; k5 < 2; ++k5) {
+        const int slot = 2 * k + k5;
+        for (int i = 0; i < L; ++i) out.exists[slot][i] = solvable[k5][i];
+        for (int j = 0; j < 3; ++j)
+          for (int i = 0; i < L; ++i)
+            out.angle[slot][j][i] = position_angle[j][i], out.angle[slot][3 + j][i] = wrist_angle[k5][j][i];
+      }
     }
   }
 
@@ -1304,28 +1410,31 @@ class SphericalWrist6 {
 
 // -- batches ------------------------------------------------------------------
 
-constexpr std::ptrdiff_t kBlock = 64;
-
-// Revolute (cos, sin) to angles, vectorised over a block: angle[k] = atan2(s[k], c[k]).
-SPOTKIN_VECTOR_KERNEL inline void block_atan2(const double* __restrict s, const double* __restrict c,
-                                              double* __restrict angle, std::ptrdiff_t n) noexcept {
-  for (std::ptrdiff_t k = 0; k < n; ++k) angle[k] = vector_math::atan2(s[k], c[k]);
+// Angles across the lanes wrapped into the limits, in place, and whether each
+// slot fits them (infinite limits keep every finite value).
+template <int Slots, int Dof, int L>
+SPOTKIN_INLINE void lane_wrap(const Limits& limits, double (&angle)[Slots][Dof][L], double (&fits)[Slots][L]) noexcept {
+  const Limits local = limits;  // a copy: the stores below cannot alias it
+  for (int k = 0; k < Slots; ++k) {
+    for (int i = 0; i < L; ++i) fits[k][i] = 1.0;
+    for (int j = 0; j < Dof; ++j)
+      for (int i = 0; i < L; ++i) angle[k][j][i] = local.wrap_value(j, angle[k][j][i], fits[k][i]);
+  }
 }
 
-// Writes one sample's slots: angles (or prismatic values), NaN padding, the
-// limit check, and the status.
-template <int dof, typename T>
-SPOTKIN_INLINE void write_slots(const Limits& limits, int slots, const double* values, const bool* exists,
-                                bool input_ok, T* q, std::uint8_t* valid, std::uint8_t* exist, std::int8_t* status) {
+// Writes one sample's slots from the lanes: values, NaN padding, valid and
+// exists flags, and the status.
+template <int Slots, int Dof, int L, typename T>
+SPOTKIN_INLINE void write_lane(int i, const double (&angle)[Slots][Dof][L], const double (&fits)[Slots][L],
+                               const bool* exists, bool input_ok, T* q, std::uint8_t* valid, std::uint8_t* exist,
+                               std::int8_t* status) noexcept {
   bool any_exists = false, any_valid = false;
-  for (int k = 0; k < slots; ++k) {
-    double row[Limits::kMaxJoints] = {};
-    for (int j = 0; j < dof; ++j) row[j] = values[k * dof + j];
+  for (int k = 0; k < Slots; ++k) {
     const bool ok = input_ok && exists[k];
-    const bool fits = ok && limits.wrap(row);
-    for (int j = 0; j < dof; ++j) q[k * dof + j] = ok ? T(row[j]) : quiet_nan<T>();
-    exist[k] = ok, valid[k] = fits;
-    any_exists |= ok, any_valid |= fits;
+    const bool fits_k = ok && fits[k][i] != 0.0;
+    for (int j = 0; j < Dof; ++j) q[k * Dof + j] = ok ? T(angle[k][j][i]) : quiet_nan<T>();
+    exist[k] = ok, valid[k] = fits_k;
+    any_exists |= ok, any_valid |= fits_k;
   }
   *status = static_cast<std::int8_t>(!input_ok     ? Status::InvalidInput
                                      : any_valid   ? Status::Ok
@@ -1333,43 +1442,44 @@ SPOTKIN_INLINE void write_slots(const Limits& limits, int slots, const double* v
                                                    : Status::Unreachable);
 }
 
-// The solves of a block of samples, compiled once per CPU level (the solvers
-// are inlined here): slot k of sample i goes to c, s, values [(i * slots + k) * dof + j]
-// and found [i * slots + k].
-__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const Position3& solver, const double* points, std::ptrdiff_t m,
-                                                 double* c, double* s, double* values, bool* found) noexcept {
-  constexpr int S = Position3::kSlots, W = S * 3, L = Position3::kLanes;
-  for (std::ptrdiff_t i0 = 0; i0 < m; i0 += L) {
-    const int lanes = static_cast<int>(std::min<std::ptrdiff_t>(L, m - i0));
-    V3 p[L];
-    for (int l = 0; l < lanes; ++l) p[l] = V3(points[3 * (i0 + l)], points[3 * (i0 + l) + 1], points[3 * (i0 + l) + 2]);
-    JointValue sol[L][S][3];
-    int n[L];
-    solver.solve_block(p, lanes, sol, n);
-    for (int l = 0; l < lanes; ++l) {
-      const std::ptrdiff_t i = i0 + l;
-      for (int k = 0; k < S; ++k) {
-        found[S * i + k] = k < n[l];
-        for (int j = 0; j < 3; ++j) {
-          const JointValue v = k < n[l] ? sol[l][k][j] : joint_zero();
-          c[W * i + 3 * k + j] = v.c, s[W * i + 3 * k + j] = v.s, values[W * i + 3 * k + j] = v.v;
-        }
-      }
+// The solves of one block (up to 16 samples) and their angles in the lanes,
+// compiled once per CPU level with the solvers inlined (double only: the I/O
+// type is handled outside).
+struct PositionBlock {
+  static constexpr int S = Position3::kSlots, L = Position3::kLanes;
+  double angle[S][3][L], fits[S][L];
+  bool found[S][L];
+};
+
+__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const Position3& solver,
+                                                                          const Limits& limits, const double* px,
+                                                                          const double* py, const double* pz, int m,
+                                                                          PositionBlock& out) noexcept {
+  Position3::BlockSolutions sol;
+  solver.solve_block(px, py, pz, m, sol);
+  for (int k = 0; k < PositionBlock::S; ++k)
+    for (int j = 0; j < 3; ++j) {
+      const bool prismatic = solver.sigma(j) == 1;
+      for (int i = 0; i < PositionBlock::L; ++i)
+        out.angle[k][j][i] = prismatic ? sol.v[k][j][i] : vector_math::atan2(sol.s[k][j][i], sol.c[k][j][i]);
     }
-  }
+  lane_wrap(limits, out.angle, out.fits);
+  for (int k = 0; k < PositionBlock::S; ++k)
+    for (int i = 0; i < PositionBlock::L; ++i) out.found[k][i] = k < sol.n[i];
 }
 
-// Slot k of pose i goes to values [(i * 8 + k) * 6 + j] (angles; values of
-// prismatic joints) and found [i * 8 + k].
+struct WristBlock {
+  static constexpr int S = SphericalWrist6::kSlots, L = SphericalWrist6::kLanes;
+  SphericalWrist6::BlockSolutions solutions;  // angles wrapped in place
+  double fits[S][L];
+};
+
 __attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void wrist_block(const SphericalWrist6& solver,
-                                                                       const Arm::Pose* poses, const bool* input_ok,
-                                                                       std::ptrdiff_t m, double* values,
-                                                                       bool* found) noexcept {
-  constexpr int S = SphericalWrist6::kSlots, W = S * 6, L = SphericalWrist6::kLanes;
-  for (std::ptrdiff_t i0 = 0; i0 < m; i0 += L) {
-    const int lanes = static_cast<int>(std::min<std::ptrdiff_t>(L, m - i0));
-    solver.solve_block(poses + i0, input_ok + i0, lanes, values + W * i0, found + S * i0);
-  }
+                                                                       const Limits& limits, const Arm::Pose* poses,
+                                                                       const bool* input_ok, int m,
+                                                                       WristBlock& out) noexcept {
+  solver.solve_block(poses, input_ok, m, out.solutions);
+  lane_wrap(limits, out.solutions.angle, out.fits);
 }
 
 // Position IK for count targets p (count, 3): q (count, 4, 3), valid and
@@ -1378,22 +1488,23 @@ template <typename T>
 SPOTKIN_INLINE void ik_position(const Position3& solver, const Limits& limits, const T* points, T* q,
                                 std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
                                 std::ptrdiff_t count) noexcept {
-  constexpr int S = Position3::kSlots, W = S * 3;
-  double p[3 * kBlock], c[W * kBlock], s[W * kBlock], angle[W * kBlock], values[W * kBlock];
-  bool found[S * kBlock];
-  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
-    const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    for (std::ptrdiff_t k = 0; k < 3 * m; ++k) p[k] = double(points[3 * b0 + k]);
-    position_block(solver, p, m, c, s, values, found);
-    block_atan2(s, c, angle, W * m);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      for (int k = 0; k < S; ++k)
-        for (int j = 0; j < 3; ++j)
-          if (solver.sigma(j) == 0) values[W * i + 3 * k + j] = angle[W * i + 3 * k + j];
+  constexpr int S = PositionBlock::S, W = S * 3, L = PositionBlock::L;
+  PositionBlock block;
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, count - b0));
+    double px[L], py[L], pz[L];
+    for (int i = 0; i < L; ++i) {
+      const T* point = points + 3 * (b0 + std::min(i, m - 1));
+      px[i] = double(point[0]), py[i] = double(point[1]), pz[i] = double(point[2]);
+    }
+    position_block(solver, limits, px, py, pz, m, block);
+    for (int i = 0; i < m; ++i) {
       const std::ptrdiff_t at = b0 + i;
-      const bool input_ok = std::isfinite(p[3 * i]) && std::isfinite(p[3 * i + 1]) && std::isfinite(p[3 * i + 2]);
-      write_slots<3>(limits, S, values + W * i, found + S * i, input_ok, q + W * at, valid + S * at,
-                  exists + S * at, status + at);
+      const bool input_ok = std::isfinite(px[i]) && std::isfinite(py[i]) && std::isfinite(pz[i]);
+      bool found[S];
+      for (int k = 0; k < S; ++k) found[k] = block.found[k][i];
+      write_lane(i, block.angle, block.fits, found, input_ok, q + W * at, valid + S * at, exists + S * at,
+                 status + at);
     }
   }
 }
@@ -1404,24 +1515,25 @@ template <PoseFormat Format, typename T>
 SPOTKIN_INLINE void ik_wrist(const SphericalWrist6& solver, const Limits& limits, const T* poses, T* q,
                              std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
                              std::ptrdiff_t count) noexcept {
-  constexpr int S = SphericalWrist6::kSlots, W = S * 6;
+  constexpr int S = WristBlock::S, W = S * 6, L = WristBlock::L;
   constexpr std::ptrdiff_t stride = Format == PoseFormat::Matrix ? 16 : 7;
-  constexpr std::ptrdiff_t block = kBlock / 4;
-  double values[W * block];
-  bool found[S * block], input_ok[block];
-  Arm::Pose pose[block];
-  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += block) {
-    const std::ptrdiff_t m = std::min(block, count - b0);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
+  WristBlock block;
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, count - b0));
+    Arm::Pose pose[L];
+    bool input_ok[L] = {};
+    for (int i = 0; i < m; ++i) {
       double in[16];
       for (std::ptrdiff_t k = 0; k < stride; ++k) in[k] = double(poses[stride * (b0 + i) + k]);
       input_ok[i] = Arm::read_pose<Format>(in, pose[i]) != 0.0;
     }
-    wrist_block(solver, pose, input_ok, m, values, found);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
+    wrist_block(solver, limits, pose, input_ok, m, block);
+    for (int i = 0; i < m; ++i) {
       const std::ptrdiff_t at = b0 + i;
-      write_slots<6>(limits, S, values + W * i, found + S * i, input_ok[i], q + W * at, valid + S * at,
-                  exists + S * at, status + at);
+      bool found[S];
+      for (int k = 0; k < S; ++k) found[k] = block.solutions.exists[k][i] != 0.0;
+      write_lane(i, block.solutions.angle, block.fits, found, input_ok[i], q + W * at, valid + S * at,
+                 exists + S * at, status + at);
     }
   }
 }
