@@ -413,9 +413,9 @@ class Position3 {
         }
     };
     if (!revolute_ || m < kLanes) {  // one by one (a short block costs no more than its targets)
-      for (int i = 0; i < kLanes; ++i) {
+      for (int i = 0; i < m; ++i) {
         JointValue q[kSlots][3];
-        store(i, q, i < m ? solve(V3(px[i], py[i], pz[i]), q) : 0);
+        store(i, q, solve(V3(px[i], py[i], pz[i]), q));
       }
       return;
     }
@@ -1278,11 +1278,11 @@ class SphericalWrist6 {
   // A pose with input_ok[i] false has no solution.
   SPOTKIN_INLINE void solve_block(const Arm::Pose* targets, const bool* input_ok, int m,
                                   BlockSolutions& out) const noexcept {
-    if (m < kLanes) {
-      for (int i = 0; i < kLanes; ++i) {
+    if (m < kLanes) {  // one by one (a short block costs no more than its poses)
+      for (int i = 0; i < m; ++i) {
         JointValue q[kSlots][6];
         bool ok[kSlots] = {};
-        if (i < m && input_ok[i]) solve(targets[i], q, ok);
+        if (input_ok[i]) solve(targets[i], q, ok);
         for (int k = 0; k < kSlots; ++k) {
           out.exists[k][i] = ok[k] ? 1.0 : 0.0;
           for (int j = 0; j < 6; ++j)
@@ -1412,13 +1412,17 @@ class SphericalWrist6 {
 
 // Angles across the lanes wrapped into the limits, in place, and whether each
 // slot fits them (infinite limits keep every finite value).
-template <int Slots, int Dof, int L>
-SPOTKIN_INLINE void lane_wrap(const Limits& limits, double (&angle)[Slots][Dof][L], double (&fits)[Slots][L]) noexcept {
+// Lanes [0, L) for a full block (a compile-time count: the loops vectorise),
+// [0, m) for a short one (a single target pays for one lane).
+template <bool Full, int Slots, int Dof, int L>
+SPOTKIN_INLINE void lane_wrap(const Limits& limits, int m, double (&angle)[Slots][Dof][L],
+                              double (&fits)[Slots][L]) noexcept {
   const Limits local = limits;  // a copy: the stores below cannot alias it
+  const int lanes = Full ? L : m;
   for (int k = 0; k < Slots; ++k) {
-    for (int i = 0; i < L; ++i) fits[k][i] = 1.0;
+    for (int i = 0; i < lanes; ++i) fits[k][i] = 1.0;
     for (int j = 0; j < Dof; ++j)
-      for (int i = 0; i < L; ++i) angle[k][j][i] = local.wrap_value(j, angle[k][j][i], fits[k][i]);
+      for (int i = 0; i < lanes; ++i) angle[k][j][i] = local.wrap_value(j, angle[k][j][i], fits[k][i]);
   }
 }
 
@@ -1457,15 +1461,22 @@ __attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const 
                                                                           PositionBlock& out) noexcept {
   Position3::BlockSolutions sol;
   solver.solve_block(px, py, pz, m, sol);
+  auto angles = [&](auto full) SPOTKIN_INLINE_LAMBDA {
+    const int lanes = decltype(full)::value ? PositionBlock::L : m;
+    for (int k = 0; k < PositionBlock::S; ++k)
+      for (int j = 0; j < 3; ++j) {
+        const bool prismatic = solver.sigma(j) == 1;
+        for (int i = 0; i < lanes; ++i)
+          out.angle[k][j][i] = prismatic ? sol.v[k][j][i] : vector_math::atan2(sol.s[k][j][i], sol.c[k][j][i]);
+      }
+    lane_wrap<decltype(full)::value>(limits, m, out.angle, out.fits);
+  };
+  if (m == PositionBlock::L)
+    angles(std::true_type{});
+  else
+    angles(std::false_type{});
   for (int k = 0; k < PositionBlock::S; ++k)
-    for (int j = 0; j < 3; ++j) {
-      const bool prismatic = solver.sigma(j) == 1;
-      for (int i = 0; i < PositionBlock::L; ++i)
-        out.angle[k][j][i] = prismatic ? sol.v[k][j][i] : vector_math::atan2(sol.s[k][j][i], sol.c[k][j][i]);
-    }
-  lane_wrap(limits, out.angle, out.fits);
-  for (int k = 0; k < PositionBlock::S; ++k)
-    for (int i = 0; i < PositionBlock::L; ++i) out.found[k][i] = k < sol.n[i];
+    for (int i = 0; i < m; ++i) out.found[k][i] = k < sol.n[i];
 }
 
 struct WristBlock {
@@ -1479,7 +1490,10 @@ __attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void wrist_block(const Sph
                                                                        const bool* input_ok, int m,
                                                                        WristBlock& out) noexcept {
   solver.solve_block(poses, input_ok, m, out.solutions);
-  lane_wrap(limits, out.solutions.angle, out.fits);
+  if (m == WristBlock::L)
+    lane_wrap<true>(limits, m, out.solutions.angle, out.fits);
+  else
+    lane_wrap<false>(limits, m, out.solutions.angle, out.fits);
 }
 
 // Position IK for count targets p (count, 3): q (count, 4, 3), valid and
