@@ -134,27 +134,49 @@ SPOTKIN_INLINE JointValue angle_difference_lane(double x1, double y1, double x2,
   return JointValue{(x1 * x2 + y1 * y2) * inv, (y1 * x2 - x1 * y2) * inv, 0.0};
 }
 
-// Every (cos x, sin x) with a cos x + b sin x = rhs: the angle of (a, b) plus
-// or minus acos(rhs / hypot(a, b)), without trigonometric calls (seed 000
-// annex, type 2). One answer (1, 0) when a = b = 0: x is free or there is no
-// solution, and the residual test decides.
+// One solution of a cos x + b sin x = rhs (seed 000 annex, type 2): the angle
+// of (a, b) plus (sign = +1) or minus (sign = -1) acos(rhs / hypot(a, b)),
+// without trigonometric calls and without branches (it runs inside loops
+// across samples). Writes (cos x, sin x); returns 1 if it exists, else 0.
+// a = b = 0: the single answer x = 0 (sign +1; x is free or there is no
+// solution, and the caller's residual test decides).
 // With sin_alpha >= 0 given, it is used for the half-angle's sine times
 // hypot(a, b) (when the caller has an accurate form of it).
-SPOTKIN_INLINE int cos_sin_roots(double a, double b, double rhs, JointValue out[2], double sin_alpha = -1.0) noexcept {
+SPOTKIN_INLINE double cos_sin_root(double a, double b, double rhs, double sign, double& c, double& s,
+                                   double sin_alpha = -1.0) noexcept {
   const double r2 = a * a + b * b;
-  if (!(r2 > 0.0)) {
-    out[0] = joint_zero();
-    return r2 == 0.0 ? 1 : 0;
-  }
-  const double inv = 1.0 / std::sqrt(r2);
-  double ratio = rhs * inv;
-  if (!(std::fabs(ratio) <= 1.0 + Tolerance::ratio)) return 0;
-  ratio = std::clamp(ratio, -1.0, 1.0);
-  const double k = sin_alpha >= 0.0 ? std::min(1.0, sin_alpha * inv) : std::sqrt(std::max(0.0, (1.0 - ratio) * (1.0 + ratio)));
+  const bool positive = r2 > 0.0;
+  const double inv = 1.0 / std::sqrt(positive ? r2 : 1.0);
+  const double ratio = rhs * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
+  const double k = sign * (sin_alpha >= 0.0 ? std::min(1.0, sin_alpha * inv)
+                                            : std::sqrt(std::max(0.0, (1.0 - clamped) * (1.0 + clamped))));
   const double ca = a * inv, sa = b * inv;
-  out[0] = JointValue{ca * ratio - sa * k, sa * ratio + ca * k, 0.0};
-  out[1] = JointValue{ca * ratio + sa * k, sa * ratio - ca * k, 0.0};
+  c = positive ? ca * clamped - sa * k : 1.0;
+  s = positive ? sa * clamped + ca * k : 0.0;
+  const double zero_answer = sign > 0.0 ? 1.0 : 0.0;
+  return positive ? (std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 1.0 : 0.0) : (r2 == 0.0 ? zero_answer : 0.0);
+}
+
+// Both solutions of a cos x + b sin x = rhs (cos_sin_root with sign +1, -1):
+// returns their number, 0, 1 (a = b = 0) or 2.
+SPOTKIN_INLINE int cos_sin_roots(double a, double b, double rhs, JointValue out[2], double sin_alpha = -1.0) noexcept {
+  out[0].v = out[1].v = 0.0;
+  if (cos_sin_root(a, b, rhs, 1.0, out[0].c, out[0].s, sin_alpha) == 0.0) return 0;
+  if (!(a * a + b * b > 0.0)) return 1;
+  cos_sin_root(a, b, rhs, -1.0, out[1].c, out[1].s, sin_alpha);
   return 2;
+}
+
+// A sorting network for 4 entries: exchange(x, y) puts entries x < y in order;
+// these 5 exchanges sort any input with no data-dependent branch.
+template <typename Exchange>
+SPOTKIN_INLINE void sort4(Exchange&& exchange) noexcept {
+  exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+}
+
+// (b0, b1, b2) < (a0, a1, a2) lexicographically, without branches.
+SPOTKIN_INLINE bool lexicographic_less(double b0, double b1, double b2, double a0, double a1, double a2) noexcept {
+  return (b0 < a0) | ((b0 == a0) & ((b1 < a1) | ((b1 == a1) & (b2 < a2))));
 }
 
 using Complex = std::complex<double>;
@@ -388,20 +410,10 @@ class Position3 {
     int n[kLanes];
   };
 
-  // solve() for m <= kLanes targets at once, into out (same solutions, same
+  // solve() for m <= kLanes targets at once (coordinates in lanes, kLanes entries each), into out (same solutions, same
   // order). The all-revolute kinds run each step across the targets (lanes),
   // so that it vectorises; the roots of the quartic, the rare Newton steps and
   // the rare merges stay per target. Same equations and tolerances as solve().
-  SPOTKIN_INLINE void solve_block(const V3* p, int m, BlockSolutions& out) const noexcept {
-    double px[kLanes], py[kLanes], pz[kLanes];
-    for (int i = 0; i < kLanes; ++i) {
-      const V3 x = i < m ? p[i] : V3::Zero();
-      px[i] = x[0], py[i] = x[1], pz[i] = x[2];
-    }
-    solve_block(px, py, pz, m, out);
-  }
-
-  // The same with the targets' coordinates in lanes (kLanes entries each).
   SPOTKIN_INLINE void solve_block(const double* px, const double* py, const double* pz, int m,
                                   BlockSolutions& out) const noexcept {
     auto store = [&](int i, const JointValue (*q)[3], int n) {
@@ -459,20 +471,8 @@ class Position3 {
           gd(i, kCos3[k], kSin3[k], g, d);
           vals[k][i] = null[0] * d[0] + null[1] * d[1];
         }
-      // trig_roots3 across the lanes
-      for (int i = 0; i < L; ++i) {
-        const double a0 = (vals[0][i] + vals[1][i] + vals[2][i]) / 3.0;
-        const double a1 = (2.0 / 3.0) * (vals[0][i] * kCos3[0] + vals[1][i] * kCos3[1] + vals[2][i] * kCos3[2]);
-        const double b1 = (2.0 / 3.0) * (vals[1][i] * kSin3[1] + vals[2][i] * kSin3[2]);
-        const double r2 = a1 * a1 + b1 * b1, m1 = 0.5 * std::sqrt(r2), top = std::max(std::fabs(a0), m1);
-        const bool varying = m1 > Tolerance::trim * top;  // else P is constant: q3 = 0 (free or none)
-        const double inv = 1.0 / std::sqrt(varying ? r2 : 1.0), ratio = -a0 * inv;
-        const double clamped = std::min(1.0, std::max(-1.0, ratio));
-        const double h = std::sqrt(std::max(0.0, (1.0 - clamped) * (1.0 + clamped))), ca = a1 * inv, sa = b1 * inv;
-        c3[0][i] = varying ? ca * clamped - sa * h : 1.0, s3[0][i] = varying ? sa * clamped + ca * h : 0.0;
-        c3[1][i] = ca * clamped + sa * h, s3[1][i] = sa * clamped - ca * h;
-        roots3[i] = !(top == top) ? 0.0 : !varying ? 1.0 : std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 2.0 : 0.0;
-      }
+      for (int i = 0; i < L; ++i)
+        roots3[i] = trig_roots3(vals[0][i], vals[1][i], vals[2][i], c3[0][i], s3[0][i], c3[1][i], s3[1][i]);
     } else {
       double vals[5][L];
       for (int k = 0; k < 5; ++k)
@@ -502,7 +502,7 @@ class Position3 {
       constexpr bool Reduced = decltype(reduced_tag)::value;
       for (int k = 0; k < C; ++k) {
         const int root = Reduced ? k / 2 : k;
-        const double sign = k % 2 == 0 ? 1.0 : -1.0, first = k % 2 == 0 ? 1.0 : 0.0;
+        const double sign = k % 2 == 0 ? 1.0 : -1.0;
         double c3_row[L], s3_row[L];
         std::copy(c3[root], c3[root] + L, c3_row);
         std::copy(s3[root], s3[root] + L, s3_row);
@@ -515,21 +515,10 @@ class Position3 {
                                                                (-a10 * d[0] + a00 * d[1]) / det, g[0], g[1]);
             cq2 = v.c, sq2 = v.s;
             exists = root < roots_found[i] ? 1.0 : 0.0;
-          } else {  // (B'): a cos q2 + b sin q2 = d_i (seed 000 annex, type 2), branch k % 2
+          } else {  // (B'): a cos q2 + b sin q2 = d_i, branch k % 2
             const double r0 = first_row ? a00 : a10, r1 = first_row ? a01 : a11;
             const double a = r0 * g[0] + r1 * g[1], b = r1 * g[0] - r0 * g[1], rhs = first_row ? d[0] : d[1];
-            const double r2 = a * a + b * b;
-            const bool positive = r2 > 0.0;
-            const double inv = 1.0 / std::sqrt(positive ? r2 : 1.0);
-            const double ratio = rhs * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
-            const double h = std::sqrt(std::max(0.0, (1.0 - clamped) * (1.0 + clamped))) * sign;
-            const double ca = a * inv, sa = b * inv;
-            cq2 = positive ? ca * clamped - sa * h : 1.0;
-            sq2 = positive ? sa * clamped + ca * h : 0.0;
-            // a = b = 0 exactly: the single answer q2 = 0 (free or none; the residual decides)
-            const double solvable = positive ? (std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 1.0 : 0.0)
-                                             : (r2 == 0.0 ? first : 0.0);
-            exists = (root < roots_found[i] ? 1.0 : 0.0) * solvable;
+            exists = (root < roots_found[i] ? 1.0 : 0.0) * detail::cos_sin_root(a, b, rhs, sign, cq2, sq2);
           }
           // f = R1 Z2(q2) g + t1; (I) q1 = angle(PT_xy) - angle(f_xy)
           const double mx = cq2 * g[0] - sq2 * g[1], my = sq2 * g[0] + cq2 * g[1], mz = g[2];
@@ -602,11 +591,10 @@ class Position3 {
     double sorted_c[C][3][L], sorted_s[C][3][L];
     std::copy(&joint_c[0][0][0], &joint_c[0][0][0] + C * 3 * L, &sorted_c[0][0][0]);
     std::copy(&joint_s[0][0][0], &joint_s[0][0][0] + C * 3 * L, &sorted_s[0][0][0]);
-    auto exchange = [&](int x, int y) SPOTKIN_INLINE_LAMBDA {
+    detail::sort4([&](int x, int y) SPOTKIN_INLINE_LAMBDA {
       for (int i = 0; i < L; ++i) {
-        const double a0 = key[x][0][i], a1 = key[x][1][i], a2 = key[x][2][i];
-        const double b0 = key[y][0][i], b1 = key[y][1][i], b2 = key[y][2][i];
-        const bool swap = (b0 < a0) | ((b0 == a0) & ((b1 < a1) | ((b1 == a1) & (b2 < a2))));
+        const bool swap = detail::lexicographic_less(key[y][0][i], key[y][1][i], key[y][2][i], key[x][0][i],
+                                                     key[x][1][i], key[x][2][i]);
         for (int j = 0; j < 3; ++j) {
           const double kx = key[x][j][i], ky = key[y][j][i], cx = sorted_c[x][j][i], cy = sorted_c[y][j][i];
           const double sx = sorted_s[x][j][i], sy = sorted_s[y][j][i];
@@ -615,8 +603,7 @@ class Position3 {
           sorted_s[x][j][i] = swap ? sy : sx, sorted_s[y][j][i] = swap ? sx : sy;
         }
       }
-    };
-    exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+    });
     for (int k = 0; k < C; ++k)
       for (int j = 0; j < 3; ++j)
         for (int i = 0; i < L; ++i) out.c[k][j][i] = sorted_c[k][j][i], out.s[k][j][i] = sorted_s[k][j][i], out.v[k][j][i] = 0.0;
@@ -648,16 +635,25 @@ class Position3 {
                                       -0.9510565162951536};
 
   // Real roots q3 of (Q'), of degree 1 in (cos q3, sin q3), from its samples
-  // at 2 pi k / 3: P = a0 + a1 cos + b1 sin exactly.
+  // at 2 pi k / 3: P = a0 + a1 cos + b1 sin exactly. Branch-free: writes both
+  // candidate roots and returns how many exist (0, 1 or 2; one, q3 = 0, when
+  // P is constant: q3 free or no solution, and the residual test decides).
+  static SPOTKIN_INLINE double trig_roots3(double v0, double v1, double v2, double& c0, double& s0, double& c1,
+                                           double& s1) noexcept {
+    const double a0 = (v0 + v1 + v2) / 3.0;
+    const double a1 = (2.0 / 3.0) * (v0 * kCos3[0] + v1 * kCos3[1] + v2 * kCos3[2]);
+    const double b1 = (2.0 / 3.0) * (v1 * kSin3[1] + v2 * kSin3[2]);
+    const double m1 = 0.5 * std::sqrt(a1 * a1 + b1 * b1), top = std::max(std::fabs(a0), m1);
+    const bool varying = m1 > Tolerance::trim * top;
+    const double found = detail::cos_sin_root(a1, b1, -a0, 1.0, c0, s0);
+    detail::cos_sin_root(a1, b1, -a0, -1.0, c1, s1);
+    c0 = varying ? c0 : 1.0, s0 = varying ? s0 : 0.0;
+    return !(top == top) ? 0.0 : !varying ? 1.0 : 2.0 * found;
+  }
+
   static SPOTKIN_INLINE int trig_roots3(const double vals[3], JointValue out[2]) noexcept {
-    const double a0 = (vals[0] + vals[1] + vals[2]) / 3.0;
-    const double a1 = (2.0 / 3.0) * (vals[0] * kCos3[0] + vals[1] * kCos3[1] + vals[2] * kCos3[2]);
-    const double b1 = (2.0 / 3.0) * (vals[1] * kSin3[1] + vals[2] * kSin3[2]);
-    const double top = std::max(std::fabs(a0), 0.5 * std::sqrt(a1 * a1 + b1 * b1));
-    if (!(top == top)) return 0;
-    if (0.5 * std::sqrt(a1 * a1 + b1 * b1) > Tolerance::trim * top) return detail::cos_sin_roots(a1, b1, -a0, out);
-    out[0] = joint_zero();  // P constant: q3 free or no solution; the residual test decides
-    return 1;
+    out[0].v = out[1].v = 0.0;
+    return static_cast<int>(trig_roots3(vals[0], vals[1], vals[2], out[0].c, out[0].s, out[1].c, out[1].s));
   }
 
   // Real roots q3 of (Q) from its samples at 2 pi k / 5; the DFT gives
@@ -961,12 +957,11 @@ class Position3 {
         order[k] = k;
         m += accepted;
       }
-      auto exchange = [&](int x, int y) SPOTKIN_INLINE_LAMBDA {
+      detail::sort4([&](int x, int y) SPOTKIN_INLINE_LAMBDA {
         const bool swap = key[order[y]] < key[order[x]];
         const int ox = order[x], oy = order[y];
         order[x] = swap ? oy : ox, order[y] = swap ? ox : oy;
-      };
-      exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+      });
     } else {
       for (int k = 0; k < n; ++k) {
         if (!(cands[k].residual <= Tolerance::residual * s)) continue;
@@ -1020,14 +1015,13 @@ class Position3 {
         const double key = sigma_[j] == 1 ? v.v : (v.s >= 0.0 ? 1.0 : -1.0) * (1.0 - v.c);
         keys[k][j] = k < count_groups ? key : std::numeric_limits<double>::infinity();
       }
-    auto exchange = [&](int x, int y) SPOTKIN_INLINE_LAMBDA {
+    detail::sort4([&](int x, int y) SPOTKIN_INLINE_LAMBDA {
       const double* a = keys[rank[x]];
       const double* b = keys[rank[y]];
-      const bool swap = (b[0] < a[0]) | ((b[0] == a[0]) & ((b[1] < a[1]) | ((b[1] == a[1]) & (b[2] < a[2]))));
+      const bool swap = detail::lexicographic_less(b[0], b[1], b[2], a[0], a[1], a[2]);
       const int rx = rank[x], ry = rank[y];
       rank[x] = swap ? ry : rx, rank[y] = swap ? rx : ry;
-    };
-    exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
+    });
     for (int k = 0; k < count_groups; ++k)
       for (int j = 0; j < 3; ++j) q[k][j] = groups[rank[k]]->q[j];
     return count_groups;
@@ -1327,6 +1321,9 @@ class SphericalWrist6 {
     // local copies: the stores to out cannot alias them (so the lane loops vectorise)
     const M3 B5 = B5_, B6 = B6_, A4 = A4_, M1R = S.M1.R, M2R = S.M2.R;
     const V3 a = B5.row(2).transpose(), b = B6.col(2);
+    // (A): A c5 + B s5 = w_z - a_z b_z, solved as detail::cos_sin_root does but
+    // with hypot(A, B) hoisted out of the lane loop (calling cos_sin_root here
+    // stops GCC 12 from vectorising the loop)
     const double A = a[0] * b[0] + a[1] * b[1], B = a[1] * b[0] - a[0] * b[1];
     const double r2 = A * A + B * B, inv = r2 > 0.0 ? 1.0 / std::sqrt(r2) : 1.0, ca = A * inv, sa = B * inv;
     for (int k = 0; k < K; ++k) {
@@ -1364,8 +1361,10 @@ class SphericalWrist6 {
         const double gram = (w[0] * w[0] + w[1] * w[1]) * (1.0 - b[2] * b[2]) - (a[2] - b[2] * w[2]) * (a[2] - b[2] * w[2]);
         const double ratio = (w[2] - a[2] * b[2]) * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
         const double h = std::min(1.0, std::sqrt(std::max(gram, 0.0)) * inv);
+        // r2 = 0 (axes 4 and 5, or 5 and 6, parallel) is refused when the chain is built
         const double ok = r2 > 0.0 ? (std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 1.0 : 0.0) : 0.0;
-        auto branch = [&](int k5, double hb) SPOTKIN_INLINE_LAMBDA {
+        auto branch = [&](int k5, double sign) SPOTKIN_INLINE_LAMBDA {
+          const double hb = sign * h;
           const double c5 = r2 > 0.0 ? ca * clamped - sa * hb : 1.0, s5 = r2 > 0.0 ? sa * clamped + ca * hb : 0.0;
           // (B) v = B5 Rz(q5) b; q4 free (0) where axes 4 and 6 align
           const double rb[3] = {c5 * b[0] - s5 * b[1], s5 * b[0] + c5 * b[1], b[2]};
@@ -1385,8 +1384,8 @@ class SphericalWrist6 {
           wrist_angle[k5][2][i] = vector_math::atan2(x6[1], x6[0]);
           solvable[k5][i] = ok * found[i];
         };
-        branch(0, h);
-        branch(1, -h);
+        branch(0, 1.0);
+        branch(1, -1.0);
       }
       for (int k5 = 0; k5 < 2; ++k5) {
         const int slot = 2 * k + k5;
