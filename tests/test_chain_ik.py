@@ -519,10 +519,16 @@ def test_block_and_single_target_paths_agree_on_merges_and_wrists(rng):
     arm = spot_arm_chain()
     T = arm.fk(rng.uniform(-np.pi, np.pi, (37, 6)))
     T[3, 0, 0] = np.nan
+    T[5, :3, :3] *= 1.01  # not a rotation
     T[11, :3, 3] *= 4.0
-    batch = arm.ik(T)
-    assert_same_solutions(batch, stack_solutions(arm, "ik", T), arm.sigma, 1e-9)
-    assert batch.status[3] == sk.Status.INVALID_INPUT and batch.status[11] == sk.Status.UNREACHABLE
+    quat = np.concatenate([T[:, :3, 3], Rotation.from_matrix(np.nan_to_num(T[:, :3, :3])).as_quat()], axis=-1)
+    quat[3, 0] = np.nan
+    for target in (T, quat):
+        batch = arm.ik(target)
+        assert_same_solutions(batch, stack_solutions(arm, "ik", target), arm.sigma, 1e-9)
+        assert batch.status[3] == sk.Status.INVALID_INPUT and batch.status[11] == sk.Status.UNREACHABLE
+        assert batch.valid[batch.exists].any() and not batch.valid[batch.exists].all()  # limits bite
+    assert arm.ik(T).status[5] == sk.Status.INVALID_INPUT
 
 
 def test_threads_give_identical_results(rng):

@@ -1140,6 +1140,43 @@ struct Limits {
   }
 };
 
+// Finishes a block across the lanes, in place: the angles wrapped into the
+// limits (infinite limits keep every finite value) and NaN where a slot has no
+// solution; exists[k][i] becomes 0 for a lane whose input is bad, and
+// valid[k][i] says whether slot k exists and fits the limits. Lanes [0, L) for
+// a full block (a compile-time count: the loops vectorise), [0, m) for a short
+// one (a single target pays for one lane).
+template <bool Full, int Slots, int Dof, int L>
+SPOTKIN_INLINE void finish_lanes(const Limits& limits, int m, const double (&input_ok)[L],
+                                 double (&angle)[Slots][Dof][L], double (&exists)[Slots][L],
+                                 double (&valid)[Slots][L]) noexcept {
+  const Limits local = limits;  // a copy: the stores below cannot alias it
+  const int lanes = Full ? L : m;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < Slots; ++k) {
+    for (int i = 0; i < lanes; ++i) exists[k][i] *= input_ok[i], valid[k][i] = exists[k][i];
+    for (int j = 0; j < Dof; ++j)
+      for (int i = 0; i < lanes; ++i) {
+        const double wrapped = local.wrap_value(j, angle[k][j][i], valid[k][i]);
+        angle[k][j][i] = exists[k][i] != 0.0 ? wrapped : nan;
+      }
+  }
+}
+
+// The Status of each lane of a finished block (as a double).
+template <int Slots, int L>
+SPOTKIN_INLINE void lane_status(int m, const double (&input_ok)[L], const double (&exists)[Slots][L],
+                                const double (&valid)[Slots][L], double (&status)[L]) noexcept {
+  for (int i = 0; i < m; ++i) {
+    double any_exists = 0.0, any_valid = 0.0;
+    for (int k = 0; k < Slots; ++k) any_exists = std::max(any_exists, exists[k][i]), any_valid = std::max(any_valid, valid[k][i]);
+    status[i] = static_cast<double>(input_ok[i] == 0.0 ? Status::InvalidInput
+                                    : any_valid != 0.0 ? Status::Ok
+                                    : any_exists != 0.0 ? Status::JointLimit
+                                                        : Status::Unreachable);
+  }
+}
+
 // 6R chains whose last three axes meet at one point c (a spherical wrist):
 // c fixes q1..q3 through Position3, then
 //   W = A4^T R_A3^T R_target Tail^T = Rz(q4) B5 Rz(q5) B6 Rz(q6)
@@ -1256,35 +1293,37 @@ class SphericalWrist6 {
 
   static constexpr int kLanes = Position3::kLanes;
 
-  // solve() for m <= kLanes poses at once (the same equations, run across the
-  // poses so that they vectorise); a pose with input_ok[i] false has no solution.
-  // Slot k of pose i goes to values [(i * kSlots + k) * 6 + j] (angles, or the
-  // value of a prismatic joint) and exists [i * kSlots + k].
-  // Solutions of a block of poses, across the lanes: slot k of pose i is
-  // angle[k][j][i] for joint j (the value of a prismatic joint), and
-  // exists[k][i] is 1 or 0.
-  struct BlockSolutions {
-    double angle[kSlots][6][kLanes], exists[kSlots][kLanes];
-  };
-
-  // solve() for m <= kLanes poses at once, into out (the same equations run
-  // across the poses, so that they vectorise; a short block goes pose by pose).
-  // A pose with input_ok[i] false has no solution.
-  SPOTKIN_INLINE void solve_block(const Arm::Pose* targets, const bool* input_ok, int m,
-                                  BlockSolutions& out) const noexcept {
+  // solve() for m <= kLanes poses at once (the same equations run across the
+  // poses, so that they vectorise; a short block goes pose by pose), finished
+  // as finish_lanes does. pose_in[e][i] is element e of pose i, in the layout
+  // of Arm::read_pose. Solutions across the lanes: slot k of pose i is
+  // angle[k][j][i] for joint j (the value of a prismatic joint; wrapped into
+  // the limits, NaN if the slot has no solution), exists[k][i] and
+  // valid[k][i] (in the limits too) are 1 or 0, and input_ok[i] is 0 for a
+  // pose that is not a rigid transform.
+  template <PoseFormat Format>
+  SPOTKIN_INLINE void solve_block(const double (*pose_in)[kLanes], int m, const Limits& limits,
+                                  double (&angle)[kSlots][6][kLanes], double (&exists)[kSlots][kLanes],
+                                  double (&valid)[kSlots][kLanes], double (&input_ok)[kLanes]) const noexcept {
+    constexpr int width = Format == PoseFormat::Matrix ? 16 : 7;
     if (m < kLanes) {  // one by one (a short block costs no more than its poses)
       for (int i = 0; i < m; ++i) {
+        double in[width];
+        for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
+        Arm::Pose target;
+        input_ok[i] = Arm::read_pose<Format>(in, target);
         JointValue q[kSlots][6];
         bool ok[kSlots] = {};
-        if (input_ok[i]) solve(targets[i], q, ok);
+        if (input_ok[i] != 0.0) solve(target, q, ok);
         for (int k = 0; k < kSlots; ++k) {
-          out.exists[k][i] = ok[k] ? 1.0 : 0.0;
+          exists[k][i] = ok[k] ? 1.0 : 0.0;
           for (int j = 0; j < 6; ++j)
-            out.angle[k][j][i] = !ok[k] ? 0.0
+            angle[k][j][i] = !ok[k] ? 0.0
                                  : j < 3 && position_.sigma(j) == 1 ? q[k][j].v
                                                                     : vector_math::atan2(q[k][j].s, q[k][j].c);
         }
       }
+      finish_lanes<false>(limits, m, input_ok, angle, exists, valid);
       return;
     }
     constexpr int L = kLanes, K = Position3::kSlots;
@@ -1294,10 +1333,14 @@ class SphericalWrist6 {
     const Split& S = position_.split();
     double R[3][3][L], p[3][L];
     for (int i = 0; i < L; ++i) {
-      const bool use = i < m && input_ok[i];
+      double in[width];
+      for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
+      Arm::Pose target;
+      const double use = Arm::read_pose<Format>(in, target);
+      input_ok[i] = use;
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R[r][c][i] = use ? targets[i].R[r][c] : nan;
-        p[r][i] = use ? targets[i].p[r] : nan;
+        for (int c = 0; c < 3; ++c) R[r][c][i] = use != 0.0 ? target.R[r][c] : nan;
+        p[r][i] = use != 0.0 ? target.p[r] : nan;
       }
     }
     const V3 t0 = tail_R_T_.col(0), t2 = tail_R_T_.col(2);
@@ -1326,29 +1369,23 @@ class SphericalWrist6 {
     // stops GCC 12 from vectorising the loop)
     const double A = a[0] * b[0] + a[1] * b[1], B = a[1] * b[0] - a[0] * b[1];
     const double r2 = A * A + B * B, inv = r2 > 0.0 ? 1.0 / std::sqrt(r2) : 1.0, ca = A * inv, sa = B * inv;
+    const Limits limit = limits;  // a local copy: the stores below cannot alias it
+    const bool prismatic[3] = {position_.sigma(0) == 1, position_.sigma(1) == 1, position_.sigma(2) == 1};
     for (int k = 0; k < K; ++k) {
-      // position solution k in lanes: (cos, sin) of q1..q3 (identity for a prismatic joint)
-      double c[3][L], sn[3][L], v[3][L], found[L];
+      // position solution k (cos, sin) = (1, 0) for a prismatic joint) -> slots 2k, 2k + 1
+      const int slot0 = 2 * k, slot1 = 2 * k + 1;
       for (int i = 0; i < L; ++i) {
-        const bool has = i < m && k < arm.n[i];
-        found[i] = has ? 1.0 : 0.0;
+        const double found = k < arm.n[i] ? input_ok[i] : 0.0;
+        // q1..q3 wrapped into their limits, once for both slots
+        double position_fit = 1.0, position_angle[3];
         for (int j = 0; j < 3; ++j) {
-          const bool rot = has && position_.sigma(j) == 0;
-          c[j][i] = rot ? arm.c[k][j][i] : 1.0, sn[j][i] = rot ? arm.s[k][j][i] : 0.0;
-          v[j][i] = has ? arm.v[k][j][i] : 0.0;
+          const double value = prismatic[j] ? arm.v[k][j][i] : vector_math::atan2(arm.s[k][j][i], arm.c[k][j][i]);
+          position_angle[j] = limit.wrap_value(j, value, position_fit);
         }
-      }
-      double position_angle[3][L];
-      for (int j = 0; j < 3; ++j) {
-        const bool prismatic = position_.sigma(j) == 1;
-        for (int i = 0; i < L; ++i) position_angle[j][i] = prismatic ? v[j][i] : vector_math::atan2(sn[j][i], c[j][i]);
-      }
-      double wrist_angle[2][3][L], solvable[2][L];  // [branch][q4, q5, q6][lane]
-      for (int i = 0; i < L; ++i) {
         // W e = A4^T Rz3^T R2^T Rz2^T R1^T Rz1^T (R0^T R_F6 e) for e = z, x
         double w[3] = {z0[0][i], z0[1][i], z0[2][i]}, wx[3] = {x0[0][i], x0[1][i], x0[2][i]};
         auto back = [&](int j, const M3& M) SPOTKIN_INLINE_LAMBDA {
-          const double cj = c[j][i], sj = sn[j][i];
+          const double cj = arm.c[k][j][i], sj = arm.s[k][j][i];
           const double u[3] = {cj * w[0] + sj * w[1], -sj * w[0] + cj * w[1], w[2]};
           const double ux[3] = {cj * wx[0] + sj * wx[1], -sj * wx[0] + cj * wx[1], wx[2]};
           detail::multiply_transposed(M, u, w);
@@ -1362,8 +1399,8 @@ class SphericalWrist6 {
         const double ratio = (w[2] - a[2] * b[2]) * inv, clamped = std::min(1.0, std::max(-1.0, ratio));
         const double h = std::min(1.0, std::sqrt(std::max(gram, 0.0)) * inv);
         // r2 = 0 (axes 4 and 5, or 5 and 6, parallel) is refused when the chain is built
-        const double ok = r2 > 0.0 ? (std::fabs(ratio) <= 1.0 + Tolerance::ratio ? 1.0 : 0.0) : 0.0;
-        auto branch = [&](int k5, double sign) SPOTKIN_INLINE_LAMBDA {
+        const double solvable = r2 > 0.0 && std::fabs(ratio) <= 1.0 + Tolerance::ratio ? found : 0.0;
+        auto branch = [&](int slot, double sign) SPOTKIN_INLINE_LAMBDA {
           const double hb = sign * h;
           const double c5 = r2 > 0.0 ? ca * clamped - sa * hb : 1.0, s5 = r2 > 0.0 ? sa * clamped + ca * hb : 0.0;
           // (B) v = B5 Rz(q5) b; q4 free (0) where axes 4 and 6 align
@@ -1379,20 +1416,18 @@ class SphericalWrist6 {
           detail::multiply_transposed(B5, y, z);
           const double t[3] = {c5 * z[0] + s5 * z[1], -s5 * z[0] + c5 * z[1], z[2]};
           detail::multiply_transposed(B6, t, x6);
-          wrist_angle[k5][0][i] = vector_math::atan2(s4, c4);
-          wrist_angle[k5][1][i] = vector_math::atan2(s5, c5);
-          wrist_angle[k5][2][i] = vector_math::atan2(x6[1], x6[0]);
-          solvable[k5][i] = ok * found[i];
+          const double wrist[3] = {vector_math::atan2(s4, c4), vector_math::atan2(s5, c5),
+                                   vector_math::atan2(x6[1], x6[0])};
+          double fit = solvable * position_fit;
+          for (int j = 0; j < 3; ++j) {
+            const double wrapped = limit.wrap_value(3 + j, wrist[j], fit);
+            angle[slot][j][i] = solvable != 0.0 ? position_angle[j] : nan;
+            angle[slot][3 + j][i] = solvable != 0.0 ? wrapped : nan;
+          }
+          exists[slot][i] = solvable, valid[slot][i] = fit;
         };
-        branch(0, 1.0);
-        branch(1, -1.0);
-      }
-      for (int k5 = 0; k5 < 2; ++k5) {
-        const int slot = 2 * k + k5;
-        for (int i = 0; i < L; ++i) out.exists[slot][i] = solvable[k5][i];
-        for (int j = 0; j < 3; ++j)
-          for (int i = 0; i < L; ++i)
-            out.angle[slot][j][i] = position_angle[j][i], out.angle[slot][3 + j][i] = wrist_angle[k5][j][i];
+        branch(slot0, 1.0);
+        branch(slot1, -1.0);
       }
     }
   }
@@ -1409,90 +1444,66 @@ class SphericalWrist6 {
 
 // -- batches ------------------------------------------------------------------
 
-// Angles across the lanes wrapped into the limits, in place, and whether each
-// slot fits them (infinite limits keep every finite value).
-// Lanes [0, L) for a full block (a compile-time count: the loops vectorise),
-// [0, m) for a short one (a single target pays for one lane).
-template <bool Full, int Slots, int Dof, int L>
-SPOTKIN_INLINE void lane_wrap(const Limits& limits, int m, double (&angle)[Slots][Dof][L],
-                              double (&fits)[Slots][L]) noexcept {
-  const Limits local = limits;  // a copy: the stores below cannot alias it
-  const int lanes = Full ? L : m;
-  for (int k = 0; k < Slots; ++k) {
-    for (int i = 0; i < lanes; ++i) fits[k][i] = 1.0;
-    for (int j = 0; j < Dof; ++j)
-      for (int i = 0; i < lanes; ++i) angle[k][j][i] = local.wrap_value(j, angle[k][j][i], fits[k][i]);
-  }
-}
-
-// Writes one sample's slots from the lanes: values, NaN padding, valid and
-// exists flags, and the status.
-template <int Slots, int Dof, int L, typename T>
-SPOTKIN_INLINE void write_lane(int i, const double (&angle)[Slots][Dof][L], const double (&fits)[Slots][L],
-                               const bool* exists, bool input_ok, T* q, std::uint8_t* valid, std::uint8_t* exist,
-                               std::int8_t* status) noexcept {
-  bool any_exists = false, any_valid = false;
-  for (int k = 0; k < Slots; ++k) {
-    const bool ok = input_ok && exists[k];
-    const bool fits_k = ok && fits[k][i] != 0.0;
-    for (int j = 0; j < Dof; ++j) q[k * Dof + j] = ok ? T(angle[k][j][i]) : quiet_nan<T>();
-    exist[k] = ok, valid[k] = fits_k;
-    any_exists |= ok, any_valid |= fits_k;
-  }
-  *status = static_cast<std::int8_t>(!input_ok     ? Status::InvalidInput
-                                     : any_valid   ? Status::Ok
-                                     : any_exists  ? Status::JointLimit
-                                                   : Status::Unreachable);
-}
-
-// The solves of one block (up to 16 samples) and their angles in the lanes,
-// compiled once per CPU level with the solvers inlined (double only: the I/O
-// type is handled outside).
-struct PositionBlock {
-  static constexpr int S = Position3::kSlots, L = Position3::kLanes;
-  double angle[S][3][L], fits[S][L];
-  bool found[S][L];
+// The finished lanes of one block: angle[k][j][i] (NaN where slot k has no
+// solution), valid and exists (1 or 0), status (a Status).
+template <int Slots, int Dof, int L>
+struct FinishedBlock {
+  static constexpr int S = Slots;
+  double angle[Slots][Dof][L], exists[Slots][L], valid[Slots][L], status[L], input_ok[L];
 };
+
+// Writes lane i of a finished block as one sample: q (Slots, Dof), valid and
+// exists (Slots), status.
+template <int Slots, int Dof, int L, typename T>
+SPOTKIN_INLINE void store_lane(const FinishedBlock<Slots, Dof, L>& block, int i, T* q, std::uint8_t* valid,
+                               std::uint8_t* exists, std::int8_t* status) noexcept {
+  const double* angles = &block.angle[0][0][0];
+  for (int k = 0; k < Slots * Dof; ++k) q[k] = T(angles[k * L + i]);
+  for (int k = 0; k < Slots; ++k) valid[k] = block.valid[k][i] != 0.0, exists[k] = block.exists[k][i] != 0.0;
+  *status = static_cast<std::int8_t>(block.status[i]);
+}
+
+// The solves of one block (up to 16 samples), finished in the lanes, compiled
+// once per CPU level with the solvers inlined (double only: the I/O type is
+// handled outside).
+using PositionBlock = FinishedBlock<Position3::kSlots, 3, Position3::kLanes>;
 
 __attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const Position3& solver,
                                                                           const Limits& limits, const double* px,
                                                                           const double* py, const double* pz, int m,
                                                                           PositionBlock& out) noexcept {
+  constexpr int S = PositionBlock::S, L = Position3::kLanes;
   Position3::BlockSolutions sol;
   solver.solve_block(px, py, pz, m, sol);
-  auto angles = [&](auto full) SPOTKIN_INLINE_LAMBDA {
-    const int lanes = decltype(full)::value ? PositionBlock::L : m;
-    for (int k = 0; k < PositionBlock::S; ++k)
+  for (int i = 0; i < L; ++i)
+    out.input_ok[i] = std::isfinite(px[i]) && std::isfinite(py[i]) && std::isfinite(pz[i]) ? 1.0 : 0.0;
+  auto finish = [&](auto full) SPOTKIN_INLINE_LAMBDA {
+    const int lanes = decltype(full)::value ? L : m;
+    for (int k = 0; k < S; ++k) {
+      for (int i = 0; i < lanes; ++i) out.exists[k][i] = k < sol.n[i] ? 1.0 : 0.0;
       for (int j = 0; j < 3; ++j) {
         const bool prismatic = solver.sigma(j) == 1;
         for (int i = 0; i < lanes; ++i)
           out.angle[k][j][i] = prismatic ? sol.v[k][j][i] : vector_math::atan2(sol.s[k][j][i], sol.c[k][j][i]);
       }
-    lane_wrap<decltype(full)::value>(limits, m, out.angle, out.fits);
+    }
+    finish_lanes<decltype(full)::value>(limits, m, out.input_ok, out.angle, out.exists, out.valid);
   };
-  if (m == PositionBlock::L)
-    angles(std::true_type{});
+  if (m == L)
+    finish(std::true_type{});
   else
-    angles(std::false_type{});
-  for (int k = 0; k < PositionBlock::S; ++k)
-    for (int i = 0; i < m; ++i) out.found[k][i] = k < sol.n[i];
+    finish(std::false_type{});
+  lane_status(m, out.input_ok, out.exists, out.valid, out.status);
 }
 
-struct WristBlock {
-  static constexpr int S = SphericalWrist6::kSlots, L = SphericalWrist6::kLanes;
-  SphericalWrist6::BlockSolutions solutions;  // angles wrapped in place
-  double fits[S][L];
-};
+using WristBlock = FinishedBlock<SphericalWrist6::kSlots, 6, SphericalWrist6::kLanes>;
 
-__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void wrist_block(const SphericalWrist6& solver,
-                                                                       const Limits& limits, const Arm::Pose* poses,
-                                                                       const bool* input_ok, int m,
-                                                                       WristBlock& out) noexcept {
-  solver.solve_block(poses, input_ok, m, out.solutions);
-  if (m == WristBlock::L)
-    lane_wrap<true>(limits, m, out.solutions.angle, out.fits);
-  else
-    lane_wrap<false>(limits, m, out.solutions.angle, out.fits);
+template <PoseFormat Format>
+__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL void wrist_block(const SphericalWrist6& solver, const Limits& limits,
+                                                                const double (*pose_in)[SphericalWrist6::kLanes],
+                                                                int m, WristBlock& out) noexcept {
+  solver.solve_block<Format>(pose_in, m, limits, out.angle, out.exists, out.valid, out.input_ok);
+  lane_status(m, out.input_ok, out.exists, out.valid, out.status);
 }
 
 // Position IK for count targets p (count, 3): q (count, 4, 3), valid and
@@ -1501,7 +1512,7 @@ template <typename T>
 SPOTKIN_INLINE void ik_position(const Position3& solver, const Limits& limits, const T* points, T* q,
                                 std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
                                 std::ptrdiff_t count) noexcept {
-  constexpr int S = PositionBlock::S, W = S * 3, L = PositionBlock::L;
+  constexpr int S = PositionBlock::S, W = S * 3, L = Position3::kLanes;
   PositionBlock block;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, count - b0));
@@ -1513,11 +1524,7 @@ SPOTKIN_INLINE void ik_position(const Position3& solver, const Limits& limits, c
     position_block(solver, limits, px, py, pz, m, block);
     for (int i = 0; i < m; ++i) {
       const std::ptrdiff_t at = b0 + i;
-      const bool input_ok = std::isfinite(px[i]) && std::isfinite(py[i]) && std::isfinite(pz[i]);
-      bool found[S];
-      for (int k = 0; k < S; ++k) found[k] = block.found[k][i];
-      write_lane(i, block.angle, block.fits, found, input_ok, q + W * at, valid + S * at, exists + S * at,
-                 status + at);
+      store_lane(block, i, q + W * at, valid + S * at, exists + S * at, status + at);
     }
   }
 }
@@ -1528,25 +1535,18 @@ template <PoseFormat Format, typename T>
 SPOTKIN_INLINE void ik_wrist(const SphericalWrist6& solver, const Limits& limits, const T* poses, T* q,
                              std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
                              std::ptrdiff_t count) noexcept {
-  constexpr int S = WristBlock::S, W = S * 6, L = WristBlock::L;
-  constexpr std::ptrdiff_t stride = Format == PoseFormat::Matrix ? 16 : 7;
+  constexpr int S = WristBlock::S, W = S * 6, L = SphericalWrist6::kLanes;
+  constexpr int width = Format == PoseFormat::Matrix ? 16 : 7;
   WristBlock block;
+  double pose_in[width][L];  // the poses as structure of arrays
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, count - b0));
-    Arm::Pose pose[L];
-    bool input_ok[L] = {};
-    for (int i = 0; i < m; ++i) {
-      double in[16];
-      for (std::ptrdiff_t k = 0; k < stride; ++k) in[k] = double(poses[stride * (b0 + i) + k]);
-      input_ok[i] = Arm::read_pose<Format>(in, pose[i]) != 0.0;
-    }
-    wrist_block(solver, limits, pose, input_ok, m, block);
+    for (int i = 0; i < m; ++i)
+      for (int e = 0; e < width; ++e) pose_in[e][i] = double(poses[width * (b0 + i) + e]);
+    wrist_block<Format>(solver, limits, pose_in, m, block);
     for (int i = 0; i < m; ++i) {
       const std::ptrdiff_t at = b0 + i;
-      bool found[S];
-      for (int k = 0; k < S; ++k) found[k] = block.solutions.exists[k][i] != 0.0;
-      write_lane(i, block.solutions.angle, block.fits, found, input_ok[i], q + W * at, valid + S * at,
-                 exists + S * at, status + at);
+      store_lane(block, i, q + W * at, valid + S * at, exists + S * at, status + at);
     }
   }
 }
