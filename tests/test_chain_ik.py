@@ -489,21 +489,28 @@ def stack_solutions(chain, method, targets):
 def test_block_and_single_target_paths_agree(rng, kind):
     """Batches run 16 targets at a time across lanes (with a one-by-one tail); single calls run one target.
     Both must give the same solutions in the same slots, including merged double roots, limits, NaN and
-    unreachable targets."""
-    while True:
-        chain = chain_with_closed_form(rng, "mdh", "RRR")
-        if chain.ik_kind == kind:
-            break
-    chain = sk.Chain(chain.rows, convention="mdh", base=chain.base, tool=chain.tool,
-                     limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)])
-    q = rng.uniform(-np.pi, np.pi, (53, 3))  # 3 blocks of 16 and a tail of 5
-    p = chain.fk(q)[:, :3, 3]
-    p[7] = np.nan
-    p[20] *= 50.0  # out of reach
-    batch = chain.ik_position(p)
-    assert_same_solutions(batch, stack_solutions(chain, "ik_position", p), chain.sigma, 1e-9)
+    unreachable targets, solutions that share q1 (their order must not hang on its rounding) and angles
+    at pi (the order is by (-pi, pi], not by the sign of a rounding error)."""
+    for _ in range(6):
+        while True:
+            chain = chain_with_closed_form(rng, "mdh", "RRR")
+            if chain.ik_kind == kind:
+                break
+        chain = sk.Chain(chain.rows, convention="mdh", base=chain.base, tool=chain.tool,
+                         limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)])
+        q = rng.uniform(-np.pi, np.pi, (53, 3))  # 3 blocks of 16 and a tail of 5
+        q[::4, 1], q[1::4, 0], q[2::8, 2] = np.pi, -np.pi, np.pi
+        p = chain.fk(q)[:, :3, 3]
+        p[7] = np.nan
+        p[20] *= 50.0  # out of reach
+        batch = chain.ik_position(p)
+        assert_same_solutions(batch, stack_solutions(chain, "ik_position", p), chain.sigma, 1e-9)
+        scale = ik3r._scale(chain.rows, chain.tool)
+        for i in range(len(p)):  # the documented slot order (the reference's)
+            found = solutions(batch, i)
+            assert all(ik3r._order(a, b, chain.sigma, scale) < 0 for a, b in itertools.pairwise(found))
+        assert batch.status[7] == sk.Status.INVALID_INPUT and batch.status[20] == sk.Status.UNREACHABLE
     assert (batch.status == sk.Status.JOINT_LIMIT).any() and (batch.status == sk.Status.OK).any()
-    assert batch.status[7] == sk.Status.INVALID_INPUT and batch.status[20] == sk.Status.UNREACHABLE
 
 
 def test_block_and_single_target_paths_agree_on_merges_and_wrists(rng):

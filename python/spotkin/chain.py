@@ -244,8 +244,9 @@ class Chain:
         and polished by Gauss–Newton steps on fk(q) = p. Accepted solutions satisfy
         |fk(q) - p| <= 1e-9 s (s: the sum of the table's lengths and the tool offset, at least
         |p|); solutions closer than 1e-6 (rad, or length / s) are merged, so a double root comes
-        back once. Slots are sorted by (q1, q2, q3). A target for which a joint is free (on a
-        joint axis) gives one representative with that joint at 0. Unreachable targets get
+        back once. Slots are sorted by (q1, q2, q3), values within 1e-7 counting as equal. A
+        target for which a joint is free (on a joint axis) gives one representative with that
+        joint at 0. Unreachable targets get
         status UNREACHABLE and NaN in every slot; :meth:`fk` of the nearest configuration is
         not attempted (use a numerical solver for a least-squares answer). The full derivation
         is in ``spotkin.reference.ik3r``.

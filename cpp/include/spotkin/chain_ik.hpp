@@ -174,9 +174,28 @@ SPOTKIN_INLINE void sort4(Exchange&& exchange) noexcept {
   exchange(0, 1), exchange(2, 3), exchange(0, 2), exchange(1, 3), exchange(1, 2);
 }
 
-// (b0, b1, b2) < (a0, a1, a2) lexicographically, without branches.
-SPOTKIN_INLINE bool lexicographic_less(double b0, double b1, double b2, double a0, double a1, double a2) noexcept {
-  return (b0 < a0) | ((b0 == a0) & ((b1 < a1) | ((b1 == a1) & (b2 < a2))));
+// The order of the solutions: lexicographic on (q1, q2, q3) in (-pi, pi]
+// (revolute) or q / s (prismatic), where values within kOrderTie count as
+// equal. Without the tie, two solutions that share q1 (every pair from one q1
+// in the degree-2 kinds) would be ordered by the rounding of q1, which differs
+// between the one-target and the lane paths.
+constexpr double kOrderTie = 1e-7;  // below Tolerance::merge: distinct solutions never tie on all three
+
+// Sort key of a revolute value (cos q, sin q): a "diamond" pseudo-angle,
+// s / (|c| + |s|) unfolded to (-2, 2], increasing with q over (-pi, pi] with
+// slope 1/2 to 1 (so a tie on keys is one on angles), without trigonometric
+// calls. Angles within kOrderTie of -pi are keyed as +pi (the same angle).
+SPOTKIN_INLINE double angle_key(double c, double s) noexcept {
+  const double t = s / (std::fabs(c) + std::fabs(s));
+  const double key = c >= 0.0 ? t : s >= 0.0 ? 2.0 - t : -2.0 - t;
+  return key <= -2.0 + kOrderTie ? 2.0 : key;
+}
+
+// (b0, b1, b2) before (a0, a1, a2) in that order, without branches (+inf keys,
+// for missing entries, go last).
+SPOTKIN_INLINE bool order_less(double b0, double b1, double b2, double a0, double a1, double a2) noexcept {
+  const bool tie0 = std::fabs(b0 - a0) <= kOrderTie, tie1 = std::fabs(b1 - a1) <= kOrderTie;
+  return (!tie0 & (b0 < a0)) | (tie0 & ((!tie1 & (b1 < a1)) | (tie1 & (b2 < a2))));
 }
 
 using Complex = std::complex<double>;
@@ -569,10 +588,6 @@ class Position3 {
       for (int k = 0; k < C; ++k) {
         const bool acc = finite && ok[k][i] != 0.0 && res2[k][i] <= Tolerance::residual * Tolerance::residual * sc[i] * sc[i];
         accepted[k][i] = acc ? 1.0 : 0.0;
-        for (int j = 0; j < 3; ++j) {
-          const double c = joint_c[k][j][i], sn = joint_s[k][j][i];
-          key[k][j][i] = acc ? (sn >= 0.0 ? 1.0 : -1.0) * (1.0 - c) : std::numeric_limits<double>::infinity();
-        }
       }
       double near = 0.0;
       for (int a = 0; a < C; ++a)
@@ -586,6 +601,11 @@ class Position3 {
         }
       merge_lane[i] = near;
     }
+    for (int k = 0; k < C; ++k)  // a loop of its own, so that it vectorises
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < L; ++i)
+          key[k][j][i] = accepted[k][i] != 0.0 ? detail::angle_key(joint_c[k][j][i], joint_s[k][j][i])
+                                               : std::numeric_limits<double>::infinity();
     // the network moves keys and values together (selects, no gathers); the
     // unsorted values stay in joint_c, joint_s for the lanes that merge
     double sorted_c[C][3][L], sorted_s[C][3][L];
@@ -593,8 +613,8 @@ class Position3 {
     std::copy(&joint_s[0][0][0], &joint_s[0][0][0] + C * 3 * L, &sorted_s[0][0][0]);
     detail::sort4([&](int x, int y) SPOTKIN_INLINE_LAMBDA {
       for (int i = 0; i < L; ++i) {
-        const bool swap = detail::lexicographic_less(key[y][0][i], key[y][1][i], key[y][2][i], key[x][0][i],
-                                                     key[x][1][i], key[x][2][i]);
+        const bool swap = detail::order_less(key[y][0][i], key[y][1][i], key[y][2][i], key[x][0][i],
+                                             key[x][1][i], key[x][2][i]);
         for (int j = 0; j < 3; ++j) {
           const double kx = key[x][j][i], ky = key[y][j][i], cx = sorted_c[x][j][i], cy = sorted_c[y][j][i];
           const double sx = sorted_s[x][j][i], sy = sorted_s[y][j][i];
@@ -1001,8 +1021,7 @@ class Position3 {
     }
     // the kSlots best residuals (groups keep the residual order; more than 4 never seen)
     count_groups = std::min(count_groups, kSlots);
-    // (q1, q2, q3) order; a revolute angle compares through the pseudo-angle
-    // s >= 0 ? 1 - c : c - 1, increasing with the angle over [-pi, pi].
+    // (q1, q2, q3) order (detail::order_less, on detail::angle_key or v / s).
     // Branch-free (the signs and the order are random): keys, then a sorting
     // network over kSlots = 4 entries, missing ones keyed +inf.
     static_assert(kSlots == 4, "the sorting network below is for 4 slots");
@@ -1012,13 +1031,13 @@ class Position3 {
     for (int k = 0; k < kSlots; ++k)
       for (int j = 0; j < 3; ++j) {
         const JointValue& v = groups[std::min(k, count_groups - 1)]->q[j];
-        const double key = sigma_[j] == 1 ? v.v : (v.s >= 0.0 ? 1.0 : -1.0) * (1.0 - v.c);
+        const double key = sigma_[j] == 1 ? v.v / s : detail::angle_key(v.c, v.s);
         keys[k][j] = k < count_groups ? key : std::numeric_limits<double>::infinity();
       }
     detail::sort4([&](int x, int y) SPOTKIN_INLINE_LAMBDA {
       const double* a = keys[rank[x]];
       const double* b = keys[rank[y]];
-      const bool swap = detail::lexicographic_less(b[0], b[1], b[2], a[0], a[1], a[2]);
+      const bool swap = detail::order_less(b[0], b[1], b[2], a[0], a[1], a[2]);
       const int rx = rank[x], ry = rank[y];
       rank[x] = swap ? ry : rx, rank[y] = swap ? rx : ry;
     });

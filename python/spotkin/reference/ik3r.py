@@ -89,12 +89,17 @@ Targets for which a joint is free (the tool point on axis 2, the target on axis 
 give one representative with that joint at 0 (or whatever the back-substitution yields).
 
 Output slots: solutions sorted lexicographically by (q1, q2, q3) after wrapping revolute angles to
-(-pi, pi] (prismatic values unchanged), NaN-padded to 4 rows; more than 4 (never seen) keeps the 4
-smallest residuals.
+(-pi, pi] (prismatic values divided by s), where values within ORDER_TIE count as equal (an angle
+within ORDER_TIE of -pi counts as +pi), NaN-padded to 4 rows; more than 4 (never seen) keeps the 4
+smallest residuals. Without the tie, two solutions sharing q1 (as every pair from one q1 does in the
+degree-2 kinds) would be ordered by the rounding of q1. The C++ compares "diamond" pseudo-angles
+(order_key below: monotone in the angle, slope 1/2 to 1) rather than angles; the order is the same
+up to where a tie falls.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -399,6 +404,29 @@ def _mean(group, sig):
     return np.array(out)
 
 
+ORDER_TIE = 1e-7  # slot order: values this close count as equal
+
+
+def order_key(value, sigma_j, s):
+    """Sort key of one joint value: the diamond pseudo-angle of a revolute angle, in (-2, 2]
+    (increasing with the angle over (-pi, pi]; within ORDER_TIE of -pi counts as +pi), or v / s."""
+    if sigma_j == 1:
+        return value / s
+    c, sn = math.cos(value), math.sin(value)
+    t = sn / (abs(c) + abs(sn))
+    key = t if c >= 0.0 else (2.0 - t if sn >= 0.0 else -2.0 - t)
+    return 2.0 if key <= -2.0 + ORDER_TIE else key
+
+
+def _order(qa, qb, sig, s):
+    """-1, 0 or 1: qa before qb lexicographically on order_key, ties within ORDER_TIE."""
+    for a, b, sj in zip(qa, qb, sig):
+        ka, kb = order_key(a, sj, s), order_key(b, sj, s)
+        if abs(ka - kb) > ORDER_TIE:
+            return -1 if ka < kb else 1
+    return 0
+
+
 def solve_position(rows, convention, p, base=None, tool=None):
     """Every real q with fk(q)[:3, 3] = p for a 3-joint chain.
 
@@ -445,7 +473,7 @@ def solve_position(rows, convention, p, base=None, tool=None):
         merged.append((res, q) if res <= RESIDUAL_TOL * s else grp[0])
     merged = sorted(merged, key=lambda t: t[0])[:4]
 
-    qs = sorted((q for _, q in merged), key=lambda q: tuple(q))
+    qs = sorted((q for _, q in merged), key=functools.cmp_to_key(lambda a, b: _order(a, b, sig, s)))
     for k, q in enumerate(qs):
         q_all[k], valid[k] = q, True
     return q_all, valid, kind
