@@ -95,9 +95,13 @@ def test_ik_matches_reference_with_and_without_seed(rng, leg):
             assert status[i] == status_ref
             if status_ref == sk.Status.UNREACHABLE:
                 # the fallback sits exactly on a singular set, where angles are only
-                # defined to sqrt(eps): compare where the foot goes
-                np.testing.assert_allclose(leg.fk(q[i]), ref.fk(q_ref, *params(leg)), rtol=0, atol=1e-12)
+                # defined to sqrt(eps): compare where the foot goes (to sqrt(eps) too
+                # where a joint was brought to its bound: the others no longer compensate)
+                on_bound = np.isclose(q_ref, lower, 0, 1e-12) | np.isclose(q_ref, upper, 0, 1e-12)
+                foot_tol = 1e-8 if on_bound.any() else 1e-12
+                np.testing.assert_allclose(leg.fk(q[i]), ref.fk(q_ref, *params(leg)), rtol=0, atol=foot_tol)
                 np.testing.assert_allclose(q[i], q_ref, rtol=0, atol=1e-6)
+                assert ((q[i] >= lower - 1e-12) & (q[i] <= upper + 1e-12)).all()
             else:
                 np.testing.assert_allclose(q[i], q_ref, rtol=0, atol=1e-11)
 
@@ -250,20 +254,54 @@ def test_singularity_measure_vanishes_on_both_sets():
 # -- statuses -------------------------------------------------------------------------------------------
 
 
-def test_unreachable_returns_nearest_configuration(rng):
+def test_unreachable_returns_nearest_configuration_within_limits(rng):
     leg = sk.Leg(H1, U, L, K, limits=LIMITS)
+    lower, upper = LIMITS[:, 0], LIMITS[:, 1]
     directions = rng.normal(size=(200, 3))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     far = directions * rng.uniform(0.72, 2.0, (200, 1))
     q, status = leg.ik(far)
     assert (status == sk.Status.UNREACHABLE).all() and np.isfinite(q).all()
+    assert ((q >= lower - 1e-12) & (q <= upper + 1e-12)).all()  # always inside the limits
+    # Spot's knee cannot straighten (kn <= -0.2471): stretched toward a far target, it stops at its bound
+    np.testing.assert_allclose(q[:, 2], upper[2], atol=1e-12)
     feet = leg.fk(q)
-    np.testing.assert_allclose(feet, [leg.nearest_reachable(p) for p in far], atol=1e-12)
-    # no configuration comes closer (dense random sampling of the whole joint space)
-    samples = leg.fk(rng.uniform(-np.pi, np.pi, (400_000, 3)))
-    for p, foot in zip(far[:40], feet[:40]):
+    nearest = np.array([leg.nearest_reachable(p, within_limits=True) for p in far])
+    on_shell = np.linalg.norm(feet - nearest, axis=1) < 1e-12
+    assert 0.2 < on_shell.mean() < 1.0  # elsewhere a hip limit binds: that joint sits on a bound
+    on_bound = (np.abs(q[:, :2] - lower[:2]) < 1e-12) | (np.abs(q[:, :2] - upper[:2]) < 1e-12)
+    assert on_bound[~on_shell].any(axis=1).all()
+    # where the hips were free, no configuration inside the limits comes closer (dense sampling)
+    samples = leg.fk(in_limit_q(rng, 400_000))
+    for p, foot in zip(far[on_shell][:40], feet[on_shell][:40]):
         best = np.linalg.norm(samples - p, axis=1).min()
         assert np.linalg.norm(foot - p) <= best + 1e-12
+    # a leg without limits: the geometric nearest point, and no configuration at all comes closer
+    free = sk.Leg(H1, U, L, K)
+    q, status = free.ik(far)
+    feet = free.fk(q)
+    np.testing.assert_allclose(feet, [free.nearest_reachable(p) for p in far], atol=1e-12)
+    np.testing.assert_allclose(feet, [free.nearest_reachable(p, within_limits=True) for p in far], atol=1e-12)
+    samples = free.fk(rng.uniform(-np.pi, np.pi, (400_000, 3)))
+    for p, foot in zip(far[:40], feet[:40]):
+        assert np.linalg.norm(foot - p) <= np.linalg.norm(samples - p, axis=1).min() + 1e-12
+
+
+def test_knee_limited_reach_matches_sampling():
+    """nearest_reachable(within_limits=True) uses the distances the knee reaches in its limits, eq. (I3);
+    the reference finds them at the interval's ends and multiples of pi: check both by sampling kn."""
+    for knee_limits in ((-2.7929, -0.2471), (-0.5, 0.4), (2.0, 4.0), (-4.0, -3.0), (-1.0, 7.0)):
+        d_min, d_max = ref.knee_reach(U, L, K, knee_limits)
+        kn = np.linspace(*knee_limits, 200_001)
+        feet = np.array([ref.fk([0.0, 0.0, v], H1, U, L, K) for v in kn[::50]])
+        d = np.sqrt(np.sum(feet**2, axis=1) - H1**2)
+        assert d.min() >= d_min - 1e-9 and d.max() <= d_max + 1e-9
+        assert d.min() <= d_min + 1e-5 and d.max() >= d_max - 1e-5
+        limits = np.array([(-np.pi, np.pi), (-np.pi, np.pi), knee_limits])
+        leg = sk.Leg(H1, U, L, K, limits=limits)
+        far = np.array([0.3, 0.4, -2.0])
+        np.testing.assert_allclose(np.linalg.norm(leg.nearest_reachable(far, within_limits=True)),
+                                   np.hypot(H1, d_max), atol=1e-12)
 
 
 def test_inner_dead_zone_and_hip_cylinder_fallbacks():

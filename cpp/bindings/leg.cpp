@@ -161,11 +161,11 @@ void bind_leg(py::module_& m) {
       .def("singularity", &singularity, py::arg("q"))
       .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none())
       .def("ik_all", &ik_all, py::arg("p"))
-      .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p) {
+      .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
         std::array<double, 3> out;
-        leg.nearest_reachable(p.data(), out.data());
+        leg.nearest_reachable(p.data(), out.data(), within_limits);
         return out;
-      }, py::arg("p"));
+      }, py::arg("p"), py::arg("within_limits") = false);
 }
 
 }  // namespace spotkin::bindings

@@ -176,9 +176,11 @@ class Leg:
           (largest single-joint move, on the circle; ties to the lower slot), or
           slot 0 without a seed.
         - ``UNREACHABLE``: the target is beyond reach, inside the inner dead zone
-          or inside the hip-roll cylinder. q is slot 0 for the reachable point
-          nearest to the target (see ``nearest_reachable``): the leg stretched or
-          folded toward it. This fallback ignores the joint limits.
+          or inside the hip-roll cylinder. q is always inside the limits: the leg
+          stretched or folded toward the target as far as the knee's limits allow,
+          i.e. a branch for ``nearest_reachable(p, within_limits=True)`` (the
+          first slot inside all the limits; if none, slot 0 with each joint
+          brought to its nearest bound, the foot then further away).
         - ``JOINT_LIMIT``: branches exist, but none within the limits; q is NaN.
         - ``INVALID_INPUT``: NaN or Inf in p or seed; q is NaN.
 
@@ -192,13 +194,16 @@ class Leg:
         """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table."""
         return LegSolutions(*self._core.ik_all(p))
 
-    def nearest_reachable(self, p: ArrayLike) -> np.ndarray:
+    def nearest_reachable(self, p: ArrayLike, within_limits: bool = False) -> np.ndarray:
         """The reachable foot position nearest to p (3,), limits aside.
 
         Radial projection onto the shell of reachable distances; if that lands
         inside the hip-roll cylinder y^2 + z^2 < h1^2, the nearest point on it.
+        ``within_limits``: the shell of the distances the knee reaches inside its
+        limits instead (the hip limits aside): the foot position of ``ik``'s
+        UNREACHABLE answer whenever that answer needs no hip joint brought to a bound.
         """
-        return np.array(self._core.nearest_reachable(np.asarray(p, dtype=np.float64)))
+        return np.array(self._core.nearest_reachable(np.asarray(p, dtype=np.float64), bool(within_limits)))
 
     def __reduce__(self):
         hip_offset, upper, lower, knee_offset, side, name = self._params

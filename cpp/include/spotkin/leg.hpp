@@ -62,6 +62,17 @@ struct JointLimits {
     }
     return all;
   }
+
+  // Each joint wrapped into its limits as wrap_mask does, or, where no 2 pi
+  // shift fits, set to the bound nearest on the circle: always in the limits.
+  void clamp_into(double* q) const noexcept {
+    wrap_mask(q);
+    for (int j = 0; j < N; ++j) {
+      if (q[j] >= lower[j] - kTolerance && q[j] <= upper[j] + kTolerance) continue;
+      const double to_lower = std::fabs(wrap_angle(q[j] - lower[j])), to_upper = std::fabs(wrap_angle(q[j] - upper[j]));
+      q[j] = to_lower <= to_upper ? lower[j] : upper[j];
+    }
+  }
 };
 
 // Largest single-joint move between a and b, measured on the circle.
@@ -187,14 +198,17 @@ class Leg {
   // The point of the reachable set (limits aside) nearest to an unreachable p:
   // the radial projection onto the shell h1^2 + Dmin^2 <= |p|^2 <= h1^2 + Dmax^2,
   // then, if that falls inside the hip-roll cylinder y^2 + z^2 < h1^2, onto the
-  // cylinder (y, z scaled to |h1|, x clamped into the shell).
-  SPOTKIN_INLINE void nearest_reachable(const double* p, double* out) const noexcept {
+  // cylinder (y, z scaled to |h1|, x clamped into the shell). within_limits:
+  // the shell of the distances D the knee reaches inside its limits instead
+  // (D^2 = R^2 + L^2 + 2 L R cos(kn + beta), eq. (I3)).
+  SPOTKIN_INLINE void nearest_reachable(const double* p, double* out, bool within_limits = false) const noexcept {
     const double h1sq = h1_ * h1_;
     const double norm2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-    const double rho_max = std::sqrt(h1sq + d_max_ * d_max_), rho_min = std::sqrt(h1sq + d_min_ * d_min_);
+    const double d_min = within_limits ? d_knee_min_ : d_min_, d_max = within_limits ? d_knee_max_ : d_max_;
+    const double rho_max = std::sqrt(h1sq + d_max * d_max), rho_min = std::sqrt(h1sq + d_min * d_min);
     double q[3] = {p[0], p[1], p[2]};
     if (norm2 == 0.0) {
-      q[0] = 0.0, q[1] = h1_, q[2] = -d_min_;
+      q[0] = 0.0, q[1] = h1_, q[2] = -d_min;
     } else {
       const double norm = std::sqrt(norm2);
       const double scale = std::clamp(norm, rho_min, rho_max) / norm;
@@ -208,7 +222,7 @@ class Leg {
       } else {
         q[1] = h1_, q[2] = 0.0;
       }
-      const double ax = std::clamp(std::fabs(q[0]), d_min_, d_max_);
+      const double ax = std::clamp(std::fabs(q[0]), d_min, d_max);
       q[0] = std::copysign(ax, q[0]);
     }
     out[0] = q[0], out[1] = q[1], out[2] = q[2];
@@ -274,12 +288,25 @@ class Leg {
     inv_2LR_ = 1.0 / (2.0 * g_.lower * R);
     d_max_ = R + g_.lower;
     d_min_ = std::fabs(R - g_.lower);
+    // cos(psi) over the knee's limits, psi = kn + beta in [lo, hi]: 1 (or -1) if
+    // the interval holds a multiple of 2 pi (or pi plus one), else its ends'
+    const double lo = limits_.lower[2] + beta_, hi = limits_.upper[2] + beta_, two_pi = 2.0 * kPi<double>;
+    double cos_max = 1.0, cos_min = -1.0;
+    if (std::isfinite(lo) && std::isfinite(hi) && hi - lo < two_pi) {
+      const bool has_zero = std::floor(hi / two_pi) * two_pi >= lo;
+      const bool has_pi = std::floor((hi - kPi<double>) / two_pi) * two_pi + kPi<double> >= lo;
+      cos_max = has_zero ? 1.0 : std::max(std::cos(lo), std::cos(hi));
+      cos_min = has_pi ? -1.0 : std::min(std::cos(lo), std::cos(hi));
+    }
+    const double sum_sq = R * R + g_.lower * g_.lower, twice_LR = 2.0 * g_.lower * R;
+    d_knee_max_ = std::sqrt(std::max(0.0, sum_sq + twice_LR * cos_max));
+    d_knee_min_ = std::sqrt(std::max(0.0, sum_sq + twice_LR * cos_min));
   }
 
   LegGeometry g_;
   JointLimits<3> limits_;
   double h1_ = 0, beta_ = 0, cos_beta_ = 1, sin_beta_ = 0, knee_sum_sq_ = 0, inv_2LR_ = 0;
-  double d_max_ = 0, d_min_ = 0;
+  double d_max_ = 0, d_min_ = 0, d_knee_max_ = 0, d_knee_min_ = 0;  // reach; with the knee in its limits
 };
 
 // Batched leg kernels over `count` targets (row-major (count, 3) inputs).
@@ -322,14 +349,21 @@ SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], bool 
   return exists ? Status::JointLimit : Status::Unreachable;
 }
 
-// Slot 0 of the nearest reachable point: the documented UNREACHABLE answer.
+// The documented UNREACHABLE answer, always inside the limits: the branches
+// for the point nearest to p that the knee reaches inside its limits
+// (nearest_reachable within_limits); the first slot inside all the limits,
+// else slot 0 with each joint brought into its limits (clamp_into).
 template <typename T>
 SPOTKIN_INLINE void unreachable_fallback(const Leg& leg, double x, double y, double z, T* q_out) noexcept {
   const double p[3] = {x, y, z};
   double nearest[3], q_all[Leg::kSlots][3];
-  leg.nearest_reachable(p, nearest);
+  leg.nearest_reachable(p, nearest, /*within_limits=*/true);
   leg.solve_all(nearest[0], nearest[1], nearest[2], q_all, /*force=*/true);
-  for (int j = 0; j < 3; ++j) q_out[j] = T(q_all[0][j]);
+  int chosen = -1;
+  for (int k = 0; k < Leg::kSlots && chosen < 0; ++k)
+    if (leg.limits().wrap_mask(q_all[k]) != 0.0) chosen = k;
+  if (chosen < 0) leg.limits().clamp_into(q_all[chosen = 0]);
+  for (int j = 0; j < 3; ++j) q_out[j] = T(q_all[chosen][j]);
 }
 
 // 1.0 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).

@@ -218,10 +218,11 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
     ties to the lowest slot; with no seed the lowest valid slot. -> OK.
     Solutions exist but none valid -> (NaN, JOINT_LIMIT).
     Non-finite p -> (NaN, INVALID_INPUT).
-    No solution -> UNREACHABLE with slot 0 (hip normal, knee back) of
-    nearest_reachable(p): the leg stretched or folded toward the target, its
-    foot at the reachable point nearest to it. Joint limits are NOT applied to
-    this fallback; angles are wrapped to (-pi, pi].
+    No solution -> UNREACHABLE with a configuration inside the limits: the
+    four branches (ratios clamped) for nearest_reachable(p, knee_limits=(lower[2],
+    upper[2])), the leg stretched or folded toward the target as far as the
+    knee's limits allow; the first slot inside all the limits
+    (wrap_into_limits), else slot 0 with each joint clamped (clamp_into_limits).
     """
     nan3 = np.full(3, np.nan)
     x, y, z = float(p[0]), float(p[1]), float(p[2])
@@ -246,18 +247,55 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
             return nan3, JOINT_LIMIT
         return best, OK
 
-    # Unreachable: slot 0 of the nearest reachable point (ratios clamped).
-    xs, ys, zs = nearest_reachable(p, h1, U, L, k)
+    # Unreachable: the branches of the nearest point the knee reaches in its limits (ratios clamped).
+    xs, ys, zs = nearest_reachable(p, h1, U, L, k, knee_limits=(lower[2], upper[2]))
     r = math.hypot(ys, zs)
-    hx = 0.0 if r == 0.0 else math.atan2(zs, ys) + math.acos(min(1.0, max(-1.0, h1 / r)))
+    a_hip = math.acos(min(1.0, max(-1.0, h1 / r))) if r > 0.0 else 0.0
     ratio, beta = _knee_ratio(xs * xs + ys * ys + zs * zs - h1 * h1, U, L, k)
-    kn = -beta - math.acos(min(1.0, max(-1.0, ratio)))
-    hy = _hip_pitch(xs, ys, zs, hx, kn, U, L, k)
-    return np.array([wrap_angle(hx), wrap_angle(hy), wrap_angle(kn)]), UNREACHABLE
+    a_knee = math.acos(min(1.0, max(-1.0, ratio)))
+    slots = []
+    for hx in (math.atan2(zs, ys) + a_hip, math.atan2(zs, ys) - a_hip):
+        hx = hx if r > 0.0 else 0.0
+        for kn in (-beta - a_knee, -beta + a_knee):
+            hy = _hip_pitch(xs, ys, zs, hx, kn, U, L, k)
+            slots.append(np.array([wrap_angle(hx), wrap_angle(hy), wrap_angle(kn)]))
+    for q_slot in slots:
+        q_wrapped, ok = wrap_into_limits(q_slot, lower, upper)
+        if ok:
+            return q_wrapped, UNREACHABLE
+    return clamp_into_limits(slots[0], lower, upper), UNREACHABLE
 
 
-def nearest_reachable(p, h1, U, L, k):
-    """The point of the reachable set (limits aside) nearest to p.
+def clamp_into_limits(q, lower, upper):
+    """Each joint wrapped into its limits (wrap_into_limits), or, where no 2 pi shift fits, set to
+    the bound nearest to it on the circle."""
+    out, _ = wrap_into_limits(q, lower, upper)
+    for i in range(3):
+        if not (lower[i] - _LIMIT_TOL <= out[i] <= upper[i] + _LIMIT_TOL):
+            to_lower, to_upper = abs(wrap_angle(out[i] - lower[i])), abs(wrap_angle(out[i] - upper[i]))
+            out[i] = lower[i] if to_lower <= to_upper else upper[i]
+    return out
+
+
+def knee_reach(U, L, k, knee_limits=None):
+    """(Dmin, Dmax): the distances hy -> foot the knee reaches, eq. (I3):
+    D^2 = R^2 + L^2 + 2 L R cos(kn + beta), over every kn or over knee_limits (lo, hi).
+    The extremes of cos(psi) over the interval lie at its ends or at a multiple of pi inside it."""
+    R, beta = math.hypot(U, k), math.atan2(k, U)
+    lo, hi = (-math.inf, math.inf) if knee_limits is None else knee_limits
+    if not (math.isfinite(lo) and math.isfinite(hi)) or hi - lo >= 2 * math.pi:
+        cosines = [1.0, -1.0]
+    else:
+        lo, hi = lo + beta, hi + beta
+        multiples_of_pi = range(math.ceil(lo / math.pi), math.floor(hi / math.pi) + 1)
+        cosines = [math.cos(lo), math.cos(hi)] + [math.cos(m * math.pi) for m in multiples_of_pi]
+    d2 = [R * R + L * L + 2.0 * L * R * c for c in cosines]
+    return math.sqrt(max(0.0, min(d2))), math.sqrt(max(0.0, max(d2)))
+
+
+def nearest_reachable(p, h1, U, L, k, knee_limits=None):
+    """The point of the reachable set (limits aside) nearest to p; with knee_limits (lo, hi),
+    of the set reachable with the knee inside them (Dmin, Dmax from knee_reach).
 
     The reachable set is the shell h1^2 + Dmin^2 <= |p|^2 <= h1^2 + Dmax^2
     (Dmax = R + L, Dmin = |R - L|, R = hypot(U, k); eq. (I3)) outside the
@@ -266,8 +304,7 @@ def nearest_reachable(p, h1, U, L, k):
     cylinder); if it lands inside, (y, z) is pushed out to radius |h1| and
     |x| clamped into [Dmin, Dmax]. p = 0 maps to (0, h1, -Dmin).
     """
-    R = math.hypot(U, k)
-    d_max, d_min = R + L, abs(R - L)
+    d_min, d_max = knee_reach(U, L, k, knee_limits)
     x, y, z = float(p[0]), float(p[1]), float(p[2])
     norm = math.sqrt(x * x + y * y + z * z)
     if norm == 0.0:
