@@ -67,3 +67,14 @@ def test_6r_from_table(measure, impl, n):
     T = T[0] if n == 1 else T
     func = ARM.ik_all if impl.startswith("ref:") else ARM_CHAIN.ik
     measure("6R spherical wrist, all 8", n, impl, func, T)
+
+
+@pytest.mark.parametrize("n", [1, 100_000])
+@pytest.mark.parametrize("impl", ["Chain.ik_nearest-1thread", "ref:SpotArm.ik-1thread"])
+def test_6r_nearest_from_table(measure, impl, n):
+    rng = np.random.default_rng(2)
+    T = ARM.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
+    seed = rng.uniform(-np.pi, np.pi, (n, 6))
+    T, seed = (T[0], seed[0]) if n == 1 else (T, seed)
+    func = ARM.ik if impl.startswith("ref:") else ARM_CHAIN.ik_nearest
+    measure("6R nearest to a seed", n, impl, func, T, seed)

@@ -27,6 +27,8 @@ rows = np.array([(0, 0, 0, 0.3, 0), (0, 0.05, -np.pi / 2, 0, -np.pi / 2), (0, 0.
                  (0, 0.03, -np.pi / 2, 0.42, 0), (0, 0, np.pi / 2, 0, 0), (0, 0, -np.pi / 2, 0, 0)])
 chain = sk.Chain.from_mdh(rows, tool=sk.translation([0, 0, 0.1]))
 q6 = np.full(6, 0.3)
+q3 = np.array([0.1, 0.9, -1.5])
+T6 = chain.fk(q6 + 0.1)
 targets = {"chain6.fk": 2.0, "chain6.jacobian": 2.0, "leg.ik": 1.0}
 targets.update({"arm.ik": 2.0, "arm.ik_all": 2.0, "body_ik": 1.5})
 calls = {
@@ -37,6 +39,10 @@ calls = {
     "leg.ik_all": lambda: leg.ik_all(p),
     "arm.ik": lambda: arm.ik(T),
     "arm.ik_all": lambda: arm.ik_all(T),
+    "leg.ik(p, seed)": lambda: leg.ik(p, q3),
+    "arm.ik(T, seed)": lambda: arm.ik(T, q6),
+    "chain6.ik": lambda: chain.ik(T6),
+    "chain6.ik_nearest": lambda: chain.ik_nearest(T6, q6),
     "body_ik": lambda: spot.body_ik(pose, feet),
     "body_fk": lambda: spot.body_fk(pose, q12),
 }

@@ -566,3 +566,96 @@ def test_round_trip_property(q, pattern):
     assert len(ours) >= 1
     assert np.linalg.norm(chain.fk(ours)[:, :3, 3] - p, axis=-1).max() < 1e-9
     assert min(joint_distance(s, q, chain.sigma) for s in ours) < 1e-5
+
+
+# -- one solution per target: ik_nearest --------------------------------------------------------------------
+
+
+def nearest_by_hand(sol, seed, sigma):
+    """NumPy oracle: the valid slot with the smallest largest-single-joint move (ties: lower slot)."""
+    move = sol.q - np.asarray(seed)[..., None, :]
+    revolute = np.asarray(sigma) == 0
+    move[..., revolute] = np.abs(np.mod(move[..., revolute] + np.pi, 2 * np.pi) - np.pi)
+    distance = np.where(sol.valid, np.abs(move).max(axis=-1), np.inf)
+    best = np.argmin(distance, axis=-1)  # first minimum: the lower slot
+    q = np.take_along_axis(sol.q, best[..., None, None], axis=-2)[..., 0, :]
+    return np.where((sol.status == sk.Status.OK)[..., None], q, np.nan)
+
+
+@pytest.mark.parametrize("kind", ["3R", "6R"])
+def test_ik_nearest_picks_the_valid_solution_nearest_to_the_seed(rng, kind):
+    if kind == "3R":
+        chain = chain_with_closed_form(rng, "mdh", "RRR")
+        chain = sk.Chain(chain.rows, convention="mdh", base=chain.base, tool=chain.tool,
+                         limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)])
+        target = chain.fk(rng.uniform(-np.pi, np.pi, (300, 3)))[:, :3, 3]
+        target[5] *= 50.0  # unreachable
+        sol = chain.ik_position(target)
+    else:
+        chain = spot_arm_chain()
+        target = chain.fk(rng.uniform(-np.pi, np.pi, (300, 6)))
+        target[5, :3, 3] *= 4.0
+        sol = chain.ik(target)
+    seed = rng.uniform(-np.pi, np.pi, (300, chain.dof))
+    q, status = chain.ik_nearest(target, seed)
+    np.testing.assert_array_equal(status, sol.status)
+    np.testing.assert_array_equal(q, nearest_by_hand(sol, seed, chain.sigma))
+    assert (status == sk.Status.OK).any() and (status == sk.Status.JOINT_LIMIT).any() and status[5] == 1
+    # without a seed: the lowest valid slot
+    q, status = chain.ik_nearest(target)
+    first = np.argmax(sol.valid, axis=-1)
+    expected = np.take_along_axis(sol.q, first[:, None, None], axis=-2)[:, 0]
+    np.testing.assert_array_equal(q, np.where((sol.status == sk.Status.OK)[:, None], expected, np.nan))
+    # one seed broadcast over every target, and a single target
+    q_one, _ = chain.ik_nearest(target, seed[0])
+    np.testing.assert_array_equal(q_one, chain.ik_nearest(target, np.broadcast_to(seed[0], seed.shape))[0])
+    q_single, status_single = chain.ik_nearest(target[0], seed[0])
+    assert q_single.shape == (chain.dof,) and isinstance(status_single, sk.Status)
+    np.testing.assert_array_equal(q_single, q_one[0])
+
+
+def test_ik_nearest_agrees_with_the_spot_arm_solver(rng):
+    arm, chain = SPOT.arm, spot_arm_chain()
+    T = arm.fk(rng.uniform(-np.pi, np.pi, (500, 6)))
+    seed = rng.uniform(-np.pi, np.pi, (500, 6))
+    (q, status), (q_arm, status_arm) = chain.ik_nearest(T, seed), arm.ik(T, seed)
+    np.testing.assert_array_equal(status, status_arm)
+    ok = status == sk.Status.OK
+    assert ok.mean() > 0.3
+    assert np.isnan(q[~ok]).all()
+
+    def largest_move(a):
+        return np.abs(np.mod(a - seed + np.pi, 2 * np.pi) - np.pi).max(axis=-1)
+
+    # the same distance; the same solution unless two tie (the largest move often sits in a joint
+    # that two solutions share; ties go to the lower slot, and the two solvers number slots differently)
+    np.testing.assert_allclose(largest_move(q)[ok], largest_move(q_arm)[ok], rtol=0, atol=1e-9)
+    same = np.abs(np.mod(q - q_arm + np.pi, 2 * np.pi) - np.pi).max(axis=-1) < 1e-8
+    all_sols = chain.ik(T)
+    moves = np.abs(np.mod(all_sols.q - seed[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=-1)
+    ties = np.sum(all_sols.valid & (np.abs(moves - largest_move(q)[:, None]) < 1e-9), axis=-1) > 1
+    assert (same | ties)[ok].all() and same[ok].mean() > 0.8
+
+
+def test_ik_nearest_bad_input():
+    chain = spot_arm_chain()
+    T = chain.fk(np.zeros((2, 6)))
+    q, status = chain.ik_nearest(T, np.array([[np.nan] * 6, [0.0] * 6]))
+    np.testing.assert_array_equal(status, [sk.Status.INVALID_INPUT, sk.Status.OK])
+    assert np.isnan(q[0]).all() and np.isfinite(q[1]).all()
+    with pytest.raises(ValueError, match="seed"):
+        chain.ik_nearest(T, np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="broadcast"):
+        chain.ik_nearest(T, np.zeros((3, 6)))
+    with pytest.raises(TypeError, match="seed"):
+        chain.ik_nearest(T, "zero")
+    rows = [(0, 0.0, 0.0, 0.0, 0.0), (0, 0.0, np.pi / 2, 0.1, 0.0), (0, 0.3, 0.0, 0.0, 0.0)]
+    three = sk.Chain.from_mdh(rows, tool=sk.translation([0.3, 0.0, 0.0]))
+    with pytest.raises(ValueError, match=r"p must have shape \(\.\.\., 3\)"):
+        three.ik_nearest(np.zeros((2, 4)))
+    q, status = three.ik_nearest(np.full(3, np.inf))
+    assert status == sk.Status.INVALID_INPUT and np.isnan(q).all()
+    q, status = three.ik_nearest(np.zeros((0, 3)), np.zeros((0, 3)))
+    assert q.shape == (0, 3) and status.shape == (0,)
+    q32, _ = three.ik_nearest(np.array([0.3, 0.2, 0.1], dtype=np.float32))
+    assert q32.dtype == np.float32

@@ -87,6 +87,22 @@ SPOTKIN_MULTIVERSION void wrist_kernel(const SphericalWrist6& solver, const Limi
     chain_ik::ik_wrist<PoseFormat::PositionQuaternion>(solver, limits, poses, q, valid, exists, status, n);
 }
 
+template <typename T>
+SPOTKIN_MULTIVERSION void position_nearest_kernel(const Position3& solver, const Limits& limits, const T* p,
+                                                  const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n) {
+  chain_ik::ik_position_nearest(solver, limits, p, seed, q, status, n);
+}
+
+template <typename T>
+SPOTKIN_MULTIVERSION void wrist_nearest_kernel(const SphericalWrist6& solver, const Limits& limits,
+                                               const T* poses, PoseFormat format, const T* seed, T* q,
+                                               std::int8_t* status, std::ptrdiff_t n) {
+  if (format == PoseFormat::Matrix)
+    chain_ik::ik_wrist_nearest<PoseFormat::Matrix>(solver, limits, poses, seed, q, status, n);
+  else
+    chain_ik::ik_wrist_nearest<PoseFormat::PositionQuaternion>(solver, limits, poses, seed, q, status, n);
+}
+
 // The shared tail: (q, valid, exists, status) arrays, filled on thread chunks.
 template <typename T, typename Kernel>
 py::object solutions(const Shape& leading, py::ssize_t slots, py::ssize_t dof, std::ptrdiff_t in_width,
@@ -107,6 +123,60 @@ py::object solutions(const Shape& leading, py::ssize_t slots, py::ssize_t dof, s
   }
   if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));
   return py::make_tuple(q, valid, exists, status);
+}
+
+// One solution per target: (q (..., dof), status (...)), filled on thread chunks.
+// seed None or (..., dof) with the targets' leading shape.
+template <typename T, typename Kernel>
+py::object nearest(const Shape& leading, py::ssize_t dof, std::ptrdiff_t in_width, const T* in,
+                   py::handle seed_obj, const char* target_name, Kernel&& kernel) {
+  py::array_t<T, py::array::c_style> seed;  // default-constructed: an empty array, not null
+  const bool has_seed = !seed_obj.is_none();
+  if (has_seed) {
+    py::array seed_arr = as_real_array(seed_obj, "seed");
+    const Shape seed_leading = leading_shape(seed_arr, "seed", {dof});
+    if (seed_leading != leading)
+      throw py::value_error("seed must have shape " + format_shape(leading) + " + (" + std::to_string(dof) +
+                            ",), the leading shape of " + target_name + ", got " + format_shape(seed_leading) +
+                            " + (" + std::to_string(dof) + ",)");
+    seed = contiguous<T>(seed_arr);
+  }
+  auto q = new_array<T>(leading, {dof});
+  auto status = new_array<std::int8_t>(leading, {});
+  const T* sd = has_seed ? seed.data() : nullptr;
+  T* qd = q.mutable_data();
+  std::int8_t* st = status.mutable_data();
+  {
+    ReleaseGilFor release(count(leading));
+    parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+      kernel(in + in_width * b, sd ? sd + dof * b : nullptr, qd + dof * b, st + b, e - b);
+    });
+  }
+  if (leading.empty()) return py::make_tuple(q, status_object(status.data()[0]));
+  return py::make_tuple(q, status);
+}
+
+py::object ik_nearest(const ChainIK& ik, py::handle target_obj, py::handle seed_obj) {
+  if (ik.position)
+    return dispatch_real(target_obj, "p", [&](auto tag, py::array arr) -> py::object {
+      using T = decltype(tag);
+      const Shape leading = leading_shape(arr, "p", {3});
+      auto p = contiguous<T>(arr);
+      return nearest<T>(leading, 3, 3, p.data(), seed_obj, "p", [&](const T* in, const T* sd, T* q, std::int8_t* st,
+                                                                    std::ptrdiff_t n) {
+        position_nearest_kernel<T>(*ik.position, ik.limits, in, sd, q, st, n);
+      });
+    });
+  return dispatch_real(target_obj, "T", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const auto [format, leading] = pose_shape(arr, "T");
+    auto poses = contiguous<T>(arr);
+    const PoseFormat fmt = format;
+    return nearest<T>(leading, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(), seed_obj, "T",
+                      [&](const T* in, const T* sd, T* q, std::int8_t* st, std::ptrdiff_t n) {
+                        wrist_nearest_kernel<T>(*ik.wrist, ik.limits, in, fmt, sd, q, st, n);
+                      });
+  });
 }
 
 py::object ik_position(const ChainIK& ik, py::handle p_obj) {
@@ -146,7 +216,8 @@ void bind_chain_ik(py::module_& m) {
       .def_property_readonly("kind", &ChainIK::kind)
       .def_property_readonly("position_kind", &ChainIK::position_kind)
       .def("ik_position", &ik_position, py::arg("p"))
-      .def("ik", &ik_pose, py::arg("T"));
+      .def("ik", &ik_pose, py::arg("T"))
+      .def("ik_nearest", &ik_nearest, py::arg("target"), py::arg("seed") = py::none());
 }
 
 }  // namespace spotkin::bindings

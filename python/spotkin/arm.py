@@ -107,6 +107,8 @@ def pose_from(position: ArrayLike, quat_xyzw: ArrayLike) -> np.ndarray:
 def _broadcast_seed(T: ArrayLike, seed: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     T, seed = np.asarray(T), np.asarray(seed)
     trailing = 2 if T.shape[-2:] == (4, 4) else 1
+    if T.shape[:-trailing] == seed.shape[:-1]:
+        return T, seed  # nothing to broadcast (the common case: a few microseconds saved per call)
     try:
         lead = np.broadcast_shapes(T.shape[:-trailing], seed.shape[:-1])
     except ValueError:

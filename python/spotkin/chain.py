@@ -8,6 +8,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from .arm import _broadcast_seed
+from .leg import _broadcast_pair
 
 __all__ = ["Chain", "ChainSolutions", "IKDifferentialInfo"]
 
@@ -267,6 +269,27 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT.
         """
         return ChainSolutions(*self._ik_core().ik(T))
+
+    def ik_nearest(self, target: ArrayLike, seed: ArrayLike | None = None):
+        """One closed-form solution per target: (q (..., dof), status (...,)).
+
+        ``target`` is what :meth:`ik_position` (3-joint chains: p (..., 3)) or :meth:`ik`
+        (6-joint chains: T (..., 4, 4) or (..., 7)) takes; of its solutions, the one within
+        the limits nearest to ``seed`` (..., dof) (the largest single-joint move: on the circle
+        for a revolute joint, plain for a prismatic one; ties to the lower slot), or the lowest
+        valid slot without a seed. Status as in :class:`ChainSolutions`; q is NaN unless it is
+        OK; a seed with NaN or Inf gives INVALID_INPUT. The seed broadcasts against the
+        target's leading dimensions. Runs in C++ per block of targets, with no temporary
+        array of every solution (for control loops and large batches alike).
+        """
+        if seed is None:
+            return self._ik_core().ik_nearest(target, None)
+        if self.dof == 3:
+            target, seed = _broadcast_pair(target, seed, "p", "seed")
+        else:
+            target, seed = _broadcast_seed(target, seed)
+        return self._ik_core().ik_nearest(target, seed)
+
     def ik_differential(
         self,
         T_targets: ArrayLike,
