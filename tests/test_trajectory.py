@@ -506,6 +506,16 @@ def test_path_nan_and_empty_times():
     poses = PATH.sample(np.array([0.1, math.nan]), form="quaternion")
     assert np.isnan(poses[1]).all() and np.isfinite(poses[0]).all()
     assert PATH.sample(np.zeros((0, 3))).shape == (0, 3, 4, 4)
+    # a long batch (blocks of samples inside) mixing NaN, clamped, blend and segment times, against one
+    # time at a time
+    t = np.linspace(-0.5, PATH.duration + 0.5, 203)
+    t[[0, 63, 64, 130]] = math.nan
+    for form in ("matrix", "quaternion"):
+        batch, twist = PATH.sample(t, form=form, twist=True)
+        for i, ti in enumerate(t):
+            one, one_twist = PATH.sample(ti, form=form, twist=True)
+            np.testing.assert_array_equal(batch[i], one)
+            np.testing.assert_array_equal(twist[i], one_twist)
 
 
 # ---- through the whole-body IK ------------------------------------------------------------------

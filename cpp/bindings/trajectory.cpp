@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -19,6 +20,13 @@ namespace tj = spotkin::trajectory;
 
 constexpr std::ptrdiff_t kMinPerThreadJoint = min_chunk(10.0);  // ~10 ns per 6-axis sample
 constexpr std::ptrdiff_t kMinPerThreadPath = min_chunk(60.0);   // two quaternion exps per sample
+
+// The path sampler compiled per CPU level (its sin/cos loop vectorises).
+template <typename T>
+SPOTKIN_MULTIVERSION void sample_path_kernel(const tj::WaypointPath& path, tj::PoseForm form, const T* t, T* pose,
+                                             T* twist, std::ptrdiff_t n) {
+  tj::sample(path, form, t, pose, twist, n);
+}
 
 Shape shape_of(const py::array& arr) { return Shape(arr.shape(), arr.shape() + arr.ndim()); }
 
@@ -198,7 +206,7 @@ class WaypointPathCore {
       {
         ReleaseGilFor release(count(leading));
         parallel_for(count(leading), kMinPerThreadPath, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-          tj::sample(path, pose_form, td + b, pd + width * b, wd ? wd + 6 * b : nullptr, e - b);
+          sample_path_kernel<T>(path, pose_form, td + b, pd + width * b, wd ? wd + 6 * b : nullptr, e - b);
         });
       }
       if (with_twist) return py::make_tuple(pose, twist);

@@ -23,6 +23,9 @@
 #include <cstddef>
 #include <limits>
 
+#include "spotkin/common.hpp"
+#include "spotkin/vector_math.hpp"
+
 namespace spotkin::trajectory {
 
 enum class Profile : int { Cubic = 0, Quintic = 1, Trapezoid = 2 };
@@ -159,12 +162,6 @@ inline Quat<Scalar> operator*(const Quat<Scalar>& a, const Quat<Scalar>& b) noex
           a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
 }
 
-// exp of the rotation by `angle` about the unit `axis`; the identity for a zero axis.
-inline Quat<double> axis_angle(const double* axis, double angle) noexcept {
-  const double half = 0.5 * angle, sh = std::sin(half), ch = std::cos(half);
-  return {sh * axis[0], sh * axis[1], sh * axis[2], ch};
-}
-
 // v rotated by the unit quaternion q: v + 2 w (u x v) + 2 u x (u x v).
 template <typename Scalar>
 inline void rotate(const Quat<Scalar>& q, const Scalar* v, Scalar* out) noexcept {
@@ -205,88 +202,131 @@ enum class PoseForm : int { Matrix = 0, Quaternion = 1 };
 // Pose (row-major 4x4, or [x, y, z, qx, qy, qz, qw]) and, if twist != nullptr,
 // the world twist [v; w] at each of the n times t. Times outside [0, duration]
 // clamp to the end poses with a zero twist; a NaN time gives NaN outputs.
+// Blocks of samples: (1) per sample, the segment or blend and the two rotation
+// angles of exp(w_{k-1} f1) and exp(w_k f2) (or exp(w_k tau)); (2) their sines
+// and cosines in one vectorised loop; (3) per sample, the pose and twist.
+// (SPOTKIN_INLINE: compiled into each CPU-level clone of its caller.)
 template <typename Scalar>
-void sample(const WaypointPath& path, PoseForm form, const Scalar* t, Scalar* pose, Scalar* twist,
-            std::ptrdiff_t n) noexcept {
+SPOTKIN_INLINE void sample(const WaypointPath& path, PoseForm form, const Scalar* t, Scalar* pose, Scalar* twist,
+                           std::ptrdiff_t n) noexcept {
+  enum Kind : int { kNaN, kAtRest, kBlend, kSegment };
+  constexpr std::ptrdiff_t B = 64;
   const std::ptrdiff_t W = path.count;
   const std::ptrdiff_t width = form == PoseForm::Matrix ? 16 : 7;
   const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-  for (std::ptrdiff_t i = 0; i < n; ++i, pose += width) {
-    Scalar* tw = twist ? twist + 6 * i : nullptr;
-    const double ti = static_cast<double>(t[i]);
-    if (std::isnan(ti)) {
-      for (std::ptrdiff_t c = 0; c < width; ++c) pose[c] = nan;
-      if (tw)
-        for (int c = 0; c < 6; ++c) tw[c] = nan;
-      continue;
-    }
-    double p[3], vel[3] = {0, 0, 0}, omega[3] = {0, 0, 0};
-    Quat<double> q;
-    std::ptrdiff_t k;
-    if (!(ti > 0.0) || ti >= path.duration) {  // clamped to an end, at rest
-      k = ti > 0.0 ? W - 1 : 0;
-      for (int c = 0; c < 3; ++c) p[c] = path.positions[3 * k + c];
-      const double* Q = path.quaternions + 4 * k;
-      q = {Q[0], Q[1], Q[2], Q[3]};
-    } else {
+  static constexpr double zero[3] = {0, 0, 0};
+  int kind[B];
+  std::ptrdiff_t segment[B];
+  double tau[B], f1[B], f2[B], g2[B], half1[B], half2[B], s1[B], c1[B], s2[B], c2[B];
+  for (std::ptrdiff_t b0 = 0; b0 < n; b0 += B) {
+    const std::ptrdiff_t m = std::min(B, n - b0);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // (1)
+      const double ti = static_cast<double>(t[b0 + i]);
+      half1[i] = half2[i] = 0.0;
+      if (std::isnan(ti)) {
+        kind[i] = kNaN;
+        continue;
+      }
+      if (!(ti > 0.0) || ti >= path.duration) {  // clamped to an end, at rest
+        kind[i] = kAtRest, segment[i] = ti > 0.0 ? W - 1 : 0;
+        continue;
+      }
       // the last waypoint whose blend has started
-      k = std::upper_bound(path.blend_starts, path.blend_starts + W, ti) - path.blend_starts - 1;
+      std::ptrdiff_t k = std::upper_bound(path.blend_starts, path.blend_starts + W, ti) - path.blend_starts - 1;
       k = std::max<std::ptrdiff_t>(k, 0);
-      const double tau = ti - path.times[k], b = path.blends[k];
+      const double tk = ti - path.times[k], bk = path.blends[k];
+      segment[i] = k, tau[i] = tk;
+      if ((tk <= 0.5 * bk && bk > 0.0) || k == W - 1) {  // blend around waypoint k
+        const double u = std::min(std::max(tk + 0.5 * bk, 0.0), bk);
+        f2[i] = bk > 0.0 ? 0.5 * u * u / bk : 0.0, f1[i] = tk - f2[i];
+        g2[i] = bk > 0.0 ? u / bk : 0.0;
+        kind[i] = kBlend;
+        // exp(w f) = rotation by |w| f about w / |w|; the end blends have one zero factor
+        half1[i] = k > 0 ? 0.5 * path.rates[k - 1] * f1[i] : 0.0;
+        half2[i] = k < W - 1 ? 0.5 * path.rates[k] * f2[i] : 0.0;
+      } else {  // straight segment k
+        kind[i] = kSegment;
+        half2[i] = 0.5 * path.rates[k] * tk;
+      }
+    }
+    bool bounded = true;  // |angle| within the inline sin/cos's range (always, short of absurd rates)
+    for (std::ptrdiff_t i = 0; i < m; ++i)
+      bounded &= std::fabs(half1[i]) < vector_math::kReducibleLimit && std::fabs(half2[i]) < vector_math::kReducibleLimit;
+    if (bounded) {  // (2)
+      for (std::ptrdiff_t i = 0; i < m; ++i) vector_math::sincos_bounded(half1[i], s1[i], c1[i]);
+      for (std::ptrdiff_t i = 0; i < m; ++i) vector_math::sincos_bounded(half2[i], s2[i], c2[i]);
+    } else {
+      for (std::ptrdiff_t i = 0; i < m; ++i)
+        s1[i] = std::sin(half1[i]), c1[i] = std::cos(half1[i]), s2[i] = std::sin(half2[i]), c2[i] = std::cos(half2[i]);
+    }
+    for (std::ptrdiff_t i = 0; i < m; ++i, pose += width) {  // (3)
+      Scalar* tw = twist ? twist + 6 * (b0 + i) : nullptr;
+      if (kind[i] == kNaN) {
+        for (std::ptrdiff_t c = 0; c < width; ++c) pose[c] = nan;
+        if (tw)
+          for (int c = 0; c < 6; ++c) tw[c] = nan;
+        continue;
+      }
+      const std::ptrdiff_t k = segment[i];
+      double p[3], vel[3] = {0, 0, 0}, omega[3] = {0, 0, 0};
       const double* P = path.positions + 3 * k;
       const double* Q = path.quaternions + 4 * k;
       const Quat<double> Qk{Q[0], Q[1], Q[2], Q[3]};
-      if ((tau <= 0.5 * b && b > 0.0) || k == W - 1) {  // blend around waypoint k
-        static constexpr double zero[3] = {0, 0, 0};
-        const double* v0 = k > 0 ? path.linear + 3 * (k - 1) : zero;
-        const double* w0 = k > 0 ? path.angular + 3 * (k - 1) : zero;
-        const double* v1 = k < W - 1 ? path.linear + 3 * k : zero;
-        const double* w1 = k < W - 1 ? path.angular + 3 * k : zero;
-        const double u = std::min(std::max(tau + 0.5 * b, 0.0), b);
-        const double f2 = b > 0.0 ? 0.5 * u * u / b : 0.0, f1 = tau - f2;
-        const double g2 = b > 0.0 ? u / b : 0.0, g1 = 1.0 - g2;
-        // exp(w f) = rotation by |w| f about w / |w|; the end blends have one zero factor
-        const Quat<double> A = k > 0 ? axis_angle(path.axes + 3 * (k - 1), path.rates[k - 1] * f1)
-                                     : Quat<double>{0, 0, 0, 1};
-        q = k < W - 1 ? A * axis_angle(path.axes + 3 * k, path.rates[k] * f2) * Qk : A * Qk;
-        double w1_rot[3];
-        rotate(A, w1, w1_rot);
-        for (int c = 0; c < 3; ++c) {
-          p[c] = P[c] + v0[c] * f1 + v1[c] * f2;
-          vel[c] = v0[c] * g1 + v1[c] * g2;
-          omega[c] = w0[c] * g1 + w1_rot[c] * g2;
+      Quat<double> q = Qk;
+      if (kind[i] == kAtRest) {
+        for (int c = 0; c < 3; ++c) p[c] = P[c];
+      } else {
+        if (kind[i] == kBlend) {
+          const double* v0 = k > 0 ? path.linear + 3 * (k - 1) : zero;
+          const double* w0 = k > 0 ? path.angular + 3 * (k - 1) : zero;
+          const double* v1 = k < W - 1 ? path.linear + 3 * k : zero;
+          const double* w1 = k < W - 1 ? path.angular + 3 * k : zero;
+          const double* axis0 = k > 0 ? path.axes + 3 * (k - 1) : zero;
+          const double* axis1 = k < W - 1 ? path.axes + 3 * k : zero;
+          const Quat<double> A{s1[i] * axis0[0], s1[i] * axis0[1], s1[i] * axis0[2], c1[i]};
+          const Quat<double> Bq{s2[i] * axis1[0], s2[i] * axis1[1], s2[i] * axis1[2], c2[i]};
+          q = A * Bq * Qk;
+          double w1_rot[3];
+          rotate(A, w1, w1_rot);
+          const double g = g2[i];
+          for (int c = 0; c < 3; ++c) {
+            p[c] = P[c] + v0[c] * f1[i] + v1[c] * f2[i];
+            vel[c] = v0[c] * (1.0 - g) + v1[c] * g;
+            omega[c] = w0[c] * (1.0 - g) + w1_rot[c] * g;
+          }
+        } else {  // straight segment k
+          const double* v = path.linear + 3 * k;
+          const double* w = path.angular + 3 * k;
+          const double* axis = path.axes + 3 * k;
+          q = Quat<double>{s2[i] * axis[0], s2[i] * axis[1], s2[i] * axis[2], c2[i]} * Qk;
+          for (int c = 0; c < 3; ++c) {
+            p[c] = P[c] + v[c] * tau[i];
+            vel[c] = v[c];
+            omega[c] = w[c];
+          }
         }
-      } else {  // straight segment k
-        const double* v = path.linear + 3 * k;
-        const double* w = path.angular + 3 * k;
-        q = axis_angle(path.axes + 3 * k, path.rates[k] * tau) * Qk;
+        const double inv_norm = 1.0 / std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+        q = {q.x * inv_norm, q.y * inv_norm, q.z * inv_norm, q.w * inv_norm};
+      }
+      if (form == PoseForm::Quaternion) {
+        const double out[7] = {p[0], p[1], p[2], q.x, q.y, q.z, q.w};
+        for (int c = 0; c < 7; ++c) pose[c] = static_cast<Scalar>(out[c]);
+      } else {
+        const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+        const double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+        const double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+        const double mtx[16] = {1 - 2 * (yy + zz), 2 * (xy - wz),     2 * (xz + wy),     p[0],
+                                2 * (xy + wz),     1 - 2 * (xx + zz), 2 * (yz - wx),     p[1],
+                                2 * (xz - wy),     2 * (yz + wx),     1 - 2 * (xx + yy), p[2],
+                                0,                 0,                 0,                 1};
+        for (int c = 0; c < 16; ++c) pose[c] = static_cast<Scalar>(mtx[c]);
+      }
+      if (tw)
         for (int c = 0; c < 3; ++c) {
-          p[c] = P[c] + v[c] * tau;
-          vel[c] = v[c];
-          omega[c] = w[c];
+          tw[c] = static_cast<Scalar>(vel[c]);
+          tw[3 + c] = static_cast<Scalar>(omega[c]);
         }
-      }
-      const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-      q = {q.x / norm, q.y / norm, q.z / norm, q.w / norm};
     }
-    if (form == PoseForm::Quaternion) {
-      const double out[7] = {p[0], p[1], p[2], q.x, q.y, q.z, q.w};
-      for (int c = 0; c < 7; ++c) pose[c] = static_cast<Scalar>(out[c]);
-    } else {
-      const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-      const double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
-      const double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-      const double m[16] = {1 - 2 * (yy + zz), 2 * (xy - wz),     2 * (xz + wy),     p[0],
-                            2 * (xy + wz),     1 - 2 * (xx + zz), 2 * (yz - wx),     p[1],
-                            2 * (xz - wy),     2 * (yz + wx),     1 - 2 * (xx + yy), p[2],
-                            0,                 0,                 0,                 1};
-      for (int c = 0; c < 16; ++c) pose[c] = static_cast<Scalar>(m[c]);
-    }
-    if (tw)
-      for (int c = 0; c < 3; ++c) {
-        tw[c] = static_cast<Scalar>(vel[c]);
-        tw[3 + c] = static_cast<Scalar>(omega[c]);
-      }
   }
 }
 
