@@ -449,6 +449,19 @@ def test_batch_shapes_and_dtypes(rng, shape, dtype):
             if ok.any():
                 err = chain.fk(s[ok].astype(np.float64))[:, :3, 3] - target.astype(np.float64)
                 assert np.abs(err).max() < 1e-4
+    # ik_nearest: the same batch semantics (leading shape kept, dtype kept, seed broadcast)
+    seed = rng.uniform(-np.pi, np.pi, (*shape, 3)).astype(dtype)
+    q, status = chain.ik_nearest(p, seed)
+    assert q.shape == (*shape, 3) and q.dtype == dtype
+    if shape == ():
+        assert isinstance(status, sk.Status)
+    else:
+        assert status.shape == shape and status.dtype == np.int8
+    np.testing.assert_array_equal(np.asarray(status), sol.status)
+    q_flat, _ = chain.ik_nearest(p.reshape(n, 3), seed.reshape(n, 3))
+    np.testing.assert_array_equal(q.reshape(n, 3), q_flat)
+    q_one_seed, _ = chain.ik_nearest(p, seed.reshape(n, 3)[0])  # one seed for every target
+    assert q_one_seed.shape == (*shape, 3)
 
 
 def test_non_contiguous_and_empty(rng):
@@ -456,6 +469,9 @@ def test_non_contiguous_and_empty(rng):
     T = chain.fk(rng.uniform(-np.pi, np.pi, (10, 6)))
     strided = np.asfortranarray(T)[::2]
     np.testing.assert_array_equal(chain.ik(strided).q, chain.ik(np.ascontiguousarray(strided)).q)
+    seed = np.asfortranarray(rng.uniform(-np.pi, np.pi, (10, 6)))[::2]
+    contiguous = chain.ik_nearest(np.ascontiguousarray(strided), np.ascontiguousarray(seed))[0]
+    np.testing.assert_array_equal(chain.ik_nearest(strided, seed)[0], contiguous)
     assert chain.ik(np.zeros((0, 4, 4))).q.shape == (0, 8, 6)
     three = chain_with_closed_form(rng, "mdh", "RRR")
     assert three.ik_position(np.zeros((2, 0, 3))).q.shape == (2, 0, 4, 3)
