@@ -13,6 +13,8 @@
 // Type 6:  W sin tj = X cos ti + Y sin ti + Z1,  W cos tj = X sin ti - Y cos ti + Z2.
 //          Squaring and adding: B1 sin ti + B2 cos ti = B3 (type 2) with
 //          B1 = 2 (Z1 Y + Z2 X), B2 = 2 (Z1 X - Z2 Y), B3 = W^2 - X^2 - Y^2 - Z1^2 - Z2^2;
+//          (|B3| within 16 eps (W^2 + X^2 + Y^2 + Z1^2 + Z2^2) beyond hypot(B1, B2), B3's own
+//          rounding, counts as touching: a double root)
 //          then tj from sin tj = (X cos ti + Y sin ti + Z1) / W, cos tj = (X sin ti - Y cos ti + Z2) / W
 //          (type 3, valid when on the unit circle to 1e-9). W = 0: ti from the type-3 system
 //          X cos ti + Y sin ti = -Z1, X sin ti - Y cos ti = -Z2, tj free (reported 0) in slot 0,
@@ -22,6 +24,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "spotkin/common.hpp"
 #include "spotkin/vector_math.hpp"
@@ -29,6 +32,7 @@
 namespace spotkin::paul {
 
 constexpr double kTolerance = 1e-12;  // relative: r^2 - Z^2 >= -tol r^2 counts as a double root
+constexpr double kType6Slack = 16.0 * std::numeric_limits<double>::epsilon();  // type 6: rounding of B3 / scale
 
 // The largest |coefficient| (1 if all are zero or it is not finite): every
 // equation is solved after dividing by it, which leaves the roots unchanged and
@@ -113,8 +117,14 @@ SPOTKIN_INLINE Type6 type6(double W, double X, double Y, double Z1, double Z2) n
     return out;
   }
   const double scale = W * W + X * X + Y * Y + Z1 * Z1 + Z2 * Z2;
-  const Type2 roots = type2(2.0 * (Z1 * Y + Z2 * X), 2.0 * (Z1 * X - Z2 * Y),
-                            W * W - X * X - Y * Y - Z1 * Z1 - Z2 * Z2, 1e-12 * scale);
+  const double B1 = 2.0 * (Z1 * Y + Z2 * X), B2 = 2.0 * (Z1 * X - Z2 * Y);
+  double B3 = W * W - X * X - Y * Y - Z1 * Z1 - Z2 * Z2;
+  // B3 is a difference of squares adding up to `scale`: its rounding (a few eps
+  // scale) can push a double root (|B3| = hypot(B1, B2)) out of reach when B1 and
+  // B2 are small. Within kType6Slack scale of touching, it touches.
+  const double r = std::sqrt(B1 * B1 + B2 * B2);
+  B3 = std::fabs(B3) > r && std::fabs(B3) - r <= kType6Slack * scale ? std::copysign(r, B3) : B3;
+  const Type2 roots = type2(B1, B2, B3, 1e-12 * scale);
   for (int r = 0; r < 2; ++r) {
     if (roots.valid[r] == 0.0) continue;
     double s, c;

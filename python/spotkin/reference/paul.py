@@ -44,6 +44,7 @@ roots, and squares such as X^2 + Y^2 can neither underflow nor overflow.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
@@ -52,6 +53,7 @@ __all__ = ["type2", "type3", "type6", "wrap"]
 TOUCH_TOL = 1e-12  # type 2: X^2 + Y^2 - Z^2 >= -TOUCH_TOL (X^2 + Y^2) counts as a double root
 DET_TOL = 1e-12  # type 3: |det| <= DET_TOL |row1| |row2| counts as degenerate
 CONSISTENCY_TOL = 1e-9  # type 3: |s^2 + c^2 - 1| and the residual of the other equation
+TYPE6_SLACK = 16 * sys.float_info.epsilon  # type 6: rounding of B3, relative to W^2 + X^2 + Y^2 + Z1^2 + Z2^2
 
 
 def wrap(angle: float) -> float:
@@ -160,6 +162,12 @@ def type6(W: float, X: float, Y: float, Z1: float, Z2: float) -> tuple[np.ndarra
     B1 = 2.0 * (Y * Z1 + X * Z2)
     B2 = 2.0 * (X * Z1 - Y * Z2)
     B3 = W * W - X * X - Y * Y - Z1 * Z1 - Z2 * Z2
+    # B3 is a difference of squares summing to `scale`: within its rounding (16 eps scale) of
+    # touching hypot(B1, B2), the equation touches (a double root), not misses
+    scale = W * W + X * X + Y * Y + Z1 * Z1 + Z2 * Z2
+    r = math.sqrt(B1 * B1 + B2 * B2)
+    if abs(B3) > r and abs(B3) - r <= TYPE6_SLACK * scale:
+        B3 = math.copysign(r, B3)
     roots, ok = type2(B1, B2, B3)
     for k in range(2):
         if not ok[k]:
