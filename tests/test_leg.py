@@ -287,6 +287,11 @@ def test_unreachable_returns_nearest_configuration_within_limits(rng):
         assert np.linalg.norm(foot - p) <= np.linalg.norm(samples - p, axis=1).min() + 1e-12
 
 
+def test_nearest_reachable_bad_shape():
+    with pytest.raises(ValueError, match=r"p must have shape \(3,\)"):
+        SPOT.leg("fl").nearest_reachable([1.0, 2.0])
+
+
 def test_knee_limited_reach_matches_sampling():
     """nearest_reachable(within_limits=True) uses the distances the knee reaches in its limits, eq. (I3);
     the reference finds them at the interval's ends and multiples of pi: check both by sampling kn."""

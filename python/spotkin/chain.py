@@ -248,10 +248,9 @@ class Chain:
         |p|); solutions closer than 1e-6 (rad, or length / s) are merged, so a double root comes
         back once. Slots are sorted by (q1, q2, q3), values within 1e-7 counting as equal. A
         target for which a joint is free (on a joint axis) gives one representative with that
-        joint at 0. Unreachable targets get
-        status UNREACHABLE and NaN in every slot; :meth:`fk` of the nearest configuration is
-        not attempted (use a numerical solver for a least-squares answer). The full derivation
-        is in ``spotkin.reference.ik3r``.
+        joint at 0. Unreachable targets get status UNREACHABLE and NaN in every slot; :meth:`fk`
+        of the nearest configuration is not attempted (use a numerical solver for a
+        least-squares answer). The full derivation is in ``spotkin.reference.ik3r``.
         """
         return ChainSolutions(*self._ik_core().ik_position(p))
 

@@ -205,7 +205,10 @@ class Leg:
         limits instead (the hip limits aside): the foot position of ``ik``'s
         UNREACHABLE answer whenever that answer needs no hip joint brought to a bound.
         """
-        return np.array(self._core.nearest_reachable(np.asarray(p, dtype=np.float64), bool(within_limits)))
+        point = np.asarray(p, dtype=np.float64)
+        if point.shape != (3,):
+            raise ValueError(f"p must have shape (3,), got {point.shape}")
+        return np.array(self._core.nearest_reachable(point, bool(within_limits)))
 
     def __reduce__(self):
         hip_offset, upper, lower, knee_offset, side, name = self._params
