@@ -40,12 +40,12 @@ SPOTKIN_MULTIVERSION void arm_ik_kernel(const Arm& arm, const T* poses, PoseForm
 
 py::object fk(const Arm& arm, py::handle q_obj) {
   return map_batch(q_obj, "q", 6, {4, 4}, kMinPerThread,
-                   [&](const auto* q, auto* T, std::ptrdiff_t n) { arm_fk_kernel(arm, q, T, n); });
+                   [&](const auto* q, auto* T, std::ptrdiff_t n) { arm_fk_kernel(arm, q, T, n); }, all_angles(6));
 }
 
 py::object jacobian(const Arm& arm, py::handle q_obj) {
   return map_batch(q_obj, "q", 6, {6, 6}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) { arm_jacobian_kernel(arm, q, J, n); });
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) { arm_jacobian_kernel(arm, q, J, n); }, all_angles(6));
 }
 
 py::object singularity(const Arm& arm, py::handle q_obj) {
@@ -58,7 +58,9 @@ py::object singularity(const Arm& arm, py::handle q_obj) {
   {
     ReleaseGilFor release(count(leading));
     parallel_for(count(leading), kMinPerThread / 8, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      for (std::ptrdiff_t i = b; i < e; ++i) arm.singularity(qd + 6 * i, od + 4 * i);
+      with_reduced_angles(qd + 6 * b, 6, all_angles(6), od + 4 * b, 4, e - b, [&](const double* qb, double* ob, std::ptrdiff_t m) {
+        for (std::ptrdiff_t i = 0; i < m; ++i) arm.singularity(qb + 6 * i, ob + 4 * i);
+      });
     });
   }
   return std::move(out);
@@ -146,10 +148,7 @@ Arm make_arm(std::array<double, 3> mount, double upper_arm, double forearm, doub
   for (int i = 0; i < 3; ++i) g.mount[i] = mount[i];
   g.upper_arm = upper_arm, g.forearm = forearm, g.forearm_offset = forearm_offset, g.hand = hand;
   if (!tool_obj.is_none()) {
-    g.tool = rigid_from<Rigid<double>>(tool_obj, "tool");
-    const double err = (g.tool.R.transpose() * g.tool.R - Mat3<double>::Identity()).cwiseAbs().maxCoeff();
-    if (!g.tool.R.allFinite() || !g.tool.p.allFinite() || err > 1e-9 || g.tool.R.determinant() < 0)
-      throw std::invalid_argument("tool must be a finite rigid transform (rotation part orthonormal to 1e-9)");
+    g.tool = rigid_from<Rigid<double>>(tool_obj, "tool");  // checked to be rigid there
   }
   JointLimits<6> limits;
   for (auto [obj, target, name] : {std::tuple{lower_limits, limits.lower, "lower limits"},

@@ -20,8 +20,8 @@ constexpr std::ptrdiff_t kMinPerThread = min_chunk(55.0);  // body IK: ~55 ns pe
 template <typename T>
 SPOTKIN_MULTIVERSION void body_ik_kernel(const Body& body, const T* poses, BodyPoseFormat format,
                                          const EulerSequence& seq, const T* feet, bool feet_shared, const T* seed,
-                                         T* q, std::int8_t* status, std::ptrdiff_t n) {
-  body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n);
+                                         T* q, std::int8_t* status, std::ptrdiff_t n, bool nearest_fallback) {
+  body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback);
 }
 template <typename T>
 SPOTKIN_MULTIVERSION void body_fk_kernel(const Body& body, const T* poses, BodyPoseFormat format,
@@ -71,9 +71,14 @@ BodyPoseFormat detect_format(const py::array& arr) {
       format_shape(Shape(arr.shape(), arr.shape() + nd)));
 }
 
+// The Euler angles' columns of a body pose: reduced exactly when huge.
+std::uint64_t euler_columns(BodyPoseFormat format) {
+  return format == BodyPoseFormat::Euler ? std::uint64_t{0b111000} : 0;
+}
+
 // format_code -1: detect the format from body_pose's shape.
 py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle feet_obj,
-              py::handle seed_obj) {
+              py::handle seed_obj, bool nearest_fallback) {
   const EulerSequence seq = make_sequence(sequence);
   return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
@@ -104,8 +109,14 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
     {
       ReleaseGilFor release(count(shape.leading));
       parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        body_ik_kernel<T>(body, pd + width * b, format, seq, feet_shared ? fd : fd + 12 * b, feet_shared,
-                          sd ? sd + 12 * b : nullptr, qd + 12 * b, std_ + 4 * b, e - b);
+        // huge Euler angles are reduced exactly; pose_block is the first pose of out_block's samples
+        with_reduced_angles(pd + width * b, width, euler_columns(format), qd + 12 * b, 12, e - b,
+                            [&](const T* pose_block, T* out_block, std::ptrdiff_t m) {
+                              const std::ptrdiff_t i = (out_block - qd) / 12;
+                              body_ik_kernel<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 12 * i,
+                                                feet_shared, sd ? sd + 12 * i : nullptr, out_block, std_ + 4 * i, m,
+                                                nearest_fallback);
+                            });
       });
     }
     return py::make_tuple(q, status);
@@ -130,12 +141,21 @@ py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code
     T* od = out.mutable_data();
     {
       ReleaseGilFor release(count(shape.leading));
+      constexpr std::ptrdiff_t out_width = Jacobian ? 216 : 12;
       parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        if constexpr (Jacobian) {
-          body_jacobian_kernel<T>(body, pd + width * b, format, seq, qd + 12 * b, od + 216 * b, e - b);
-        } else {
-          body_fk_kernel<T>(body, pd + width * b, format, seq, qd + 12 * b, od + 12 * b, e - b);
-        }
+        // huge joint and Euler angles are reduced exactly (with_reduced_angles, once per input)
+        with_reduced_angles(qd + 12 * b, 12, all_angles(12), od + out_width * b, out_width, e - b,
+                            [&](const T* q_block, T* out_block, std::ptrdiff_t m) {
+          const std::ptrdiff_t i = (out_block - od) / out_width;
+          with_reduced_angles(pd + width * i, width, euler_columns(format), out_block, out_width, m,
+                              [&](const T* pose_block, T* out_inner, std::ptrdiff_t k) {
+            if constexpr (Jacobian) {
+              body_jacobian_kernel<T>(body, pose_block, format, seq, q_block, out_inner, k);
+            } else {
+              body_fk_kernel<T>(body, pose_block, format, seq, q_block, out_inner, k);
+            }
+          });
+        });
       });
     }
     return std::move(out);
@@ -161,7 +181,7 @@ void bind_body(py::module_& m) {
   py::class_<Body>(m, "Body")
       .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"))
       .def("ik", &ik, py::arg("body_pose"), py::arg("format"), py::arg("sequence"), py::arg("feet"),
-           py::arg("seed"))
+           py::arg("seed"), py::arg("nearest_fallback") = true)
       .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
            py::arg("q12"))
       .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdlib>
+#include <memory>
 #include <mutex>
 #include <new>
 #include <vector>
@@ -108,8 +109,9 @@ pybind11::array_t<T> cached_array(const std::vector<pybind11::ssize_t>& shape) {
     void* data;
     std::size_t capacity;
   };
-  auto* owner = new Owner{nullptr, 0};
-  owner->data = cache.take(bytes, owner->capacity);
+  auto owned = std::make_unique<Owner>(Owner{nullptr, 0});
+  owned->data = cache.take(bytes, owned->capacity);  // std::bad_alloc (MemoryError) when the OS refuses
+  auto* owner = owned.release();
   pybind11::capsule base(owner, [](void* p) {
     auto* o = static_cast<Owner*>(p);
     BufferCache::instance().give(o->data, o->capacity);

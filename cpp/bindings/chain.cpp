@@ -69,23 +69,34 @@ const Chain<std::remove_const_t<T>>& in_precision(const ChainPair& chain, T*) {
   return chain.get(std::remove_const_t<T>{});
 }
 
+// The revolute joints' columns of q: huge angles are reduced exactly before the kernels.
+std::uint64_t revolute_columns(const ChainPair& chain) {
+  std::uint64_t mask = 0;
+  const auto& joints = chain.f64.joints();
+  for (std::size_t j = 0; j < joints.size() && j < 64; ++j)
+    if (joints[j].type == JointType::Revolute) mask |= std::uint64_t{1} << j;
+  return mask;
+}
+
 py::object fk(const ChainPair& chain, py::handle q_obj) {
   return map_batch(q_obj, "q", chain.f64.dof(), {4, 4}, kMinPerThread, [&](const auto* q, auto* T, std::ptrdiff_t n) {
     fk_kernel(in_precision(chain, q), q, T, n);
-  });
+  }, revolute_columns(chain));
 }
 
 py::object frames(const ChainPair& chain, py::handle q_obj) {
   const py::ssize_t n_frames = chain.f64.dof() + 2;
   return map_batch(q_obj, "q", chain.f64.dof(), {n_frames, 4, 4}, kMinPerThread / 4,
-                   [&](const auto* q, auto* F, std::ptrdiff_t n) { frames_kernel(in_precision(chain, q), q, F, n); });
+                   [&](const auto* q, auto* F, std::ptrdiff_t n) { frames_kernel(in_precision(chain, q), q, F, n); },
+                   revolute_columns(chain));
 }
 
 py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_tool_frame) {
   return map_batch(q_obj, "q", chain.f64.dof(), {rows, chain.f64.dof()}, kMinPerThread,
                    [&](const auto* q, auto* J, std::ptrdiff_t n) {
                      jacobian_kernel(in_precision(chain, q), q, J, n, rows, in_tool_frame);
-                   });
+                   },
+                   revolute_columns(chain));
 }
 
 // Closed-loop differential IK (spotkin::differential::ik_differential), always

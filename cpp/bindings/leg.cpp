@@ -28,8 +28,8 @@ SPOTKIN_MULTIVERSION void leg_jacobian_kernel(const Leg& leg, const T* q, T* J, 
 }
 template <typename T>
 SPOTKIN_MULTIVERSION void leg_ik_kernel(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
-                                          std::ptrdiff_t n) {
-  leg_batch::ik(leg, p, seed, q, status, n);
+                                          std::ptrdiff_t n, bool nearest_fallback) {
+  leg_batch::ik(leg, p, seed, q, status, n, nearest_fallback);
 }
 template <typename T>
 SPOTKIN_MULTIVERSION void leg_ik_all_kernel(const Leg& leg, const T* p, T* q, std::uint8_t* valid,
@@ -39,12 +39,12 @@ SPOTKIN_MULTIVERSION void leg_ik_all_kernel(const Leg& leg, const T* p, T* q, st
 
 py::object fk(const Leg& leg, py::handle q_obj) {
   return map_batch(q_obj, "q", 3, {3}, kMinPerThread,
-                   [&](const auto* q, auto* p, std::ptrdiff_t n) { leg_fk_kernel(leg, q, p, n); });
+                   [&](const auto* q, auto* p, std::ptrdiff_t n) { leg_fk_kernel(leg, q, p, n); }, all_angles(3));
 }
 
 py::object jacobian(const Leg& leg, py::handle q_obj) {
   return map_batch(q_obj, "q", 3, {3, 3}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) { leg_jacobian_kernel(leg, q, J, n); });
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) { leg_jacobian_kernel(leg, q, J, n); }, all_angles(3));
 }
 
 py::object singularity(const Leg& leg, py::handle q_obj) {
@@ -60,7 +60,10 @@ py::object singularity(const Leg& leg, py::handle q_obj) {
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThread / 8, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        for (std::ptrdiff_t i = b; i < e; ++i) leg.singularity(qd + 3 * i, dd + i, sd + i);
+        with_reduced_angles(qd + 3 * b, 3, all_angles(3), dd + b, 1, e - b, [&](const T* qb, T* ob, std::ptrdiff_t m) {
+          const std::ptrdiff_t first = ob - dd;  // the sub-block's first sample
+          for (std::ptrdiff_t i = 0; i < m; ++i) leg.singularity(qb + 3 * i, dd + first + i, sd + first + i);
+        });
       });
     }
     return py::make_tuple(det, sigma);
@@ -68,7 +71,7 @@ py::object singularity(const Leg& leg, py::handle q_obj) {
 }
 
 // p (..., 3), seed None or (..., 3) of the same shape -> (q (..., 3), status (...)).
-py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj) {
+py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj, bool nearest_fallback) {
   return dispatch_real(p_obj, "p", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const Shape leading = leading_shape(arr, "p", {3});
@@ -95,7 +98,8 @@ py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj) {
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        leg_ik_kernel<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b);
+        leg_ik_kernel<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b,
+                         nearest_fallback);
       });
     }
     if (single) return py::make_tuple(q, status_object(single_status));
@@ -159,7 +163,7 @@ void bind_leg(py::module_& m) {
       .def("fk", &fk, py::arg("q"))
       .def("jacobian", &jacobian, py::arg("q"))
       .def("singularity", &singularity, py::arg("q"))
-      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none())
+      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true)
       .def("ik_all", &ik_all, py::arg("p"))
       .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
         std::array<double, 3> out;

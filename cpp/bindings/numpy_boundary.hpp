@@ -9,6 +9,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,6 +19,7 @@
 #include "buffer_cache.hpp"
 #include "spotkin/arm.hpp"
 #include "spotkin/parallel.hpp"
+#include "spotkin/vector_math.hpp"
 
 namespace spotkin::bindings {
 
@@ -33,10 +37,22 @@ inline std::string format_shape(const Shape& shape, bool ellipsis = false) {
   return s + ")";
 }
 
-// Any array-like to an ndarray of a real dtype; TypeError otherwise.
+// numpy.ma.MaskedArray, imported on first use (never released: see status_members).
+inline bool is_masked_array(py::handle obj) {
+  static PyObject* masked_type = [] {
+    return py::object(py::module_::import("numpy.ma").attr("MaskedArray")).release().ptr();
+  }();
+  return PyObject_IsInstance(obj.ptr(), masked_type) == 1;
+}
+
+// Any array-like to an ndarray of a real dtype; TypeError otherwise (also for a
+// masked array, whose mask the kernels would ignore).
 inline py::array as_real_array(py::handle obj, const char* name) {
   py::array arr;
   if (py::isinstance<py::array>(obj)) {  // no conversion needed
+    if (is_masked_array(obj))
+      throw py::type_error(std::string(name) + " must be a plain array, got a masked array (its mask would be "
+                           "ignored); pass " + name + ".filled(np.nan) to mark masked entries as missing");
     arr = py::reinterpret_borrow<py::array>(obj);
   } else {
     try {
@@ -57,16 +73,19 @@ inline py::array as_real_array(py::handle obj, const char* name) {
   return arr;
 }
 
+// float32 of either byte order (a big-endian one is converted, and stays float32).
 inline bool is_float32(const py::array& arr) {
-  return arr.dtype().is(py::dtype::of<float>());
+  const py::dtype dtype = arr.dtype();
+  return dtype.kind() == 'f' && dtype.itemsize() == 4;
 }
 
-// A C-contiguous view (or copy) of arr in dtype T.
+// A C-contiguous view (or copy) of arr in dtype T. A copy too large to allocate
+// raises MemoryError (numpy's), not a null array.
 template <typename T>
 py::array_t<T, py::array::c_style> contiguous(const py::array& arr) {
   using Exact = py::array_t<T, py::array::c_style>;
   if (Exact::check_(arr)) return py::reinterpret_borrow<Exact>(arr);  // already right: no copy, no call
-  return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(arr);
+  return py::array_t<T, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(arr));
 }
 
 // Checks that arr has shape (..., *trailing) and returns the leading shape.
@@ -131,12 +150,50 @@ py::object dispatch_real(py::handle obj, const char* name, F&& f) {
   return f(double{}, arr);
 }
 
+// Calls kernel(in, out, n) on [0, n) in sub-blocks of kAngleBlock samples. In a
+// sub-block holding an angle column (bit j of angle_columns: column j) beyond
+// vector_math::kReducibleLimit, the kernel sees a copy with those angles reduced
+// exactly (vector_math::reduce_huge_angle): a huge angle gives the same result as
+// its exact remainder, never garbage. The check is one pass over data in cache.
+constexpr std::ptrdiff_t kAngleBlock = 512;  // a multiple of kChunkAlignment: same results for any split
+template <typename T, typename Kernel>
+void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t angle_columns, T* out,
+                         std::ptrdiff_t out_width, std::ptrdiff_t n, Kernel&& kernel) {
+  if (angle_columns == 0) {
+    kernel(in, out, n);
+    return;
+  }
+  std::vector<T> reduced;
+  for (std::ptrdiff_t b = 0; b < n; b += kAngleBlock) {
+    const std::ptrdiff_t m = std::min(kAngleBlock, n - b);
+    const T* block = in + in_width * b;
+    bool huge = false;
+    for (std::ptrdiff_t k = 0; k < m * in_width; ++k)
+      huge |= std::fabs(double(block[k])) > vector_math::kReducibleLimit;
+    if (huge) {
+      reduced.assign(block, block + m * in_width);
+      for (std::ptrdiff_t i = 0; i < m; ++i)
+        for (std::ptrdiff_t j = 0; j < in_width; ++j)
+          if ((angle_columns >> j) & 1U) {
+            T& x = reduced[std::size_t(i * in_width + j)];
+            x = T(vector_math::reduce_huge_angle(double(x)));
+          }
+      block = reduced.data();
+    }
+    kernel(block, out + out_width * b, m);
+  }
+}
+
+// Every column of a width-n joint vector is an angle.
+constexpr std::uint64_t all_angles(int n) { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
+
 // The common binding: a batch obj (..., in_width) mapped to a new (..., *trailing)
 // array by kernel(first_input, first_output, count), called on thread chunks with
 // the GIL released; float32 stays float32, other real dtypes run in float64.
+// Columns in angle_columns are angles, reduced exactly when huge (with_reduced_angles).
 template <typename Kernel>
 py::object map_batch(py::handle obj, const char* name, py::ssize_t in_width, const Shape& trailing,
-                     std::ptrdiff_t min_per_thread, Kernel&& kernel) {
+                     std::ptrdiff_t min_per_thread, Kernel&& kernel, std::uint64_t angle_columns = 0) {
   return dispatch_real(obj, name, [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const Shape leading = leading_shape(arr, name, {in_width});
@@ -149,7 +206,8 @@ py::object map_batch(py::handle obj, const char* name, py::ssize_t in_width, con
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), min_per_thread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        kernel(id + in_width * b, od + out_width * b, e - b);
+        with_reduced_angles(id + in_width * b, in_width, angle_columns, od + out_width * b, out_width, e - b,
+                            kernel);
       });
     }
     return std::move(out);
@@ -167,7 +225,9 @@ inline std::pair<PoseFormat, Shape> pose_shape(const py::array& arr, const char*
                         format_shape(shape));
 }
 
-// Reads a (4, 4) homogeneous transform given as any array-like.
+// Reads a (4, 4) rigid transform given as any array-like (a model parameter:
+// a base, a tool). It must be finite, with last row [0, 0, 0, 1] and a rotation
+// orthonormal to 1e-9 with det +1; ValueError otherwise (never orthonormalised).
 template <typename Rigid>
 Rigid rigid_from(py::handle obj, const char* name) {
   py::array arr = as_real_array(obj, name);
@@ -177,10 +237,18 @@ Rigid rigid_from(py::handle obj, const char* name) {
   auto a = contiguous<double>(arr);
   auto m = a.template unchecked<2>();
   Rigid T;
+  double row_error = std::fabs(m(3, 3) - 1.0);
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) T.R(i, j) = m(i, j);
     T.p[i] = m(i, 3);
+    row_error = std::max(row_error, std::fabs(m(3, i)));
   }
+  const bool finite = T.R.allFinite() && T.p.allFinite() && std::isfinite(row_error);
+  const double orth = finite ? (T.R.transpose() * T.R - decltype(T.R)::Identity()).cwiseAbs().maxCoeff() : 0.0;
+  if (!finite || !(row_error <= 1e-9) || !(orth <= 1e-9) || !(T.R.determinant() > 0.0))
+    throw py::value_error(std::string(name) +
+                          " must be a finite rigid transform: last row [0, 0, 0, 1], rotation part "
+                          "orthonormal to 1e-9 with determinant +1");
   return T;
 }
 

@@ -155,11 +155,12 @@ SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __rest
 
 // Whole-body IK over `count` poses. feet: (count, 4, 3) or, when feet_shared,
 // one (4, 3) stance for every pose. seed: null or (count, 12). q (count, 12),
-// status (count, 4): each leg's status and fallback are exactly the leg API's.
+// status (count, 4): each leg's status and fallback are exactly the leg API's
+// (NaN for UNREACHABLE when !nearest_fallback).
 template <typename T>
 SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
                        const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
-                       std::ptrdiff_t count) noexcept {
+                       std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   BlockPoses P;
   double fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock],
@@ -190,7 +191,10 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
           continue;
         }
         if (exists[i] == 0.0) {
-          leg_batch::unreachable_fallback(leg, x[i], y[i], z[i], qt);
+          if (nearest_fallback)
+            leg_batch::unreachable_fallback(leg, x[i], y[i], z[i], qt);
+          else
+            qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
           st = std::int8_t(Status::Unreachable);
           continue;
         }

@@ -351,6 +351,25 @@ inline void ik_step(const double* J, const double* e, const bool* locked, int ro
   dls_damped<double, Dyn, Dyn>(Jm.data(), e, lambda2, rows, n, dq);
 }
 
+
+// A finite (4, 4) rigid transform, row-major: last row [0, 0, 0, 1] (1e-9),
+// max |R^T R - I| <= 1e-6 and det R > 0, as the closed-form IK accepts (Arm::read_pose).
+inline bool is_rigid_transform(const double* T) noexcept {
+  if (!all_finite(T, 16)) return false;
+  const double row_error = std::max(std::max(std::fabs(T[12]), std::fabs(T[13])),
+                                    std::max(std::fabs(T[14]), std::fabs(T[15] - 1.0)));
+  if (!(row_error <= 1e-9)) return false;
+  double orth = 0.0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      const double dot = T[a] * T[b] + T[4 + a] * T[4 + b] + T[8 + a] * T[8 + b];
+      orth = std::max(orth, std::fabs(dot - (a == b ? 1.0 : 0.0)));
+    }
+  const double det = T[0] * (T[5] * T[10] - T[6] * T[9]) - T[1] * (T[4] * T[10] - T[6] * T[8]) +
+                     T[2] * (T[4] * T[9] - T[5] * T[8]);
+  return orth <= 1e-6 && det > 0.0;
+}
+
 // Closed-loop IK for one sample: targets K x (4, 4) row-major, q0 (n), limits
 // (n). For each target in turn, from the previous result (q0 clamped into the
 // limits for the first): stop if converged, else a DLS step on the pose error,
@@ -376,7 +395,7 @@ inline void ik_differential(const Chain<double>& chain, const double* lower, con
     }
     IkResult& res = results[k];
     double* qk = q_path + k * n;
-    if (!finite_seed || !all_finite(Tk, 12)) {  // NaN in, NaN out; the path continues from q
+    if (!finite_seed || !is_rigid_transform(Tk)) {  // invalid in, NaN out; the path continues from q
       fill_nan(qk, n);
       res = {false, 0, quiet_nan<double>(), quiet_nan<double>()};
       continue;

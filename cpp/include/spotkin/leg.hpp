@@ -151,6 +151,10 @@ class Leg {
     jacobian(q, Jt);
     Eigen::Matrix3d J;
     for (int i = 0; i < 9; ++i) J(i / 3, i % 3) = double(Jt[i]);
+    if (!J.allFinite()) {  // Eigen's SVD of NaN is unspecified (it read stale values)
+      *abs_det = *sigma_min = T(std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
     *abs_det = T(std::fabs(J.determinant()));
     *sigma_min = T(Eigen::JacobiSVD<Eigen::Matrix3d>(J).singularValues()[2]);
   }
@@ -371,10 +375,12 @@ SPOTKIN_INLINE double finite_mask(double x, double y, double z) noexcept {
   return ((x - x) == 0.0) & ((y - y) == 0.0) & ((z - z) == 0.0) ? 1.0 : 0.0;
 }
 
-// Limit-aware IK: q (count, 3), status (count). seed may be null.
+// Limit-aware IK: q (count, 3), status (count). seed may be null. An
+// UNREACHABLE target gets unreachable_fallback's answer, or NaN when
+// !nearest_fallback.
 template <typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
-                       std::ptrdiff_t count) noexcept {
+                       std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   double x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
@@ -404,7 +410,10 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
         continue;
       }
       if (exists[i] == 0.0) {
-        unreachable_fallback(leg, x[i], y[i], z[i], qt);
+        if (nearest_fallback)
+          unreachable_fallback(leg, x[i], y[i], z[i], qt);
+        else
+          qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
         status[t] = std::int8_t(Status::Unreachable);
         continue;
       }

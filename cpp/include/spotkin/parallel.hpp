@@ -3,31 +3,68 @@
 // Every sample is computed by the same code whatever the split, so results are
 // bit-identical for any thread count. Batches below `kMinSamplesPerThread` per
 // extra thread stay on the calling thread.
+//
+// Long batches can be interrupted: the calling thread asks a registered poll
+// (the bindings check Python's signals) between its chunks, at most every
+// kPollInterval; when it says stop, every thread finishes its current chunk,
+// all are joined, and parallel_for throws Interrupted.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdlib>
+#include <exception>
+#include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
 namespace spotkin {
 
+// The most worker threads set_num_threads accepts (SPOTKIN_NUM_THREADS is capped to it).
+constexpr int kMaxThreads = 1024;
+
+// The thread count SPOTKIN_NUM_THREADS asks for: 0 when unset, -1 when it is not
+// a positive integer, else at most kMaxThreads.
+inline int parse_thread_count(const char* text) noexcept {
+  if (text == nullptr) return 0;
+  char* end = nullptr;
+  const long long n = std::strtoll(text, &end, 10);
+  while (end && *end == ' ') ++end;
+  if (end == text || (end && *end != '\0') || n < 1) return -1;
+  return n > kMaxThreads ? kMaxThreads : static_cast<int>(n);
+}
+
+inline int default_num_threads() noexcept {
+  const int from_env = parse_thread_count(std::getenv("SPOTKIN_NUM_THREADS"));
+  if (from_env > 0) return from_env;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw == 0 ? 1 : static_cast<int>(std::min<unsigned>(hw, kMaxThreads));
+}
+
 inline std::atomic<int>& num_threads_setting() noexcept {
-  static std::atomic<int> value{[] {
-    if (const char* env = std::getenv("SPOTKIN_NUM_THREADS")) {
-      const int n = std::atoi(env);
-      if (n > 0) return n;
-    }
-    const unsigned hw = std::thread::hardware_concurrency();
-    return hw == 0 ? 1 : static_cast<int>(hw);
-  }()};
+  static std::atomic<int> value{default_num_threads()};
   return value;
 }
 
 inline int get_num_threads() noexcept { return num_threads_setting().load(); }
-inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::max(1, n)); }
+// Clamped into [1, kMaxThreads]; the bindings reject values outside it first.
+inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::clamp(n, 1, kMaxThreads)); }
+
+// Thrown by parallel_for when the poll asked it to stop.
+struct Interrupted : std::exception {
+  const char* what() const noexcept override { return "interrupted"; }
+};
+
+// Returns true when the batch should stop (called on the thread that called parallel_for).
+using InterruptPoll = bool (*)() noexcept;
+inline std::atomic<InterruptPoll>& interrupt_poll() noexcept {
+  static std::atomic<InterruptPoll> poll{nullptr};
+  return poll;
+}
+constexpr std::chrono::milliseconds kPollInterval{5};
 
 // Calls body(begin, end) over [0, n) in contiguous chunks. `min_per_thread` is
 // the smallest chunk worth a thread. Measured on the 2-core development
@@ -45,33 +82,80 @@ constexpr std::ptrdiff_t min_chunk(double ns_per_sample) {
   return static_cast<std::ptrdiff_t>(kChunkWork / ns_per_sample);
 }
 
+// A chunk holds at most this many minimum chunks (about 20 ms of work), so an
+// interrupt is seen within about that time.
+constexpr std::ptrdiff_t kMaxChunksPerGrain = 100;
+
+namespace detail {
+inline std::ptrdiff_t align_up(std::ptrdiff_t n) {
+  return std::max<std::ptrdiff_t>(1, (n + kChunkAlignment - 1) / kChunkAlignment) * kChunkAlignment;
+}
+}  // namespace detail
+
 template <typename Body>
 void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) {
-  const std::ptrdiff_t by_size = min_per_thread > 0 ? n / min_per_thread : n;
+  if (n <= 0) return;
+  const std::ptrdiff_t min_chunk = std::max<std::ptrdiff_t>(1, min_per_thread);
   const std::ptrdiff_t threads =
-      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(get_num_threads(), by_size));
-  if (threads <= 1) {
+      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(get_num_threads(), n / min_chunk));
+  const InterruptPoll poll = interrupt_poll().load();
+  const std::ptrdiff_t longest = detail::align_up(kMaxChunksPerGrain * min_chunk);
+  if (threads <= 1 && (poll == nullptr || n <= longest)) {
     body(std::ptrdiff_t{0}, n);
     return;
   }
   // Chunks are handed out from a shared counter, about 8 per thread, so a core
   // that runs faster (cores of a VM often differ) takes more of the batch
   // instead of waiting for the slowest; each chunk starts on a block boundary.
-  std::ptrdiff_t grain = std::max<std::ptrdiff_t>(min_per_thread / 4, n / (8 * threads));
-  grain = std::max<std::ptrdiff_t>(1, (grain + kChunkAlignment - 1) / kChunkAlignment) * kChunkAlignment;
+  const std::ptrdiff_t grain =
+      threads <= 1 ? longest
+                   : std::min(longest, detail::align_up(std::max<std::ptrdiff_t>(min_chunk / 4, n / (8 * threads))));
   std::atomic<std::ptrdiff_t> next{0};
-  auto work = [&] {
-    for (;;) {
+  std::atomic<bool> stop{false};
+  std::exception_ptr failure;  // the first exception a worker threw
+  std::atomic<bool> failed{false};
+  auto run_chunks = [&](bool polling) {
+    auto last_poll = std::chrono::steady_clock::now();
+    while (!stop.load(std::memory_order_relaxed)) {
       const std::ptrdiff_t begin = next.fetch_add(grain, std::memory_order_relaxed);
       if (begin >= n) return;
       body(begin, std::min(n, begin + grain));
+      if (polling) {
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_poll >= kPollInterval) {
+          last_poll = now;
+          if (poll()) stop.store(true);
+        }
+      }
     }
   };
+  auto worker = [&] {
+    try {
+      run_chunks(false);
+    } catch (...) {
+      if (!failed.exchange(true)) failure = std::current_exception();
+      stop.store(true);
+    }
+  };
+  // Starting a thread can fail (resource limits): the threads already started
+  // and the calling thread share the whole batch, so fewer threads still finish it.
   std::vector<std::thread> workers;
-  workers.reserve(static_cast<std::size_t>(threads - 1));
-  for (std::ptrdiff_t t = 1; t < threads; ++t) workers.emplace_back(work);
-  work();
+  try {
+    workers.reserve(static_cast<std::size_t>(threads - 1));
+    for (std::ptrdiff_t t = 1; t < threads; ++t) workers.emplace_back(worker);
+  } catch (const std::exception&) {
+  }
+  std::exception_ptr caller_failure;
+  try {
+    run_chunks(poll != nullptr);
+  } catch (...) {
+    caller_failure = std::current_exception();
+    stop.store(true);
+  }
   for (auto& w : workers) w.join();
+  if (caller_failure) std::rethrow_exception(caller_failure);
+  if (failure) std::rethrow_exception(failure);
+  if (stop.load()) throw Interrupted();  // only the poll sets it without a failure
 }
 
 }  // namespace spotkin

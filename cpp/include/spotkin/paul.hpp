@@ -53,13 +53,14 @@ struct Type2 {
 // zero_tolerance: |Z| at or below it counts as 0 when X = Y = 0 (type 6 passes
 // one scaled to its coefficients, since its Z is a difference of squares).
 SPOTKIN_INLINE Type2 type2(double X, double Y, double Z, double zero_tolerance = 0.0) noexcept {
+  const bool finite = std::isfinite(X) & std::isfinite(Y) & std::isfinite(Z);  // Inf or NaN: no root
   const double m = scale_of(X, Y, Z);
   X /= m, Y /= m, Z /= m, zero_tolerance /= m;
   Type2 out;
   const double r2 = X * X + Y * Y;
   const double disc = r2 - Z * Z;
   const bool degenerate = !(r2 > zero_tolerance * zero_tolerance);
-  const bool exists = degenerate ? std::fabs(Z) <= zero_tolerance : disc >= -kTolerance * r2;
+  const bool exists = finite && (degenerate ? std::fabs(Z) <= zero_tolerance : disc >= -kTolerance * r2);
   const double S = std::sqrt(std::max(disc, 0.0));
   for (int k = 0; k < 2; ++k) {
     const double eps = k == 0 ? 1.0 : -1.0;
@@ -76,6 +77,9 @@ struct Type3 {
 };
 
 SPOTKIN_INLINE Type3 type3(double X1, double Y1, double Z1, double X2, double Y2, double Z2) noexcept {
+  if (!(std::isfinite(X1) && std::isfinite(Y1) && std::isfinite(Z1) && std::isfinite(X2) && std::isfinite(Y2) &&
+        std::isfinite(Z2)))
+    return Type3{quiet_nan<double>(), 0.0};
   const double m1 = scale_of(X1, Y1, Z1), m2 = scale_of(X2, Y2, Z2);
   X1 /= m1, Y1 /= m1, Z1 /= m1, X2 /= m2, Y2 /= m2, Z2 /= m2;
   const double D = X1 * Y2 - X2 * Y1;
@@ -111,6 +115,8 @@ SPOTKIN_INLINE Type6 type6(double W, double X, double Y, double Z1, double Z2) n
   Type6 out;
   out.ti[0] = out.ti[1] = out.tj[0] = out.tj[1] = quiet_nan<double>();
   out.valid[0] = out.valid[1] = 0.0;
+  if (!(std::isfinite(W) && std::isfinite(X) && std::isfinite(Y) && std::isfinite(Z1) && std::isfinite(Z2)))
+    return out;  // Inf or NaN: no root
   if (W == 0.0) {  // X cos ti + Y sin ti = -Z1, X sin ti - Y cos ti = -Z2 (type 3); tj free, reported 0
     const Type3 t = type3(Y, X, -Z1, X, -Y, -Z2);
     if (t.valid != 0.0) out.ti[0] = t.t, out.tj[0] = 0.0, out.valid[0] = 1.0;

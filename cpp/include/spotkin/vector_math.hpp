@@ -85,6 +85,14 @@ SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdif
   }
 }
 
+// An angle beyond kReducibleLimit brought into [-pi, pi] with libm's exact
+// (Payne-Hanek) reduction inside sin and cos; smaller ones are returned as they
+// are. Kernels sum angles (hy + kn) before their sincos, and a sum of huge
+// angles has lost its fraction: the bindings reduce such inputs first.
+inline double reduce_huge_angle(double x) noexcept {
+  return std::fabs(x) > kReducibleLimit && std::isfinite(x) ? std::atan2(std::sin(x), std::cos(x)) : x;
+}
+
 namespace detail {
 // atan(lo / hi) for 0 <= lo <= hi (Cephes atan.c, P/Q of degree 4/5). Above
 // 0.66 the argument is reduced by pi/4, x = (lo - hi) / (lo + hi), formed with
