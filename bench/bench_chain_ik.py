@@ -13,7 +13,7 @@ ARM = sk.Spot().arm
 # A chain with both consecutive pairs of axes skew: Pieper's quartic, up to 4 solutions.
 GENERAL_ROWS = [(0, 0.3, 0.4, 0.1, 0.2), (0, 0.5, 1.1, 0.2, -0.3), (0, 0.4, -0.7, 0.3, 0.5)]
 GENERAL = sk.Chain.from_mdh(GENERAL_ROWS, tool=sk.translation([0.2, 0.1, 0.3]))
-# The Spot leg as a DHm table (seed 000): the parallel (degree-2) closed form.
+# The Spot leg as a DHm table (knee offset left out): the parallel (degree-2) closed form.
 LEG = sk.Chain.from_mdh(
     [(0, 0.0, -np.pi / 2, 0.0, 0.0), (0, 0.0, np.pi / 2, 0.110945, 0.0), (0, 0.3205, 0.0, 0.0, 0.0)],
     tool=sk.translation([0.3365, 0.0, 0.0]),

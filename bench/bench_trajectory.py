@@ -1,6 +1,7 @@
 """Trajectory sampling (spotkin.trajectory) against NumPy-vectorised baselines of the same formulas:
 a 6-axis quintic and trapezoid point-to-point move (q, qd, qdd) and a Cartesian straight line
-(4x4 poses, slerp). Target: 1e6 time points in under 20 ms."""
+(4x4 poses, slerp). Target: 1e6 time points in under 20 ms. Also the planning of a
+blended waypoint path (via_points) with 1e3 and 1e5 waypoints."""
 
 from __future__ import annotations
 
@@ -73,3 +74,18 @@ def test_linear_path_sample(measure, impl, n):
         measure("traj.linear.matrix", n, impl, linear_path, t, P0, P1, QUAT0, QUAT1, *path_baseline_args())
     else:
         measure("traj.linear.matrix", n, impl, PATH.sample, t)
+
+
+def waypoints(n: int) -> np.ndarray:
+    """n poses (n, 6): a helix with 0.3 mm jitter (many corners to blend) and a turning body."""
+    s = np.linspace(0.0, 40 * np.pi, n)
+    jitter = np.random.default_rng(5).normal(0.0, 3e-4, (n, 3))
+    positions = np.stack([np.cos(s), np.sin(s), s / 50], axis=1) + jitter
+    euler = np.stack([0.1 * np.sin(s / 7), 0.1 * np.cos(s / 5), s / 20], axis=1)
+    return np.concatenate([positions, euler], axis=1)
+
+
+@pytest.mark.parametrize("n", [1_000, 100_000])
+def test_via_points_plan(measure, n):
+    """Planning the blends of an n-waypoint path (O(n log n)); time per waypoint."""
+    measure("traj.via_points.plan", n, "spotkin", sk.trajectory.via_points, waypoints(n), 1.0, 2.0, 1.0, 2.0)

@@ -86,8 +86,7 @@ def test_many_threads_do_not_abort(restore_threads):
 def test_environment_thread_count(value, expected):
     result = run_python(
         "import warnings, os; warnings.simplefilter('always')\n"
-        "import spotkin as sk; print(sk.get_num_threads(), os.cpu_count())"
-    ,
+        "import spotkin as sk; print(sk.get_num_threads(), os.cpu_count())",
         env={"SPOTKIN_NUM_THREADS": value},
     )
     assert result.returncode == 0, result.stderr
@@ -168,21 +167,26 @@ def test_ctrl_c_interrupts_ik_differential():
         import sys, time
         import numpy as np
         import spotkin as sk
-        chain = sk.Chain.from_mdh([(0, 0, 0, 0.3, 0), (0, 0, np.pi / 2, 0, 0), (0, 0.4, 0, 0, 0),
-                                   (0, 0, np.pi / 2, 0.4, 0), (0, 0, -np.pi / 2, 0, 0), (0, 0, np.pi / 2, 0.1, 0)])
+        rows = [(0, 0, 0, 0.3, 0), (0, 0, np.pi / 2, 0, 0), (0, 0.4, 0, 0, 0),
+                (0, 0, np.pi / 2, 0.4, 0), (0, 0, -np.pi / 2, 0, 0), (0, 0, np.pi / 2, 0.1, 0)]
+        chain = sk.Chain.from_mdh(rows)
         T = chain.fk(np.full(6, 0.3))
         targets = np.broadcast_to(T, (400_000, 4, 4))
         q0 = np.zeros((400_000, 6))
         print("ready", flush=True)
         try:
-            chain.ik_differential(targets, q0, max_iter=200, position_tolerance=0.0, orientation_tolerance=0.0)
+            chain.ik_differential(targets, q0, max_iter=200, position_tolerance=0.0,
+                                  orientation_tolerance=0.0)
         except KeyboardInterrupt:
             print("interrupted", time.perf_counter(), flush=True)
             sys.exit(0)
         print("finished", flush=True)
     """
     proc = subprocess.Popen(
-        [sys.executable, "-c", textwrap.dedent(code)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, "-c", textwrap.dedent(code)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     assert proc.stdout.readline().strip() == "ready"
     time.sleep(0.8)
@@ -373,8 +377,9 @@ def test_huge_angles_everywhere():
     reduced = _exactly_reduced(q6)
     np.testing.assert_allclose(SPOT.arm.fk(q6), SPOT.arm.fk(reduced), atol=1e-12)
     np.testing.assert_allclose(SPOT.arm.jacobian(q6), SPOT.arm.jacobian(reduced), atol=1e-12)
-    np.testing.assert_allclose(SPOT.arm.singularity(q6).manipulability,
-                               SPOT.arm.singularity(reduced).manipulability, atol=1e-12)
+    np.testing.assert_allclose(
+        SPOT.arm.singularity(q6).manipulability, SPOT.arm.singularity(reduced).manipulability, atol=1e-12
+    )
     chain = _six_joint_chain()
     np.testing.assert_allclose(chain.fk(q6), chain.fk(reduced), atol=1e-12)
     np.testing.assert_allclose(chain.frames(q6), chain.frames(reduced), atol=1e-12)
@@ -433,3 +438,17 @@ def test_body_fallback_choice():
     assert np.isnan(single.q).all()
     with pytest.raises(ValueError, match="fallback"):
         SPOT.body_ik(poses, feet, fallback="NaN")
+
+
+def test_ragged_input_is_a_value_error():
+    with pytest.raises(ValueError, match="q must be a rectangular numeric array"):
+        LEG.fk([[0.0, 1.0, 2.0], [0.0, 1.0]])
+
+
+def test_nearest_reachable_of_huge_points():
+    # beyond reach, the answer depends on the direction only: no overflow in |p|^2
+    for direction in ([1.0, 1.0, 0.0], [0.3, -0.2, -1.0], [-1.0, 0.0, 0.0]):
+        huge = LEG.nearest_reachable(np.array(direction) * 1e308)
+        np.testing.assert_allclose(huge, LEG.nearest_reachable(direction), atol=1e-12)
+        assert np.isfinite(LEG.ik(np.array(direction) * 1e308)[0]).all()
+    assert np.isnan(LEG.nearest_reachable([np.inf, 0.0, 0.0])).all()

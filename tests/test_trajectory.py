@@ -4,6 +4,7 @@ finite differences, limits, boundary conditions, bad input and the body IK round
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -478,6 +479,142 @@ def test_via_points_bad_input(rng):
     # repeated waypoints are dropped, not divided by zero
     path = sk.trajectory.via_points(np.repeat(poses, 2, axis=0), vmax=1.0, amax=1.0)
     assert len(path.times) == 3
+
+
+# ---- planning the blends: by hand, near the physical optimum, against the reference, at scale ----------
+
+
+def test_via_points_plans_by_hand():
+    # an L of two 10 m legs at vmax = amax = 1: every blend fits at the cruise bound, nothing slows down.
+    # b_0 = b_2 = 1 (from / to rest), b_1 = |(0, 1) - (1, 0)| = sqrt(2); t_k = b_0 / 2 + 10 k
+    corner = np.array([[0.0, 0, 0, 0, 0, 0], [10, 0, 0, 0, 0, 0], [10, 10, 0, 0, 0, 0]])
+    path = sk.trajectory.via_points(corner, vmax=1.0, amax=1.0)
+    np.testing.assert_allclose(path.times, [0.5, 10.5, 20.5], rtol=1e-15)
+    np.testing.assert_allclose(path.blends, [1.0, math.sqrt(2), 1.0], rtol=1e-15)
+    assert path.duration == pytest.approx(21.0, rel=1e-15)
+    # out and back, 1 m each, vmax = 10, amax = 2: the reversal blend b_1 = 2 v / amax = v must fit in
+    # d = 1 / v (half of each segment), so v^2 <= 1: v = 1, d = 1, b = [0.5, 1, 0.5], duration 2.5
+    back = np.array([[0.0, 0, 0, 0, 0, 0], [1, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0]])
+    path = sk.trajectory.via_points(back, vmax=10.0, amax=2.0)
+    np.testing.assert_allclose(path.times, [0.25, 1.25, 2.25], rtol=1e-15)
+    np.testing.assert_allclose(path.blends, [0.5, 1.0, 0.5], rtol=1e-15)
+    np.testing.assert_allclose(path.linear_velocity, [[1, 0, 0], [-1, 0, 0]], rtol=1e-15)
+
+
+@pytest.mark.parametrize("n", [3, 11, 1001])
+def test_via_points_straight_line_near_the_trapezoid(n):
+    # 10 m in a straight line, vmax = 1, amax = 0.5: no plan with continuous velocity and |a| <= amax
+    # beats the trapezoid's 10 / 1 + 1 / 0.5 = 12 s; the blended plan stays within 2.5 % of it
+    poses = np.zeros((n, 6))
+    poses[:, 0] = np.linspace(0.0, 10.0, n)
+    path = sk.trajectory.via_points(poses, vmax=1.0, amax=0.5)
+    assert 12.0 * (1 - 1e-12) <= path.duration <= 12.0 * 1.025
+    if n == 3:  # two 5 m segments at vmax, blends of 2 s from and to rest, none in the middle
+        assert path.duration == pytest.approx(12.0, rel=1e-15)
+
+
+def test_via_points_circle_speed():
+    # a regular polygon on a circle of radius R: at equal speeds v a corner blend changes the velocity by
+    # v L / R in b = v L / (R amax), which fits in d = L / v only if v^2 <= amax R (centripetal limit)
+    R, amax = 1.0, 0.5
+    s = np.linspace(0.0, 2 * np.pi, 2001)[:-1]
+    poses = np.stack([R * np.cos(s), R * np.sin(s), 0 * s, 0 * s, 0 * s, 0 * s], axis=1)
+    path = sk.trajectory.via_points(poses, vmax=10.0, amax=amax)
+    speed = np.linalg.norm(path.linear_velocity, axis=1)
+    assert speed.max() <= math.sqrt(amax * R) * (1 + 1e-9)
+    assert speed.max() >= 0.99 * math.sqrt(amax * R)
+
+
+def rotation_vector(R: np.ndarray) -> np.ndarray:
+    """log of a rotation matrix (angle < pi) as a rotation vector."""
+    angle = math.acos(min(1.0, max(-1.0, (np.trace(R) - 1) / 2)))
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / 2
+    return axis if angle < 1e-12 else axis * angle / math.sin(angle)
+
+
+PLAN_CASES = {
+    "close waypoints": dict(spacing=0.01, vmax=1.0, amax=0.5, wmax=2.0, alphamax=1.0, blend=0.0),
+    "minimum blend": dict(spacing=0.05, vmax=0.5, amax=2.0, wmax=None, alphamax=None, blend=0.3),
+    "rotation bound": dict(spacing=0.2, vmax=2.0, amax=5.0, wmax=0.5, alphamax=0.2, blend=0.0),
+    "uneven spacing": dict(spacing=None, vmax=1.0, amax=1.0, wmax=None, alphamax=None, blend=0.0),
+}
+
+
+@pytest.mark.parametrize("case", PLAN_CASES)
+def test_via_points_plan_matches_reference(rng, case):
+    c = PLAN_CASES[case]
+    n = 40
+    if c["spacing"] is None:  # nearly collinear, spacing from 1 mm to 1 m: long speed ramps
+        lateral = rng.uniform(-1e-3, 1e-3, n - 1)
+        steps = np.stack([10 ** rng.uniform(-3, 0, n - 1), lateral, np.zeros(n - 1)], 1)
+        poses = np.concatenate([np.zeros((n, 3)), rng.uniform(-0.05, 0.05, (n, 3))], axis=1)
+        poses[1:, :3] = np.cumsum(steps, axis=0)
+    else:
+        walk = np.cumsum(rng.uniform(-c["spacing"], c["spacing"], (n, 3)), axis=0)
+        poses = np.concatenate([walk, rng.uniform(-0.3, 0.3, (n, 3))], axis=1)
+    limits = {k: c[k] for k in ("vmax", "amax", "wmax", "alphamax", "blend")}
+    path = sk.trajectory.via_points(poses, **limits)
+    mats = sk.body_transform(poses)
+    phis = [rotation_vector(B[:3, :3] @ A[:3, :3].T) for A, B in zip(mats, mats[1:])]
+    wmax = c["wmax"] or math.inf
+    alphamax = c["alphamax"] or math.inf
+    d_ref, b_ref = ref.blend_plan(mats[:, :3, 3], phis, c["vmax"], c["amax"], wmax, alphamax, c["blend"])
+    np.testing.assert_allclose(np.diff(path.times), d_ref, rtol=1e-9)
+    np.testing.assert_allclose(path.blends, b_ref, rtol=1e-9, atol=1e-15)
+    # the case exercises the planning: some segments are slowed below their cruise bound
+    d_min = np.maximum(
+        np.linalg.norm(np.diff(poses[:, :3], axis=0), axis=1) / c["vmax"], np.linalg.norm(phis, axis=1) / wmax
+    )
+    assert (d_ref > d_min * (1 + 1e-6)).sum() >= 3
+
+
+def test_via_points_1e5_waypoints():
+    rng = np.random.default_rng(5)
+    n = 100_000
+    s = np.linspace(0.0, 40 * np.pi, n)
+    positions = np.stack([np.cos(s), np.sin(s), s / 50], axis=1) + rng.normal(0.0, 3e-4, (n, 3))
+    euler = np.stack([0.1 * np.sin(s / 7), 0.1 * np.cos(s / 5), s / 20], axis=1)
+    vmax, amax, wmax, alphamax = 1.0, 2.0, 1.0, 2.0
+    start = time.perf_counter()
+    path = sk.trajectory.via_points(np.concatenate([positions, euler], axis=1), vmax, amax, wmax, alphamax)
+    assert time.perf_counter() - start < 5.0
+    assert len(path.times) == n
+    P = path.waypoints[:, :3, 3]
+    d, b = np.diff(path.times), path.blends
+    rounding = 8 * np.spacing(path.duration)  # of the times, hence of d = diff(times)
+    # the blends fit in their segments; straight segments within the speed limits
+    assert (d > 0).all()
+    assert ((b[:-1] + b[1:]) / 2 <= d + rounding).all()
+    speed = np.linalg.norm(path.linear_velocity, axis=1)
+    np.testing.assert_allclose(
+        path.linear_velocity * d[:, None], np.diff(P, axis=0), rtol=0, atol=1e-14 + speed.max() * rounding
+    )
+    assert np.linalg.norm(path.linear_velocity, axis=1).max() <= vmax * (1 + 1e-12)
+    assert np.linalg.norm(path.angular_velocity, axis=1).max() <= wmax * (1 + 1e-12)
+    # each blend is long enough for its velocity change: the acceleration bounds
+    v = np.vstack([np.zeros(3), path.linear_velocity, np.zeros(3)])
+    w = np.vstack([np.zeros(3), path.angular_velocity, np.zeros(3)])
+    assert (np.linalg.norm(np.diff(v, axis=0), axis=1) <= amax * b * (1 + 1e-12)).all()
+    assert (np.linalg.norm(np.diff(w, axis=0), axis=1) <= alphamax * b * (1 + 1e-12)).all()
+    # sampled: the velocity is continuous across every blend start and end ...
+    delta = 1e-9
+    edges = np.concatenate([path.times - b / 2, path.times + b / 2])
+    edges = edges[(edges > delta) & (edges < path.duration - delta)]
+    _, before = path.sample(edges - delta, twist=True)
+    _, after = path.sample(edges + delta, twist=True)
+    assert np.abs(after - before).max() <= 1e-7
+    # ... the linear acceleration inside a blend (a difference quotient over its middle half) within amax
+    inner = b > 1e-6
+    _, early = path.sample(path.times[inner] - b[inner] / 4, twist=True)
+    _, late = path.sample(path.times[inner] + b[inner] / 4, twist=True)
+    accel = np.linalg.norm(late[:, :3] - early[:, :3], axis=1) / (b[inner] / 2)
+    assert accel.max() <= amax * (1 + 1e-6)
+    # ... and the path passes within max(|v_{k-1}|, |v_k|) b_k / 2 of every waypoint
+    at_waypoints = path.sample(path.times)[:, :3, 3]
+    speed = np.linalg.norm(v, axis=1)
+    reach = np.maximum(speed[:-1], speed[1:]) * b / 2
+    assert (reach > 0).all()
+    assert (np.linalg.norm(at_waypoints - P, axis=1) <= reach * (1 + 1e-9) + 1e-12).all()
 
 
 @given(

@@ -94,7 +94,7 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
     const bool has_seed = !seed_obj.is_none();
     py::array_t<T, py::array::c_style> seed;
     if (has_seed) {
-      seed = contiguous<T>(as_real_array(seed_obj, "seed"));
+      seed = reduce_seed_angles(contiguous<T>(as_real_array(seed_obj, "seed")), 12, all_angles(12));
       if (leading_shape(seed, "seed", {12}) != shape.leading)
         throw py::value_error("seed must have shape " + format_shape(shape.leading) + " + (12,)");
     }
@@ -155,7 +155,7 @@ py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code
               body_fk_kernel<T>(body, pose_block, format, seq, q_block, out_inner, k);
             }
           });
-        });
+        }, /*groups=*/4);  // a leg's non-finite joints make its foot (its Jacobian rows) NaN, and only them
       });
     }
     return std::move(out);

@@ -123,7 +123,7 @@ py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::ha
   if (max_iterations < 0) throw py::value_error("max_iter must be >= 0");
   if (rows != 3 && rows != 6) throw py::value_error("rows must be 3 or 6");
   auto targets = contiguous<double>(targets_arr);
-  auto q0 = contiguous<double>(q0_arr);
+  auto q0 = reduce_seed_angles(contiguous<double>(q0_arr), n, revolute_columns(chain));
   const py::ssize_t N = count(lead);
   auto q_path = new_array<double>(t_lead, {n});
   py::array_t<bool> converged(t_lead);

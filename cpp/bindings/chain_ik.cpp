@@ -21,6 +21,7 @@ struct ChainIK {
   std::optional<Position3> position;    // 3-joint chains
   std::optional<SphericalWrist6> wrist;  // 6-joint chains
   Limits limits;
+  std::uint64_t revolute_columns = 0;  // huge seed angles are reduced exactly
 
   std::string kind() const { return position ? position->name() : "6R-spherical-wrist"; }
   std::string position_kind() const { return position ? position->name() : wrist->position().name(); }
@@ -43,6 +44,8 @@ ChainIK make_chain_ik(Convention convention, py::handle rows_obj, py::handle bas
   if (!(scale > 0.0)) scale = 1.0;
 
   ChainIK ik;
+  for (std::ptrdiff_t j = 0; j < dof && j < 64; ++j)
+    if (chain.joints()[std::size_t(j)].type == JointType::Revolute) ik.revolute_columns |= std::uint64_t{1} << j;
   auto lower = contiguous<double>(as_real_array(lower_obj, "lower"));
   auto upper = contiguous<double>(as_real_array(upper_obj, "upper"));
   if (lower.size() != dof || upper.size() != dof) throw py::value_error("lower and upper must have shape (dof,)");
@@ -129,7 +132,7 @@ py::object solutions(const Shape& leading, py::ssize_t slots, py::ssize_t dof, s
 // seed None or (..., dof) with the targets' leading shape.
 template <typename T, typename Kernel>
 py::object nearest(const Shape& leading, py::ssize_t dof, std::ptrdiff_t in_width, const T* in,
-                   py::handle seed_obj, const char* target_name, Kernel&& kernel) {
+                   py::handle seed_obj, const char* target_name, std::uint64_t revolute_columns, Kernel&& kernel) {
   py::array_t<T, py::array::c_style> seed;  // default-constructed: an empty array, not null
   const bool has_seed = !seed_obj.is_none();
   if (has_seed) {
@@ -139,7 +142,7 @@ py::object nearest(const Shape& leading, py::ssize_t dof, std::ptrdiff_t in_widt
       throw py::value_error("seed must have shape " + format_shape(leading) + " + (" + std::to_string(dof) +
                             ",), the leading shape of " + target_name + ", got " + format_shape(seed_leading) +
                             " + (" + std::to_string(dof) + ",)");
-    seed = contiguous<T>(seed_arr);
+    seed = reduce_seed_angles(contiguous<T>(seed_arr), dof, revolute_columns);
   }
   auto q = new_array<T>(leading, {dof});
   auto status = new_array<std::int8_t>(leading, {});
@@ -162,7 +165,7 @@ py::object ik_nearest(const ChainIK& ik, py::handle target_obj, py::handle seed_
       using T = decltype(tag);
       const Shape leading = leading_shape(arr, "p", {3});
       auto p = contiguous<T>(arr);
-      return nearest<T>(leading, 3, 3, p.data(), seed_obj, "p", [&](const T* in, const T* sd, T* q, std::int8_t* st,
+      return nearest<T>(leading, 3, 3, p.data(), seed_obj, "p", ik.revolute_columns, [&](const T* in, const T* sd, T* q, std::int8_t* st,
                                                                     std::ptrdiff_t n) {
         position_nearest_kernel<T>(*ik.position, ik.limits, in, sd, q, st, n);
       });
@@ -173,7 +176,7 @@ py::object ik_nearest(const ChainIK& ik, py::handle target_obj, py::handle seed_
     auto poses = contiguous<T>(arr);
     const PoseFormat fmt = format;
     return nearest<T>(leading, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(), seed_obj, "T",
-                      [&](const T* in, const T* sd, T* q, std::int8_t* st, std::ptrdiff_t n) {
+                      ik.revolute_columns, [&](const T* in, const T* sd, T* q, std::int8_t* st, std::ptrdiff_t n) {
                         wrist_nearest_kernel<T>(*ik.wrist, ik.limits, in, fmt, sd, q, st, n);
                       });
   });

@@ -56,8 +56,10 @@ inline py::array as_real_array(py::handle obj, const char* name) {
     arr = py::reinterpret_borrow<py::array>(obj);
   } else {
     try {
-      arr = py::array::ensure(obj);
-    } catch (py::error_already_set&) {
+      arr = py::array(py::reinterpret_borrow<py::object>(obj));  // throws numpy's error, unlike ensure()
+    } catch (py::error_already_set& error) {
+      if (error.matches(PyExc_ValueError))  // a ragged nested sequence
+        throw py::value_error(std::string(name) + " must be a rectangular numeric array: " + error.what());
       arr = py::array();
     }
   }
@@ -150,38 +152,70 @@ py::object dispatch_real(py::handle obj, const char* name, F&& f) {
   return f(double{}, arr);
 }
 
-// Calls kernel(in, out, n) on [0, n) in sub-blocks of kAngleBlock samples. In a
-// sub-block holding an angle column (bit j of angle_columns: column j) beyond
-// vector_math::kReducibleLimit, the kernel sees a copy with those angles reduced
-// exactly (vector_math::reduce_huge_angle): a huge angle gives the same result as
-// its exact remainder, never garbage. The check is one pass over data in cache.
+// Calls kernel(in, out, n) on [0, n) in sub-blocks of kAngleBlock samples, and
+// makes two guarantees the kernels alone do not:
+// - a huge angle (bit j of angle_columns: column j is an angle; beyond
+//   vector_math::kReducibleLimit) gives the result of its exact remainder: the
+//   kernel sees a copy with it reduced (vector_math::reduce_huge_angle);
+// - a sample with NaN or Inf anywhere in its input gets NaN in its whole output
+//   row (out_width values), never a partly finite row (x of leg.fk does not
+//   depend on hx, say). With `groups` > 1 the row is split in that many equal
+//   parts of input and of output (the four legs of the body): a non-finite value
+//   in input part g makes output part g NaN, and only it.
+// The check is one pass over input in cache; the copy only happens in a
+// sub-block holding such a value.
 constexpr std::ptrdiff_t kAngleBlock = 512;  // a multiple of kChunkAlignment: same results for any split
 template <typename T, typename Kernel>
 void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t angle_columns, T* out,
-                         std::ptrdiff_t out_width, std::ptrdiff_t n, Kernel&& kernel) {
-  if (angle_columns == 0) {
-    kernel(in, out, n);
-    return;
-  }
+                         std::ptrdiff_t out_width, std::ptrdiff_t n, Kernel&& kernel, std::ptrdiff_t groups = 1) {
+  const std::ptrdiff_t in_part = in_width / groups, out_part = out_width / groups;
   std::vector<T> reduced;
   for (std::ptrdiff_t b = 0; b < n; b += kAngleBlock) {
     const std::ptrdiff_t m = std::min(kAngleBlock, n - b);
     const T* block = in + in_width * b;
-    bool huge = false;
+    T* out_block = out + out_width * b;
+    bool unusual = false;  // huge, Inf or NaN somewhere
     for (std::ptrdiff_t k = 0; k < m * in_width; ++k)
-      huge |= std::fabs(double(block[k])) > vector_math::kReducibleLimit;
-    if (huge) {
-      reduced.assign(block, block + m * in_width);
-      for (std::ptrdiff_t i = 0; i < m; ++i)
-        for (std::ptrdiff_t j = 0; j < in_width; ++j)
-          if ((angle_columns >> j) & 1U) {
-            T& x = reduced[std::size_t(i * in_width + j)];
-            x = T(vector_math::reduce_huge_angle(double(x)));
-          }
-      block = reduced.data();
+      unusual |= !(std::fabs(double(block[k])) <= vector_math::kReducibleLimit);
+    if (!unusual) {
+      kernel(block, out_block, m);
+      continue;
     }
-    kernel(block, out + out_width * b, m);
+    reduced.assign(block, block + m * in_width);
+    for (std::ptrdiff_t i = 0; i < m; ++i)
+      for (std::ptrdiff_t j = 0; j < in_width; ++j)
+        if ((angle_columns >> j) & 1U) {
+          T& x = reduced[std::size_t(i * in_width + j)];
+          x = T(vector_math::reduce_huge_angle(double(x)));
+        }
+    kernel(reduced.data(), out_block, m);
+    for (std::ptrdiff_t i = 0; i < m; ++i)
+      for (std::ptrdiff_t g = 0; g < groups; ++g) {
+        bool finite = true;
+        for (std::ptrdiff_t j = 0; j < in_part; ++j)
+          finite &= std::isfinite(double(block[i * in_width + g * in_part + j]));
+        T* part = out_block + out_width * i + out_part * g;
+        if (!finite) std::fill(part, part + out_part, T(quiet_nan<double>()));
+      }
   }
+}
+
+// A seed (or start) array with its huge angles (columns in angle_columns) reduced
+// exactly, as with_reduced_angles does for kernel inputs; the same array when it
+// has none (one scan; seeds only choose among solutions, so this runs up front).
+template <typename T>
+py::array_t<T, py::array::c_style> reduce_seed_angles(py::array_t<T, py::array::c_style> seed, std::ptrdiff_t width,
+                                                      std::uint64_t angle_columns) {
+  const T* data = seed.data();
+  const py::ssize_t size = seed.size();
+  bool huge = false;
+  for (py::ssize_t k = 0; k < size; ++k) huge |= std::fabs(double(data[k])) > vector_math::kReducibleLimit;
+  if (!huge) return seed;
+  py::array_t<T, py::array::c_style> copy(Shape(seed.shape(), seed.shape() + seed.ndim()));
+  T* out = copy.mutable_data();
+  for (py::ssize_t k = 0; k < size; ++k)
+    out[k] = (angle_columns >> (k % width)) & 1U ? T(vector_math::reduce_huge_angle(double(data[k]))) : data[k];
+  return copy;
 }
 
 // Every column of a width-n joint vector is an angle.
@@ -190,7 +224,8 @@ constexpr std::uint64_t all_angles(int n) { return n >= 64 ? ~std::uint64_t{0} :
 // The common binding: a batch obj (..., in_width) mapped to a new (..., *trailing)
 // array by kernel(first_input, first_output, count), called on thread chunks with
 // the GIL released; float32 stays float32, other real dtypes run in float64.
-// Columns in angle_columns are angles, reduced exactly when huge (with_reduced_angles).
+// Columns in angle_columns are angles, reduced exactly when huge; a non-finite input
+// sample gives a NaN output row (with_reduced_angles).
 template <typename Kernel>
 py::object map_batch(py::handle obj, const char* name, py::ssize_t in_width, const Shape& trailing,
                      std::ptrdiff_t min_per_thread, Kernel&& kernel, std::uint64_t angle_columns = 0) {
@@ -243,7 +278,9 @@ Rigid rigid_from(py::handle obj, const char* name) {
     T.p[i] = m(i, 3);
     row_error = std::max(row_error, std::fabs(m(3, i)));
   }
-  const bool finite = T.R.allFinite() && T.p.allFinite() && std::isfinite(row_error);
+  bool finite = true;  // all 16 (std::max above drops a NaN)
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) finite &= std::isfinite(m(i, j));
   const double orth = finite ? (T.R.transpose() * T.R - decltype(T.R)::Identity()).cwiseAbs().maxCoeff() : 0.0;
   if (!finite || !(row_error <= 1e-9) || !(orth <= 1e-9) || !(T.R.determinant() > 0.0))
     throw py::value_error(std::string(name) +

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from . import paul, trajectory
-from ._runtime import get_num_threads, set_num_threads
+from ._runtime import MAX_THREADS, get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
@@ -15,6 +15,7 @@ from .spot import BodyFrames, BodyIK, BodyRates, Spot
 
 __all__ = [
     "EULER_SEQUENCES",
+    "MAX_THREADS",
     "ArmSingularity",
     "ArmSolutions",
     "BodyFrames",

@@ -18,9 +18,10 @@ from .leg import SLOT_NAMES
 from .spot import Spot
 from .trajectory import hold_branch, via_points
 
-# Seed 000 Q1.2: the exam's DHm leg, (sigma, d, alpha, r, theta), with Spot's lengths.
+# A Spot leg as a modified DH table (sigma, d, alpha, r, theta), knee offset left out: the leg model
+# of the course this library follows (docs/derivations.md, "The leg as a DH table").
 _H1, _H2, _H3 = 0.110945, 0.3205, 0.3365
-EXAM_LEG_ROWS = [
+LEG_MDH_ROWS = [
     (0, 0.0, -np.pi / 2, 0.0, 0.0),
     (0, 0.0, np.pi / 2, _H1, 0.0),
     (0, _H2, 0.0, 0.0, 0.0),
@@ -37,6 +38,9 @@ def _throughput(func, arg, repeats: int = 3) -> float:
 
 
 def demo(samples: int = 1_000_000) -> int:
+    """Print the showcase: the whole body, a timed body path, one leg, the arm and a DH chain."""
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+        raise ValueError(f"samples must be a positive integer, got {samples!r}")
     print(f"spotkin {__version__} demo: the built-in Spot model")
     print()
     _demo_body(samples)
@@ -175,7 +179,7 @@ def _demo_leg(samples: int) -> None:
     counts = {s.name: int((status == s).sum()) for s in Status}
     foot_error = np.linalg.norm(leg.fk(q_back) - feet, axis=-1).max()
     unique = feet[:, 2] < -0.08  # below this, the limits leave a single branch (slot 0)
-    joint_error = np.abs(q_back[unique] - q_batch[unique]).max()
+    joint_error = np.abs(q_back[unique] - q_batch[unique]).max(initial=0.0)
     print(
         f"  round trip fk -> ik: worst |fk(ik(p)) - p| = {foot_error:.1e} m; worst joint error "
         f"{joint_error:.1e} rad where the branch is unique (foot > 8 cm below hx); statuses {counts}"
@@ -211,8 +215,11 @@ def _demo_arm(samples: int) -> None:
 
 
 def _demo_chain(samples: int) -> None:
-    leg = Chain.from_mdh(EXAM_LEG_ROWS, tool=translation([_H3, 0.0, 0.0]))
-    print(f"Seed 000 exam leg as a DHm chain: {leg!r}")
+    leg = Chain.from_mdh(LEG_MDH_ROWS, tool=translation([_H3, 0.0, 0.0]))
+    print(
+        "A Spot leg as a modified DH table, knee offset left out "
+        f"(angles th1 = -hx, th2 = hy, th3 = kn): {leg!r}"
+    )
     q = np.array([0.1, -0.6, 1.2])
     T = leg.fk(q)
     print(f"  q = {q} rad -> foot at {np.round(T[:3, 3], 6)} m")
@@ -227,8 +234,9 @@ def _demo_chain(samples: int) -> None:
             f"  {name:>8} on {samples:,} configurations: {seconds * 1e3:7.1f} ms "
             f"({samples / seconds / 1e6:.1f} M/s, {seconds / samples * 1e9:.0f} ns each)"
         )
-    worst = _fd_error(leg, batch[:1000])
-    print(f"  worst |J - central finite differences| over 1,000 samples: {worst:.1e}")
+    checked = batch[:1000]
+    worst = _fd_error(leg, checked)
+    print(f"  worst |J - central finite differences| over {len(checked):,} samples: {worst:.1e}")
     targets = leg.fk(batch)[:, :3, 3]
     seconds = _throughput(leg.ik_position, targets)
     sol = leg.ik_position(targets)
@@ -252,13 +260,26 @@ def _fd_error(chain: Chain, q: np.ndarray, step: float = 1e-6) -> float:
     return worst
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="spotkin", description=__doc__)
     parser.add_argument("--version", action="version", version=f"spotkin {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     demo_parser = commands.add_parser("demo", help="run the showcase on the built-in Spot model")
     demo_parser.add_argument(
-        "--samples", type=int, default=1_000_000, help="batch size for the throughput figures"
+        "--samples",
+        type=_positive_int,
+        default=1_000_000,
+        help="batch size for the throughput figures (a positive integer; default 1,000,000)",
     )
     args = parser.parse_args(argv)
     if args.command == "demo":

@@ -1,34 +1,34 @@
-"""Homogeneous-transform helpers, batched over leading dimensions (float64)."""
+"""Homogeneous-transform helpers, batched over leading dimensions (float64).
+
+Inputs go through the library's numpy boundary: non-numeric or masked input raises
+``TypeError``, a wrong shape ``ValueError`` naming the argument.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors
+
 __all__ = ["rotation_x", "rotation_y", "rotation_z", "transform", "translation"]
-
-
-def _real(value: ArrayLike, name: str) -> np.ndarray:
-    array = np.asarray(value)
-    if array.dtype.kind not in "biuf":
-        raise TypeError(f"{name} must be a real numeric array, got dtype {array.dtype}")
-    return array.astype(np.float64, copy=False)
 
 
 def translation(p: ArrayLike) -> np.ndarray:
     """Pure translation: p (..., 3) -> (..., 4, 4)."""
-    p = _real(p, "p")
-    if p.shape[-1:] != (3,):
-        raise ValueError(f"p must have shape (..., 3), got {p.shape}")
-    out = np.zeros((*p.shape[:-1], 4, 4))
+    p = as_real(p, "p", np.float64)
+    out = np.zeros((*check_trailing(p, "p", (3,)), 4, 4))
     out[..., :3, :3] = np.eye(3)
     out[..., :3, 3] = p
     out[..., 3, 3] = 1.0
     return out
 
 
+@quiet_float_errors
+
+
 def _rotation(angle: ArrayLike, axis: int) -> np.ndarray:
-    angle = _real(angle, "angle")
+    angle = as_real(angle, "angle", np.float64)
     c, s = np.cos(angle), np.sin(angle)
     i, j = [(1, 2), (2, 0), (0, 1)][axis]  # R e_i = c e_i + s e_j, R e_j = -s e_i + c e_j
     out = np.zeros((*angle.shape, 4, 4))
@@ -62,13 +62,10 @@ def transform(R: ArrayLike, p: ArrayLike) -> np.ndarray:
     Leading dimensions broadcast. R is used as given: it is not checked or
     orthonormalised.
     """
-    R = _real(R, "R")
-    p = _real(p, "p")
-    if R.shape[-2:] != (3, 3):
-        raise ValueError(f"R must have shape (..., 3, 3), got {R.shape}")
-    if p.shape[-1:] != (3,):
-        raise ValueError(f"p must have shape (..., 3), got {p.shape}")
-    lead = np.broadcast_shapes(R.shape[:-2], p.shape[:-1])
+    R = as_real(R, "R", np.float64)
+    p = as_real(p, "p", np.float64)
+    R_lead, p_lead = check_trailing(R, "R", (3, 3)), check_trailing(p, "p", (3,))
+    lead = broadcast_lead(R=(R_lead, R.shape), p=(p_lead, p.shape))
     out = np.zeros((*lead, 4, 4))
     out[..., :3, :3] = R
     out[..., :3, 3] = p

@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._boundary import as_real, as_scalar, broadcast_lead, check_trailing, quiet_float_errors
 from .models import SPOT
 
 __all__ = ["ArmSingularity", "ArmSolutions", "SpotArm", "pose_from"]
@@ -71,18 +72,23 @@ class ArmSingularity(NamedTuple):
     """|det J| of the 6x6 geometric Jacobian (= sqrt(det(J J^T)))."""
 
 
+@quiet_float_errors
+
+
 def pose_from(position: ArrayLike, quat_xyzw: ArrayLike) -> np.ndarray:
     """(..., 4, 4) pose from positions (..., 3) and scalar-last quaternions (..., 4) (scipy order).
 
     Quaternions must be unit to 1e-6; others give an all-NaN matrix (they are never
-    silently normalised). Leading dimensions broadcast.
+    silently normalised), as does a non-finite position. Leading dimensions broadcast;
+    the result is float64. Non-numeric input raises ``TypeError``, a wrong or
+    non-broadcasting shape ``ValueError``, each naming the argument.
     """
-    p = np.asarray(position, dtype=np.float64)
-    quat = np.asarray(quat_xyzw, dtype=np.float64)
-    if p.shape[-1:] != (3,):
-        raise ValueError(f"position must have shape (..., 3), got {p.shape}")
-    if quat.shape[-1:] != (4,):
-        raise ValueError(f"quat_xyzw must have shape (..., 4), got {quat.shape}")
+    p = as_real(position, "position", np.float64)
+    quat = as_real(quat_xyzw, "quat_xyzw", np.float64)
+    lead = broadcast_lead(
+        position=(check_trailing(p, "position", (3,)), p.shape),
+        quat_xyzw=(check_trailing(quat, "quat_xyzw", (4,)), quat.shape),
+    )
     x, y, z, w = np.moveaxis(quat, -1, 0)
     n2 = x * x + y * y + z * z + w * w
     s = 2.0 / n2
@@ -94,7 +100,6 @@ def pose_from(position: ArrayLike, quat_xyzw: ArrayLike) -> np.ndarray:
         ],
         -2,
     )
-    lead = np.broadcast_shapes(p.shape[:-1], quat.shape[:-1])
     T = np.zeros((*lead, 4, 4))
     T[..., :3, :3] = R
     T[..., :3, 3] = p
@@ -105,16 +110,13 @@ def pose_from(position: ArrayLike, quat_xyzw: ArrayLike) -> np.ndarray:
 
 
 def _broadcast_seed(T: ArrayLike, seed: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    T, seed = np.asarray(T), np.asarray(seed)
+    """Pose targets (..., 4, 4) or (..., 7) and seeds (..., n) broadcast over their leading
+    dimensions (the core checks the trailing ones)."""
+    T, seed = as_real(T, "T"), as_real(seed, "seed")
     trailing = 2 if T.shape[-2:] == (4, 4) else 1
     if T.shape[:-trailing] == seed.shape[:-1]:
         return T, seed  # nothing to broadcast (the common case: a few microseconds saved per call)
-    try:
-        lead = np.broadcast_shapes(T.shape[:-trailing], seed.shape[:-1])
-    except ValueError:
-        raise ValueError(
-            f"T {T.shape} and seed {seed.shape} do not broadcast over their leading dimensions"
-        ) from None
+    lead = broadcast_lead(T=(T.shape[:-trailing], T.shape), seed=(seed.shape[:-1], seed.shape))
     return (
         np.broadcast_to(T, (*lead, *T.shape[-trailing:])),
         np.broadcast_to(seed, (*lead, *seed.shape[-1:])),
@@ -124,9 +126,11 @@ def _broadcast_seed(T: ArrayLike, seed: ArrayLike) -> tuple[np.ndarray, np.ndarr
 class SpotArm:
     """The Spot Arm, or any arm of the same structure. See the module docstring.
 
-    Parameters default to the official Spot numbers (``../shared/spot_geometry.md``).
+    Parameters default to the official Spot numbers (Boston Dynamics' ``spot_with_arm.urdf``).
     ``tool`` (4, 4) maps the hand frame to the frame the IK targets (for example the
-    gripper fingertip); ``limits`` is (6, 2) [(lower, upper)], or None for none.
+    gripper fingertip); ``limits`` is (6, 2) [(lower, upper)], or None for none. Lengths
+    must be real numbers and arrays real arrays (``TypeError`` otherwise); the core
+    rejects non-finite values and inconsistent limits with ``ValueError``.
     """
 
     __slots__ = ("_core", "_params")
@@ -141,13 +145,16 @@ class SpotArm:
         tool: ArrayLike | None = None,
         limits: ArrayLike | None = SPOT["arm"]["limits"],
     ) -> None:
-        table = np.tile([-np.inf, np.inf], (6, 1)) if limits is None else np.array(limits, dtype=np.float64)
+        unlimited = np.tile([-np.inf, np.inf], (6, 1))
+        table = unlimited if limits is None else as_real(limits, "limits", np.float64).copy()
         if table.shape != (6, 2):
             raise ValueError(f"limits must have shape (6, 2) as (lower, upper) rows, got {table.shape}")
-        mount = np.array(mount, dtype=np.float64)
+        mount = as_real(mount, "mount", np.float64).copy()
         if mount.shape != (3,):
             raise ValueError(f"mount must have shape (3,), got {mount.shape}")
-        tool = None if tool is None else np.array(tool, dtype=np.float64)
+        tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
+        upper_arm, forearm = as_scalar(upper_arm, "upper_arm"), as_scalar(forearm, "forearm")
+        forearm_offset, hand = as_scalar(forearm_offset, "forearm_offset"), as_scalar(hand, "hand")
         self._core = _core.Arm(
             mount,
             float(upper_arm),
@@ -224,6 +231,6 @@ class SpotArm:
     def __repr__(self) -> str:
         mount, upper_arm, forearm, forearm_offset, hand, _, _ = self._params
         return (
-            f"SpotArm(mount={tuple(mount)}, upper_arm={upper_arm}, forearm={forearm}, "
+            f"SpotArm(mount={tuple(float(v) for v in mount)}, upper_arm={upper_arm}, forearm={forearm}, "
             f"forearm_offset={forearm_offset}, hand={hand})"
         )

@@ -3,9 +3,10 @@
 A body pose is one of
 
 - ``(..., 6)`` ``[x, y, z, a, b, c]``: position, then Euler angles in the sequence
-  ``seq`` (scipy's names). The default ``"XYZ"`` is intrinsic X, Y', Z''
-  (Tait–Bryan, seed 000 Q3.2): R = Rx(a) Ry(b) Rz(c). Lower case is extrinsic:
-  ``"xyz"`` gives R = Rz(c) Ry(b) Rx(a), ROS roll-pitch-yaw;
+  ``seq`` (scipy's names). The default ``"XYZ"`` is intrinsic X, Y', Z'' (Tait–Bryan,
+  as in the course this library follows): R = Rx(a) Ry(b) Rz(c). Lower case is
+  extrinsic: ``"xyz"`` gives R = Rz(c) Ry(b) Rx(a), ROS roll-pitch-yaw. Pass the same
+  ``seq`` to every call that reads the pose;
 - ``(..., 4, 4)`` homogeneous transforms (world <- body);
 - ``(..., 7)`` ``[x, y, z, qx, qy, qz, qw]`` (scipy's scalar-last quaternions).
 """
@@ -14,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from ._boundary import as_real
 
 __all__ = ["EULER_SEQUENCES", "body_transform"]
 
@@ -94,17 +97,48 @@ def _elementary(axis: int, angle: np.ndarray) -> np.ndarray:
 def body_transform(body_pose: ArrayLike, seq: str = "XYZ") -> np.ndarray:
     """The world <- body transform (..., 4, 4) of body poses in any accepted form (NumPy).
 
-    Matrices are returned as given; quaternions are converted with s = 2 / |q|^2.
+    Poses are checked as :meth:`spotkin.Spot.body_ik` checks them, and an invalid one
+    gives a NaN transform for that sample only: a matrix whose last row is not
+    ``[0, 0, 0, 1]`` (1e-9) or whose rotation is not one (``max |R^T R - I| > 1e-6`` or
+    ``det R <= 0``), a quaternion whose norm is not 1 within 1e-6 (never renormalised:
+    it is converted with s = 2 / |q|^2), NaN or Inf. The result is float64. Non-numeric
+    or masked input raises ``TypeError``, a shape other than (..., 6), (..., 4, 4),
+    (..., 7) ``ValueError``, naming ``body_pose``; ``seq`` is checked for every form.
     """
-    pose = np.asarray(body_pose, dtype=np.float64)
+    pose = as_real(body_pose, "body_pose", np.float64)
     fmt, lead = pose_format(pose)
+    axes, order = parse_sequence(seq)
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        T = _transform_of(pose, fmt, lead, axes, order)
+        bad = ~np.isfinite(T).all(axis=(-2, -1))
+        if fmt == FORMAT_MATRIX:
+            R = T[..., :3, :3]
+            orth = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1), initial=0.0)
+            row = np.abs(T[..., 3, :] - [0.0, 0.0, 0.0, 1.0]).max(axis=-1, initial=0.0)
+            det = np.linalg.det(np.where(bad[..., None, None], 1.0, R))
+            bad |= ~((orth <= 1e-6) & (row <= 1e-9) & (det > 0))
+        elif fmt != FORMAT_EULER:
+            bad |= ~(np.abs(np.linalg.norm(pose[..., 3:], axis=-1) - 1.0) <= 1e-6)
+    if bad.any():
+        T[bad] = np.nan
+    return T
+
+
+def unchecked_transform(pose: np.ndarray, seq: str = "XYZ") -> np.ndarray:
+    """body_transform without its checks (float64 poses): for callers that check poses
+    their own way (the trajectories normalise quaternions first)."""
+    fmt, lead = pose_format(pose)
+    axes, order = parse_sequence(seq)
+    return _transform_of(pose, fmt, lead, axes, order)
+
+
+def _transform_of(pose, fmt, lead, axes, order) -> np.ndarray:
     if fmt == FORMAT_MATRIX:
         return pose.copy()
     T = np.zeros((*lead, 4, 4))
     T[..., 3, 3] = 1.0
     T[..., :3, 3] = pose[..., :3]
     if fmt == FORMAT_EULER:
-        axes, order = parse_sequence(seq)
         R = np.broadcast_to(np.eye(3), (*lead, 3, 3))
         for k in range(3):
             R = R @ _elementary(axes[k], pose[..., 3 + order[k]])

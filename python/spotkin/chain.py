@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._boundary import as_finite, as_index, as_real, broadcast_lead
 from .arm import _broadcast_seed
 from .leg import _broadcast_pair
 
@@ -21,20 +22,18 @@ _CONVENTIONS = {
 
 def _table(rows: ArrayLike) -> np.ndarray:
     try:
-        table = np.asarray(rows)
-    except ValueError as error:  # ragged rows
-        raise ValueError(f"rows must be a numeric table of shape (n, 5): {error}") from None
-    if table.dtype.kind not in "biuf":
-        raise TypeError(f"rows must be a numeric table of shape (n, 5), got dtype {table.dtype}")
+        table = as_real(rows, "rows", np.float64)
+    except (TypeError, ValueError) as error:
+        raise type(error)(f"rows must be a numeric table of shape (n, 5): {error}") from None
     if table.ndim != 2 or table.shape[1] != 5:
         raise ValueError(f"rows must have shape (n, 5), got {table.shape}")
-    return table.astype(np.float64)
+    return table.copy()
 
 
 def _limits(limits: ArrayLike | None, dof: int) -> tuple[np.ndarray, np.ndarray]:
     if limits is None:
         return np.full(dof, -np.inf), np.full(dof, np.inf)
-    table = np.array(limits, dtype=np.float64)
+    table = as_real(limits, "limits", np.float64)
     if table.shape != (dof, 2):
         raise ValueError(f"limits must have shape ({dof}, 2) as (lower, upper) rows, got {table.shape}")
     lower, upper = table[:, 0].copy(), table[:, 1].copy()
@@ -102,8 +101,8 @@ class Chain:
         table = _table(rows)
         self._rows = table
         self._convention = convention
-        self._base = None if base is None else np.array(base, dtype=np.float64)
-        self._tool = None if tool is None else np.array(tool, dtype=np.float64)
+        self._base = None if base is None else as_real(base, "base", np.float64).copy()
+        self._tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
         self._core = _core.Chain(_CONVENTIONS[convention], table, self._base, self._tool)
         self._limits = _limits(limits, table.shape[0])
         self._ik = None
@@ -321,21 +320,24 @@ class Chain:
           6 joints, or when the orientation is free);
         - converged when ``|p_target - p| <= position_tolerance`` (m) and, for the pose
           task, ``|log(R_target R^T)| <= orientation_tolerance`` (rad);
-        - step ``dq = J^T (J J^T + damping² I)^-1 e``, scaled down so that
-          ``max |dq_j| <= max_step``;
+        - step ``dq = J^T (J J^T + damping² I)^-1 e`` (``damping`` finite and > 0: the
+          damping keeps the steps bounded at singular configurations), scaled down so that
+          ``max |dq_j| <= max_step`` (finite and > 0);
         - joint limits by clamping: ``q <- clip(q + dq, lower, upper)``. A joint sitting
           at a limit whose step points outwards is locked (its Jacobian column removed)
           and the step re-solved, so the other joints make up for it.
 
         Unreachable targets (out of the workspace or the limits) end with
         ``converged=False`` and the final errors, after ``max_iter`` steps. Non-finite
-        input gives NaN joints and errors with ``converged=False`` for that target.
+        input, or a target that is not a rigid transform (last row ``[0, 0, 0, 1]``,
+        ``max |R^T R - I| <= 1e-6``, ``det R > 0``, as :meth:`ik` requires), gives NaN
+        joints and errors with ``converged=False`` for that target.
         Computed in float64; the result is float32 when ``T_targets`` and ``q0`` both are.
         """
         if task not in ("pose", "position"):
             raise ValueError(f"task must be 'pose' or 'position', got {task!r}")
-        targets = _as_real(T_targets, "T_targets")
-        q0_arr = _as_real(q0, "q0")
+        targets = as_real(T_targets, "T_targets")
+        q0_arr = as_real(q0, "q0")
         if targets.ndim < 2 or targets.shape[-2:] != (4, 4):
             raise ValueError(f"T_targets must have shape (..., K, 4, 4) or (..., 4, 4), got {targets.shape}")
         if q0_arr.ndim < 1 or q0_arr.shape[-1] != self.dof:
@@ -343,25 +345,18 @@ class Chain:
         # a single target per sample when T_targets has no more leading dimensions than q0
         single = targets.ndim - 2 <= q0_arr.ndim - 1
         path = targets[..., None, :, :] if single else targets
-        try:
-            lead = np.broadcast_shapes(path.shape[:-3], q0_arr.shape[:-1])
-        except ValueError:
-            raise ValueError(
-                f"T_targets {targets.shape} and q0 {q0_arr.shape} do not broadcast over their "
-                "leading dimensions"
-            ) from None
+        lead = broadcast_lead(
+            T_targets=(path.shape[:-3], targets.shape), q0=(q0_arr.shape[:-1], q0_arr.shape)
+        )
         path = np.broadcast_to(path, (*lead, *path.shape[-3:]))
         start = np.broadcast_to(q0_arr, (*lead, self.dof))
-        for name, value in (
-            ("damping", damping),
-            ("position_tolerance", position_tolerance),
-            ("orientation_tolerance", orientation_tolerance),
-            ("max_step", max_step),
-        ):
-            if not isinstance(value, (int, float, np.floating, np.integer)) or not np.isfinite(value):
-                raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
-            raise ValueError(f"max_iter must be an int >= 0, got {max_iter!r}")
+        damping = as_finite(damping, "damping", 0.0, strict=True)
+        max_step = as_finite(max_step, "max_step", 0.0, strict=True)
+        position_tolerance = as_finite(position_tolerance, "position_tolerance")
+        orientation_tolerance = as_finite(orientation_tolerance, "orientation_tolerance")
+        max_iter = as_index(max_iter, "max_iter")
+        if not 0 <= max_iter <= 2**31 - 1:
+            raise ValueError(f"max_iter must be an int in [0, 2**31 - 1], got {max_iter!r}")
         q_path, converged, iterations, position_error, orientation_error = self._core.ik_differential(
             path,
             start,
@@ -393,13 +388,6 @@ class Chain:
 
 def _rebuild(rows, convention, base, tool, limits) -> Chain:
     return Chain(rows, convention=convention, base=base, tool=tool, limits=limits)
-
-
-def _as_real(value: ArrayLike, name: str) -> np.ndarray:
-    array = np.asarray(value)
-    if array.dtype.kind not in "biuf":
-        raise TypeError(f"{name} must be a real numeric array, got dtype {array.dtype}")
-    return array
 
 
 def _scalar(array: np.ndarray):

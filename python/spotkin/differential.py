@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._boundary import as_scalar
 
 __all__ = ["dls", "manipulability", "nullspace_projector", "pinv", "rank", "singular_values"]
 
@@ -99,10 +100,8 @@ def manipulability(J: ArrayLike):
 
 
 def _nonnegative(value: float, name: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a real number, got {type(value).__name__}") from None
+    """A real number (bool, str, None and complex raise TypeError), finite and >= 0."""
+    value = as_scalar(value, name)
     if not math.isfinite(value) or value < 0:
         raise ValueError(f"{name} must be finite and >= 0, got {value}")
     return value

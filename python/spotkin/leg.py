@@ -6,8 +6,8 @@ to the body frame (x forward, y left, z up)::
     p = Rx(hx) ( [0, h1, 0] + Ry(hy) ( [k, 0, -upper] + Ry(kn) [0, 0, -lower] ) )
 
 with h1 = +hip_offset for a left leg and -hip_offset for a right leg, and k the
-knee's forward offset. The IK is closed form (Paul's method, seed 000 Q2.1,
-re-derived): hip roll from a type-2 equation (two roots), knee from a second
+knee's forward offset. The IK is closed form (Paul's method, re-derived in
+docs/derivations.md): hip roll from a type-2 equation (two roots), knee from a second
 type-2 equation (two roots), hip pitch from an angle difference; the knee
 offset is handled exactly. Branch slots are fixed:
 
@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._boundary import as_flag, as_real, as_scalar, broadcast_lead, fallback_is_nearest
 
 __all__ = ["Leg", "LegSolutions"]
 
@@ -63,15 +64,11 @@ class LegSolutions(NamedTuple):
 
 
 def _broadcast_pair(a: ArrayLike, b: ArrayLike, name_a: str, name_b: str) -> tuple[np.ndarray, np.ndarray]:
-    a, b = np.asarray(a), np.asarray(b)
+    """Two batches (..., n) broadcast over their leading dimensions (the core checks n)."""
+    a, b = as_real(a, name_a), as_real(b, name_b)
     if a.shape[:-1] == b.shape[:-1]:
         return a, b  # nothing to broadcast (the common case: a few microseconds saved per call)
-    try:
-        lead = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
-    except ValueError:
-        raise ValueError(
-            f"{name_a} {a.shape} and {name_b} {b.shape} do not broadcast over their leading dimensions"
-        ) from None
+    lead = broadcast_lead(**{name_a: (a.shape[:-1], a.shape), name_b: (b.shape[:-1], b.shape)})
     return (np.broadcast_to(a, (*lead, *a.shape[-1:])), np.broadcast_to(b, (*lead, *b.shape[-1:])))
 
 
@@ -88,6 +85,10 @@ class Leg:
         ``"left"`` (h1 = +hip_offset) or ``"right"`` (h1 = -hip_offset).
     limits:
         Optional (3, 2) joint limits [(lower, upper)] for hx, hy, kn; None for none.
+
+    Lengths must be real numbers and ``limits`` a real array (``TypeError`` otherwise);
+    non-finite lengths, ``upper`` or ``lower`` not positive, a negative ``hip_offset``,
+    and limits with NaN or lower > upper raise ``ValueError``.
     """
 
     __slots__ = ("_core", "_limits", "_params")
@@ -104,9 +105,12 @@ class Leg:
     ) -> None:
         if side not in ("left", "right"):
             raise ValueError(f"side must be 'left' or 'right', got {side!r}")
+        hip_offset, knee_offset = as_scalar(hip_offset, "hip_offset"), as_scalar(knee_offset, "knee_offset")
+        upper, lower = as_scalar(upper, "upper"), as_scalar(lower, "lower")
         if not hip_offset >= 0:
             raise ValueError(f"hip_offset is a length (its sign comes from side), got {hip_offset}")
-        table = np.tile([-np.inf, np.inf], (3, 1)) if limits is None else np.array(limits, dtype=np.float64)
+        unlimited = np.tile([-np.inf, np.inf], (3, 1))
+        table = unlimited if limits is None else as_real(limits, "limits", np.float64).copy()
         if table.shape != (3, 2):
             raise ValueError(f"limits must have shape (3, 2) as (lower, upper) rows, got {table.shape}")
         h1 = float(hip_offset) if side == "left" else -float(hip_offset)
@@ -168,7 +172,7 @@ class Leg:
         """
         return self._core.singularity(q)
 
-    def ik(self, p: ArrayLike, seed: ArrayLike | None = None):
+    def ik(self, p: ArrayLike, seed: ArrayLike | None = None, fallback: str = "nearest"):
         """Joint angles placing the foot at p: p (..., 3) -> (q (..., 3), status (...,)).
 
         Status per target (a :class:`Status` for a single target, an int8 array otherwise):
@@ -182,15 +186,18 @@ class Leg:
           stretched or folded toward the target as far as the knee's limits allow,
           i.e. a branch for ``nearest_reachable(p, within_limits=True)`` (the
           first slot inside all the limits; if none, slot 0 with each joint
-          brought to its nearest bound, the foot then further away).
+          brought to its nearest bound, the foot then further away). With
+          ``fallback="nan"``, q is NaN instead (as :meth:`SpotArm.ik` and
+          :meth:`Chain.ik_nearest` answer).
         - ``JOINT_LIMIT``: branches exist, but none within the limits; q is NaN.
         - ``INVALID_INPUT``: NaN or Inf in p or seed; q is NaN.
 
         ``seed`` (..., 3) must have the shape of p when given.
         """
+        nearest = fallback_is_nearest(fallback)
         if seed is None:
-            return self._core.ik(p, None)
-        return self._core.ik(*_broadcast_pair(p, seed, "p", "seed"))
+            return self._core.ik(p, None, nearest)
+        return self._core.ik(*_broadcast_pair(p, seed, "p", "seed"), nearest)
 
     def ik_all(self, p: ArrayLike) -> LegSolutions:
         """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table."""
@@ -204,11 +211,19 @@ class Leg:
         ``within_limits``: the shell of the distances the knee reaches inside its
         limits instead (the hip limits aside): the foot position of ``ik``'s
         UNREACHABLE answer whenever that answer needs no hip joint brought to a bound.
+
+        Returns float64 (3,), all NaN when p has NaN or Inf. ``p`` must be a real array
+        of shape (3,) (``TypeError`` for non-numeric or masked input, ``ValueError`` for
+        another shape) and ``within_limits`` a bool (``TypeError`` otherwise, so
+        ``"False"`` is not true).
         """
-        point = np.asarray(p, dtype=np.float64)
+        point = as_real(p, "p", np.float64)
         if point.shape != (3,):
             raise ValueError(f"p must have shape (3,), got {point.shape}")
-        return np.array(self._core.nearest_reachable(point, bool(within_limits)))
+        within_limits = as_flag(within_limits, "within_limits")
+        if not np.isfinite(point).all():
+            return np.full(3, np.nan)
+        return np.array(self._core.nearest_reachable(point, within_limits))
 
     def __reduce__(self):
         hip_offset, upper, lower, knee_offset, side, name = self._params

@@ -1,5 +1,5 @@
-"""Built-in robot models, as data. Numbers from ../shared/spot_geometry.md
-(Boston Dynamics spot-sdk `spot_with_arm.urdf`, 2023)."""
+"""Built-in robot models, as data. Numbers from the official Boston Dynamics URDF
+(spot-sdk `spot_with_arm.urdf`, 2023; `bdaiinstitute/spot_description` agrees)."""
 
 from __future__ import annotations
 

@@ -3,12 +3,25 @@ numbers; whole-body IK, FK and Jacobians."""
 
 from __future__ import annotations
 
+import contextlib
+import math
+from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._boundary import (
+    as_finite,
+    as_real,
+    as_scalar,
+    broadcast_lead,
+    check_trailing,
+    fallback_is_nearest,
+    quiet_float_errors,
+    real_dtype,
+)
 from .arm import SpotArm
 from .body import body_transform, pose_format, sequence_code
 from .leg import Leg
@@ -59,14 +72,114 @@ def _broadcast_to_lead(array: np.ndarray, trailing: int, lead: tuple[int, ...]) 
     return np.broadcast_to(array, (*lead, *array.shape[array.ndim - trailing :]))
 
 
+def _section(table: Mapping, key: str, where: str):
+    """table[key], with a ValueError naming the missing key (``where`` names the table)."""
+    if not isinstance(table, Mapping):
+        raise TypeError(f"{where} must be a dict, got {type(table).__name__}")
+    try:
+        return table[key]
+    except KeyError:
+        raise ValueError(f"{where} is missing the key {key!r}") from None
+
+
+def _number(table: Mapping, key: str, where: str, minimum: float = -math.inf, strict: bool = False) -> float:
+    return as_finite(_section(table, key, where), f"{where}[{key!r}]", minimum, strict)
+
+
+def _point(table: Mapping, key: str, where: str) -> tuple[float, ...]:
+    name = f"{where}[{key!r}]"
+    point = as_real(_section(table, key, where), name, np.float64)
+    if point.shape != (3,) or not np.isfinite(point).all():
+        raise ValueError(f"{name} must be 3 finite numbers (shape (3,)), got {point.tolist()}")
+    return tuple(point.tolist())
+
+
+def _limit_rows(table: Mapping, key: str, where: str, joints: int) -> tuple[tuple[float, float], ...]:
+    name = f"{where}[{key!r}]"
+    rows = as_real(_section(table, key, where), name, np.float64)
+    if rows.shape != (joints, 2):
+        raise ValueError(f"{name} must have shape ({joints}, 2) as (lower, upper) rows, got {rows.shape}")
+    if np.isnan(rows).any() or (rows[:, 0] > rows[:, 1]).any():
+        raise ValueError(f"{name} must satisfy lower <= upper, with no NaN, got {rows.tolist()}")
+    return tuple(map(tuple, rows.tolist()))
+
+
+def _checked_model(model: Mapping) -> dict:
+    """A validated copy of a model dict shaped like :data:`spotkin.models.SPOT`."""
+    if not isinstance(model, Mapping):
+        raise TypeError(f"model must be a dict shaped like spotkin.models.SPOT, got {type(model).__name__}")
+    hips = _section(model, "hip_positions", "model")
+    leg = _section(model, "leg", "model")
+    arm = _section(model, "arm", "model")
+    where_hips, where_leg, where_arm = "model['hip_positions']", "model['leg']", "model['arm']"
+    checked = {
+        "hip_positions": {name: _point(hips, name, where_hips) for name in LEG_NAMES},
+        "leg": {
+            "hip_offset": _number(leg, "hip_offset", where_leg, 0.0),
+            "upper": _number(leg, "upper", where_leg, 0.0, strict=True),
+            "knee_offset": _number(leg, "knee_offset", where_leg),
+            "lower": _number(leg, "lower", where_leg, 0.0, strict=True),
+            "foot_radius": _number(leg, "foot_radius", where_leg, 0.0),
+            "limits": _limit_rows(leg, "limits", where_leg, 3),
+        },
+        "arm": {
+            "mount": _point(arm, "mount", where_arm),
+            "upper_arm": _number(arm, "upper_arm", where_arm, 0.0, strict=True),
+            "forearm": _number(arm, "forearm", where_arm),
+            "forearm_offset": _number(arm, "forearm_offset", where_arm),
+            "hand": _number(arm, "hand", where_arm),
+            "limits": _limit_rows(arm, "limits", where_arm, 6),
+        },
+    }
+    if checked["arm"]["forearm"] == 0.0 and checked["arm"]["forearm_offset"] == 0.0:
+        raise ValueError("model['arm']['forearm'] and model['arm']['forearm_offset'] are both 0")
+    if "nominal_stance" in model:
+        checked["nominal_stance"] = _point(model, "nominal_stance", "model")
+    return checked
+
+
+def _solve_rows(J: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x with J x = rhs for each J (n, 3, 3), rhs (n, 3); NaN rows where LAPACK finds J
+    exactly singular (the rest of the batch is unaffected)."""
+    try:
+        return np.linalg.solve(J, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # one exactly singular J: solve one by one
+        x = np.full(rhs.shape, np.nan)
+        for k in range(len(J)):
+            with contextlib.suppress(np.linalg.LinAlgError):
+                x[k] = np.linalg.solve(J[k], rhs[k])
+        return x
+
+
 class Spot:
     """Boston Dynamics Spot. Body frame: x forward, y left, z up, origin at the
-    centre of the four hx joints. Legs in SDK order: fl, fr, hl, hr."""
+    centre of the four hx joints. Legs in SDK order: fl, fr, hl, hr.
 
-    __slots__ = ("_arm", "_body_core", "_legs", "_model")
+    ``model`` is a dict shaped like :data:`spotkin.models.SPOT` (the default): keys
+    ``"hip_positions"`` (a (3,) point per leg name), ``"leg"`` (``hip_offset``,
+    ``upper``, ``knee_offset``, ``lower``, ``foot_radius``, ``limits`` (3, 2)) and
+    ``"arm"`` (``mount`` (3,), ``upper_arm``, ``forearm``, ``forearm_offset``, ``hand``,
+    ``limits`` (6, 2)); other keys are ignored. It is checked and copied: a missing key,
+    a non-finite number, ``upper``, ``lower`` or ``upper_arm`` not positive, a negative
+    ``hip_offset`` or ``foot_radius``, a point not of shape (3,), or limits with NaN or
+    lower > upper raise ``ValueError`` naming the key; a non-dict or non-numeric value
+    raises ``TypeError``.
+    """
 
-    def __init__(self, model: dict | None = None) -> None:
-        self._model = SPOT if model is None else model
+    __slots__ = ("_arm", "_body_core", "_hips", "_legs", "_model")
+
+    leg_names = LEG_NAMES
+    """The legs in SDK order: ("fl", "fr", "hl", "hr") (h: hind)."""
+    joint_names = tuple(f"{leg}.{joint}" for leg in LEG_NAMES for joint in ("hx", "hy", "kn"))
+    """The 12 leg joints in SDK order, the order of ``q12``: "fl.hx", "fl.hy", "fl.kn", "fr.hx", ...,
+    "hr.kn"."""
+    arm_joint_names = ("arm0.sh0", "arm0.sh1", "arm0.el0", "arm0.el1", "arm0.wr0", "arm0.wr1")
+    """The 6 arm joints in SDK order, the order of ``q_arm``."""
+
+    def __init__(self, model: Mapping | None = None) -> None:
+        self._model = SPOT if model is None else _checked_model(model)
+        self._hips = np.array([self._model["hip_positions"][name] for name in LEG_NAMES], dtype=np.float64)
+        self._hips.flags.writeable = False
         leg = self._model["leg"]
         self._legs = tuple(
             Leg(
@@ -80,7 +193,7 @@ class Spot:
             )
             for name in LEG_NAMES
         )
-        self._body_core = _core.Body([leg._core for leg in self._legs], self.hip_positions)
+        self._body_core = _core.Body([leg._core for leg in self._legs], self._hips)
         arm = self._model["arm"]
         self._arm = SpotArm(
             arm["mount"],
@@ -111,7 +224,7 @@ class Spot:
     @property
     def hip_positions(self) -> np.ndarray:
         """(4, 3) hx joint origins in the body frame, SDK order."""
-        return np.array([self._model["hip_positions"][name] for name in LEG_NAMES], dtype=np.float64)
+        return self._hips.copy()
 
     # -- whole body -----------------------------------------------------------------------------------
 
@@ -121,17 +234,21 @@ class Spot:
         Each foot is straight below its hy joint (hx = 0) with the foot sphere resting on
         the ground z = 0, so its centre is at z = foot_radius.
         """
-        leg = self._model["leg"]
-        feet = self.hip_positions.copy()
+        height = as_scalar(height, "height")
+        feet = self.hip_positions
         feet[:, 1] += [leg.hip_offset for leg in self._legs]
         feet[:, 2] = self._model["leg"]["foot_radius"]
         if not 0.0 < height - feet[0, 2] <= self._legs[0].reach[1]:
             raise ValueError(f"height {height} m puts the feet out of reach")
-        del leg
         return feet
 
     def body_ik(
-        self, body_pose: ArrayLike, feet: ArrayLike, seed: ArrayLike | None = None, seq: str = "XYZ"
+        self,
+        body_pose: ArrayLike,
+        feet: ArrayLike,
+        seed: ArrayLike | None = None,
+        seq: str = "XYZ",
+        fallback: str = "nearest",
     ) -> BodyIK:
         """The 12 leg joints placing the body at ``body_pose`` with the feet at ``feet``.
 
@@ -144,35 +261,39 @@ class Spot:
         :meth:`Leg.ik`, and a leg's failure never touches the other legs. ``seed``
         (..., 12) picks the branch where several are valid. A pose with NaN, or a 4x4 /
         quaternion that is not a rotation, gives INVALID_INPUT on all four legs of that
-        sample only.
+        sample only. ``fallback`` is the UNREACHABLE legs' answer, as in :meth:`Leg.ik`:
+        ``"nearest"`` (in the limits, stretched or folded toward the foot) or ``"nan"``.
         """
-        if seed is None and seq == "XYZ" and type(feet) is np.ndarray and feet.shape == (4, 3):
+        if (
+            seed is None
+            and seq == "XYZ"
+            and fallback == "nearest"
+            and type(feet) is np.ndarray
+            and feet.shape == (4, 3)
+        ):
             # the control-loop call, one shared stance: the core checks body_pose itself
             return BodyIK._make(self._body_core.ik(body_pose, -1, _XYZ, feet, None))
-        pose = body_pose if type(body_pose) is np.ndarray else np.asarray(body_pose)
+        nearest = fallback_is_nearest(fallback)
+        pose = as_real(body_pose, "body_pose")
         fmt, pose_lead = pose_format(pose)
         code = sequence_code(seq)
-        feet = feet if type(feet) is np.ndarray else np.asarray(feet)
-        if feet.shape[-2:] != (4, 3):
-            raise ValueError(f"feet must have shape (..., 4, 3), got {feet.shape}")
-        feet_lead = feet.shape[:-2]
-        if not feet_lead or feet_lead == pose_lead:  # a shared stance, or one stance per pose
-            lead = pose_lead
-        else:
-            try:
-                lead = np.broadcast_shapes(pose_lead, feet_lead)
-            except ValueError:
-                raise ValueError(f"body_pose {pose.shape} and feet {feet.shape} do not broadcast") from None
-            if feet_lead != lead:
+        feet = as_real(feet, "feet")
+        feet_lead = check_trailing(feet, "feet", (4, 3))
+        if seed is not None:
+            seed = as_real(seed, "seed")
+            seed_lead = check_trailing(seed, "seed", (12,))
+        # nothing to broadcast for a shared stance or one stance per pose, and one seed per pose
+        if (feet_lead and feet_lead != pose_lead) or (seed is not None and seed_lead != pose_lead):
+            leads = {"body_pose": (pose_lead, pose.shape), "feet": (feet_lead, feet.shape)}
+            if seed is not None:
+                leads["seed"] = (seed_lead, seed.shape)
+            lead = broadcast_lead(**leads)
+            if feet_lead and feet_lead != lead:  # a single stance is shared without copying
                 feet = feet.reshape(4, 3) if feet.size == 12 else np.broadcast_to(feet, (*lead, 4, 3))
             pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
-        if seed is not None:
-            seed = np.asarray(seed)
-            if seed.shape[-1:] != (12,):
-                raise ValueError(f"seed must have shape (..., 12), got {seed.shape}")
-            if seed.shape[:-1] != lead:
-                seed = np.broadcast_to(seed, (*lead, 12))
-        return BodyIK(*self._body_core.ik(pose, fmt, code, feet, seed))
+            if seed is not None:
+                seed = _broadcast_to_lead(seed, 1, lead)
+        return BodyIK(*self._body_core.ik(pose, fmt, code, feet, seed, nearest))
 
     def body_fk(self, body_pose: ArrayLike, q12: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)). Leading dimensions broadcast."""
@@ -188,6 +309,8 @@ class Spot:
         pose, q12, fmt, code = self._pose_and_q(body_pose, q12, seq)
         return self._body_core.jacobian(pose, fmt, code, q12)
 
+    @quiet_float_errors
+
     def body_rates(
         self,
         body_pose: ArrayLike,
@@ -199,62 +322,113 @@ class Spot:
         """Joint velocities that keep every foot fixed while the body moves with ``twist``.
 
         ``twist`` (..., 6) is [v; w] (world frame, as in :meth:`body_jacobian`). Per leg,
-        J_leg dq = -R^T (v + w x (foot - t)). A leg whose Jacobian's smallest singular
-        value is below ``tolerance`` (stretched, folded, or on the hip-roll cylinder)
-        gets NaN velocities and ``singular = True``: it cannot follow every twist.
+        J_leg dq = -R^T (v + w x (foot - t)). Leading dimensions of ``body_pose``, ``q12``
+        and ``twist`` broadcast; the result is float64.
+
+        A leg gets NaN velocities and ``singular = True`` when it has no usable answer:
+        its Jacobian's smallest singular value is not above ``tolerance`` (stretched,
+        folded, or on the hip-roll cylinder: it cannot follow every twist), or its
+        sample has a NaN or Inf joint angle, twist or body pose, or a body pose that is
+        not a rigid transform (as :meth:`body_fk` reads it). So ``qd`` is NaN exactly
+        where ``singular`` is True, and such a leg never affects another leg or sample.
+
+        ``tolerance`` must be a finite real number >= 0 (``TypeError`` for a non-number,
+        ``ValueError`` for NaN, Inf or a negative value). Non-numeric arrays raise
+        ``TypeError``, wrong or non-broadcasting shapes ``ValueError``, naming the argument.
         """
-        T = body_transform(body_pose, seq)
-        q12 = np.asarray(q12, dtype=np.float64)
-        twist = np.asarray(twist, dtype=np.float64)
-        if q12.shape[-1:] != (12,):
-            raise ValueError(f"q12 must have shape (..., 12), got {q12.shape}")
-        if twist.shape[-1:] != (6,):
-            raise ValueError(f"twist must have shape (..., 6), got {twist.shape}")
-        lead = np.broadcast_shapes(T.shape[:-2], q12.shape[:-1], twist.shape[:-1])
-        R = np.broadcast_to(T[..., :3, :3], (*lead, 3, 3))
-        q = np.broadcast_to(q12, (*lead, 12)).reshape(*lead, 4, 3)
-        v, w = np.broadcast_to(twist[..., :3], (*lead, 3)), np.broadcast_to(twist[..., 3:], (*lead, 3))
-        qd = np.empty((*lead, 4, 3))
-        singular = np.empty((*lead, 4), dtype=bool)
+        tolerance = as_finite(tolerance, "tolerance", 0.0)
+        T, pose = self._world_from_body(body_pose, seq)
+        q12 = as_real(q12, "q12", np.float64)
+        twist = as_real(twist, "twist", np.float64)
+        lead = broadcast_lead(
+            body_pose=(T.shape[:-2], pose.shape),
+            q12=(check_trailing(q12, "q12", (12,)), q12.shape),
+            twist=(check_trailing(twist, "twist", (6,)), twist.shape),
+        )
+        n = math.prod(lead)
+        R = np.broadcast_to(T[..., :3, :3], (*lead, 3, 3)).reshape(n, 3, 3)
+        q = np.broadcast_to(q12, (*lead, 12)).reshape(n, 4, 3)
+        twist = np.broadcast_to(twist, (*lead, 6)).reshape(n, 6)
+        v, w = twist[:, :3], twist[:, 3:]
+        qd = np.full((n, 4, 3), np.nan)
+        singular = np.ones((n, 4), dtype=bool)
         for i, leg in enumerate(self._legs):
-            r = np.einsum("...ij,...j->...i", R, self.hip_positions[i] + leg.fk(q[..., i, :]))
-            rhs = -np.einsum("...ji,...j->...i", R, v + np.cross(w, r))
-            J = leg.jacobian(q[..., i, :])
-            sigma = leg.singularity(q[..., i, :])[1]
-            bad = ~(sigma >= tolerance)
-            J_safe = np.where(bad[..., None, None], np.eye(3), J)
-            qd[..., i, :] = np.where(bad[..., None], np.nan, np.linalg.solve(J_safe, rhs[..., None])[..., 0])
-            singular[..., i] = bad
-        return BodyRates(qd.reshape(*lead, 12), singular)
+            q_leg = q[:, i]
+            r = np.einsum("nij,nj->ni", R, self._hips[i] + leg.fk(q_leg))
+            rhs = -np.einsum("nji,nj->ni", R, v + np.cross(w, r))
+            J = leg.jacobian(q_leg)
+            sigma = leg.singularity(q_leg)[1]
+            # the finiteness checks do not rely on sigma, which NaN input need not make NaN
+            finite_input = np.isfinite(J).all((1, 2)) & np.isfinite(rhs).all(1)
+            usable = np.flatnonzero((sigma > tolerance) & finite_input)
+            solved = _solve_rows(J[usable], rhs[usable])
+            finite = np.isfinite(solved).all(1)
+            qd[usable[finite], i] = solved[finite]
+            singular[usable[finite], i] = False
+        return BodyRates(qd.reshape(*lead, 12), singular.reshape(*lead, 4))
+
+    @quiet_float_errors
 
     def arm_ik_world(
         self, body_pose: ArrayLike, T_world: ArrayLike, seed: ArrayLike | None = None, seq: str = "XYZ"
     ):
         """Arm IK for hand targets given in the world frame: (q (..., 6), status).
 
-        T_body = T_world_body^-1 T_world, then :meth:`SpotArm.ik`. ``T_world`` is (..., 4, 4);
-        body poses, targets and seeds broadcast together.
+        T_body = T_world_body^-1 T_world, then :meth:`SpotArm.ik`. ``T_world`` is (..., 4, 4)
+        and ``seed`` (..., 6); leading dimensions of body poses, targets and seeds broadcast
+        together (``ValueError`` naming them otherwise). A body pose with NaN/Inf or that
+        is not a rigid transform (as :meth:`body_fk` reads it) gives INVALID_INPUT for
+        that sample, like a bad target. q is float32 when ``body_pose`` and ``T_world``
+        both are, float64 otherwise.
         """
-        T_wb = body_transform(body_pose, seq)
-        T_world = np.asarray(T_world, dtype=np.float64)
-        if T_world.shape[-2:] != (4, 4):
-            raise ValueError(f"T_world must have shape (..., 4, 4), got {T_world.shape}")
+        T_wb, pose = self._world_from_body(body_pose, seq)
+        target = as_real(T_world, "T_world")
+        leads = {
+            "body_pose": (T_wb.shape[:-2], pose.shape),
+            "T_world": (check_trailing(target, "T_world", (4, 4)), target.shape),
+        }
+        if seed is not None:
+            seed = as_real(seed, "seed")
+            leads["seed"] = (check_trailing(seed, "seed", (6,)), seed.shape)
+        lead = broadcast_lead(**leads)
+        T_world64 = target.astype(np.float64, copy=False)
         R, t = T_wb[..., :3, :3], T_wb[..., :3, 3]
         T_bw = np.zeros_like(T_wb)
         T_bw[..., :3, :3] = np.swapaxes(R, -1, -2)
         T_bw[..., :3, 3] = -np.einsum("...ji,...j->...i", R, t)
         T_bw[..., 3, 3] = 1.0
-        T_body = T_bw @ T_world
-        T_body[..., 3, :] = T_world[..., 3, :]  # keep the caller's last row, so a bad one is still reported
+        T_body = T_bw @ T_world64
+        T_body[..., 3, :] = T_world64[..., 3, :]  # keep the caller's last row, so a bad one is still reported
+        T_body = np.broadcast_to(T_body, (*lead, 4, 4)).astype(real_dtype(pose, target))
+        if seed is not None:
+            seed = _broadcast_to_lead(seed, 1, lead)
         return self._arm.ik(T_body, seed=seed)
+
+    @quiet_float_errors
 
     def fk_all(
         self, body_pose: ArrayLike, q12: ArrayLike, q_arm: ArrayLike | None = None, seq: str = "XYZ"
     ) -> BodyFrames:
-        """Every frame of interest in the world frame: body, hips, knees, feet, and the hand."""
-        T = body_transform(body_pose, seq)
-        q12 = np.asarray(q12, dtype=np.float64)
-        lead = np.broadcast_shapes(T.shape[:-2], q12.shape[:-1])
+        """Every frame of interest in the world frame: body, hips, knees, feet, and the hand.
+
+        Checked as :meth:`body_fk`: ``body_pose`` in any accepted form, ``q12`` (..., 12)
+        and ``q_arm`` (..., 6) real arrays whose leading dimensions broadcast (``TypeError``
+        for non-numeric input such as None, ``ValueError`` naming the argument for another
+        shape). A body pose with NaN or Inf, or that is not a rigid transform (a 4x4 whose
+        rotation part is not a rotation or whose last row is not [0, 0, 0, 1], a non-unit
+        quaternion), gives NaN frames for that sample only, as :meth:`body_fk` gives NaN
+        feet. Every frame is float64.
+        """
+        T, pose = self._world_from_body(body_pose, seq)
+        q12 = as_real(q12, "q12", np.float64)
+        leads = {
+            "body_pose": (T.shape[:-2], pose.shape),
+            "q12": (check_trailing(q12, "q12", (12,)), q12.shape),
+        }
+        if q_arm is not None:
+            q_arm = as_real(q_arm, "q_arm", np.float64)
+            leads["q_arm"] = (check_trailing(q_arm, "q_arm", (6,)), q_arm.shape)
+        lead = broadcast_lead(**leads)
         T = np.broadcast_to(T, (*lead, 4, 4))
         q = np.broadcast_to(q12, (*lead, 12)).reshape(*lead, 4, 3)
         R, t = T[..., :3, :3], T[..., :3, 3]
@@ -262,14 +436,14 @@ class Spot:
         def world(p):
             return t[..., None, :] + np.einsum("...ij,...kj->...ki", R, p)
 
-        hips = np.broadcast_to(self.hip_positions, (*lead, 4, 3))
+        hips = np.broadcast_to(self._hips, (*lead, 4, 3))
         knees, feet = np.empty((*lead, 4, 3)), np.empty((*lead, 4, 3))
         for i, leg in enumerate(self._legs):
             hx, hy = q[..., i, 0], q[..., i, 1]
             # knee = Rx(hx) ([0, h1, 0] + Ry(hy) [k, 0, -upper]) in the leg frame
             kx = leg.knee_offset * np.cos(hy) - leg.upper * np.sin(hy)
             kz = -leg.knee_offset * np.sin(hy) - leg.upper * np.cos(hy)
-            knees[..., i, :] = self.hip_positions[i] + np.stack(
+            knees[..., i, :] = self._hips[i] + np.stack(
                 [
                     kx,
                     leg.hip_offset * np.cos(hx) - kz * np.sin(hx),
@@ -277,25 +451,32 @@ class Spot:
                 ],
                 -1,
             )
-            feet[..., i, :] = self.hip_positions[i] + leg.fk(q[..., i, :])
+            feet[..., i, :] = self._hips[i] + leg.fk(q[..., i, :])
         hand = None if q_arm is None else T @ self._arm.fk(q_arm)
         return BodyFrames(T.copy(), world(hips), world(knees), world(feet), hand)
 
     def _pose_and_q(self, body_pose, q12, seq):
-        pose = body_pose if type(body_pose) is np.ndarray else np.asarray(body_pose)
+        pose = as_real(body_pose, "body_pose")
         fmt, pose_lead = pose_format(pose)
         code = sequence_code(seq)
-        q12 = q12 if type(q12) is np.ndarray else np.asarray(q12)
-        if q12.shape[-1:] != (12,):
-            raise ValueError(f"q12 must have shape (..., 12), got {q12.shape}")
-        if q12.shape[:-1] != pose_lead:
-            try:
-                lead = np.broadcast_shapes(pose_lead, q12.shape[:-1])
-            except ValueError:
-                raise ValueError(f"body_pose {pose.shape} and q12 {q12.shape} do not broadcast") from None
+        q12 = as_real(q12, "q12")
+        q_lead = check_trailing(q12, "q12", (12,))
+        if q_lead != pose_lead:
+            lead = broadcast_lead(body_pose=(pose_lead, pose.shape), q12=(q_lead, q12.shape))
             pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
             q12 = _broadcast_to_lead(q12, 1, lead)
         return pose, q12, fmt, code
+
+    def _world_from_body(self, body_pose, seq) -> tuple[np.ndarray, np.ndarray]:
+        """(T, pose): world <- body transforms (..., 4, 4) in float64, NaN for every pose the
+        core rejects (NaN/Inf, a non-rigid 4x4, a non-unit quaternion: read exactly as
+        :meth:`body_fk` reads it), and ``body_pose`` as an array."""
+        pose = as_real(body_pose, "body_pose")
+        fmt, lead = pose_format(pose)
+        T = body_transform(pose, seq)
+        feet_at_zero = self._body_core.fk(pose, fmt, sequence_code(seq), np.zeros((*lead, 12), pose.dtype))
+        T[np.isnan(feet_at_zero).any((-2, -1))] = np.nan
+        return T, pose
 
     def __reduce__(self):
         return (Spot, (None if self._model is SPOT else self._model,))

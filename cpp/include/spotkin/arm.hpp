@@ -211,6 +211,8 @@ class Arm {
     }
     double sum = 0.0;  // NaN and Inf fail every comparison above or make this NaN
     for (int i = 0; i < 3; ++i) sum += pose.R[i][0] + pose.R[i][1] + pose.R[i][2] + pose.p[i];
+    if constexpr (Format == PoseFormat::Matrix)  // std::max drops a NaN of the last row
+      sum += double(in[12]) + double(in[13]) + double(in[14]) + double(in[15]);
     return (sum - sum) == 0.0 ? ok : 0.0;
   }
 

@@ -273,6 +273,8 @@ SPOTKIN_INLINE void jacobian(const Body& body, const T* poses, BodyPoseFormat fo
                                              P.R[3 * a + 2][i] * Jli[6 + k] + nan_if_bad);
       }
     }
+    for (std::ptrdiff_t i = 0; i < m; ++i)  // an invalid pose: NaN everywhere, the zero blocks too
+      if (P.ok[i] == 0.0) std::fill(J + 216 * (b0 + i), J + 216 * (b0 + i + 1), T(quiet_nan<double>()));
   }
 }
 

@@ -206,15 +206,18 @@ class Leg {
   // the shell of the distances D the knee reaches inside its limits instead
   // (D^2 = R^2 + L^2 + 2 L R cos(kn + beta), eq. (I3)).
   SPOTKIN_INLINE void nearest_reachable(const double* p, double* out, bool within_limits = false) const noexcept {
+    if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
+      out[0] = out[1] = out[2] = quiet_nan<double>();
+      return;
+    }
     const double h1sq = h1_ * h1_;
-    const double norm2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+    const double norm = std::hypot(p[0], std::hypot(p[1], p[2]));  // no overflow for |p| near 1e308
     const double d_min = within_limits ? d_knee_min_ : d_min_, d_max = within_limits ? d_knee_max_ : d_max_;
     const double rho_max = std::sqrt(h1sq + d_max * d_max), rho_min = std::sqrt(h1sq + d_min * d_min);
     double q[3] = {p[0], p[1], p[2]};
-    if (norm2 == 0.0) {
+    if (norm == 0.0) {
       q[0] = 0.0, q[1] = h1_, q[2] = -d_min;
     } else {
-      const double norm = std::sqrt(norm2);
       const double scale = std::clamp(norm, rho_min, rho_max) / norm;
       for (double& v : q) v *= scale;
     }

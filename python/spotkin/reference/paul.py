@@ -11,7 +11,7 @@ roots, and squares such as X^2 + Y^2 can neither underflow nor overflow.
           cos t = (Y Z - eps X sqrt(D)) / r2,   sin t = (X Z + eps Y sqrt(D)) / r2,   eps = +-1.
       Root 0 takes eps = +1, root 1 eps = -1 (the same convention in every case below).
       No real root when D < 0, i.e. X^2 + Y^2 < Z^2. The annex calls the last case
-      "configuration singulière si X != 0 et Y != 0", which is wrong (see ERRATA.md).
+      "configuration singulière si X != 0 et Y != 0", which is wrong (see docs/course-errata.md).
       D >= -1e-12 r2 counts as touching: D is clamped to 0 and the double root is returned twice.
       Special cases of the annex table, all the eps formula above specialised:
         X = 0, Y != 0:  cos t = Z / Y,  sin t = eps sign(Y) sqrt(1 - cos^2 t)

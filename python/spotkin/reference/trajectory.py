@@ -7,7 +7,6 @@ Point to point, one axis moving D = qf - q0 in t_f, tau = t / t_f
 (C)  cubic     s = 3 tau^2 - 2 tau^3;  s' = 6 tau (1 - tau);  s'' = 6 - 12 tau.
                max s' = 3/2 (tau = 1/2), max |s''| = 6 (tau = 0, 1)
                => t_f = max(3 |D| / (2 Kv), sqrt(6 |D| / Ka)).
-               (The course summary prints 2/3 |D| / Kv: wrong.)
 (Q)  quintic   s = 10 tau^3 - 15 tau^4 + 6 tau^5;  s' = 30 tau^2 (1 - tau)^2;
                s'' = 60 tau (1 - tau) (1 - 2 tau). max s' = 15/8 (tau = 1/2); s''' = 0 at
                tau = 1/2 -+ sqrt(3)/6 where |s''| = 60 (1/6) (1/sqrt(3)) = 10 / sqrt(3)
@@ -17,7 +16,6 @@ Point to point, one axis moving D = qf - q0 in t_f, tau = t / t_f
                                   t_f - t_a < t <= t_f:   q = qf - a (t_f - t)^2 / 2
                and |D| = v (t_f - t_a). Minimum time: v = Kv, a = Ka, t_f = |D|/Kv + Kv/Ka if
                |D| >= Kv^2/Ka; else triangular, v = sqrt(|D| Ka), t_f = 2 sqrt(|D|/Ka).
-               (The summary's t_1 = L / V_M and "V_M t" in the last phase are wrong.)
                Stretched to t_f with a = Ka: v^2 - Ka t_f v + Ka |D| = 0, the smaller root.
 (S)  synchronisation: t_f = max over axes of the per-axis minimum time.
 
@@ -27,6 +25,15 @@ Cartesian
      A = min(amax/L, alphamax/theta) (by (T) with D = 1); p = p0 + s (p1 - p0);
      slerp q(s) = sin((1 - s) O) / sin O q0 + sin(s O) / sin O q1, cos O = q0 . q1 >= 0.
 (B)  blended waypoint path (see spotkin.trajectory.CartesianPath), with rotation matrices.
+(P)  its plan (see spotkin.trajectory._plan): rates r_k = 1 / d_k, segment k's (dp_k, phi_k),
+     N(u, w) = max(|u| / amax, |w| / alphamax), blend b_j = max(N(twist change), min_blend).
+     Fit rule b_j <= min(d_{j-1}, d_j), bounded by the triangle inequality: with
+     gamma = N(seg_j - seg_{j-1}), accelerating (r_j >= r_{j-1}):
+     beta r_j^2 - (beta - gamma) r_{j-1} r_j <= 1, beta = max(N(seg_j), gamma);
+     decelerating the same with j-1 and j swapped. Caps r_k <= 1 / d_min_k,
+     r^2 <= 1 / gamma next to a corner, r^2 <= 1 / N(seg) on the end segments,
+     r <= 1 / min_blend next to an interior waypoint. The fastest rates: a forward then a
+     backward pass, one corner at a time, each solving its quadratic for the largest root.
 """
 
 from __future__ import annotations
@@ -190,3 +197,51 @@ def blended(times, blends, positions, rotations, linear_velocity, angular_veloci
     T[:3, :3] = R
     T[:3, 3] = p
     return T, np.concatenate([v, w])
+
+
+def blend_plan(positions, rotation_vectors, vmax, amax, wmax, alphamax, min_blend):
+    """(P) Segment durations d (S,) and blend durations b (S + 1,) of a blended path through
+    ``positions`` (S + 1, 3) with world rotation vectors ``rotation_vectors`` (S, 3) between them,
+    one segment at a time. wmax = alphamax = inf: no rotation limit."""
+    P = [np.asarray(p, dtype=float) for p in positions]
+    segments = [(P[k + 1] - P[k], np.asarray(rotation_vectors[k], dtype=float)) for k in range(len(P) - 1)]
+    S = len(segments)
+
+    def N(u, w) -> float:
+        return max(float(np.linalg.norm(u)) / amax, float(np.linalg.norm(w)) / alphamax)
+
+    r = []
+    for u, w in segments:
+        d_min = max(float(np.linalg.norm(u)) / vmax, float(np.linalg.norm(w)) / wmax)
+        r.append(1 / d_min)
+    r[0] = min(r[0], 1 / math.sqrt(N(*segments[0])))
+    r[-1] = min(r[-1], 1 / math.sqrt(N(*segments[-1])))
+    gamma = [math.nan]
+    for j in range(1, S):
+        (a, wa), (b, wb) = segments[j - 1], segments[j]
+        gamma.append(N(b - a, wb - wa))
+        if gamma[j] > 0:
+            r[j - 1] = min(r[j - 1], 1 / math.sqrt(gamma[j]))
+            r[j] = min(r[j], 1 / math.sqrt(gamma[j]))
+        if min_blend > 0:
+            r[j - 1] = min(r[j - 1], 1 / min_blend)
+            r[j] = min(r[j], 1 / min_blend)
+
+    def largest_root(beta, g, x):  # the largest y with beta y^2 - (beta - g) x y <= 1
+        k = (beta - g) * x
+        return (k + math.sqrt(k * k + 4 * beta)) / (2 * beta)
+
+    for j in range(1, S):  # forward: segment j accelerating from j - 1
+        beta = max(N(*segments[j]), gamma[j])
+        r[j] = min(r[j], largest_root(beta, gamma[j], r[j - 1]))
+    for j in range(S - 1, 0, -1):  # backward: segment j - 1 decelerating into j
+        beta = max(N(*segments[j - 1]), gamma[j])
+        r[j - 1] = min(r[j - 1], largest_root(beta, gamma[j], r[j]))
+    d = [1 / rk for rk in r]
+    twists = [(np.zeros(3), np.zeros(3))] + [(u / dk, w / dk) for (u, w), dk in zip(segments, d)]
+    twists.append((np.zeros(3), np.zeros(3)))
+    b = []
+    for j in range(S + 1):
+        (v0, w0), (v1, w1) = twists[j], twists[j + 1]
+        b.append(max(N(v1 - v0, w1 - w0), min_blend if 0 < j < S else 0.0))
+    return np.array(d), np.array(b)
