@@ -452,3 +452,26 @@ def test_nearest_reachable_of_huge_points():
         np.testing.assert_allclose(huge, LEG.nearest_reachable(direction), atol=1e-12)
         assert np.isfinite(LEG.ik(np.array(direction) * 1e308)[0]).all()
     assert np.isnan(LEG.nearest_reachable([np.inf, 0.0, 0.0])).all()
+
+
+def test_float64_seed_beside_float32_targets_is_reduced_then_narrowed():
+    """A float64 seed of 1e308 rad is an angle: reduced exactly, then cast (no overflow warning)."""
+    q_true = np.array([0.3, -0.6, 1.4, 0.2, 0.5, -0.3])
+    T = SPOT.arm.fk(q_true).astype(np.float32)
+    huge = np.array([1e308, -3e300, 1e200, 7e250, -1e308, 5e299])
+    q, status = SPOT.arm.ik(T, seed=huge)
+    q_reduced, status_reduced = SPOT.arm.ik(T, seed=_exactly_reduced(huge).astype(np.float32))
+    assert status == status_reduced == sk.Status.OK
+    np.testing.assert_array_equal(q, q_reduced)
+    p = LEG.fk(np.array([0.1, 0.9, -1.5])).astype(np.float32)
+    seed = np.array([1e308, 1e308, -1e308])
+    np.testing.assert_array_equal(
+        LEG.ik(p, seed=seed)[0], LEG.ik(p, seed=_exactly_reduced(seed).astype(np.float32))[0]
+    )
+
+
+def test_integers_beyond_the_float_range_are_value_errors():
+    with pytest.raises(ValueError, match="tolerance must be a finite number"):
+        SPOT.body_rates(np.zeros(6), np.zeros(12), np.zeros(6), tolerance=10**400)
+    with pytest.raises(ValueError, match="damping"):
+        sk.dls(np.eye(3), np.ones(3), damping=10**400)

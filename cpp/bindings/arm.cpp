@@ -75,7 +75,7 @@ py::array_t<T, py::array::c_style> seed_array(py::handle seed_obj, const Shape& 
   if (seed_leading != leading)
     throw py::value_error("seed must have the leading shape of T, " + format_shape(leading) + ", got " +
                           format_shape(seed_leading) + "; broadcast them first");
-  return reduce_seed_angles(contiguous<T>(seed_arr), 6, all_angles(6));
+  return seed_angles<T>(seed_arr, 6, all_angles(6));
 }
 
 py::object ik_all(const Arm& arm, py::handle T_obj, py::handle seed_obj) {

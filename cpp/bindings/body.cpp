@@ -94,7 +94,7 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
     const bool has_seed = !seed_obj.is_none();
     py::array_t<T, py::array::c_style> seed;
     if (has_seed) {
-      seed = reduce_seed_angles(contiguous<T>(as_real_array(seed_obj, "seed")), 12, all_angles(12));
+      seed = seed_angles<T>(as_real_array(seed_obj, "seed"), 12, all_angles(12));
       if (leading_shape(seed, "seed", {12}) != shape.leading)
         throw py::value_error("seed must have shape " + format_shape(shape.leading) + " + (12,)");
     }

@@ -142,7 +142,7 @@ py::object nearest(const Shape& leading, py::ssize_t dof, std::ptrdiff_t in_widt
       throw py::value_error("seed must have shape " + format_shape(leading) + " + (" + std::to_string(dof) +
                             ",), the leading shape of " + target_name + ", got " + format_shape(seed_leading) +
                             " + (" + std::to_string(dof) + ",)");
-    seed = reduce_seed_angles(contiguous<T>(seed_arr), dof, revolute_columns);
+    seed = seed_angles<T>(seed_arr, dof, revolute_columns);
   }
   auto q = new_array<T>(leading, {dof});
   auto status = new_array<std::int8_t>(leading, {});

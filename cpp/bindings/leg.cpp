@@ -84,7 +84,7 @@ py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj, bool neares
       if (seed_leading != leading)
         throw py::value_error("seed must have the shape of p, " + format_shape(leading) + " + (3,), got " +
                               format_shape(seed_leading) + " + (3,); broadcast them first");
-      seed = reduce_seed_angles(contiguous<T>(seed_arr), 3, all_angles(3));
+      seed = seed_angles<T>(seed_arr, 3, all_angles(3));
     }
     const bool single = leading.empty();
     auto q = new_array<T>(leading, {3});

@@ -12,8 +12,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "buffer_cache.hpp"
@@ -87,6 +89,19 @@ template <typename T>
 py::array_t<T, py::array::c_style> contiguous(const py::array& arr) {
   using Exact = py::array_t<T, py::array::c_style>;
   if (Exact::check_(arr)) return py::reinterpret_borrow<Exact>(arr);  // already right: no copy, no call
+  if constexpr (std::is_same_v<T, float>) {
+    if (!is_float32(arr)) {  // float64 (a seed beside float32 targets): cast here, where 1e308 -> Inf
+      const auto wide = contiguous<double>(arr);  // quietly, as the kernels then report (numpy would warn)
+      Exact narrow(Shape(wide.shape(), wide.shape() + wide.ndim()));
+      const double* from = wide.data();
+      float* to = narrow.mutable_data();
+      constexpr double kMax = std::numeric_limits<float>::max();
+      for (py::ssize_t i = 0; i < wide.size(); ++i)  // beyond the float range: Inf (a cast there is undefined)
+        to[i] = std::fabs(from[i]) > kMax ? std::copysign(std::numeric_limits<float>::infinity(), float(from[i] > 0 ? 1 : -1))
+                                          : static_cast<float>(from[i]);
+      return narrow;
+    }
+  }
   return py::array_t<T, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(arr));
 }
 
@@ -164,7 +179,13 @@ py::object dispatch_real(py::handle obj, const char* name, F&& f) {
 //   in input part g makes output part g NaN, and only it.
 // The check is one pass over input in cache; the copy only happens in a
 // sub-block holding such a value.
-constexpr std::ptrdiff_t kAngleBlock = 512;  // a multiple of kChunkAlignment: same results for any split
+constexpr std::ptrdiff_t kAngleBlock = 512;
+
+// How many of x[0, n) are NaN, Inf or beyond vector_math::kReducibleLimit: a
+// vectorised scan compiled per CPU level (defined in runtime.cpp).
+std::ptrdiff_t count_unusual(const double* x, std::ptrdiff_t n) noexcept;
+std::ptrdiff_t count_unusual(const float* x, std::ptrdiff_t n) noexcept;
+  // a multiple of kChunkAlignment: same results for any split
 template <typename T, typename Kernel>
 void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t angle_columns, T* out,
                          std::ptrdiff_t out_width, std::ptrdiff_t n, Kernel&& kernel, std::ptrdiff_t groups = 1) {
@@ -174,10 +195,7 @@ void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t ang
     const std::ptrdiff_t m = std::min(kAngleBlock, n - b);
     const T* block = in + in_width * b;
     T* out_block = out + out_width * b;
-    bool unusual = false;  // huge, Inf or NaN somewhere
-    for (std::ptrdiff_t k = 0; k < m * in_width; ++k)
-      unusual |= !(std::fabs(double(block[k])) <= vector_math::kReducibleLimit);
-    if (!unusual) {
+    if (count_unusual(block, m * in_width) == 0) {  // the common case: nothing huge, Inf or NaN
       kernel(block, out_block, m);
       continue;
     }
@@ -216,6 +234,18 @@ py::array_t<T, py::array::c_style> reduce_seed_angles(py::array_t<T, py::array::
   for (py::ssize_t k = 0; k < size; ++k)
     out[k] = (angle_columns >> (k % width)) & 1U ? T(vector_math::reduce_huge_angle(double(data[k]))) : data[k];
   return copy;
+}
+
+// A seed in the working dtype T with its huge angles reduced exactly; a float64
+// seed beside float32 targets is reduced before it is narrowed (1e308 rad is an
+// angle, not an overflow).
+template <typename T>
+py::array_t<T, py::array::c_style> seed_angles(const py::array& seed, std::ptrdiff_t width,
+                                               std::uint64_t angle_columns) {
+  if constexpr (std::is_same_v<T, float>) {
+    if (!is_float32(seed)) return contiguous<float>(seed_angles<double>(seed, width, angle_columns));
+  }
+  return reduce_seed_angles(contiguous<T>(seed), width, angle_columns);
 }
 
 // Every column of a width-n joint vector is an angle.

@@ -2,6 +2,7 @@
 #include <Python.h>
 
 #include "bindings.hpp"
+#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -43,6 +44,18 @@ int thread_count_argument(py::handle n) {
 }
 
 }  // namespace
+
+SPOTKIN_MULTIVERSION std::ptrdiff_t count_unusual(const double* x, std::ptrdiff_t n) noexcept {
+  std::ptrdiff_t count = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i) count += !(std::fabs(x[i]) <= vector_math::kReducibleLimit);
+  return count;
+}
+SPOTKIN_MULTIVERSION std::ptrdiff_t count_unusual(const float* x, std::ptrdiff_t n) noexcept {
+  constexpr float kLimit = float(vector_math::kReducibleLimit);
+  std::ptrdiff_t count = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i) count += !(std::fabs(x[i]) <= kLimit);
+  return count;
+}
 
 void bind_runtime(pybind11::module_& m) {
   interrupt_poll().store(&poll_python_signals);

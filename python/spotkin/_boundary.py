@@ -118,7 +118,12 @@ def as_scalar(value, name: str) -> float:
     and arrays raise ``TypeError``. NaN and Inf pass: the caller checks the range."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a real number, got {_type_name(value)}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ValueError(
+            f"{name} must be a finite number, got an integer of {value.bit_length()} bits"
+        ) from None
 
 
 def as_finite(value, name: str, minimum: float = -math.inf, strict: bool = False) -> float:
