@@ -475,3 +475,20 @@ def test_integers_beyond_the_float_range_are_value_errors():
         SPOT.body_rates(np.zeros(6), np.zeros(12), np.zeros(6), tolerance=10**400)
     with pytest.raises(ValueError, match="damping"):
         sk.dls(np.eye(3), np.ones(3), damping=10**400)
+
+
+def test_body_calls_promote_mixed_float32_and_float64():
+    pose32 = np.array([0.0, 0.0, 0.5, 0.05, -0.1, 0.2], dtype=np.float32)
+    feet = SPOT.stance_feet(0.5)
+    q12 = SPOT.body_ik(pose32.astype(np.float64), feet).q
+    assert SPOT.body_ik(pose32, feet).q.dtype == np.float64  # feet float64: promoted
+    assert SPOT.body_ik(pose32, feet.astype(np.float32)).q.dtype == np.float32
+    assert SPOT.body_fk(pose32, q12).dtype == np.float64
+    assert SPOT.body_fk(pose32, q12.astype(np.float32)).dtype == np.float32
+    far = feet * 1e300  # far, finite: out of reach, not an Inf of a narrowing cast
+    res = SPOT.body_ik(pose32, far)
+    assert (res.status == sk.Status.UNREACHABLE).all()
+    huge = q12 + 2 * np.pi * 1e290  # angles beyond float32: reduced exactly in float64
+    np.testing.assert_allclose(
+        SPOT.body_fk(pose32, huge), SPOT.body_fk(pose32, _exactly_reduced(huge)), atol=1e-12
+    )

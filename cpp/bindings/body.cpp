@@ -80,7 +80,7 @@ std::uint64_t euler_columns(BodyPoseFormat format) {
 py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle feet_obj,
               py::handle seed_obj, bool nearest_fallback) {
   const EulerSequence seq = make_sequence(sequence);
-  return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
+  return dispatch_promoted(pose_obj, "body_pose", {{feet_obj, "feet"}}, [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const auto format = format_code < 0 ? detect_format(arr) : static_cast<BodyPoseFormat>(format_code);
     const Poses shape = pose_shape(arr, format);
@@ -127,7 +127,7 @@ template <bool Jacobian>
 py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle q_obj) {
   const auto format = static_cast<BodyPoseFormat>(format_code);
   const EulerSequence seq = make_sequence(sequence);
-  return dispatch_real(pose_obj, "body_pose", [&](auto tag, py::array arr) -> py::object {
+  return dispatch_promoted(pose_obj, "body_pose", {{q_obj, "q12"}}, [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const Poses shape = pose_shape(arr, format);
     auto poses = contiguous<T>(arr);

@@ -12,10 +12,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "buffer_cache.hpp"
@@ -250,6 +252,20 @@ py::array_t<T, py::array::c_style> seed_angles(const py::array& seed, std::ptrdi
 
 // Every column of a width-n joint vector is an angle.
 constexpr std::uint64_t all_angles(int n) { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
+
+// dispatch_real with NumPy's promotion over several primary inputs: float32 only
+// when obj and every one of `others` is float32 (a float64 foot beside a float32
+// pose is not narrowed: 1e308 m stays a far target, not an Inf).
+template <typename F>
+py::object dispatch_promoted(py::handle obj, const char* name,
+                             std::initializer_list<std::pair<py::handle, const char*>> others, F&& f) {
+  py::array arr = as_real_array(obj, name);
+  bool single = is_float32(arr);
+  for (const auto& [other, other_name] : others)
+    if (single) single = is_float32(as_real_array(other, other_name));
+  if (single) return f(float{}, arr);
+  return f(double{}, arr);
+}
 
 // The common binding: a batch obj (..., in_width) mapped to a new (..., *trailing)
 // array by kernel(first_input, first_output, count), called on thread chunks with

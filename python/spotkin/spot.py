@@ -263,6 +263,8 @@ class Spot:
         quaternion that is not a rotation, gives INVALID_INPUT on all four legs of that
         sample only. ``fallback`` is the UNREACHABLE legs' answer, as in :meth:`Leg.ik`:
         ``"nearest"`` (in the limits, stretched or folded toward the foot) or ``"nan"``.
+        Computed in float32 when ``body_pose`` and ``feet`` both are float32, else float64;
+        ``seed`` takes that dtype.
         """
         if (
             seed is None
@@ -296,7 +298,10 @@ class Spot:
         return BodyIK(*self._body_core.ik(pose, fmt, code, feet, seed, nearest))
 
     def body_fk(self, body_pose: ArrayLike, q12: ArrayLike, seq: str = "XYZ") -> np.ndarray:
-        """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)). Leading dimensions broadcast."""
+        """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)). Leading dimensions broadcast.
+
+        float32 when ``body_pose`` and ``q12`` both are float32, else float64. A leg with a
+        NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample."""
         pose, q12, fmt, code = self._pose_and_q(body_pose, q12, seq)
         return self._body_core.fk(pose, fmt, code, q12)
 
