@@ -43,6 +43,8 @@ inline std::string format_shape(const Shape& shape, bool ellipsis = false) {
 
 // numpy.ma.MaskedArray, imported on first use (never released: see status_members).
 inline bool is_masked_array(py::handle obj) {
+  if (Py_TYPE(obj.ptr()) == reinterpret_cast<PyTypeObject*>(py::detail::npy_api::get().PyArray_Type_))
+    return false;  // a plain ndarray: the common case, no call
   static PyObject* masked_type = [] {
     return py::object(py::module_::import("numpy.ma").attr("MaskedArray")).release().ptr();
   }();

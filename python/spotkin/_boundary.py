@@ -149,6 +149,8 @@ FALLBACKS = ("nearest", "nan")
 
 def fallback_is_nearest(fallback: str) -> bool:
     """The UNREACHABLE answer of the leg and body IK: "nearest" (in-limit, toward the target) or "nan"."""
+    if type(fallback) is str and fallback == "nearest":  # the default: cheap
+        return True
     if not isinstance(fallback, str) or fallback not in FALLBACKS:
         raise ValueError(f"fallback must be one of {FALLBACKS}, got {fallback!r}")
     return fallback == "nearest"
