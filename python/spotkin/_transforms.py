@@ -25,8 +25,6 @@ def translation(p: ArrayLike) -> np.ndarray:
 
 
 @quiet_float_errors
-
-
 def _rotation(angle: ArrayLike, axis: int) -> np.ndarray:
     angle = as_real(angle, "angle", np.float64)
     c, s = np.cos(angle), np.sin(angle)

@@ -73,8 +73,6 @@ class ArmSingularity(NamedTuple):
 
 
 @quiet_float_errors
-
-
 def pose_from(position: ArrayLike, quat_xyzw: ArrayLike) -> np.ndarray:
     """(..., 4, 4) pose from positions (..., 3) and scalar-last quaternions (..., 4) (scipy order).
 

@@ -315,7 +315,6 @@ class Spot:
         return self._body_core.jacobian(pose, fmt, code, q12)
 
     @quiet_float_errors
-
     def body_rates(
         self,
         body_pose: ArrayLike,
@@ -373,7 +372,6 @@ class Spot:
         return BodyRates(qd.reshape(*lead, 12), singular.reshape(*lead, 4))
 
     @quiet_float_errors
-
     def arm_ik_world(
         self, body_pose: ArrayLike, T_world: ArrayLike, seed: ArrayLike | None = None, seq: str = "XYZ"
     ):
@@ -410,7 +408,6 @@ class Spot:
         return self._arm.ik(T_body, seed=seed)
 
     @quiet_float_errors
-
     def fk_all(
         self, body_pose: ArrayLike, q12: ArrayLike, q_arm: ArrayLike | None = None, seq: str = "XYZ"
     ) -> BodyFrames:
@@ -474,14 +471,9 @@ class Spot:
 
     def _world_from_body(self, body_pose, seq) -> tuple[np.ndarray, np.ndarray]:
         """(T, pose): world <- body transforms (..., 4, 4) in float64, NaN for every pose the
-        core rejects (NaN/Inf, a non-rigid 4x4, a non-unit quaternion: read exactly as
-        :meth:`body_fk` reads it), and ``body_pose`` as an array."""
+        core rejects (body_transform checks them as the core does), and ``body_pose`` as an array."""
         pose = as_real(body_pose, "body_pose")
-        fmt, lead = pose_format(pose)
-        T = body_transform(pose, seq)
-        feet_at_zero = self._body_core.fk(pose, fmt, sequence_code(seq), np.zeros((*lead, 12), pose.dtype))
-        T[np.isnan(feet_at_zero).any((-2, -1))] = np.nan
-        return T, pose
+        return body_transform(pose, seq), pose
 
     def __reduce__(self):
         return (Spot, (None if self._model is SPOT else self._model,))
