@@ -264,3 +264,44 @@ def linear_path(t: np.ndarray, p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q
     T[:, :3, 3] = p0 + s[:, None] * (p1 - p0)
     T[:, 3] = [0, 0, 0, 1]
     return T
+
+
+# -- Any roll-pitch-pitch leg (spotkin.leg's model), slot 0, no limits: the hand-written NumPy form ---------
+
+
+def rpp_leg_ik_one_branch(p: np.ndarray, a, b, c, signs) -> np.ndarray:
+    """p = Rx(s1 q1)(a + Ry(s2 q2)(b + Ry(s3 q3) c)): hip normal, knee back, no limits or statuses."""
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    h = a[1] + b[1] + c[1]
+    r2 = y * y + z * z
+    S = np.sqrt(np.maximum(r2 - h * h, 0.0))
+    t1 = np.arctan2(z * h + y * S, y * h - z * S)
+    wx, wz = x - a[0], -S - a[2]
+    nB, nC = np.hypot(b[0], b[2]), np.hypot(c[0], c[2])
+    phi = np.arctan2(c[0], c[2]) - np.arctan2(b[0], b[2])
+    ratio = (wx * wx + wz * wz - nB * nB - nC * nC) / (2 * nB * nC)
+    psi = -np.arccos(np.clip(ratio, -1, 1))
+    t3 = psi - phi
+    c3, s3 = np.cos(t3), np.sin(t3)
+    dz, dx = b[2] + c3 * c[2] - s3 * c[0], b[0] + c3 * c[0] + s3 * c[2]
+    t2 = np.arctan2(wx * dz - wz * dx, wz * dz + wx * dx)
+    t3 = (t3 + np.pi) % (2 * np.pi) - np.pi
+    return np.stack([signs[0] * t1, signs[1] * t2, signs[2] * t3], axis=-1)
+
+
+CHUNK = 32768
+
+
+def robot_body_ik_chunked(poses: np.ndarray, feet: np.ndarray, hips: np.ndarray, legs: list[tuple]) -> np.ndarray:
+    """Whole-body IK for any number of RPP legs (a, b, c, signs), one branch, in 32768-row chunks
+    (so that the temporaries stay in cache: the strong NumPy form)."""
+    n_legs = len(legs)
+    q = np.empty((poses.shape[0], 3 * n_legs))
+    for start in range(0, poses.shape[0], CHUNK):
+        chunk = poses[start : start + CHUNK]
+        R = body_rotation_xyz(chunk[:, 3:])
+        for i, geometry in enumerate(legs):
+            d = feet[i] - chunk[:, :3]
+            p = np.einsum("nji,nj->ni", R, d) - hips[i]
+            q[start : start + CHUNK, 3 * i : 3 * i + 3] = rpp_leg_ik_one_branch(p, *geometry)
+    return q

@@ -1002,6 +1002,56 @@ CHAIN_ROWS = {
     ],
 }
 LEG_LIMITS = [(-0.8, 0.8), (-0.9, 2.3), (-2.8, -0.25)]
+# chains from URDFs: key -> (Context.robot key, tip link, dof)
+URDF_CHAINS = {"go2_fl": ("go2", "FL_foot", 3), "spot_arm": ("spot_urdf", "arm_hand", 6)}
+ROBOT_FILES = {"go2": "go2", "spot_urdf": "spot_with_arm"}
+STANCE_HEIGHT = {"spot": 0.5, "go2": 0.28, "hexapod": 0.3, "spot_urdf": 0.5}
+
+
+def _urdf_joint(name, kind, parent, child, xyz, axis=None, limits=None) -> str:
+    body = f'<origin xyz="{xyz}" rpy="0 0 0"/>'
+    if axis is not None:
+        body += f'<axis xyz="{axis}"/>'
+    if limits is not None:
+        body += f'<limit lower="{limits[0]}" upper="{limits[1]}" effort="10" velocity="5"/>'
+    return f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
+
+
+def _hexapod_urdf() -> str:
+    """Six roll-pitch-pitch legs in three pairs at different x (and heights), with mixed axis signs
+    (a knee about -y takes positive limits to bend back) and offsets; the joints are written hips
+    first, then thighs, then knees, so the whole-body q interleaves the legs (as tests/test_robot.py's
+    hexapod)."""
+    legs = [  # name, hip origin, axes, knee limits, a, b, c
+        ("L1", "0.3 0.12 0", ("1 0 0", "0 1 0", "0 1 0"), (-2.6, -0.2), "0 0.08 0", "0.02 0 -0.2", "0 0 -0.21"),
+        ("R1", "0.31 -0.1 0.01", ("-1 0 0", "0 -1 0", "0 -1 0"), (0.2, 2.6), "0 -0.07 0.01", "0.02 0 -0.2",
+         "0 0 -0.21"),
+        ("L2", "0.02 0.15 -0.01", ("1 0 0", "0 -1 0", "0 1 0"), (-2.6, -0.2), "0 0.08 0", "-0.015 0.005 -0.22",
+         "0 0 -0.21"),
+        ("R2", "-0.01 -0.16 0", ("1 0 0", "0 1 0", "0 -1 0"), (0.2, 2.6), "0.01 -0.09 0", "0.02 0 -0.2",
+         "0 0 -0.21"),
+        ("L3", "-0.33 0.11 0.005", ("-1 0 0", "0 1 0", "0 1 0"), (-2.6, -0.2), "0 0.08 0", "0.02 0 -0.2",
+         "0.01 0.01 -0.2"),
+        ("R3", "-0.3 -0.12 -0.02", ("-1 0 0", "0 -1 0", "0 1 0"), (-2.6, -0.2), "0 -0.085 -0.01", "0.02 0 -0.2",
+         "0 0 -0.21"),
+    ]
+    links = ['<link name="base"/>']
+    joints = [[], [], [], []]
+    for name, hip, axes, knee, a, b, c in legs:
+        parts = [f"{name}_{part}" for part in ("hip", "thigh", "calf", "foot")]
+        links += [f'<link name="{part}"/>' for part in parts]
+        joints[0].append(_urdf_joint(f"{name}_hip_joint", "revolute", "base", parts[0], hip, axes[0], (-0.7, 0.7)))
+        joints[1].append(
+            _urdf_joint(f"{name}_thigh_joint", "revolute", parts[0], parts[1], a, axes[1], (-2.2, 2.2))
+        )
+        joints[2].append(_urdf_joint(f"{name}_calf_joint", "revolute", parts[1], parts[2], b, axes[2], knee))
+        joints[3].append(_urdf_joint(f"{name}_foot_joint", "fixed", parts[2], parts[3], c))
+    body = "".join(links) + "".join(j for group in joints for j in group)
+    return f'<?xml version="1.0"?><robot name="hexapod">{body}</robot>'
+
+
+HEXAPOD_URDF = _hexapod_urdf()
+HEXAPOD_LEGS = ("L1", "R1", "L2", "R2", "L3", "R3")
 
 
 def rigid(R, p):
@@ -1061,8 +1111,49 @@ class Context:
     def arm(self):
         return self.spot.arm
 
+    def robot(self, key):
+        """A whole-body robot: "spot" (sk.Spot()), "go2", "spot_urdf" (sk.Robot from the packaged
+        URDFs) or "hexapod" (sk.Robot from :data:`HEXAPOD_URDF`)."""
+
+        def make():
+            if key == "hexapod":
+                return sk.Robot.from_urdf_string(HEXAPOD_URDF)
+            return sk.Robot.from_urdf(sk.robots.path(ROBOT_FILES[key]))
+
+        return self.spot if key == "spot" else self._get(("robot", key), make)
+
+    def columns(self, key):
+        """Per leg (robot.legs order), the indices of its three joints in the whole-body q."""
+
+        def make():
+            robot = self.robot(key)
+            if isinstance(robot, sk.Spot):
+                return [np.arange(3 * k, 3 * k + 3) for k in range(4)]
+            specs = {spec.name: spec for spec in sk.urdf.find_legs(robot.model)[0]}
+            order = list(robot.leg_joint_names)
+            return [np.array([order.index(j) for j in specs[name].joint_names]) for name in robot.leg_names]
+
+        return self._get(("columns", key), make)
+
+    def hips(self, key):
+        return self._get(("hips", key), lambda: self.robot(key).hip_positions)
+
+    def nominal(self, key):
+        """(3 n,) whole-body joints of the nominal stance (body_ik of stance_feet at its height)."""
+
+        def make():
+            robot, height = self.robot(key), STANCE_HEIGHT[key]
+            q, status = robot.body_ik([0.0, 0.0, height, 0.0, 0.0, 0.0], robot.stance_feet(height))
+            assert (status == OK).all(), (key, status)
+            return q
+
+        return self._get(("nominal", key), make)
+
     def chain(self, key):
         def make():
+            if key in URDF_CHAINS:
+                robot, link, _ = URDF_CHAINS[key]
+                return self.robot(robot).chain(link)
             rows = CHAIN_ROWS[key]
             if key == "mdh3":
                 return sk.Chain.from_mdh(rows, tool=sk.translation([0.37, 0.0, 0.0]), limits=LEG_LIMITS)
@@ -1127,9 +1218,9 @@ def nominal_q12(rng, n):
     return np.tile([0.0, 1.04, -1.8], 4) + rng.uniform(-0.1, 0.1, (n, 12))
 
 
-def body_poses(rng, n):
+def body_poses(rng, n, height=0.48):
     pose = np.zeros((n, 6))
-    pose[:, :3] = rng.uniform(-0.03, 0.03, (n, 3)) + [0.0, 0.0, 0.48]
+    pose[:, :3] = rng.uniform(-0.03, 0.03, (n, 3)) + [0.0, 0.0, height]
     pose[:, 3:] = rng.uniform(-0.15, 0.15, (n, 3))
     return pose
 
@@ -1845,21 +1936,95 @@ def _chain_entries(tool_extra):
 # -- the whole body --
 
 
-def _spot_entries():
-    def spot_base(c, rng, n):
-        q_arm = in_limits(c.arm.limits, rng, n, margin=0.1)
-        pose = body_poses(rng, n)
-        T_world = np.array([pose_matrix(p) for p in pose]) @ c.arm.fk(q_arm)
-        feet = np.broadcast_to(c.spot.stance_feet(0.5), (n, 4, 3)) + rng.uniform(-0.02, 0.02, (n, 4, 3))
-        return {
+@dataclass(frozen=True)
+class BodySpec:
+    """A robot whose whole-body methods are fuzzed: ``key`` (:meth:`Context.robot`), the class whose
+    methods the entries cover, the name of the whole-body joint argument, and a name tag."""
+
+    key: str
+    cls: str = "Robot"
+    qname: str = "q"
+
+    def name(self, method: str) -> str:
+        return f"{self.cls}.{method}" if self.cls == "Spot" else f"{self.cls}.{method}[{self.key}]"
+
+    def covers(self, method: str) -> str:
+        return f"spotkin.{self.cls}.{method}"
+
+
+BODY_METHODS = ("body_ik", "body_fk", "body_jacobian", "body_rates", "fk_all", "arm_ik_world")
+SPOT_BODY = BodySpec("spot", "Spot", "q12")
+ROBOT_BODIES = (BodySpec("go2"), BodySpec("hexapod"))
+
+
+def arm_limits(arm) -> np.ndarray:
+    """(6, 2) limits of a SpotArm or a Chain."""
+    return np.asarray(arm.limits) if isinstance(arm, sk.SpotArm) else np.stack([arm.lower, arm.upper], 1)
+
+
+def knee_point(leg, q) -> np.ndarray:
+    """The documented knee origin Rx(s1 q1) (a + Ry(s2 q2) b), NaN where a used angle is not finite."""
+    q = np.asarray(q, dtype=np.float64)
+    (s1, s2, _), a, b = leg.signs, leg.a, leg.b
+    with np.errstate(all="ignore"):
+        t1, t2 = s1 * q[..., 0], s2 * q[..., 1]
+        v = np.stack(
+            [
+                a[0] + np.cos(t2) * b[0] + np.sin(t2) * b[2],
+                np.full_like(t2, a[1] + b[1]),
+                a[2] - np.sin(t2) * b[0] + np.cos(t2) * b[2],
+            ],
+            -1,
+        )
+        return np.stack(
+            [v[..., 0], np.cos(t1) * v[..., 1] - np.sin(t1) * v[..., 2], np.sin(t1) * v[..., 1] + np.cos(t1) * v[..., 2]],
+            -1,
+        )
+
+
+def _body_base(spec: BodySpec):
+    """Valid samples for the whole-body calls of one robot."""
+
+    def base(c, rng, n):
+        robot, height = c.robot(spec.key), STANCE_HEIGHT[spec.key]
+        legs = robot.n_legs
+        if spec.key == "spot":  # the Spot entries' historical draws
+            q_arm = in_limits(c.arm.limits, rng, n, margin=0.1)
+            pose = body_poses(rng, n)
+            q, seed = nominal_q12(rng, n), nominal_q12(rng, n)
+        else:
+            pose = body_poses(rng, n, height)
+            q = c.nominal(spec.key) + rng.uniform(-0.1, 0.1, (n, 3 * legs))
+            seed = c.nominal(spec.key) + rng.uniform(-0.1, 0.1, (n, 3 * legs))
+            q_arm = None if robot.arm is None else in_limits(arm_limits(robot.arm), rng, n, margin=0.1)
+        feet = np.broadcast_to(robot.stance_feet(height), (n, legs, 3)) + rng.uniform(-0.02, 0.02, (n, legs, 3))
+        world = np.array([pose_matrix(p) for p in pose])
+        out = {
             "body_pose": pose,
             "feet": feet,
-            "q12": nominal_q12(rng, n),
-            "seed": nominal_q12(rng, n),
+            spec.qname: q,
+            "seed": seed,
             "twist": rng.normal(0, 0.1, (n, 6)),
-            "q_arm": q_arm,
-            "T_world": T_world,
         }
+        if q_arm is None:  # no arm: any target (the call raises)
+            out["q_arm"] = np.zeros((n, 6))
+            out["T_world"] = world @ sk.translation([0.5, 0.0, 0.2])
+        else:
+            out["q_arm"] = q_arm
+            out["T_world"] = world @ robot.arm.fk(q_arm)
+        return out
+
+    return base
+
+
+def _body_entries(spec: BodySpec, methods=BODY_METHODS):
+    """The whole-body ``methods`` of one robot, against the documented formulas per leg (n legs,
+    each with its columns of the whole-body q)."""
+    qn = spec.qname
+    base = _body_base(spec)
+
+    def robot_of(c):
+        return c.robot(spec.key)
 
     euler = np.array([False] * 3 + [True] * 3)
 
@@ -1869,9 +2034,6 @@ def _spot_entries():
     def world(x, kw):
         return pose_matrix(x["body_pose"], kw.get("seq", "XYZ"))
 
-    def hips(c):
-        return c.spot.hip_positions
-
     def body_ik_check(x, out, kw, c):
         q, status = out
         ok = pose_validity(x["body_pose"])
@@ -1879,13 +2041,10 @@ def _spot_entries():
             return None
         T = world(x, kw) if ok else None
         tol = tol_for(*x.values(), base=1e-7, f32=1e-3)
-        for k, leg in enumerate(c.spot.legs):
-            qk, sk_ = q[3 * k : 3 * k + 3], int(status[k])
-            bad = (
-                not ok
-                or not finite(x["feet"][k])
-                or ("seed" in x and not finite(x["seed"][3 * k : 3 * k + 3]))
-            )
+        hips = c.hips(spec.key)
+        for k, (leg, cols) in enumerate(zip(robot_of(c).legs, c.columns(spec.key))):
+            qk, sk_ = q[cols], int(status[k])
+            bad = not ok or not finite(x["feet"][k]) or ("seed" in x and not finite(x["seed"][cols]))
             if bad:
                 if sk_ != INVALID or not all_nan(qk):
                     return f"leg {k}: invalid input but status {sk_}, q {qk}"
@@ -1893,7 +2052,7 @@ def _spot_entries():
             if sk_ == INVALID:
                 return f"leg {k}: INVALID_INPUT for a valid input"
             if sk_ == OK:
-                foot = T[:3, 3] + T[:3, :3] @ (hips(c)[k] + leg.fk(qk.astype(np.float64)))
+                foot = T[:3, 3] + T[:3, :3] @ (hips[k] + leg.fk(qk.astype(np.float64)))
                 if not finite(qk) or np.abs(foot - x["feet"][k]).max() > tol:
                     return f"leg {k}: OK but its foot is at {foot}, not {x['feet'][k]}"
                 if not within(qk, leg.limits, 1e-6):
@@ -1905,52 +2064,60 @@ def _spot_entries():
                 return f"leg {k}: status {sk_} with q {qk}"
         return None
 
-    register(
-        name="Spot.body_ik",
-        covers="spotkin.Spot.body_ik",
-        call=lambda c, **k: c.spot.body_ik(**k),
+    def legs(c):
+        return robot_of(c).n_legs
+
+    if "body_ik" in methods:
+        register(
+        name=spec.name("body_ik"),
+        covers=spec.covers("body_ik"),
+        call=lambda c, **k: robot_of(c).body_ik(**k),
         slots=[
             body_pose_slot(),
-            Batch("feet", (4, 3)),
-            angle_slot("seed", 12, optional=True, default="omit"),
+            Batch("feet", (ROBOT_LEGS[spec.key], 3)),
+            angle_slot("seed", 3 * ROBOT_LEGS[spec.key], optional=True, default="omit"),
             seq_slot(),
             Choice("fallback", "nearest", ("nearest", "nan"), default="omit"),
         ],
-        baseline=spot_base,
-        outputs=outs(("float", (12,)), ("status", (4,))),
+        baseline=base,
+        outputs=outs(("float", (3 * ROBOT_LEGS[spec.key],)), ("status", (ROBOT_LEGS[spec.key],))),
         nan_rule="check",
         check=body_ik_check,
     )
 
-    def legs_bad(x):
-        return [not finite(x["q12"][3 * k : 3 * k + 3]) for k in range(4)]
+    def legs_bad(x, c):
+        return [not finite(x[qn][cols]) for cols in c.columns(spec.key)]
 
     def body_fk_check(x, out, kw, c):
         (feet,) = out
         ok = pose_validity(x["body_pose"])
-        if ok is None or (any(legs_bad(x)) and all_nan(feet)):  # NaN for the whole sample, or per leg
+        bad = legs_bad(x, c)
+        if ok is None or (any(bad) and all_nan(feet)):  # NaN for the whole sample, or per leg
             return None
         if not ok:
             return None if all_nan(feet) else f"invalid body pose but feet {describe(feet)}"
         T = world(x, kw)
         tol = tol_for(*x.values(), base=1e-9, f32=1e-4)
-        for k, leg in enumerate(c.spot.legs):
-            if legs_bad(x)[k]:
+        hips = c.hips(spec.key)
+        for k, (leg, cols) in enumerate(zip(robot_of(c).legs, c.columns(spec.key))):
+            if bad[k]:
                 if not all_nan(feet[k]):
                     return f"leg {k} has a NaN/Inf joint but its foot is {feet[k]}"
                 continue
-            ref = T[:3, 3] + T[:3, :3] @ (hips(c)[k] + leg.fk(x["q12"][3 * k : 3 * k + 3].astype(np.float64)))
+            ref = T[:3, 3] + T[:3, :3] @ (hips[k] + leg.fk(x[qn][cols].astype(np.float64)))
             if not finite(feet[k]) or np.abs(feet[k] - ref).max() > tol * max(1, np.abs(ref).max()):
                 return f"foot {k} is {feet[k]}, expected {ref}"
         return None
 
-    register(
-        name="Spot.body_fk",
-        covers="spotkin.Spot.body_fk",
-        call=lambda c, **k: c.spot.body_fk(**k),
-        slots=[body_pose_slot(), angle_slot("q12", 12), seq_slot()],
-        baseline=spot_base,
-        outputs=outs(("float", (4, 3))),
+    n = ROBOT_LEGS[spec.key]
+    if "body_fk" in methods:
+        register(
+        name=spec.name("body_fk"),
+        covers=spec.covers("body_fk"),
+        call=lambda c, **k: robot_of(c).body_fk(**k),
+        slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
+        baseline=base,
+        outputs=outs(("float", (n, 3))),
         nan_rule="check",
         check=body_fk_check,
     )
@@ -1958,36 +2125,39 @@ def _spot_entries():
     def body_jacobian_check(x, out, kw, c):
         (J,) = out
         ok = pose_validity(x["body_pose"])
-        if ok is None or (any(legs_bad(x)) and all_nan(J)):  # NaN for the whole sample, or per leg
+        bad = legs_bad(x, c)
+        if ok is None or (any(bad) and all_nan(J)):  # NaN for the whole sample, or per leg
             return None
         if not ok:
             return None if all_nan(J) else f"partly NaN: invalid body pose but the Jacobian is {describe(J)}"
         T = world(x, kw)
         R = T[:3, :3]
         tol = tol_for(*x.values(), base=1e-9, f32=1e-4)
-        for k, leg in enumerate(c.spot.legs):
+        hips = c.hips(spec.key)
+        for k, (leg, cols) in enumerate(zip(robot_of(c).legs, c.columns(spec.key))):
             rows = J[3 * k : 3 * k + 3]
-            if legs_bad(x)[k]:
-                if not np.isnan(rows[:, 6 + 3 * k : 9 + 3 * k]).all():
+            if bad[k]:
+                if not np.isnan(rows[:, 6 + cols]).all():
                     return f"leg {k} has a NaN/Inf joint but its Jacobian block is finite"
                 continue
-            qk = x["q12"][3 * k : 3 * k + 3].astype(np.float64)
-            r = R @ (hips(c)[k] + leg.fk(qk))
-            ref = np.zeros((3, 18))
+            qk = x[qn][cols].astype(np.float64)
+            r = R @ (hips[k] + leg.fk(qk))
+            ref = np.zeros((3, 6 + 3 * n))
             ref[:, :3] = np.eye(3)
             ref[:, 3:6] = -np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
-            ref[:, 6 + 3 * k : 9 + 3 * k] = R @ leg.jacobian(qk)
+            ref[:, 6 + cols] = R @ leg.jacobian(qk)
             if not finite(rows) or np.abs(rows - ref).max() > tol:
                 return f"rows of leg {k} differ from v + w x (foot - t) + R J_leg dq"
         return None
 
-    register(
-        name="Spot.body_jacobian",
-        covers="spotkin.Spot.body_jacobian",
-        call=lambda c, **k: c.spot.body_jacobian(**k),
-        slots=[body_pose_slot(), angle_slot("q12", 12), seq_slot()],
-        baseline=spot_base,
-        outputs=outs(("float", (12, 18))),
+    if "body_jacobian" in methods:
+        register(
+        name=spec.name("body_jacobian"),
+        covers=spec.covers("body_jacobian"),
+        call=lambda c, **k: robot_of(c).body_jacobian(**k),
+        slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
+        baseline=base,
+        outputs=outs(("float", (3 * n, 6 + 3 * n))),
         nan_rule="check",
         check=body_jacobian_check,
     )
@@ -1998,21 +2168,23 @@ def _spot_entries():
         if ok is None:
             return None
         tolerance = kw.get("tolerance", 1e-6)
-        for k, leg in enumerate(c.spot.legs):
-            qdk = qd[3 * k : 3 * k + 3]
+        bad = legs_bad(x, c)
+        hips = c.hips(spec.key)
+        for k, (leg, cols) in enumerate(zip(robot_of(c).legs, c.columns(spec.key))):
+            qdk = qd[cols]
             if bool(singular[k]) != all_nan(qdk) or (not singular[k] and not finite(qdk)):
                 return f"leg {k}: singular {singular[k]} with qd {qdk}"
-            if not ok or legs_bad(x)[k] or not finite(x["twist"]):
+            if not ok or bad[k] or not finite(x["twist"]):
                 if not singular[k]:
                     return f"leg {k}: invalid input but singular False, qd {qdk}"
                 continue
-            qk = x["q12"][3 * k : 3 * k + 3].astype(np.float64)
+            qk = x[qn][cols].astype(np.float64)
             J = leg.jacobian(qk)
             sigma = np.linalg.svd(J, compute_uv=False)[-1]
             R = world(x, kw)[:3, :3]
             v, w = x["twist"][:3].astype(np.float64), x["twist"][3:].astype(np.float64)
             with np.errstate(all="ignore"):
-                rhs = -R.T @ (v + np.cross(w, R @ (hips(c)[k] + leg.fk(qk))))
+                rhs = -R.T @ (v + np.cross(w, R @ (hips[k] + leg.fk(qk))))
                 overflow = not finite(rhs) or (sigma > 0 and not finite(np.linalg.solve(J, rhs)))
             if overflow:
                 continue  # the velocities themselves overflow: NaN and singular, or Inf
@@ -2025,21 +2197,85 @@ def _spot_entries():
                 return f"leg {k}: J qd != -R^T (v + w x (foot - t))"
         return None
 
-    register(
-        name="Spot.body_rates",
-        covers="spotkin.Spot.body_rates",
-        call=lambda c, **k: c.spot.body_rates(**k),
+    if "body_rates" in methods:
+        register(
+        name=spec.name("body_rates"),
+        covers=spec.covers("body_rates"),
+        call=lambda c, **k: robot_of(c).body_rates(**k),
         slots=[
             body_pose_slot(),
-            angle_slot("q12", 12),
+            angle_slot(qn, 3 * n),
             Batch("twist", (6,)),
             seq_slot(),
             Real("tolerance", 1e-6, "nonneg", default="omit"),
         ],
-        baseline=spot_base,
-        outputs=outs(("f64", (12,)), ("bool", (4,))),
+        baseline=base,
+        outputs=outs(("f64", (3 * n,)), ("bool", (n,))),
         nan_rule="check",
         check=body_rates_check,
+    )
+
+    def fk_all_outputs(args, kw):
+        hand = Out("hand", (4, 4)) if args["q_arm"].present else Out("none")
+        return [Out("f64", (4, 4)), Out("f64", (n, 3)), Out("f64", (n, 3)), Out("f64", (n, 3)), hand]
+
+    def fk_all_check(x, out, kw, c):
+        body, hip_w, knees, feet, hand = out
+        ok = pose_validity(x["body_pose"])
+        bad = legs_bad(x, c)
+        if ok is None or (any(bad) and all(all_nan(v) for v in (body, hip_w, knees, feet))):
+            return None  # NaN for the whole sample, or per leg
+        if not ok:
+            leaves = [body, hip_w, knees, feet] + ([hand] if hand is not None else [])
+            return None if all(all_nan(v) for v in leaves) else "invalid body pose but frames are not NaN"
+        T = world(x, kw)
+        R, t = T[:3, :3], T[:3, 3]
+        hips = c.hips(spec.key)
+        if not close(body, T, False) or not close(hip_w, (R @ hips.T).T + t, False):
+            return "body or hips differ from the body transform"
+        q = x[qn].astype(np.float64)
+        robot = robot_of(c)
+        for k, (leg, cols) in enumerate(zip(robot.legs, c.columns(spec.key))):
+            knee = knee_point(leg, q[cols])
+            knee = t + R @ (hips[k] + knee) if finite(knee) else np.full(3, np.nan)
+            foot = t + R @ (hips[k] + leg.fk(q[cols])) if not bad[k] else np.full(3, np.nan)
+            if finite(knee) != finite(knees[k]) or (finite(knee) and not close(knees[k], knee, False)):
+                return f"knee {k} is {knees[k]}, expected {knee}"
+            if finite(foot) != finite(feet[k]) or (finite(foot) and not close(feet[k], foot, False)):
+                return f"foot {k} is {feet[k]}, expected {foot}"
+        if hand is not None:
+            if not finite(x["q_arm"]):
+                return None if all_nan(hand) else f"NaN/Inf arm joint but hand {describe(hand)}"
+            if not close(hand, T @ robot.arm.fk(x["q_arm"].astype(np.float64)), False):
+                return "hand differs from T_world_body arm.fk(q_arm)"
+        return None
+
+    if ROBOT_ARMS[spec.key]:
+        q_arm = angle_slot("q_arm", 6, optional=True, default="omit")
+    else:  # q_arm needs an arm: any q_arm but None is refused
+        q_arm = Custom(
+            "q_arm",
+            {
+                "none": lambda c, r, b: Arg(None),
+                "valid": lambda c, r, b: Arg(b["q_arm"][0], REJECT, "value"),
+                "batch": lambda c, r, b: Arg(b["q_arm"], REJECT, "value"),
+                "nan": lambda c, r, b: Arg(np.full(6, np.nan), REJECT, "value"),
+                "float32": lambda c, r, b: Arg(b["q_arm"].astype(np.float32), REJECT, "value"),
+                "str": lambda c, r, b: Arg("abc", REJECT),
+                "wrong_shape": lambda c, r, b: Arg(np.zeros(5), REJECT),
+            },
+            default="omit",
+        )
+    if "fk_all" in methods:
+        register(
+        name=spec.name("fk_all"),
+        covers=spec.covers("fk_all"),
+        call=lambda c, **k: robot_of(c).fk_all(**k),
+        slots=[body_pose_slot(), angle_slot(qn, 3 * n), q_arm, seq_slot()],
+        baseline=base,
+        outputs=fk_all_outputs,
+        nan_rule="check",
+        check=fk_all_check,
     )
 
     def arm_world_check(x, out, kw, c):
@@ -2056,88 +2292,46 @@ def _spot_entries():
             and np.abs(np.asarray(x["T_world"], dtype=np.float64)).max() > 1e300
         ):
             return None  # the body-frame target may overflow
-        return nearest_check(lambda q: T @ c.arm.fk(q), lambda x: x["T_world"], c.arm.limits)(x, out, kw, c)
+        arm = robot_of(c).arm
+        return nearest_check(lambda q: T @ arm.fk(q), lambda x: x["T_world"], arm_limits(arm))(x, out, kw, c)
 
-    register(
-        name="Spot.arm_ik_world",
-        covers="spotkin.Spot.arm_ik_world",
-        call=lambda c, **k: c.spot.arm_ik_world(**k),
+    def arm_base(c, rng, n):
+        samples = base(c, rng, n)
+        arm = robot_of(c).arm
+        if arm is not None:
+            samples["seed"] = in_limits(arm_limits(arm), rng, n, 0.1)
+        else:
+            samples["seed"] = np.zeros((n, 6))
+        return samples
+
+    if "arm_ik_world" in methods:
+        register(
+        name=spec.name("arm_ik_world"),
+        covers=spec.covers("arm_ik_world"),
+        call=lambda c, **k: robot_of(c).arm_ik_world(**k),
         slots=[
             body_pose_slot(),
             Batch("T_world", (4, 4), pose="T", quat_ok=False),
             angle_slot("seed", 6, optional=True, default="omit", dtype_driver=False),
             seq_slot(),
         ],
-        baseline=lambda c, rng, n: {**spot_base(c, rng, n), "seed": in_limits(c.arm.limits, rng, n, 0.1)},
+        baseline=arm_base,
         outputs=outs(("float", (6,)), ("status", ())),
         mixed="f64",
         nan_rule="check",
         check=arm_world_check,
+        # "this robot has no arm": ValueError whatever the arguments
+        expect=ACCEPT if ROBOT_ARMS[spec.key] else REJECT,
+        why="" if ROBOT_ARMS[spec.key] else "value",
     )
 
-    def fk_all_outputs(args, kw):
-        hand = Out("hand", (4, 4)) if args["q_arm"].present else Out("none")
-        return [Out("f64", (4, 4)), Out("f64", (4, 3)), Out("f64", (4, 3)), Out("f64", (4, 3)), hand]
 
-    def fk_all_check(x, out, kw, c):
-        body, hip_w, knees, feet, hand = out
-        ok = pose_validity(x["body_pose"])
-        if ok is None or (any(legs_bad(x)) and all(all_nan(v) for v in (body, hip_w, knees, feet))):
-            return None  # NaN for the whole sample, or per leg
-        if not ok:
-            leaves = [body, hip_w, knees, feet] + ([hand] if hand is not None else [])
-            return None if all(all_nan(v) for v in leaves) else "invalid body pose but frames are not NaN"
-        T = world(x, kw)
-        R, t = T[:3, :3], T[:3, 3]
-        if not close(body, T, False) or not close(hip_w, (R @ hips(c).T).T + t, False):
-            return "body or hips differ from the body transform"
-        q12 = x["q12"].astype(np.float64)
-        for k, leg in enumerate(c.spot.legs):
-            hx, hy, _ = q12[3 * k : 3 * k + 3]
-            kx = leg.knee_offset * math.cos(hy) - leg.upper * math.sin(hy) if finite([hy]) else math.nan
-            kz = -leg.knee_offset * math.sin(hy) - leg.upper * math.cos(hy) if finite([hy]) else math.nan
-            knee = np.array(
-                [
-                    kx,
-                    leg.hip_offset * np.cos(hx) - kz * np.sin(hx),
-                    leg.hip_offset * np.sin(hx) + kz * np.cos(hx),
-                ]
-            )
-            if finite(knee):
-                knee = t + R @ (hips(c)[k] + knee)
-            else:
-                knee = np.full(3, np.nan)
-            foot = (
-                t + R @ (hips(c)[k] + leg.fk(q12[3 * k : 3 * k + 3]))
-                if not legs_bad(x)[k]
-                else np.full(3, np.nan)
-            )
-            if finite(knee) != finite(knees[k]) or (finite(knee) and not close(knees[k], knee, False)):
-                return f"knee {k} is {knees[k]}, expected {knee}"
-            if finite(foot) != finite(feet[k]) or (finite(foot) and not close(feet[k], foot, False)):
-                return f"foot {k} is {feet[k]}, expected {foot}"
-        if hand is not None:
-            if not finite(x["q_arm"]):
-                return None if all_nan(hand) else f"NaN/Inf arm joint but hand {describe(hand)}"
-            if not close(hand, T @ c.arm.fk(x["q_arm"].astype(np.float64)), False):
-                return "hand differs from T_world_body arm.fk(q_arm)"
-        return None
+ROBOT_LEGS = {"spot": 4, "go2": 4, "hexapod": 6, "spot_urdf": 4}
+ROBOT_ARMS = {"spot": True, "go2": False, "hexapod": False, "spot_urdf": True}
 
-    register(
-        name="Spot.fk_all",
-        covers="spotkin.Spot.fk_all",
-        call=lambda c, **k: c.spot.fk_all(**k),
-        slots=[
-            body_pose_slot(),
-            angle_slot("q12", 12),
-            angle_slot("q_arm", 6, optional=True, default="omit"),
-            seq_slot(),
-        ],
-        baseline=spot_base,
-        outputs=fk_all_outputs,
-        nan_rule="check",
-        check=fk_all_check,
-    )
+
+def _spot_entries():
+    _body_entries(SPOT_BODY)
 
     def stance_probe(feet, kw, c):
         height = kw.get("height", 0.5)

@@ -117,7 +117,9 @@ def test_round_trip_on_random_stances(rng):
 def test_round_trip_recovers_the_generating_joints(rng):
     # joints with every foot more than 8 cm below its hip, where the limits leave one branch
     n = 100_000
-    limits = SPOT.leg("fl").limits
+    # the tightest limits of the four legs (the knee stops differ per leg)
+    limits = np.stack([leg.limits for leg in SPOT.legs])
+    limits = np.stack([limits[:, :, 0].max(axis=0), limits[:, :, 1].min(axis=0)], axis=1)
     q = rng.uniform(limits[:, 0], limits[:, 1], (4 * n, 3))
     q = q[SPOT.leg("fl").fk(q)[:, 2] < -0.1][: 4 * (len(q) // 8) // 4 * 4]
     q12 = q[: (len(q) // 4) * 4].reshape(-1, 12)

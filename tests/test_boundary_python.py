@@ -18,7 +18,7 @@ import spotkin as sk
 from spotkin import _boundary
 from spotkin.models import LEG_NAMES
 from spotkin.models import SPOT as SPOT_MODEL
-from spotkin.spot import _solve_rows
+from spotkin.robot import _solve_rows
 
 SPOT = sk.Spot()
 Q12 = np.tile([0.0, 1.04, -1.8], 4)

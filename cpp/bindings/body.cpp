@@ -85,21 +85,23 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
     const auto format = format_code < 0 ? detect_format(arr) : static_cast<BodyPoseFormat>(format_code);
     const Poses shape = pose_shape(arr, format);
     auto poses = contiguous<T>(arr);
+    const py::ssize_t n_legs = body.n_legs(), w = body.width();
     auto feet = contiguous<T>(as_real_array(feet_obj, "feet"));
-    const Shape feet_leading = leading_shape(feet, "feet", {4, 3});
+    const Shape feet_leading = leading_shape(feet, "feet", {n_legs, 3});
     const bool feet_shared = feet_leading.empty();
     if (!feet_shared && feet_leading != shape.leading)
-      throw py::value_error("feet " + format_shape(feet_leading) + " + (4, 3) must match body_pose's leading shape " +
-                            format_shape(shape.leading));
+      throw py::value_error("feet " + format_shape(feet_leading) + " + (" + std::to_string(n_legs) +
+                            ", 3) must match body_pose's leading shape " + format_shape(shape.leading));
     const bool has_seed = !seed_obj.is_none();
     py::array_t<T, py::array::c_style> seed;
     if (has_seed) {
-      seed = seed_angles<T>(as_real_array(seed_obj, "seed"), 12, all_angles(12));
-      if (leading_shape(seed, "seed", {12}) != shape.leading)
-        throw py::value_error("seed must have shape " + format_shape(shape.leading) + " + (12,)");
+      seed = seed_angles<T>(as_real_array(seed_obj, "seed"), w, all_angles(int(w)));
+      if (leading_shape(seed, "seed", {w}) != shape.leading)
+        throw py::value_error("seed must have shape " + format_shape(shape.leading) + " + (" + std::to_string(w) +
+                              ",)");
     }
-    auto q = new_array<T>(shape.leading, {12});
-    auto status = new_array<std::int8_t>(shape.leading, {4});
+    auto q = new_array<T>(shape.leading, {w});
+    auto status = new_array<std::int8_t>(shape.leading, {n_legs});
     const std::ptrdiff_t width = pose_width(format);
     const T* pd = poses.data();
     const T* fd = feet.data();
@@ -110,12 +112,12 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
       ReleaseGilFor release(count(shape.leading));
       parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         // huge Euler angles are reduced exactly; pose_block is the first pose of out_block's samples
-        with_reduced_angles(pd + width * b, width, euler_columns(format), qd + 12 * b, 12, e - b,
+        with_reduced_angles(pd + width * b, width, euler_columns(format), qd + w * b, w, e - b,
                             [&](const T* pose_block, T* out_block, std::ptrdiff_t m) {
-                              const std::ptrdiff_t i = (out_block - qd) / 12;
-                              body_ik_kernel<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 12 * i,
-                                                feet_shared, sd ? sd + 12 * i : nullptr, out_block, std_ + 4 * i, m,
-                                                nearest_fallback);
+                              const std::ptrdiff_t i = (out_block - qd) / w;
+                              body_ik_kernel<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 3 * n_legs * i,
+                                                feet_shared, sd ? sd + w * i : nullptr, out_block, std_ + n_legs * i,
+                                                m, nearest_fallback);
                             });
       });
     }
@@ -127,24 +129,28 @@ template <bool Jacobian>
 py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle q_obj) {
   const auto format = static_cast<BodyPoseFormat>(format_code);
   const EulerSequence seq = make_sequence(sequence);
-  return dispatch_promoted(pose_obj, "body_pose", {{q_obj, "q12"}}, [&](auto tag, py::array arr) -> py::object {
+  return dispatch_promoted(pose_obj, "body_pose", {{q_obj, "q"}}, [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const Poses shape = pose_shape(arr, format);
     auto poses = contiguous<T>(arr);
-    auto q = contiguous<T>(as_real_array(q_obj, "q12"));
-    if (leading_shape(q, "q12", {12}) != shape.leading)
-      throw py::value_error("q12 must have shape " + format_shape(shape.leading) + " + (12,)");
-    auto out = Jacobian ? new_array<T>(shape.leading, {12, 18}) : new_array<T>(shape.leading, {4, 3});
+    const py::ssize_t n_legs = body.n_legs(), w = body.width();
+    auto q = contiguous<T>(as_real_array(q_obj, "q"));
+    if (leading_shape(q, "q", {w}) != shape.leading)
+      throw py::value_error("q must have shape " + format_shape(shape.leading) + " + (" + std::to_string(w) + ",)");
+    auto out = Jacobian ? new_array<T>(shape.leading, {w, 6 + w}) : new_array<T>(shape.leading, {n_legs, 3});
     const std::ptrdiff_t width = pose_width(format);
     const T* pd = poses.data();
     const T* qd = q.data();
     T* od = out.mutable_data();
+    // a leg's non-finite joints make its foot (its Jacobian rows) NaN, and only them, when each
+    // leg's joints are its own three columns of q; otherwise the whole sample
+    const std::ptrdiff_t groups = body.leg_contiguous() ? n_legs : 1;
     {
       ReleaseGilFor release(count(shape.leading));
-      constexpr std::ptrdiff_t out_width = Jacobian ? 216 : 12;
+      const std::ptrdiff_t out_width = Jacobian ? w * (6 + w) : 3 * n_legs;
       parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         // huge joint and Euler angles are reduced exactly (with_reduced_angles, once per input)
-        with_reduced_angles(qd + 12 * b, 12, all_angles(12), od + out_width * b, out_width, e - b,
+        with_reduced_angles(qd + w * b, w, all_angles(int(w)), od + out_width * b, out_width, e - b,
                             [&](const T* q_block, T* out_block, std::ptrdiff_t m) {
           const std::ptrdiff_t i = (out_block - od) / out_width;
           with_reduced_angles(pd + width * i, width, euler_columns(format), out_block, out_width, m,
@@ -155,37 +161,60 @@ py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code
               body_fk_kernel<T>(body, pose_block, format, seq, q_block, out_inner, k);
             }
           });
-        }, /*groups=*/4);  // a leg's non-finite joints make its foot (its Jacobian rows) NaN, and only them
+        }, groups);
       });
     }
     return std::move(out);
   });
 }
 
-Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj) {
-  if (legs.size() != 4) throw py::value_error("a body needs four legs");
+// legs: sk.Leg cores; hips (n, 3); columns (n, 3) integers (None: leg l's
+// joints are columns 3 l, 3 l + 1, 3 l + 2).
+Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj, py::handle columns_obj) {
+  const auto n = static_cast<py::ssize_t>(legs.size());
+  if (n < 1 || n > Body::kMaxLegs)
+    throw py::value_error("a body needs 1 to " + std::to_string(Body::kMaxLegs) + " legs, got " + std::to_string(n));
   auto hips = contiguous<double>(as_real_array(hips_obj, "hip_positions"));
-  if (hips.ndim() != 2 || hips.shape(0) != 4 || hips.shape(1) != 3)
-    throw py::value_error("hip_positions must have shape (4, 3)");
-  Body body;
-  for (int l = 0; l < 4; ++l) {
-    body.legs[l] = *legs[static_cast<std::size_t>(l)];
-    for (int k = 0; k < 3; ++k) body.hips[l][k] = hips.data()[3 * l + k];
+  if (hips.ndim() != 2 || hips.shape(0) != n || hips.shape(1) != 3)
+    throw py::value_error("hip_positions must have shape (" + std::to_string(n) + ", 3)");
+  std::vector<Leg> leg_list;
+  std::vector<std::array<double, 3>> hip_list;
+  std::vector<std::array<int, 3>> column_list;
+  py::array_t<double, py::array::c_style> columns;
+  if (!columns_obj.is_none()) {
+    columns = contiguous<double>(as_real_array(columns_obj, "columns"));
+    if (columns.ndim() != 2 || columns.shape(0) != n || columns.shape(1) != 3)
+      throw py::value_error("columns must have shape (" + std::to_string(n) + ", 3)");
   }
-  return body;
+  for (py::ssize_t l = 0; l < n; ++l) {
+    leg_list.push_back(*legs[std::size_t(l)]);
+    std::array<double, 3> hip;
+    std::array<int, 3> col;
+    for (int k = 0; k < 3; ++k) {
+      hip[std::size_t(k)] = hips.data()[3 * l + k];
+      if (!std::isfinite(hip[std::size_t(k)])) throw py::value_error("hip_positions must be finite");
+      const double c = columns_obj.is_none() ? double(3 * l + k) : columns.data()[3 * l + k];
+      if (c != std::floor(c)) throw py::value_error("columns must be integers");
+      col[std::size_t(k)] = int(c);
+    }
+    hip_list.push_back(hip);
+    column_list.push_back(col);
+  }
+  return Body(std::move(leg_list), std::move(hip_list), std::move(column_list));
 }
 
 }  // namespace
 
 void bind_body(py::module_& m) {
   py::class_<Body>(m, "Body")
-      .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"))
+      .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"), py::arg("columns") = py::none())
+      .def_property_readonly("n_legs", &Body::n_legs)
       .def("ik", &ik, py::arg("body_pose"), py::arg("format"), py::arg("sequence"), py::arg("feet"),
            py::arg("seed"), py::arg("nearest_fallback") = true)
       .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
-           py::arg("q12"))
+           py::arg("q"))
       .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
-           py::arg("q12"));
+           py::arg("q"));
 }
 
 }  // namespace spotkin::bindings

@@ -1,4 +1,4 @@
-// Bindings for spotkin::Chain: construction from DH tables, batched FK,
+// Bindings for spotkin::Chain: construction from DH tables or URDF joints, batched FK,
 // frames and Jacobians.
 #include "spotkin/chain.hpp"
 
@@ -8,36 +8,13 @@
 
 #include "bindings.hpp"
 #include "dispatch.hpp"
+#include "chain_model.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
 namespace {
-
-// The chain in both working precisions.
-struct ChainPair {
-  Chain<double> f64;
-  Chain<float> f32;
-  Convention convention;
-
-  const Chain<double>& get(double) const { return f64; }
-  const Chain<float>& get(float) const { return f32; }
-};
-
-ChainPair make_chain(Convention convention, py::handle rows_obj, py::handle base_obj,
-                     py::handle tool_obj) {
-  py::array rows_arr = as_real_array(rows_obj, "rows");
-  if (rows_arr.ndim() != 2 || rows_arr.shape(1) != 5)
-    throw py::value_error("rows must have shape (n, 5), got " +
-                          format_shape(Shape(rows_arr.shape(), rows_arr.shape() + rows_arr.ndim())));
-  auto rows = contiguous<double>(rows_arr);
-  const Rigid<double> base = base_obj.is_none() ? Rigid<double>{} : rigid_from<Rigid<double>>(base_obj, "base");
-  const Rigid<double> tool = tool_obj.is_none() ? Rigid<double>{} : rigid_from<Rigid<double>>(tool_obj, "tool");
-  auto chain = Chain<double>::from_table(convention, rows.data(), rows.shape(0), base, tool);
-  auto single = chain.template cast<float>();
-  return ChainPair{std::move(chain), std::move(single), convention};
-}
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(40.0);  // 6-joint FK/Jacobian: ~40 ns
 
@@ -173,10 +150,11 @@ void bind_chain(py::module_& m) {
       .value("CLASSIC_DH", Convention::ClassicDH);
 
   py::class_<ChainPair>(m, "Chain")
-      .def(py::init(&make_chain), py::arg("convention"), py::arg("rows"), py::arg("base") = py::none(),
+      .def(py::init(&chain_from_table), py::arg("convention"), py::arg("rows"), py::arg("base") = py::none(),
            py::arg("tool") = py::none())
+      .def_static("from_joints", &chain_from_joints, py::arg("placements"), py::arg("axes"), py::arg("types"),
+                  py::arg("base") = py::none(), py::arg("tool") = py::none())
       .def_property_readonly("dof", [](const ChainPair& c) { return c.f64.dof(); })
-      .def_property_readonly("convention", [](const ChainPair& c) { return c.convention; })
       .def("fk", &fk, py::arg("q"))
       .def("frames", &frames, py::arg("q"))
       .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"))

@@ -1,4 +1,4 @@
-// Bindings for the closed-form IK of chains from DH tables: 3-joint position
+// Bindings for the closed-form IK of chains (DH or URDF): 3-joint position
 // IK and 6R spherical-wrist IK.
 #include "spotkin/chain_ik.hpp"
 
@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "dispatch.hpp"
+#include "chain_model.hpp"
 #include "numpy_boundary.hpp"
 
 namespace spotkin::bindings {
@@ -27,21 +28,11 @@ struct ChainIK {
   std::string position_kind() const { return position ? position->name() : wrist->position().name(); }
 };
 
-ChainIK make_chain_ik(Convention convention, py::handle rows_obj, py::handle base_obj, py::handle tool_obj,
-                      py::handle lower_obj, py::handle upper_obj) {
-  py::array rows_arr = as_real_array(rows_obj, "rows");
-  if (rows_arr.ndim() != 2 || rows_arr.shape(1) != 5)
-    throw py::value_error("rows must have shape (n, 5), got " +
-                          format_shape(Shape(rows_arr.shape(), rows_arr.shape() + rows_arr.ndim())));
-  auto rows = contiguous<double>(rows_arr);
-  const Rigid<double> base = base_obj.is_none() ? Rigid<double>{} : rigid_from<Rigid<double>>(base_obj, "base");
-  const Rigid<double> tool = tool_obj.is_none() ? Rigid<double>{} : rigid_from<Rigid<double>>(tool_obj, "tool");
-  const auto chain = Chain<double>::from_table(convention, rows.data(), rows.shape(0), base, tool);
+ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle upper_obj) {
+  const Chain<double>& chain = pair.f64;
   const std::ptrdiff_t dof = chain.dof();
-  // Length scale: every length in the table plus the tool offset (1 if all are zero).
-  double scale = tool.p.norm();
-  for (std::ptrdiff_t j = 0; j < dof; ++j) scale += std::fabs(rows.data()[5 * j + 1]) + std::fabs(rows.data()[5 * j + 3]);
-  if (!(scale > 0.0)) scale = 1.0;
+  // Length scale: every fixed length of the chain plus the tool offset (1 if all are zero).
+  const double scale = chain.length_scale();
 
   ChainIK ik;
   for (std::ptrdiff_t j = 0; j < dof && j < 64; ++j)
@@ -58,7 +49,7 @@ ChainIK make_chain_ik(Convention convention, py::handle rows_obj, py::handle bas
   }
 
   if (dof == 3) {
-    const chain_ik::V3 w = (chain_ik::x_screw(chain.joints()[2].post) * tool).p;
+    const chain_ik::V3 w = (chain.z_tail(2) * chain.tool()).p;
     ik.position.emplace(chain_ik::split_first_three(chain), w, scale);
   } else if (dof == 6) {
     ik.wrist.emplace(SphericalWrist6::make(chain, scale));
@@ -214,8 +205,7 @@ py::object ik_pose(const ChainIK& ik, py::handle T_obj) {
 
 void bind_chain_ik(py::module_& m) {
   py::class_<ChainIK>(m, "ChainIK")
-      .def(py::init(&make_chain_ik), py::arg("convention"), py::arg("rows"), py::arg("base"), py::arg("tool"),
-           py::arg("lower"), py::arg("upper"))
+      .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"))
       .def_property_readonly("kind", &ChainIK::kind)
       .def_property_readonly("position_kind", &ChainIK::position_kind)
       .def("ik_position", &ik_position, py::arg("p"))

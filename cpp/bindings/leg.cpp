@@ -132,12 +132,21 @@ py::object ik_all(const Leg& leg, py::handle p_obj) {
   });
 }
 
-Leg make_leg(double hip_offset, double upper, double lower, double knee_offset, py::handle lower_limits,
-             py::handle upper_limits) {
-  for (double v : {hip_offset, upper, lower, knee_offset})
-    if (!std::isfinite(v)) throw std::invalid_argument("leg lengths must be finite");
-  if (!(upper > 0.0) || !(lower > 0.0))
-    throw std::invalid_argument("upper and lower leg lengths must be positive");
+std::array<double, 3> vector3(py::handle obj, const char* name) {
+  auto arr = contiguous<double>(as_real_array(obj, name));
+  if (arr.ndim() != 1 || arr.shape(0) != 3) throw py::value_error(std::string(name) + " must have shape (3,)");
+  std::array<double, 3> v{arr.data()[0], arr.data()[1], arr.data()[2]};
+  for (double x : v)
+    if (!std::isfinite(x)) throw py::value_error(std::string(name) + " must be finite");
+  return v;
+}
+
+// a, b, c, signs: (3,) each (rpp_geometry.hpp); limits (3,) each.
+Leg make_leg(py::handle a, py::handle b, py::handle c, py::handle signs, py::handle lower_limits,
+             py::handle upper_limits, int preferred_slot) {
+  RppGeometry g;
+  const auto va = vector3(a, "a"), vb = vector3(b, "b"), vc = vector3(c, "c"), vs = vector3(signs, "signs");
+  for (int k = 0; k < 3; ++k) g.a[k] = va[k], g.b[k] = vb[k], g.c[k] = vc[k], g.sign[k] = vs[k];
   JointLimits<3> limits;
   for (auto [obj, target, name] : {std::tuple{lower_limits, limits.lower, "lower limits"},
                                    std::tuple{upper_limits, limits.upper, "upper limits"}}) {
@@ -149,15 +158,16 @@ Leg make_leg(double hip_offset, double upper, double lower, double knee_offset, 
   for (int j = 0; j < 3; ++j)
     if (std::isnan(limits.lower[j]) || std::isnan(limits.upper[j]) || limits.lower[j] > limits.upper[j])
       throw std::invalid_argument("limits must satisfy lower <= upper, with no NaN");
-  return Leg(LegGeometry{hip_offset, upper, lower, knee_offset}, limits);
+  return Leg(g, limits, preferred_slot);
 }
 
 }  // namespace
 
 void bind_leg(py::module_& m) {
   py::class_<Leg>(m, "Leg")
-      .def(py::init(&make_leg), py::arg("hip_offset"), py::arg("upper"), py::arg("lower"),
-           py::arg("knee_offset"), py::arg("lower_limits"), py::arg("upper_limits"))
+      .def(py::init(&make_leg), py::arg("a"), py::arg("b"), py::arg("c"), py::arg("signs"),
+           py::arg("lower_limits"), py::arg("upper_limits"), py::arg("preferred_slot") = -1)
+      .def_property_readonly("preferred_slot", &Leg::preferred_slot)
       .def_property_readonly("max_reach", &Leg::max_reach)
       .def_property_readonly("min_reach", &Leg::min_reach)
       .def("fk", &fk, py::arg("q"))
@@ -166,9 +176,9 @@ void bind_leg(py::module_& m) {
       .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true)
       .def("ik_all", &ik_all, py::arg("p"))
       .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
-        std::array<double, 3> out;
-        leg.nearest_reachable(p.data(), out.data(), within_limits);
-        return out;
+        std::array<double, 3> out, q;
+        leg.nearest_reachable(p.data(), out.data(), within_limits, q.data());
+        return py::make_tuple(out, q);
       }, py::arg("p"), py::arg("within_limits") = false);
 }
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import paul, trajectory
+from . import paul, trajectory, urdf
 from ._runtime import MAX_THREADS, get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
@@ -11,7 +11,8 @@ from .body import EULER_SEQUENCES, body_transform
 from .chain import Chain, ChainSolutions, IKDifferentialInfo
 from .differential import dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .leg import Leg, LegSolutions
-from .spot import BodyFrames, BodyIK, BodyRates, Spot
+from .robot import BodyFrames, BodyIK, BodyRates, Robot
+from .spot import Spot
 
 __all__ = [
     "EULER_SEQUENCES",
@@ -26,6 +27,7 @@ __all__ = [
     "IKDifferentialInfo",
     "Leg",
     "LegSolutions",
+    "Robot",
     "Spot",
     "SpotArm",
     "Status",
@@ -46,6 +48,7 @@ __all__ = [
     "trajectory",
     "transform",
     "translation",
+    "urdf",
 ]
 
 __version__ = "0.1.0"

@@ -1,4 +1,5 @@
-"""The ``spotkin`` command line: ``spotkin demo`` runs the showcase on built-in data."""
+"""The ``spotkin`` command line: ``spotkin demo`` runs the showcase on built-in data;
+``spotkin inspect ROBOT.urdf`` shows what a description holds and what spotkin recognises."""
 
 from __future__ import annotations
 
@@ -14,7 +15,9 @@ from ._status import Status
 from ._transforms import translation
 from .body import body_transform
 from .chain import Chain
+from . import robots
 from .leg import SLOT_NAMES
+from .robot import Robot
 from .spot import Spot
 from .trajectory import hold_branch, via_points
 
@@ -44,6 +47,8 @@ def demo(samples: int = 1_000_000) -> int:
     print(f"spotkin {__version__} demo: the built-in Spot model")
     print()
     _demo_body(samples)
+    print()
+    _demo_urdf_robot(samples)
     print()
     _demo_path()
     print()
@@ -99,6 +104,41 @@ def _demo_body(samples: int) -> None:
         f"{len(reached):,} of those poses: {int(reached.sum()):,} solved within limits, "
         f"worst hand pose error {hand_error:.1e}"
     )
+
+
+def _demo_urdf_robot(samples: int) -> None:
+    """Whole-body IK on a robot loaded from its URDF (the packaged Unitree Go2)."""
+    start = time.perf_counter()
+    go2 = Robot.from_urdf(robots.path("go2"))
+    load_ms = (time.perf_counter() - start) * 1e3
+    print(
+        f"Unitree Go2 from its URDF ({load_ms:.1f} ms to load): legs {', '.join(go2.leg_names)}, "
+        f"{len(go2.joint_names)} actuated joints"
+    )
+    leg = go2.legs[0]
+    print(
+        f"  {leg.name}: a = {np.round(leg.a, 4)}, b = {np.round(leg.b, 4)}, c = {np.round(leg.c, 4)} m, "
+        f"preferred slot {leg.preferred_slot} ({SLOT_NAMES[leg.preferred_slot]})"
+    )
+    feet = go2.stance_feet(height=0.3)
+    poses = body_trajectory(samples, height=0.3) * [0.5, 0.5, 1.0, 0.5, 0.5, 0.5]
+    seconds = _throughput(lambda p: go2.body_ik(p, feet), poses)
+    result = go2.body_ik(poses, feet)
+    ok = result.status == Status.OK
+    error = np.abs(go2.body_fk(poses, result.q) - feet)[ok].max(initial=0.0)
+    counts = {s.name: int((result.status == s).sum()) for s in Status}
+    print(
+        f"  body_ik: {samples:,} poses in {seconds * 1e3:.1f} ms ({seconds / samples * 1e9:.1f} ns per pose); "
+        f"worst foot error by body_fk {error:.1e} m; leg statuses {counts}"
+    )
+
+
+def inspect(path: str) -> int:
+    """Print a URDF's tree, the legs and arms spotkin recognises with their geometry, and why the
+    other branches were not recognised."""
+    robot_model = Robot.from_urdf(path)
+    print(robot_model.describe())
+    return 0
 
 
 def _demo_path(rate: float = 1000.0) -> None:
@@ -281,9 +321,19 @@ def main(argv: list[str] | None = None) -> int:
         default=1_000_000,
         help="batch size for the throughput figures (a positive integer; default 1,000,000)",
     )
+    inspect_parser = commands.add_parser(
+        "inspect", help="show a URDF's tree and the legs and arms spotkin recognises in it"
+    )
+    inspect_parser.add_argument("urdf", help="path of the URDF file")
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.samples)
+    if args.command == "inspect":
+        try:
+            return inspect(args.urdf)
+        except (OSError, ValueError) as error:
+            print(f"spotkin inspect: {error}", file=sys.stderr)
+            return 1
     return 2  # pragma: no cover
 
 

@@ -1,4 +1,10 @@
-"""Serial chains from Denavit–Hartenberg tables: FK, frames and geometric Jacobians."""
+"""Serial chains: one model for URDF, DH and DHm descriptions. FK, frames, geometric
+Jacobians, closed-form IK where the structure has one, and differential IK.
+
+Every joint is a fixed placement followed by a motion about (revolute) or along
+(prismatic) a unit axis: what a URDF ``<joint>`` describes. :meth:`Chain.from_mdh` and
+:meth:`Chain.from_dh` build the same model from DH tables; :meth:`Chain.from_joints` and
+:meth:`spotkin.Robot.chain` from placements and axes."""
 
 from __future__ import annotations
 
@@ -85,7 +91,7 @@ class Chain:
     computed in float64. NaN in ``q`` propagates to NaN in the result.
     """
 
-    __slots__ = ("_base", "_convention", "_core", "_ik", "_limits", "_rows", "_tool")
+    __slots__ = ("_base", "_convention", "_core", "_ik", "_joints", "_limits", "_names", "_rows", "_tool")
 
     def __init__(
         self,
@@ -101,11 +107,57 @@ class Chain:
         table = _table(rows)
         self._rows = table
         self._convention = convention
+        self._joints = None
+        self._names = None
         self._base = None if base is None else as_real(base, "base", np.float64).copy()
         self._tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
         self._core = _core.Chain(_CONVENTIONS[convention], table, self._base, self._tool)
         self._limits = _limits(limits, table.shape[0])
         self._ik = None
+
+    @classmethod
+    def from_joints(
+        cls,
+        placements: ArrayLike,
+        axes: ArrayLike,
+        types: ArrayLike | None = None,
+        base: ArrayLike | None = None,
+        tool: ArrayLike | None = None,
+        limits: ArrayLike | None = None,
+        joint_names: tuple[str, ...] | None = None,
+    ) -> Chain:
+        """Chain from URDF-style joints: T(j-1, j) = placements[j] · Rot(axes[j], q_j) (revolute) or
+        placements[j] · Trans(axes[j] q_j) (prismatic).
+
+        ``placements`` (n, 4, 4) rigid transforms (finite, rotation orthonormal to 1e-9), ``axes``
+        (n, 3) non-zero (normalised here, any sign), ``types`` (n,) 0 revolute / 1 prismatic
+        (default all revolute), ``limits`` (n, 2). ``base`` maps the world frame to the frame
+        before joint 0 and ``tool`` the last joint's frame to the tool frame.
+        """
+        chain = cls.__new__(cls)
+        placements = as_real(placements, "placements", np.float64).copy()
+        if placements.ndim != 3 or placements.shape[1:] != (4, 4):
+            raise ValueError(f"placements must have shape (n, 4, 4), got {placements.shape}")
+        n = placements.shape[0]
+        axes = as_real(axes, "axes", np.float64).copy()
+        if axes.shape != (n, 3):
+            raise ValueError(f"axes must have shape ({n}, 3), got {axes.shape}")
+        types = np.zeros(n, dtype=np.int8) if types is None else as_real(types, "types", np.float64)
+        if types.shape != (n,) or not np.isin(types, (0, 1)).all():
+            raise ValueError(f"types must have shape ({n},) with 0 (revolute) or 1 (prismatic) entries")
+        types = types.astype(np.int8)
+        chain._base = None if base is None else as_real(base, "base", np.float64).copy()
+        chain._tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
+        chain._core = _core.Chain.from_joints(placements, axes, types.astype(np.float64), chain._base, chain._tool)
+        chain._rows = None
+        chain._convention = "joints"
+        chain._joints = (placements, axes, types)
+        chain._names = None if joint_names is None else tuple(str(name) for name in joint_names)
+        if chain._names is not None and len(chain._names) != n:
+            raise ValueError(f"joint_names must have {n} names, got {len(chain._names)}")
+        chain._limits = _limits(limits, n)
+        chain._ik = None
+        return chain
 
     @classmethod
     def from_mdh(
@@ -142,21 +194,28 @@ class Chain:
     @property
     def dof(self) -> int:
         """Number of joints."""
-        return self._rows.shape[0]
+        return self._core.dof
 
     @property
-    def rows(self) -> np.ndarray:
-        """A copy of the DH table, (dof, 5)."""
-        return self._rows.copy()
+    def rows(self) -> np.ndarray | None:
+        """A copy of the DH table, (dof, 5); None for a chain built from joints."""
+        return None if self._rows is None else self._rows.copy()
 
     @property
     def convention(self) -> str:
-        """``"mdh"`` or ``"dh"``."""
+        """``"mdh"``, ``"dh"``, or ``"joints"`` (built by :meth:`from_joints` or from a URDF)."""
         return self._convention
+
+    @property
+    def joint_names(self) -> tuple[str, ...] | None:
+        """The joints' names (from a URDF), or None."""
+        return self._names
 
     @property
     def sigma(self) -> np.ndarray:
         """Joint types, (dof,): 0 revolute, 1 prismatic."""
+        if self._rows is None:
+            return self._joints[2].copy()
         return self._rows[:, 0].astype(np.int8)
 
     @property
@@ -209,9 +268,7 @@ class Chain:
 
     def _ik_core(self):
         if self._ik is None:
-            self._ik = _core.ChainIK(
-                _CONVENTIONS[self._convention], self._rows, self._base, self._tool, *self._limits
-            )
+            self._ik = _core.ChainIK(self._core, *self._limits)
         return self._ik
 
     @property
@@ -379,15 +436,21 @@ class Chain:
 
     def __reduce__(self):
         limits = None if np.isinf(self._limits).all() else np.stack(self._limits, axis=1)
+        if self._rows is None:
+            return (_rebuild_joints, (*self._joints, self._base, self._tool, limits, self._names))
         return (_rebuild, (self._rows, self._convention, self._base, self._tool, limits))
 
     def __repr__(self) -> str:
-        kinds = "".join("RP"[int(s)] for s in self._rows[:, 0])
+        kinds = "".join("RP"[int(s)] for s in self.sigma)
         return f"Chain({kinds}, convention={self._convention!r}, dof={self.dof})"
 
 
 def _rebuild(rows, convention, base, tool, limits) -> Chain:
     return Chain(rows, convention=convention, base=base, tool=tool, limits=limits)
+
+
+def _rebuild_joints(placements, axes, types, base, tool, limits, names) -> Chain:
+    return Chain.from_joints(placements, axes, types, base, tool, limits, names)
 
 
 def _scalar(array: np.ndarray):

@@ -1,5 +1,7 @@
-"""Built-in robot models, as data. Numbers from the official Boston Dynamics URDF
-(spot-sdk `spot_with_arm.urdf`, 2023; `bdaiinstitute/spot_description` agrees)."""
+"""Built-in robot models, as data. The built-in Spot is the packaged URDF
+(``spotkin/robots/spot_with_arm.urdf``, from the public ``bdaiinstitute/spot_description``
+package; the official Boston Dynamics spot-sdk URDF has the same kinematics); :data:`SPOT`
+holds the same numbers as a dict, for :class:`spotkin.Spot` ``(model=...)`` variations."""
 
 from __future__ import annotations
 
@@ -22,6 +24,17 @@ SPOT = {
         "foot_radius": 0.036,
         "limits": ((-0.785398, 0.785398), (-0.898845, 2.295108), (-2.7929, -0.2471)),
     },
+    # per-leg limits from the packaged URDF: the knee upper limits differ per leg
+    "leg_limits": {
+        "fl": ((-0.7853981633974483, 0.7853981633974483), (-0.8988445647770796, 2.2951079663725435),
+               (-2.7929, -0.254801)),
+        "fr": ((-0.7853981633974483, 0.7853981633974483), (-0.8988445647770796, 2.2951079663725435),
+               (-2.7929, -0.247563)),
+        "hl": ((-0.7853981633974483, 0.7853981633974483), (-0.8988445647770796, 2.2951079663725435),
+               (-2.7929, -0.267153)),
+        "hr": ((-0.7853981633974483, 0.7853981633974483), (-0.8988445647770796, 2.2951079663725435),
+               (-2.7929, -0.257725)),
+    },
     "arm": {
         "mount": (0.292, 0.0, 0.188),  # sh0 origin in the body frame
         "upper_arm": 0.3385,  # sh1 -> el0 along x
@@ -29,12 +42,12 @@ SPOT = {
         "forearm_offset": 0.075,  # el0 -> el1 along z
         "hand": 0.19557,  # wr1 -> hand frame along x
         "limits": (
-            (-2.61799, 3.14159),
-            (-3.14159, 0.523599),
-            (0.0, 3.14159),
-            (-2.79253, 2.79253),
-            (-1.8326, 1.8326),
-            (-2.87979, 2.87979),
+            (-2.6179938779914944, 3.141592653589793),
+            (-3.141592653589793, 0.5235987755982988),
+            (0.0, 3.141592653589793),
+            (-2.792526803190927, 2.792526803190927),
+            (-1.8325957145940461, 1.8325957145940461),
+            (-2.8797932657906435, 2.8797932657906435),
         ),
     },
     # MuJoCo Menagerie keyframe: hy = 1.04, kn = -1.8 (body 0.46 m above ground).

@@ -1,5 +1,5 @@
-// Whole-body kinematics (seed 000 §3): the body pose in the world, the four
-// feet fixed on the ground, the 12 leg joints.
+// Whole-body kinematics (seed 000 §3, for any number of legs): the body pose
+// in the world, the feet fixed on the ground, three joints per leg.
 //
 //   foot_world_i = t + R (hip_i + fk_leg_i(q_i))                      (B1)
 //   IK: p_leg_i = R^T (foot_world_i - t) - hip_i, then the leg IK     (B2)
@@ -16,6 +16,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
+#include <vector>
 
 #include "spotkin/arm.hpp"
 #include "spotkin/common.hpp"
@@ -34,8 +36,37 @@ struct EulerSequence {
 };
 
 struct Body {
-  Leg legs[4];
-  double hips[4][3];  // hx joint origins in the body frame, SDK order
+  std::vector<Leg> legs;
+  std::vector<std::array<double, 3>> hips;   // hip-roll joint origins in the body frame
+  std::vector<std::array<int, 3>> columns;   // each leg joint's column in q
+
+  static constexpr int kMaxLegs = 21;  // q's angle mask holds 64 columns
+
+  Body() = default;
+  // columns: a permutation of 0 .. 3 n - 1 (throws std::invalid_argument otherwise).
+  Body(std::vector<Leg> legs_, std::vector<std::array<double, 3>> hips_, std::vector<std::array<int, 3>> columns_)
+      : legs(std::move(legs_)), hips(std::move(hips_)), columns(std::move(columns_)) {
+    const std::size_t n = legs.size();
+    if (n == 0 || n > std::size_t(kMaxLegs)) throw std::invalid_argument("a body needs 1 to 21 legs");
+    if (hips.size() != n || columns.size() != n)
+      throw std::invalid_argument("one hip position and one column triple per leg");
+    std::vector<bool> seen(3 * n, false);
+    for (const auto& c : columns)
+      for (int k : c) {
+        if (k < 0 || k >= int(3 * n) || seen[std::size_t(k)])
+          throw std::invalid_argument("leg joint columns must be a permutation of 0 .. 3 n - 1");
+        seen[std::size_t(k)] = true;
+      }
+  }
+
+  int n_legs() const noexcept { return static_cast<int>(legs.size()); }
+  int width() const noexcept { return 3 * n_legs(); }  // q holds every leg joint
+  bool leg_contiguous() const noexcept {
+    for (std::size_t l = 0; l < columns.size(); ++l)
+      for (int k = 0; k < 3; ++k)
+        if (columns[l][std::size_t(k)] != int(3 * l) + k) return false;
+    return true;
+  }
 
   // R = product of elementary rotations for one sample. vector_math::sincos is
   // exact for any magnitude (glibc's reduction beyond its polynomial range).
@@ -146,83 +177,87 @@ SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __rest
     x[i] = px, y[i] = py, z[i] = pz;
     double q[3];
     const double finite = leg_batch::finite_mask(px, py, pz);
-    const double e = finite * leg.solve_slot0(px, py, pz, q, tol);
+    const double e = finite * leg.solve_preferred(px, py, pz, q, tol);
     ok[i] = e * leg.limits().wrap_mask(q);
     exists[i] = finite == 0.0 ? -1.0 : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
   }
 }
 
-// Whole-body IK over `count` poses. feet: (count, 4, 3) or, when feet_shared,
-// one (4, 3) stance for every pose. seed: null or (count, 12). q (count, 12),
-// status (count, 4): each leg's status and fallback are exactly the leg API's
-// (NaN for UNREACHABLE when !nearest_fallback).
+// Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
+// (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:
+// null or (count, w). q (count, w) in the body's column order, status
+// (count, n): each leg's status and fallback are exactly the leg API's (NaN
+// for UNREACHABLE when !nearest_fallback).
 template <typename T>
 SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
                        const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  const int n = body.n_legs(), w = body.width();
+  const double tol = Leg::ratio_tolerance<T>();
   BlockPoses P;
   double fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock],
       ok[kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     read_poses(poses + stride * b0, format, seq, stride, m, P);
-    for (int l = 0; l < 4; ++l) {
-      const Leg& leg = body.legs[l];
+    for (int l = 0; l < n; ++l) {
+      const Leg& leg = body.legs[std::size_t(l)];
+      const std::array<int, 3>& col = body.columns[std::size_t(l)];
       for (std::ptrdiff_t i = 0; i < m; ++i) {
-        const T* f = feet + (feet_shared ? 3 * l : 12 * (b0 + i) + 3 * l);
+        const T* f = feet + (feet_shared ? 3 * l : 3 * n * (b0 + i) + 3 * l);
         fx[i] = double(f[0]), fy[i] = double(f[1]), fz[i] = double(f[2]);
       }
-      leg_block(leg, body.hips[l], P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, Leg::ratio_tolerance<T>());
+      leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol);
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
-        T* qt = q + 12 * t + 3 * l;
-        std::int8_t& st = status[4 * t + l];
-        const T* sd = seed ? seed + 12 * t + 3 * l : nullptr;
-        if (ok[i] != 0.0 && P.ok[i] != 0.0 && !sd) {  // the common case
-          qt[0] = T(q0[0][i]), qt[1] = T(q0[1][i]), qt[2] = T(q0[2][i]);
+        T* qt = q + w * t;
+        std::int8_t& st = status[n * t + l];
+        T* out[3] = {qt + col[0], qt + col[1], qt + col[2]};
+        if (ok[i] != 0.0 && P.ok[i] != 0.0 && !seed) {  // the common case
+          *out[0] = T(q0[0][i]), *out[1] = T(q0[1][i]), *out[2] = T(q0[2][i]);
           st = std::int8_t(Status::Ok);
           continue;
         }
-        if (P.ok[i] == 0.0 || exists[i] < 0.0 || (sd && !leg_batch::finite3(sd))) {
-          qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
+        T sd[3];
+        if (seed) {
+          const T* s = seed + w * t;
+          sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
+        }
+        T leg_q[3];
+        if (P.ok[i] == 0.0 || exists[i] < 0.0 || (seed && !leg_batch::finite3(sd))) {
+          leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
           st = std::int8_t(Status::InvalidInput);
-          continue;
+        } else {
+          st = std::int8_t(leg_batch::settle(leg, x[i], y[i], z[i], seed ? sd : nullptr, leg_q, nearest_fallback, tol));
         }
-        if (exists[i] == 0.0) {
-          if (nearest_fallback)
-            leg_batch::unreachable_fallback(leg, x[i], y[i], z[i], qt);
-          else
-            qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
-          st = std::int8_t(Status::Unreachable);
-          continue;
-        }
-        double q_all[Leg::kSlots][3];
-        leg.solve_all(x[i], y[i], z[i], q_all, true);
-        st = std::int8_t(leg_batch::choose(leg, q_all, true, sd, qt, nullptr));
+        *out[0] = leg_q[0], *out[1] = leg_q[1], *out[2] = leg_q[2];
       }
     }
   }
 }
 
-// (B1): world foot centres (count, 4, 3).
+// (B1): world foot positions (count, n, 3).
 template <typename T>
 SPOTKIN_INLINE void fk(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
                        const T* q, T* feet, std::ptrdiff_t count) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  const int n = body.n_legs(), w = body.width();
   BlockPoses P;
   double legq[kBlock * 3], p[kBlock * 3];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     read_poses(poses + stride * b0, format, seq, stride, m, P);
-    for (int l = 0; l < 4; ++l) {
+    for (int l = 0; l < n; ++l) {
+      const std::array<int, 3>& col = body.columns[std::size_t(l)];
+      const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       for (std::ptrdiff_t i = 0; i < m; ++i)
-        for (int j = 0; j < 3; ++j) legq[3 * i + j] = double(q[12 * (b0 + i) + 3 * l + j]);
-      leg_batch::fk(body.legs[l], legq, p, m);
+        for (int j = 0; j < 3; ++j) legq[3 * i + j] = double(q[w * (b0 + i) + col[j]]);
+      leg_batch::fk(body.legs[std::size_t(l)], legq, p, m);
       for (std::ptrdiff_t i = 0; i < m; ++i) {
-        const double h[3] = {body.hips[l][0] + p[3 * i], body.hips[l][1] + p[3 * i + 1], body.hips[l][2] + p[3 * i + 2]};
-        T* f = feet + 12 * (b0 + i) + 3 * l;
+        const double h[3] = {hip[0] + p[3 * i], hip[1] + p[3 * i + 1], hip[2] + p[3 * i + 2]};
+        T* f = feet + 3 * n * (b0 + i) + 3 * l;
         const double nan_if_bad = P.ok[i] != 0.0 ? 0.0 : quiet_nan<double>();
         for (int r = 0; r < 3; ++r)
           f[r] = T(P.t[r][i] + P.R[3 * r][i] * h[0] + P.R[3 * r + 1][i] * h[1] + P.R[3 * r + 2][i] * h[2] +
@@ -232,49 +267,51 @@ SPOTKIN_INLINE void fk(const Body& body, const T* poses, BodyPoseFormat format, 
   }
 }
 
-// (B3): d(feet world) / d(v, w, q12), (count, 12, 18), row-major.
+// (B3): d(feet world) / d(v, w, q), (count, 3 n, 6 + 3 n), row-major; the q
+// columns in the body's column order.
 template <typename T>
 SPOTKIN_INLINE void jacobian(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
                              const T* q, T* J, std::ptrdiff_t count) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  const int n = body.n_legs(), w = body.width(), cols = 6 + w;
+  const std::ptrdiff_t size = std::ptrdiff_t(3 * n) * cols;
   BlockPoses P;
   double legq[kBlock * 3], p[kBlock * 3], Jl[kBlock * 9];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     read_poses(poses + stride * b0, format, seq, stride, m, P);
-    for (std::ptrdiff_t i = 0; i < m; ++i) std::fill(J + 216 * (b0 + i), J + 216 * (b0 + i + 1), T(0));
-    for (int l = 0; l < 4; ++l) {
+    for (std::ptrdiff_t i = 0; i < m; ++i) std::fill(J + size * (b0 + i), J + size * (b0 + i + 1), T(0));
+    for (int l = 0; l < n; ++l) {
+      const std::array<int, 3>& col = body.columns[std::size_t(l)];
+      const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       for (std::ptrdiff_t i = 0; i < m; ++i)
-        for (int j = 0; j < 3; ++j) legq[3 * i + j] = double(q[12 * (b0 + i) + 3 * l + j]);
-      leg_batch::fk(body.legs[l], legq, p, m);
-      leg_batch::jacobian(body.legs[l], legq, Jl, m);
+        for (int j = 0; j < 3; ++j) legq[3 * i + j] = double(q[w * (b0 + i) + col[j]]);
+      leg_batch::fk(body.legs[std::size_t(l)], legq, p, m);
+      leg_batch::jacobian(body.legs[std::size_t(l)], legq, Jl, m);
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const double nan_if_bad = P.ok[i] != 0.0 ? 0.0 : quiet_nan<double>();
-        const double h[3] = {body.hips[l][0] + p[3 * i], body.hips[l][1] + p[3 * i + 1], body.hips[l][2] + p[3 * i + 2]};
+        const double h[3] = {hip[0] + p[3 * i], hip[1] + p[3 * i + 1], hip[2] + p[3 * i + 2]};
         double r[3];  // foot_world - t = R h
         for (int a = 0; a < 3; ++a) r[a] = P.R[3 * a][i] * h[0] + P.R[3 * a + 1][i] * h[1] + P.R[3 * a + 2][i] * h[2];
-        T* rows = J + 216 * (b0 + i) + 18 * 3 * l;
-        for (int a = 0; a < 3; ++a) {
-          T* row = rows + 18 * a;
-          row[a] = T(1.0 + nan_if_bad);  // d/dv = I
-        }
+        T* rows = J + size * (b0 + i) + std::ptrdiff_t(cols) * 3 * l;
+        for (int a = 0; a < 3; ++a) rows[cols * a + a] = T(1.0 + nan_if_bad);  // d/dv = I
         // d/dw: w x r = -[r]x w
-        rows[0 * 18 + 3] = T(0.0 + nan_if_bad), rows[0 * 18 + 4] = T(r[2] + nan_if_bad),
-        rows[0 * 18 + 5] = T(-r[1] + nan_if_bad);
-        rows[1 * 18 + 3] = T(-r[2] + nan_if_bad), rows[1 * 18 + 4] = T(0.0 + nan_if_bad),
-        rows[1 * 18 + 5] = T(r[0] + nan_if_bad);
-        rows[2 * 18 + 3] = T(r[1] + nan_if_bad), rows[2 * 18 + 4] = T(-r[0] + nan_if_bad),
-        rows[2 * 18 + 5] = T(0.0 + nan_if_bad);
+        rows[0 * cols + 3] = T(0.0 + nan_if_bad), rows[0 * cols + 4] = T(r[2] + nan_if_bad),
+        rows[0 * cols + 5] = T(-r[1] + nan_if_bad);
+        rows[1 * cols + 3] = T(-r[2] + nan_if_bad), rows[1 * cols + 4] = T(0.0 + nan_if_bad),
+        rows[1 * cols + 5] = T(r[0] + nan_if_bad);
+        rows[2 * cols + 3] = T(r[1] + nan_if_bad), rows[2 * cols + 4] = T(-r[0] + nan_if_bad),
+        rows[2 * cols + 5] = T(0.0 + nan_if_bad);
         // d/dq_l = R J_leg
         const double* Jli = Jl + 9 * i;
         for (int a = 0; a < 3; ++a)
           for (int k = 0; k < 3; ++k)
-            rows[18 * a + 6 + 3 * l + k] = T(P.R[3 * a][i] * Jli[k] + P.R[3 * a + 1][i] * Jli[3 + k] +
+            rows[cols * a + 6 + col[k]] = T(P.R[3 * a][i] * Jli[k] + P.R[3 * a + 1][i] * Jli[3 + k] +
                                              P.R[3 * a + 2][i] * Jli[6 + k] + nan_if_bad);
       }
     }
     for (std::ptrdiff_t i = 0; i < m; ++i)  // an invalid pose: NaN everywhere, the zero blocks too
-      if (P.ok[i] == 0.0) std::fill(J + 216 * (b0 + i), J + 216 * (b0 + i + 1), T(quiet_nan<double>()));
+      if (P.ok[i] == 0.0) std::fill(J + size * (b0 + i), J + size * (b0 + i + 1), T(quiet_nan<double>()));
   }
 }
 

@@ -1,13 +1,17 @@
-// Serial chains from Denavit-Hartenberg tables: forward kinematics, every
-// frame, and the geometric Jacobian (seed 004, "Jacobienne géométrique").
-//
-// Both conventions are screws along x and z (RotX and TransX commute, as do
-// RotZ and TransZ):
-//   DHm (Khalil-Kleinfinger):  T(j-1,j) = RotX(alpha) TransX(d) . RotZ(theta) TransZ(r)
-//   DH  (classic):             T(j-1,j) = RotZ(theta) TransZ(d) . TransX(a) RotX(alpha)
-// so every joint is  X(pre) . Z(theta, r) . X(post),  with the joint variable
-// added to theta (revolute) or r (prismatic). The joint axis is the z axis of
-// the frame reached after X(pre).
+// Serial chains: one model for URDF, DH and DHm descriptions. Every joint is
+//   T(j-1, j) = pre . Motion(axis, theta + q | r + q) . post
+// with pre and post fixed placements (rigid transforms) and the motion a
+// rotation about a unit axis of the frame reached after pre (revolute, q added
+// to theta) or a translation along it (prismatic, q added to r); the revolute
+// motion also carries the fixed shift r along its axis (the two commute).
+//   URDF:                      pre = the joint's <origin> (fixed joints merged), post = I, any axis
+//   DHm (Khalil-Kleinfinger):  pre = TransX(d) RotX(alpha), post = I, axis z
+//   DH  (classic):             pre = I, post = TransX(a) RotX(alpha), axis z
+// (RotX and TransX commute, as do RotZ and TransZ.) Placements and axes keep
+// their kind (identity, x screw, translation, general; x, y, z or general axis)
+// so that DH chains and URDF chains with axis-aligned joints pay only for
+// what they use. Forward kinematics, frames and the geometric Jacobian
+// (seed 004, "Jacobienne géométrique") are written once for every kind.
 #pragma once
 
 #include <algorithm>
@@ -25,38 +29,148 @@ namespace spotkin {
 enum class JointType : std::int8_t { Revolute = 0, Prismatic = 1 };
 enum class Convention : std::int8_t { ModifiedDH = 0, ClassicDH = 1 };
 
-// Screw along x: TransX(a) RotX(alpha), with alpha's cosine and sine cached.
-template <typename Scalar>
-struct XScrew {
-  Scalar a = 0, alpha = 0, cos_alpha = 1, sin_alpha = 0;
-  bool identity = true;
+enum class PlacementKind : std::int8_t { Identity = 0, XScrew = 1, Translation = 2, General = 3 };
 
-  static XScrew make(double a, double alpha) {
-    XScrew s;
+// A fixed rigid transform, applied on the right: T <- T . placement.
+template <typename Scalar>
+struct Placement {
+  PlacementKind kind = PlacementKind::Identity;
+  Scalar a = 0, cos_alpha = 1, sin_alpha = 0;  // XScrew: TransX(a) RotX(alpha)
+  Rigid<Scalar> X;                             // Translation (X.R = I) and General
+
+  static Placement x_screw(double a, double alpha) {
+    Placement s;
+    if (a == 0.0 && alpha == 0.0) return s;
+    s.kind = PlacementKind::XScrew;
     s.a = Scalar(a);
-    s.alpha = Scalar(alpha);
     s.cos_alpha = Scalar(std::cos(alpha));
     s.sin_alpha = Scalar(std::sin(alpha));
-    s.identity = (a == 0.0 && alpha == 0.0);
+    s.X = Rigid<double>{Mat3<double>(Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX())),
+                        Eigen::Vector3d(a, 0.0, 0.0)}.template cast<Scalar>();
     return s;
   }
 
-  // T <- T . TransX(a) RotX(alpha)
+  // The kind is read off exactly: a rotation equal to I keeps the cheap forms.
+  static Placement rigid(const Rigid<double>& T) {
+    Placement s;
+    const bool no_rotation = T.R == Mat3<double>::Identity();
+    if (no_rotation && T.p.isZero(0.0)) return s;
+    s.kind = no_rotation ? PlacementKind::Translation : PlacementKind::General;
+    s.X = T.template cast<Scalar>();
+    return s;
+  }
+
   SPOTKIN_INLINE void apply(Rigid<Scalar>& T) const noexcept {
-    if (identity) return;
-    T.p.noalias() += a * T.R.col(0);
-    const Vec3<Scalar> y = T.R.col(1), z = T.R.col(2);
-    T.R.col(1) = cos_alpha * y + sin_alpha * z;
-    T.R.col(2) = cos_alpha * z - sin_alpha * y;
+    switch (kind) {
+      case PlacementKind::Identity:
+        return;
+      case PlacementKind::XScrew: {
+        T.p.noalias() += a * T.R.col(0);
+        const Vec3<Scalar> y = T.R.col(1), z = T.R.col(2);
+        T.R.col(1) = cos_alpha * y + sin_alpha * z;
+        T.R.col(2) = cos_alpha * z - sin_alpha * y;
+        return;
+      }
+      case PlacementKind::Translation:
+        T.p.noalias() += T.R.lazyProduct(X.p);
+        return;
+      case PlacementKind::General:
+        T = T * X;
+        return;
+    }
+  }
+
+  Rigid<double> matrix() const {
+    return kind == PlacementKind::Identity ? Rigid<double>{} : X.template cast<double>();
+  }
+
+  template <typename Other>
+  Placement<Other> cast() const {
+    Placement<Other> o;
+    o.kind = kind;
+    o.a = Other(a), o.cos_alpha = Other(cos_alpha), o.sin_alpha = Other(sin_alpha);
+    o.X = X.template cast<Other>();
+    return o;
   }
 };
+
+enum class AxisKind : std::int8_t { X = 0, Y = 1, Z = 2, General = 3 };
 
 template <typename Scalar>
 struct Joint {
   JointType type = JointType::Revolute;
-  XScrew<Scalar> pre, post;
-  Scalar theta = 0;  // angle about z at q = 0
-  Scalar r = 0;      // offset along z at q = 0
+  Placement<Scalar> pre, post;
+  AxisKind axis_kind = AxisKind::Z;
+  Scalar axis_sign = 1;                     // X, Y, Z: the axis is axis_sign e_k
+  Vec3<Scalar> axis = Vec3<Scalar>::UnitZ();  // the unit axis, in the frame after pre
+  Scalar theta = 0;  // angle about the axis at q = 0
+  Scalar r = 0;      // offset along the axis at q = 0
+
+  // Sets the axis from a unit vector; exact +-e_k keep the cheap kinds.
+  void set_axis(const Vec3<double>& u) {
+    axis = u.template cast<Scalar>();
+    axis_kind = AxisKind::General;
+    axis_sign = 1;
+    for (int k = 0; k < 3; ++k)
+      if (std::fabs(u[k]) == 1.0 && u[(k + 1) % 3] == 0.0 && u[(k + 2) % 3] == 0.0) {
+        axis_kind = static_cast<AxisKind>(k);
+        axis_sign = Scalar(u[k]);
+      }
+  }
+
+  // T <- T . Rot(axis, angle) . Trans(axis, shift), given c = cos(angle), s = sin(angle).
+  SPOTKIN_INLINE void apply_motion(Rigid<Scalar>& T, Scalar c, Scalar s, Scalar shift) const noexcept {
+    if (axis_kind == AxisKind::General) {
+      const Vec3<Scalar> w = T.R.lazyProduct(axis);  // R u
+      const Vec3<Scalar> c0 = T.R.col(0), c1 = T.R.col(1), c2 = T.R.col(2);
+      const Scalar one_c = Scalar(1) - c;
+      // R Rot(u, angle) = c R + s R [u]x + (1 - c) (R u) u^T (Rodrigues)
+      T.R.col(0) = c * c0 + s * (axis[2] * c1 - axis[1] * c2) + one_c * axis[0] * w;
+      T.R.col(1) = c * c1 + s * (axis[0] * c2 - axis[2] * c0) + one_c * axis[1] * w;
+      T.R.col(2) = c * c2 + s * (axis[1] * c0 - axis[0] * c1) + one_c * axis[2] * w;
+      T.p.noalias() += shift * w;
+      return;
+    }
+    // Rotation about +-e_k mixes columns i = k+1 and j = k+2 (cyclic).
+    const int k = static_cast<int>(axis_kind), i = (k + 1) % 3, j = (k + 2) % 3;
+    const Scalar sk = axis_sign * s;
+    const Vec3<Scalar> ci = T.R.col(i), cj = T.R.col(j);
+    T.R.col(i) = c * ci + sk * cj;
+    T.R.col(j) = c * cj - sk * ci;
+    T.p.noalias() += (axis_sign * shift) * T.R.col(k);
+  }
+
+  // The joint axis in the frame T reached after pre.
+  SPOTKIN_INLINE Vec3<Scalar> axis_in(const Rigid<Scalar>& T) const noexcept {
+    if (axis_kind == AxisKind::General) return T.R.lazyProduct(axis);
+    return axis_sign * T.R.col(static_cast<int>(axis_kind));
+  }
+
+  // A rotation Q with Q e_z = axis: Rot(axis, t) = Q Rz(t) Q^T (for the z-axis
+  // forms of the closed-form solvers).
+  Mat3<double> z_alignment() const {
+    const Vec3<double> u = axis.template cast<double>();
+    Vec3<double> x = std::fabs(u[0]) < 0.9 ? Vec3<double>::UnitX() : Vec3<double>::UnitY();
+    x = (x - x.dot(u) * u).normalized();
+    Mat3<double> Q;
+    Q.col(0) = x, Q.col(1) = u.cross(x), Q.col(2) = u;
+    if (axis_kind == AxisKind::Z && axis_sign > 0) Q.setIdentity();
+    return Q;
+  }
+
+  template <typename Other>
+  Joint<Other> cast() const {
+    Joint<Other> o;
+    o.type = type;
+    o.pre = pre.template cast<Other>();
+    o.post = post.template cast<Other>();
+    o.axis_kind = axis_kind;
+    o.axis_sign = Other(axis_sign);
+    o.axis = axis.template cast<Other>();
+    o.theta = Other(theta);
+    o.r = Other(r);
+    return o;
+  }
 };
 
 // T <- T . RotZ(theta) TransZ(r), given c = cos(theta), s = sin(theta)
@@ -86,9 +200,7 @@ class Chain {
   // for classic DH. Throws std::invalid_argument on malformed rows.
   static Chain from_table(Convention convention, const double* rows, std::ptrdiff_t n,
                           const Rigid<double>& base, const Rigid<double>& tool) {
-    if (n < 1 || n > kMaxJoints)
-      throw std::invalid_argument("a chain needs 1 to " + std::to_string(kMaxJoints) +
-                                  " joints, got " + std::to_string(n));
+    check_count(n);
     std::vector<Joint<Scalar>> joints(static_cast<std::size_t>(n));
     for (std::ptrdiff_t j = 0; j < n; ++j) {
       const double* row = rows + 5 * j;
@@ -103,12 +215,38 @@ class Chain {
       joint.type = row[0] == 0.0 ? JointType::Revolute : JointType::Prismatic;
       joint.theta = Scalar(row[4]);
       joint.r = Scalar(row[3]);
-      const auto screw = XScrew<Scalar>::make(row[1], row[2]);
+      const auto screw = Placement<Scalar>::x_screw(row[1], row[2]);
       (convention == Convention::ModifiedDH ? joint.pre : joint.post) = screw;
     }
-    for (const auto* T : {&base, &tool})
-      if (!T->R.allFinite() || !T->p.allFinite())
-        throw std::invalid_argument("base and tool transforms must be finite");
+    check_finite(base, tool);
+    return Chain(std::move(joints), base.template cast<Scalar>(), tool.template cast<Scalar>());
+  }
+
+  // URDF-style joints: placements[j] (the fixed transform before joint j's
+  // motion), a unit axis in that frame and the type. Axes are normalised here;
+  // a zero or non-finite axis, or a non-finite placement, throws.
+  static Chain from_joints(const std::vector<Rigid<double>>& placements, const std::vector<Vec3<double>>& axes,
+                           const std::vector<JointType>& types, const Rigid<double>& base,
+                           const Rigid<double>& tool) {
+    const auto n = static_cast<std::ptrdiff_t>(placements.size());
+    check_count(n);
+    if (axes.size() != placements.size() || types.size() != placements.size())
+      throw std::invalid_argument("placements, axes and types must have one entry per joint");
+    std::vector<Joint<Scalar>> joints(placements.size());
+    for (std::size_t j = 0; j < placements.size(); ++j) {
+      const double norm = axes[j].norm();
+      if (!(norm > 0.0) || !std::isfinite(norm))
+        throw std::invalid_argument("joint " + std::to_string(j) + ": the axis must be finite and non-zero");
+      if (!placements[j].R.allFinite() || !placements[j].p.allFinite())
+        throw std::invalid_argument("joint " + std::to_string(j) + ": the placement must be finite");
+      Vec3<double> u = axes[j] / norm;
+      for (int k = 0; k < 3; ++k)  // keep exact unit axes exact
+        if (std::fabs(std::fabs(u[k]) - 1.0) <= 4e-16) u = Vec3<double>::Zero(), u[k] = axes[j][k] > 0 ? 1.0 : -1.0;
+      joints[j].type = types[j];
+      joints[j].pre = Placement<Scalar>::rigid(placements[j]);
+      joints[j].set_axis(u);
+    }
+    check_finite(base, tool);
     return Chain(std::move(joints), base.template cast<Scalar>(), tool.template cast<Scalar>());
   }
 
@@ -116,23 +254,45 @@ class Chain {
   Chain<Other> cast() const {
     std::vector<Joint<Other>> joints;
     joints.reserve(joints_.size());
-    for (const auto& j : joints_) {
-      Joint<Other> o;
-      o.type = j.type;
-      o.pre = XScrew<Other>::make(double(j.pre.a), double(j.pre.alpha));
-      o.post = XScrew<Other>::make(double(j.post.a), double(j.post.alpha));
-      o.theta = Other(j.theta);
-      o.r = Other(j.r);
-      joints.push_back(o);
-    }
-    return Chain<Other>(std::move(joints), base_.template cast<Other>(),
-                        tool_.template cast<Other>());
+    for (const auto& j : joints_) joints.push_back(j.template cast<Other>());
+    return Chain<Other>(std::move(joints), base_.template cast<Other>(), tool_.template cast<Other>());
   }
 
   int dof() const noexcept { return static_cast<int>(joints_.size()); }
   const std::vector<Joint<Scalar>>& joints() const noexcept { return joints_; }
   const Rigid<Scalar>& base() const noexcept { return base_; }
   const Rigid<Scalar>& tool() const noexcept { return tool_; }
+
+  // A length scale for tolerances: the L1 norms of every fixed translation
+  // (1 if all are zero). For DH tables, the sum of |a| (or |d|) and |r|.
+  double length_scale() const noexcept {
+    double scale = double(tool_.p.template cast<double>().norm());
+    for (const auto& j : joints_) {
+      for (const auto* P : {&j.pre, &j.post})
+        scale += P->kind == PlacementKind::XScrew ? std::fabs(double(P->a))
+                                                  : P->matrix().p.template lpNorm<1>();
+      scale += std::fabs(double(j.r));
+    }
+    return scale > 0.0 ? scale : 1.0;
+  }
+
+  // The z-axis form of the chain for the closed-form solvers:
+  //   T = base . L_0 Z(q_0) L_1 Z(q_1) ... L_{n-1} Z(q_{n-1}) . tail(n-1) . tool
+  // with Z(q) = RotZ(q) (revolute) or TransZ(q) (prismatic), Q_j the joint's
+  // z_alignment, and the fixed links
+  //   L_j = Q_{j-1}^T post_{j-1} pre_j Q_j RotZ(theta_j) TransZ(r_j),   tail(j) = Q_j^T post_j
+  // (Rot(u, t) = Q RotZ(t) Q^T; the constant z screw commutes with Z(q)).
+  Rigid<double> z_link(int j) const {
+    const auto& J = joints_[static_cast<std::size_t>(j)];
+    Rigid<double> T = j > 0 ? z_tail(j - 1) : Rigid<double>{};
+    Rigid<double> screw;
+    apply_z_screw(screw, double(J.theta), double(J.r));
+    return T * J.pre.matrix() * Rigid<double>{J.z_alignment(), Vec3<double>::Zero()} * screw;
+  }
+  Rigid<double> z_tail(int j) const {
+    const auto& J = joints_[static_cast<std::size_t>(j)];
+    return Rigid<double>{J.z_alignment().transpose(), Vec3<double>::Zero()} * J.post.matrix();
+  }
 
   // Base -> tool transform for joint values q[0..n).
   Rigid<Scalar> forward(const Scalar* q) const noexcept {
@@ -164,9 +324,10 @@ class Chain {
     for (std::size_t j = 0; j < n; ++j) {
       const Joint<Scalar>& joint = joints_[j];
       joint.pre.apply(T);
-      axis[j] = T.R.col(2);
+      axis[j] = joint.axis_in(T);
       origin[j] = T.p;
-      apply_z_screw(T, joint_theta(joint, q[j]), joint_r(joint, q[j]));
+      const Scalar angle = joint_theta(joint, q[j]);
+      joint.apply_motion(T, Scalar(std::cos(angle)), Scalar(std::sin(angle)), joint_r(joint, q[j]));
       joint.post.apply(T);
     }
     write_jacobian(T * tool_, axis, origin, J, rows, in_tool_frame);
@@ -227,9 +388,9 @@ class Chain {
         for (std::size_t j = 0; j < joints_.size(); ++j) {
           const Joint<Scalar>& joint = joints_[j];
           joint.pre.apply(T);
-          axis[j] = T.R.col(2);
+          axis[j] = joint.axis_in(T);
           origin[j] = T.p;
-          apply_z_screw(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, qi[j]));
+          joint.apply_motion(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, qi[j]));
           joint.post.apply(T);
         }
         write_jacobian(T * tool_, axis, origin, out + rows * n * (b0 + i), rows, in_tool_frame);
@@ -238,6 +399,17 @@ class Chain {
   }
 
  private:
+  static void check_count(std::ptrdiff_t n) {
+    if (n < 1 || n > kMaxJoints)
+      throw std::invalid_argument("a chain needs 1 to " + std::to_string(kMaxJoints) + " joints, got " +
+                                  std::to_string(n));
+  }
+  static void check_finite(const Rigid<double>& base, const Rigid<double>& tool) {
+    for (const auto* T : {&base, &tool})
+      if (!T->R.allFinite() || !T->p.allFinite())
+        throw std::invalid_argument("base and tool transforms must be finite");
+  }
+
   struct BlockTrig {
     double angle[kBlock];
     double s[kMaxJoints][kBlock];
@@ -259,7 +431,7 @@ class Chain {
                               std::ptrdiff_t i) const noexcept {
     const Joint<Scalar>& joint = joints_[j];
     joint.pre.apply(T);
-    apply_z_screw(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, q));
+    joint.apply_motion(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, q));
     joint.post.apply(T);
   }
 
@@ -295,7 +467,8 @@ class Chain {
   void advance(Rigid<Scalar>& T, std::size_t j, Scalar q) const noexcept {
     const Joint<Scalar>& joint = joints_[j];
     joint.pre.apply(T);
-    apply_z_screw(T, joint_theta(joint, q), joint_r(joint, q));
+    const Scalar angle = joint_theta(joint, q);
+    joint.apply_motion(T, Scalar(std::cos(angle)), Scalar(std::sin(angle)), joint_r(joint, q));
     joint.post.apply(T);
   }
 

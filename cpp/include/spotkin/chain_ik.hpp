@@ -305,32 +305,14 @@ inline Rigid<double> inverse(const Rigid<double>& T) { return {T.R.transpose(), 
 
 // The split (F) of a chain's first three joints:
 //   p = M0 Z1(q1) M1 Z2(q2) M2 Z3(q3) w,
-// with Mj = X(post_j) X(pre_{j+1}) Z(theta0, r0 of joint j+1) from the table
-// (the constant z screw commutes with Z(q)); the same for DH and DHm.
+// with M0 = base . L_0, M1 = L_1, M2 = L_2 the fixed links of the chain's
+// z-axis form (Chain::z_link): the same for URDF, DH and DHm chains.
 struct Split {
   int sigma[3];
   Rigid<double> M0, M1, M2;
 };
 
-inline Rigid<double> x_screw(const XScrew<double>& x) {
-  Rigid<double> T;
-  x.apply(T);
-  return T;
-}
-
-inline Rigid<double> z_screw(double theta, double r) {
-  Rigid<double> T;
-  apply_z_screw(T, theta, r);
-  return T;
-}
-
-// Frame just after joint j's X(pre) and constant z screw, relative to the frame
-// after joint j-1's variable Z and X(post): X(post_{j-1}) X(pre_j) Z(theta0_j, r0_j).
-inline Rigid<double> link(const Chain<double>& chain, int j) {
-  const auto& J = chain.joints()[static_cast<std::size_t>(j)];
-  Rigid<double> T = j > 0 ? x_screw(chain.joints()[static_cast<std::size_t>(j - 1)].post) : Rigid<double>{};
-  return T * x_screw(J.pre) * z_screw(J.theta, J.r);
-}
+inline Rigid<double> link(const Chain<double>& chain, int j) { return chain.z_link(j); }
 
 inline Split split_first_three(const Chain<double>& chain) {
   Split s;
@@ -1244,7 +1226,7 @@ class SphericalWrist6 {
     wrist.A4_ = L4.R;
     wrist.B5_ = L5.R;
     wrist.B6_ = L6.R;
-    const Rigid<double> tail = x_screw(chain.joints()[5].post) * chain.tool();
+    const Rigid<double> tail = chain.z_tail(5) * chain.tool();
     wrist.tail_R_T_ = tail.R.transpose();
     // c in the tool frame: F6^-1 c in frame 6, then Tail^-1
     const Rigid<double> tail_inv = detail::inverse(tail), F6_inv = detail::inverse(F6);

@@ -1,22 +1,26 @@
-// Roll-pitch-pitch leg (Spot's hx, hy, kn): FK, Jacobian and closed-form IK
-// with every branch. Derivation (seed 000 Q2.1, re-derived; see
-// python/spotkin/reference/leg.py for the same equations written plainly):
+// Roll-pitch-pitch legs (Spot's hx, hy, kn; Go2's hip, thigh, calf; any leg
+// whose axes at zero angles are +-x, +-y, +-y in the body frame): FK,
+// Jacobian and closed-form IK with every branch. Geometry and model (R1) in
+// rpp_geometry.hpp; derivation (re-derived from seed 000 Q2.1 and generalised;
+// python/spotkin/reference/rpp_leg.py writes the same equations plainly):
 //
-//   (M1) p = Rx(hx) ( [0, h1, 0] + Ry(hy) ( [k, 0, -U] + Ry(kn) [0, 0, -L] ) )
-//   (I1) hip roll, Paul type 2:  y cos hx + z sin hx = h1.  With r^2 = y^2 + z^2,
-//        S = sqrt(r^2 - h1^2) and eps = +1 (branch 0, foot under the hip) or -1:
-//          cos hx = (y h1 - eps z S) / r^2,   sin hx = (z h1 + eps y S) / r^2
-//        (the annex's type-2 formulas; no solution when r < |h1|).
-//   (I2) the foot in the hip-pitch plane: x' = x, z' = -sin hx y + cos hx z = -eps S.
-//   (I3) knee, type 2: U cos kn - k sin kn = Zk, Zk = (x^2 + S^2 - k^2 - U^2 - L^2) / (2L),
-//        i.e. R cos(kn + beta) = Zk, R = hypot(U, k), beta = atan2(k, U):
-//          kn = -beta - mu acos(Zk / R),  mu = +1 (branch 0, knee back) or -1.
-//   (I4) hip pitch: Ry(hy) multiplies z + i x by e^{i hy}, so with
-//        w = (k - L sin kn, -U - L cos kn):  hy = arg((z' + i x') (w_z - i w_x)).
+//   (I1) hip roll, Paul type 2: v = Rx(theta1)^T p has v_y = h = a_y + b_y + c_y,
+//        i.e. y cos theta1 + z sin theta1 = h.  With r^2 = y^2 + z^2,
+//        S = sqrt(r^2 - h^2) and eps = +1 (hip branch 0, "normal") or -1:
+//          cos theta1 = (y h - eps z S) / r^2,   sin theta1 = (z h + eps y S) / r^2,
+//        and then v_z = -eps S (no solution when r < |h|).
+//   (I2) the pitch plane, with zeta(u) = u_z + i u_x (Ry(t) multiplies zeta by e^{it}):
+//          W = (v_z - a_z) + i (x - a_x) = e^{i theta2} (B + e^{i theta3} C),  B = zeta(b), C = zeta(c).
+//   (I3) knee, type 2: |W|^2 = |B|^2 + |C|^2 + 2 |B| |C| cos psi,  psi = theta3 + phi,
+//        phi = arg C - arg B:  psi = -mu acos(ratio), mu = +1 (knee branch 0,
+//        "knee back": sin psi <= 0) or -1 ("knee forward").
+//   (I4) hip pitch: theta2 = arg(W conj(D)),  D = B + e^{i theta3} C.
+//   q_k = s_k theta_k, wrapped into (-pi, pi].
 //
 // Slot order: slot = 2 * hip_branch + knee_branch:
-//   0 (hip normal, knee back), 1 (normal, knee forward), 2 (flipped, back), 3 (flipped, forward).
-// Either all four slots exist or none does: both conditions depend on p only.
+//   0 (hip normal, knee back), 1 (normal, forward), 2 (flipped, back), 3 (flipped, forward).
+// The two knee slots of a hip branch exist together; the two hip branches
+// differ only when a_z != 0 (|W| then depends on eps).
 #pragma once
 
 #include <Eigen/SVD>
@@ -24,8 +28,12 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "spotkin/common.hpp"
+#include "spotkin/rpp_geometry.hpp"
+#include "spotkin/rpp_nearest.hpp"
 #include "spotkin/vector_math.hpp"
 
 namespace spotkin {
@@ -83,12 +91,16 @@ SPOTKIN_INLINE double circle_distance(const double* a, const double* b) noexcept
   return worst;
 }
 
-struct LegGeometry {
-  double hip_offset = 0.110945;  // h1: signed, + for left legs
-  double upper = 0.3205;         // U
-  double lower = 0.3365;         // L
-  double knee_offset = 0.025;    // k: forward offset of the knee from the hy joint
-};
+// The foot position a Spot-style description gives: lateral hx -> hy offset h1
+// (signed: + left), hy -> knee (k forward, U down), knee -> foot (L down).
+inline RppGeometry spot_style_geometry(double h1, double upper, double lower, double knee_offset) {
+  RppGeometry g;
+  g.a[0] = 0.0, g.a[1] = h1, g.a[2] = 0.0;
+  g.b[0] = knee_offset, g.b[1] = 0.0, g.b[2] = -upper;
+  g.c[0] = 0.0, g.c[1] = 0.0, g.c[2] = -lower;
+  g.sign[0] = g.sign[1] = g.sign[2] = 1.0;
+  return g;
+}
 
 class Leg {
  public:
@@ -103,45 +115,58 @@ class Leg {
     return sizeof(T) < sizeof(double) ? kRatioToleranceFloat : kRatioTolerance;
   }
 
-  Leg() { update(); }
-  Leg(const LegGeometry& g, const JointLimits<3>& limits) : g_(g), limits_(limits) { update(); }
-
-  const LegGeometry& geometry() const noexcept { return g_; }
-  const JointLimits<3>& limits() const noexcept { return limits_; }
-  double max_reach() const noexcept { return d_max_; }  // |w| max = R + L
-  double min_reach() const noexcept { return d_min_; }  // |w| min = |R - L|
-
-  // (M1), expanded with X, Zs the forward and downward sagittal coordinates.
-  template <typename T>
-  SPOTKIN_INLINE void forward(const T* q, T* p) const noexcept {
-    double s1, c1, s2, c2, s23, c23;
-    const double hx = double(q[0]), hy = double(q[1]), hk = double(q[1]) + double(q[2]);
-    vector_math::sincos(&hx, &s1, &c1, 1);
-    vector_math::sincos(&hy, &s2, &c2, 1);
-    vector_math::sincos(&hk, &s23, &c23, 1);
-    const double X = g_.knee_offset * c2 - g_.upper * s2 - g_.lower * s23;
-    const double Zs = -g_.knee_offset * s2 - g_.upper * c2 - g_.lower * c23;
-    p[0] = T(X);
-    p[1] = T(g_.hip_offset * c1 - Zs * s1);
-    p[2] = T(g_.hip_offset * s1 + Zs * c1);
+  Leg() { update(-1); }
+  // preferred_slot: the slot ik() takes without a seed when it is valid (then
+  // the others in slot order); -1 picks it from the knee's limits (the knee
+  // branch that the middle of the knee's range lies on, hip normal).
+  // Throws std::invalid_argument for a geometry without a closed form.
+  Leg(const RppGeometry& g, const JointLimits<3>& limits, int preferred_slot = -1) : g_(g), limits_(limits) {
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(g.a[k]) || !std::isfinite(g.b[k]) || !std::isfinite(g.c[k]))
+        throw std::invalid_argument("leg geometry must be finite");
+      if (g.sign[k] != 1.0 && g.sign[k] != -1.0) throw std::invalid_argument("axis signs must be +1 or -1");
+    }
+    if (!(std::hypot(g.b[0], g.b[2]) > 0.0) || !(std::hypot(g.c[0], g.c[2]) > 0.0))
+      throw std::invalid_argument(
+          "no closed form: the hip-pitch -> knee and knee -> foot offsets must not lie along the pitch axis");
+    if (preferred_slot < -1 || preferred_slot >= kSlots)
+      throw std::invalid_argument("preferred_slot must be -1 or a slot 0..3");
+    update(preferred_slot);
   }
 
-  // d p / d q (row-major 3x3): columns (0, -p_z, p_y), (Zs, X s1, -X c1),
-  // (-L c23, -L s23 s1, L s23 c1).
+  const RppGeometry& geometry() const noexcept { return g_; }
+  const JointLimits<3>& limits() const noexcept { return limits_; }
+  double max_reach() const noexcept { return d_max_; }  // |W| max = |B| + |C|
+  double min_reach() const noexcept { return d_min_; }  // |W| min = ||B| - |C||
+  int preferred_slot() const noexcept { return order_[0]; }
+  // Slots in the order ik() tries them without a seed.
+  const int* slot_order() const noexcept { return order_; }
+
+  // (R1), with zeta = A + e^{i theta2} (B + e^{i theta3} C) the pitch-plane part.
+  template <typename T>
+  SPOTKIN_INLINE void forward(const T* q, T* p) const noexcept {
+    double s[3], c[3];
+    const double angles[3] = {sign1_ * double(q[0]), sign2_ * double(q[1]),
+                              sign2_ * double(q[1]) + sign3_ * double(q[2])};
+    vector_math::sincos(angles, s, c, 3);
+    double vx, vz;
+    plane(c[1], s[1], c[2], s[2], vx, vz);
+    p[0] = T(vx);
+    p[1] = T(h_ * c[0] - vz * s[0]);
+    p[2] = T(h_ * s[0] + vz * c[0]);
+  }
+
+  // d p / d q (row-major 3x3): columns s1 (0, -p_z, p_y), s2 Rx(theta1)(y x u2),
+  // s3 Rx(theta1)(y x u3), u2 = zeta^-1(e^{i theta2}(B + e^{i theta3} C)), u3 = zeta^-1(e^{i(theta2+theta3)} C).
   template <typename T>
   SPOTKIN_INLINE void jacobian(const T* q, T* J) const noexcept {
-    double s1, c1, s2, c2, s23, c23;
-    const double hx = double(q[0]), hy = double(q[1]), hk = double(q[1]) + double(q[2]);
-    vector_math::sincos(&hx, &s1, &c1, 1);
-    vector_math::sincos(&hy, &s2, &c2, 1);
-    vector_math::sincos(&hk, &s23, &c23, 1);
-    const double X = g_.knee_offset * c2 - g_.upper * s2 - g_.lower * s23;
-    const double Zs = -g_.knee_offset * s2 - g_.upper * c2 - g_.lower * c23;
-    const double py = g_.hip_offset * c1 - Zs * s1, pz = g_.hip_offset * s1 + Zs * c1;
-    const double L = g_.lower;
-    J[0] = T(0.0), J[1] = T(Zs), J[2] = T(-L * c23);
-    J[3] = T(-pz), J[4] = T(X * s1), J[5] = T(-L * s23 * s1);
-    J[6] = T(py), J[7] = T(-X * c1), J[8] = T(L * s23 * c1);
+    double s[3], c[3];
+    const double angles[3] = {sign1_ * double(q[0]), sign2_ * double(q[1]),
+                              sign2_ * double(q[1]) + sign3_ * double(q[2])};
+    vector_math::sincos(angles, s, c, 3);
+    double out[9];
+    jacobian_from(c, s, out);
+    for (int k = 0; k < 9; ++k) J[k] = T(out[k]);
   }
 
   // |det J| and the smallest singular value of J.
@@ -160,79 +185,96 @@ class Leg {
   }
 
   // All four branches of (I1)-(I4) for one target, angles in (-pi, pi].
-  // Returns whether they exist; when `force`, ratios are clamped into [-1, 1]
-  // whatever their size (used for the nearest-reachable fallback).
+  // Returns whether any exists; when `force`, ratios are clamped into [-1, 1]
+  // whatever their size and true is returned.
   SPOTKIN_INLINE bool solve_all(double x, double y, double z, double q[kSlots][3], bool force = false,
-                                double tol = kRatioTolerance) const noexcept {
-    return solve_all_mask(x, y, z, q, tol) != 0.0 || force;
+                                double tol = kRatioTolerance, double* exists_hip = nullptr) const noexcept {
+    double hip_exists[2];
+    solve_all_mask(x, y, z, q, hip_exists, tol);
+    if (exists_hip) exists_hip[0] = hip_exists[0], exists_hip[1] = hip_exists[1];
+    return hip_exists[0] != 0.0 || hip_exists[1] != 0.0 || force;
   }
 
-  // As solve_all, returning 1.0 where the branches exist and 0.0 elsewhere: a
-  // form the compiler vectorises over samples.
-  SPOTKIN_INLINE double solve_all_mask(double x, double y, double z, double q[kSlots][3],
-                                       double tol = kRatioTolerance) const noexcept {
+  // As solve_all, writing 1.0 / 0.0 per hip branch (both knee slots of a hip
+  // branch exist together): a form the compiler vectorises over samples.
+  SPOTKIN_INLINE void solve_all_mask(double x, double y, double z, double q[kSlots][3], double exists_hip[2],
+                                     double tol = kRatioTolerance) const noexcept {
     const Hip hip = solve_hip(y, z, tol);
-    const Knee knee = solve_knee(x, hip.S, tol);
 #pragma GCC unroll 2
     for (int hb = 0; hb < 2; ++hb) {
       const double eps = hb == 0 ? 1.0 : -1.0;
-      const double hx_safe = hip_roll(y, z, hip, eps);
+      const double hx = hip_roll(y, z, hip, eps);
+      const double wx = x - g_.a[0], wz = -eps * hip.S - g_.a[2];
+      const Knee knee = solve_knee(wx, wz, tol);
+      exists_hip[hb] = hip.exists * knee.exists;
 #pragma GCC unroll 2
       for (int kb = 0; kb < 2; ++kb) {
         double* slot = q[2 * hb + kb];
-        slot[0] = hx_safe;
-        slot[1] = hip_pitch(x, -eps * hip.S, knee, kb);
+        slot[0] = hx;
+        slot[1] = hip_pitch(wx, wz, knee, kb);
         slot[2] = knee_angle(knee, kb);
       }
     }
-    return hip.exists * knee.exists;
   }
 
-  // Slot 0 only (hip normal, knee back): the walking controller's branch.
-  SPOTKIN_INLINE double solve_slot0(double x, double y, double z, double q[3],
-                                    double tol = kRatioTolerance) const noexcept {
+  // The preferred slot only: the walking controller's branch. Returns 1.0 if it exists.
+  SPOTKIN_INLINE double solve_preferred(double x, double y, double z, double q[3],
+                                        double tol = kRatioTolerance) const noexcept {
     const Hip hip = solve_hip(y, z, tol);
-    const Knee knee = solve_knee(x, hip.S, tol);
-    q[0] = hip_roll(y, z, hip, 1.0);
-    q[1] = hip_pitch(x, -hip.S, knee, 0);
-    q[2] = knee_angle(knee, 0);
+    const double wx = x - g_.a[0], wz = -preferred_eps_ * hip.S - g_.a[2];
+    const Knee knee = solve_knee(wx, wz, tol);
+    q[0] = hip_roll(y, z, hip, preferred_eps_);
+    q[1] = hip_pitch(wx, wz, knee, preferred_knee_);
+    q[2] = knee_angle(knee, preferred_knee_);
     return hip.exists * knee.exists;
   }
 
-  // The point of the reachable set (limits aside) nearest to an unreachable p:
-  // the radial projection onto the shell h1^2 + Dmin^2 <= |p|^2 <= h1^2 + Dmax^2,
-  // then, if that falls inside the hip-roll cylinder y^2 + z^2 < h1^2, onto the
-  // cylinder (y, z scaled to |h1|, x clamped into the shell). within_limits:
-  // the shell of the distances D the knee reaches inside its limits instead
-  // (D^2 = R^2 + L^2 + 2 L R cos(kn + beta), eq. (I3)).
-  SPOTKIN_INLINE void nearest_reachable(const double* p, double* out, bool within_limits = false) const noexcept {
-    if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
-      out[0] = out[1] = out[2] = quiet_nan<double>();
-      return;
-    }
-    const double h1sq = h1_ * h1_;
-    const double norm = std::hypot(p[0], std::hypot(p[1], p[2]));  // no overflow for |p| near 1e308
-    const double d_min = within_limits ? d_knee_min_ : d_min_, d_max = within_limits ? d_knee_max_ : d_max_;
-    const double rho_max = std::sqrt(h1sq + d_max * d_max), rho_min = std::sqrt(h1sq + d_min * d_min);
-    double q[3] = {p[0], p[1], p[2]};
-    if (norm == 0.0) {
-      q[0] = 0.0, q[1] = h1_, q[2] = -d_min;
-    } else {
-      const double scale = std::clamp(norm, rho_min, rho_max) / norm;
-      for (double& v : q) v *= scale;
-    }
-    const double r2 = q[1] * q[1] + q[2] * q[2];
-    if (r2 < h1sq) {
-      const double r = std::sqrt(r2);
-      if (r > 0.0) {
-        q[1] *= std::fabs(h1_) / r, q[2] *= std::fabs(h1_) / r;
-      } else {
-        q[1] = h1_, q[2] = 0.0;
-      }
-      const double ax = std::clamp(std::fabs(q[0]), d_min, d_max);
-      q[0] = std::copysign(ax, q[0]);
-    }
-    out[0] = q[0], out[1] = q[1], out[2] = q[2];
+  // The configuration within `limits` whose foot is nearest to p (exact; see
+  // rpp_nearest.hpp), or with no limits at all when !within_limits. Writes the
+  // foot position to out and, when q_out is given, the joint angles. NaN for a
+  // non-finite p.
+  void nearest_reachable(const double* p, double* out, bool within_limits = false,
+                         double* q_out = nullptr) const noexcept {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const double no_lower[3] = {-inf, -inf, -inf}, no_upper[3] = {inf, inf, inf};
+    double q[3];
+    rpp_nearest_in_limits(g_, within_limits ? limits_.lower : no_lower, within_limits ? limits_.upper : no_upper, p,
+                          q);
+    if (q_out) q_out[0] = q[0], q_out[1] = q[1], q_out[2] = q[2];
+    forward(q, out);
+  }
+
+  // Knee joint origin for q (the leg frame): Rx(theta1)(a + Ry(theta2) b).
+  void knee_position(const double* q, double* out) const noexcept {
+    const double t1 = sign1_ * q[0], t2 = sign2_ * q[1];
+    const double c2 = std::cos(t2), s2 = std::sin(t2), c1 = std::cos(t1), s1 = std::sin(t1);
+    const double vx = g_.a[0] + c2 * g_.b[0] + s2 * g_.b[2], vy = g_.a[1] + g_.b[1];
+    const double vz = g_.a[2] - s2 * g_.b[0] + c2 * g_.b[2];
+    out[0] = vx, out[1] = c1 * vy - s1 * vz, out[2] = s1 * vy + c1 * vz;
+  }
+
+  // Batch helpers (leg_batch): the pitch-plane part of (R1) from the
+  // cosines and sines of theta2 and theta2 + theta3.
+  SPOTKIN_INLINE void plane(double c2, double s2, double c23, double s23, double& vx, double& vz) const noexcept {
+    // zeta = A + e^{i t2} B + e^{i t23} C;  v_z = Re, v_x = Im
+    vz = g_.a[2] + c2 * Bz_ - s2 * Bx_ + c23 * Cz_ - s23 * Cx_;
+    vx = g_.a[0] + c2 * Bx_ + s2 * Bz_ + c23 * Cx_ + s23 * Cz_;
+  }
+  SPOTKIN_INLINE double lateral() const noexcept { return h_; }
+  SPOTKIN_INLINE double sign(int k) const noexcept { return k == 0 ? sign1_ : (k == 1 ? sign2_ : sign3_); }
+
+  // Jacobian from c[k], s[k] = cos, sin of theta1, theta2, theta2 + theta3.
+  SPOTKIN_INLINE void jacobian_from(const double* c, const double* s, double* J) const noexcept {
+    // u3 = e^{i t23} C, u2 = e^{i t2} B + u3 (zeta components z + i x)
+    const double u3z = c[2] * Cz_ - s[2] * Cx_, u3x = c[2] * Cx_ + s[2] * Cz_;
+    const double u2z = c[1] * Bz_ - s[1] * Bx_ + u3z, u2x = c[1] * Bx_ + s[1] * Bz_ + u3x;
+    const double vz = g_.a[2] + u2z, vx = g_.a[0] + u2x;
+    const double py = h_ * c[0] - vz * s[0], pz = h_ * s[0] + vz * c[0];
+    (void)vx;
+    // y x u = (u_z, 0, -u_x), then Rx(theta1): (u_z, s1 u_x, -c1 u_x)
+    J[0] = 0.0, J[1] = sign2_ * u2z, J[2] = sign3_ * u3z;
+    J[3] = -sign1_ * pz, J[4] = sign2_ * s[0] * u2x, J[5] = sign3_ * s[0] * u3x;
+    J[6] = sign1_ * py, J[7] = -sign2_ * c[0] * u2x, J[8] = -sign3_ * c[0] * u3x;
   }
 
  private:
@@ -241,21 +283,21 @@ class Leg {
     double r2, S, exists;
   };
   struct Knee {
-    double cos_psi, sin_psi, acos_psi, exists;  // psi = kn + beta, knee branch 0: psi = -acos
+    double cos_psi, sin_psi, acos_psi, exists;  // knee branch 0: psi = -acos
   };
 
   SPOTKIN_INLINE Hip solve_hip(double y, double z, double tol) const noexcept {
-    Hip h;
-    h.r2 = y * y + z * z;
-    const double disc = h.r2 - h1_ * h1_;
-    h.exists = disc >= -tol * 2.0 * h1_ * h1_ ? 1.0 : 0.0;  // (h1/r)^2 <= 1 + 2 tol
-    h.S = std::sqrt(std::max(disc, 0.0));
-    return h;
+    Hip hp;
+    hp.r2 = y * y + z * z;
+    const double disc = hp.r2 - h_ * h_;
+    hp.exists = disc >= -tol * 2.0 * h_ * h_ ? 1.0 : 0.0;  // (h/r)^2 <= 1 + 2 tol
+    hp.S = std::sqrt(std::max(disc, 0.0));
+    return hp;
   }
 
-  SPOTKIN_INLINE Knee solve_knee(double x, double S, double tol) const noexcept {
+  SPOTKIN_INLINE Knee solve_knee(double wx, double wz, double tol) const noexcept {
     Knee k;
-    const double ratio = (x * x + S * S - knee_sum_sq_) * inv_2LR_;
+    const double ratio = (wx * wx + wz * wz - knee_sum_sq_) * inv_2BC_;
     k.exists = std::fabs(ratio) <= 1.0 + tol ? 1.0 : 0.0;
     k.cos_psi = std::clamp(ratio, -1.0, 1.0);
     k.sin_psi = std::sqrt((1.0 - k.cos_psi) * (1.0 + k.cos_psi));
@@ -263,57 +305,63 @@ class Leg {
     return k;
   }
 
-  // (I1): hx for hip branch eps; atan2 is scale-invariant, so the cos/sin are
-  // used without their common 1 / r^2. hx = 0 when r = 0 (every hx works).
+  // (I1): theta1 for hip branch eps; atan2 is scale-invariant, so the cos/sin
+  // are used without their common 1 / r^2. 0 when r = 0 (every angle works).
   SPOTKIN_INLINE double hip_roll(double y, double z, const Hip& hip, double eps) const noexcept {
-    const double hx = vector_math::atan2(z * h1_ + eps * y * hip.S, y * h1_ - eps * z * hip.S);
-    return hip.r2 > 0.0 ? hx : 0.0;
+    const double t1 = vector_math::atan2(z * h_ + eps * y * hip.S, y * h_ - eps * z * hip.S);
+    return hip.r2 > 0.0 ? sign1_ * t1 : 0.0;
   }
 
+  // theta3 = psi - phi, then q3 = s3 theta3 in (-pi, pi].
   SPOTKIN_INLINE double knee_angle(const Knee& k, int kb) const noexcept {
-    const double kn = kb == 0 ? -beta_ - k.acos_psi : -beta_ + k.acos_psi;
-    const double wrapped = kn <= -kPi<double> ? kn + 2.0 * kPi<double> : kn;  // kn in (-2pi, 2pi)
+    const double t3 = (kb == 0 ? -k.acos_psi : k.acos_psi) - phi_;
+    const double q3 = sign3_ * t3;  // in (-2pi, 2pi)
+    const double wrapped = q3 <= -kPi<double> ? q3 + 2.0 * kPi<double> : q3;
     return wrapped > kPi<double> ? wrapped - 2.0 * kPi<double> : wrapped;
   }
 
-  // (I4) with sin/cos of kn from psi = kn + beta: kn = psi - beta.
-  SPOTKIN_INLINE double hip_pitch(double x, double z_prime, const Knee& k, int kb) const noexcept {
+  // (I4) with e^{i theta3} from psi: theta3 = psi - phi.
+  SPOTKIN_INLINE double hip_pitch(double wx, double wz, const Knee& k, int kb) const noexcept {
     const double sin_psi = kb == 0 ? -k.sin_psi : k.sin_psi;
-    const double sin_kn = sin_psi * cos_beta_ - k.cos_psi * sin_beta_;
-    const double cos_kn = k.cos_psi * cos_beta_ + sin_psi * sin_beta_;
-    const double wx = g_.knee_offset - g_.lower * sin_kn, wz = -g_.upper - g_.lower * cos_kn;
-    return vector_math::atan2(x * wz - z_prime * wx, z_prime * wz + x * wx);
+    const double c3 = k.cos_psi * cos_phi_ + sin_psi * sin_phi_;
+    const double s3 = sin_psi * cos_phi_ - k.cos_psi * sin_phi_;
+    const double dz = Bz_ + c3 * Cz_ - s3 * Cx_, dx = Bx_ + c3 * Cx_ + s3 * Cz_;
+    const double t2 = vector_math::atan2(wx * dz - wz * dx, wz * dz + wx * dx);
+    return sign2_ * t2;
   }
 
-  void update() noexcept {
-    h1_ = g_.hip_offset;
-    const double R = std::hypot(g_.upper, g_.knee_offset);
-    beta_ = std::atan2(g_.knee_offset, g_.upper);
-    cos_beta_ = g_.upper / R;
-    sin_beta_ = g_.knee_offset / R;
-    knee_sum_sq_ = g_.knee_offset * g_.knee_offset + g_.upper * g_.upper + g_.lower * g_.lower;
-    inv_2LR_ = 1.0 / (2.0 * g_.lower * R);
-    d_max_ = R + g_.lower;
-    d_min_ = std::fabs(R - g_.lower);
-    // cos(psi) over the knee's limits, psi = kn + beta in [lo, hi]: 1 (or -1) if
-    // the interval holds a multiple of 2 pi (or pi plus one), else its ends'
-    const double lo = limits_.lower[2] + beta_, hi = limits_.upper[2] + beta_, two_pi = 2.0 * kPi<double>;
-    double cos_max = 1.0, cos_min = -1.0;
-    if (std::isfinite(lo) && std::isfinite(hi) && hi - lo < two_pi) {
-      const bool has_zero = std::floor(hi / two_pi) * two_pi >= lo;
-      const bool has_pi = std::floor((hi - kPi<double>) / two_pi) * two_pi + kPi<double> >= lo;
-      cos_max = has_zero ? 1.0 : std::max(std::cos(lo), std::cos(hi));
-      cos_min = has_pi ? -1.0 : std::min(std::cos(lo), std::cos(hi));
+  void update(int preferred_slot) noexcept {
+    sign1_ = g_.sign[0], sign2_ = g_.sign[1], sign3_ = g_.sign[2];
+    h_ = g_.a[1] + g_.b[1] + g_.c[1];
+    Bz_ = g_.b[2], Bx_ = g_.b[0], Cz_ = g_.c[2], Cx_ = g_.c[0];
+    const double nB = std::hypot(Bz_, Bx_), nC = std::hypot(Cz_, Cx_);
+    phi_ = std::atan2(Cx_, Cz_) - std::atan2(Bx_, Bz_);
+    cos_phi_ = std::cos(phi_), sin_phi_ = std::sin(phi_);
+    knee_sum_sq_ = nB * nB + nC * nC;
+    inv_2BC_ = 1.0 / (2.0 * nB * nC);
+    d_max_ = nB + nC;
+    d_min_ = std::fabs(nB - nC);
+    if (preferred_slot < 0) {
+      // knee branch of the middle of the knee's range: sin(psi) <= 0 is branch 0
+      const double lo = limits_.lower[2], hi = limits_.upper[2];
+      int knee = 0;
+      if (std::isfinite(lo) && std::isfinite(hi)) knee = std::sin(sign3_ * 0.5 * (lo + hi) + phi_) > 0.0 ? 1 : 0;
+      preferred_slot = knee;
     }
-    const double sum_sq = R * R + g_.lower * g_.lower, twice_LR = 2.0 * g_.lower * R;
-    d_knee_max_ = std::sqrt(std::max(0.0, sum_sq + twice_LR * cos_max));
-    d_knee_min_ = std::sqrt(std::max(0.0, sum_sq + twice_LR * cos_min));
+    order_[0] = preferred_slot;
+    for (int s = 0, k = 1; s < kSlots; ++s)
+      if (s != preferred_slot) order_[k++] = s;
+    preferred_eps_ = preferred_slot < 2 ? 1.0 : -1.0;
+    preferred_knee_ = preferred_slot % 2;
   }
 
-  LegGeometry g_;
+  RppGeometry g_;
   JointLimits<3> limits_;
-  double h1_ = 0, beta_ = 0, cos_beta_ = 1, sin_beta_ = 0, knee_sum_sq_ = 0, inv_2LR_ = 0;
-  double d_max_ = 0, d_min_ = 0, d_knee_max_ = 0, d_knee_min_ = 0;  // reach; with the knee in its limits
+  double sign1_ = 1, sign2_ = 1, sign3_ = 1, h_ = 0, Bz_ = 0, Bx_ = 0, Cz_ = 0, Cx_ = 0;
+  double phi_ = 0, cos_phi_ = 1, sin_phi_ = 0, knee_sum_sq_ = 0, inv_2BC_ = 0, d_max_ = 0, d_min_ = 0;
+  double preferred_eps_ = 1.0;
+  int preferred_knee_ = 0;
+  int order_[kSlots] = {0, 1, 2, 3};
 };
 
 // Batched leg kernels over `count` targets (row-major (count, 3) inputs).
@@ -328,17 +376,21 @@ SPOTKIN_INLINE bool finite3(const T* v) noexcept {
   return std::isfinite(double(v[0])) && std::isfinite(double(v[1])) && std::isfinite(double(v[2]));
 }
 
-// Chooses among the four slots of one target. Writes q (limit-wrapped) and
-// returns the status; sets valid[] when given.
+// Chooses among the four slots of one target (exists_hip: per hip branch).
+// Writes q (limit-wrapped) and returns the status; sets valid[] when given.
+// Without a seed: the first valid slot in the leg's slot order (the preferred
+// slot first); with one: the valid slot nearest to it (ties: that order).
 template <typename T>
-SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], bool exists,
+SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], const double exists_hip[2],
                              const T* seed, T* q_out, std::uint8_t* valid_out) noexcept {
   int best = -1;
   double best_distance = std::numeric_limits<double>::infinity();
   double seed_d[3] = {0, 0, 0};
   if (seed) seed_d[0] = double(seed[0]), seed_d[1] = double(seed[1]), seed_d[2] = double(seed[2]);
-  for (int s = 0; s < Leg::kSlots; ++s) {
-    const bool ok = exists && leg.limits().wrap_mask(q_all[s]) != 0.0;
+  const int* order = leg.slot_order();
+  for (int k = 0; k < Leg::kSlots; ++k) {
+    const int s = order[k];
+    const bool ok = exists_hip[s / 2] != 0.0 && leg.limits().wrap_mask(q_all[s]) != 0.0;
     if (valid_out) valid_out[s] = ok;
     if (!ok) continue;
     if (!seed) {
@@ -353,29 +405,40 @@ SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], bool 
     return Status::Ok;
   }
   for (int j = 0; j < 3; ++j) q_out[j] = T(quiet_nan<double>());
-  return exists ? Status::JointLimit : Status::Unreachable;
+  return exists_hip[0] != 0.0 || exists_hip[1] != 0.0 ? Status::JointLimit : Status::Unreachable;
 }
 
-// The documented UNREACHABLE answer, always inside the limits: the branches
-// for the point nearest to p that the knee reaches inside its limits
-// (nearest_reachable within_limits); the first slot inside all the limits,
-// else slot 0 with each joint brought into its limits (clamp_into).
+// The documented UNREACHABLE answer, always inside the limits: the
+// configuration whose foot is nearest to p among all those within the joint
+// limits (exact, Leg::nearest_reachable within_limits).
 template <typename T>
 SPOTKIN_INLINE void unreachable_fallback(const Leg& leg, double x, double y, double z, T* q_out) noexcept {
   const double p[3] = {x, y, z};
-  double nearest[3], q_all[Leg::kSlots][3];
-  leg.nearest_reachable(p, nearest, /*within_limits=*/true);
-  leg.solve_all(nearest[0], nearest[1], nearest[2], q_all, /*force=*/true);
-  int chosen = -1;
-  for (int k = 0; k < Leg::kSlots && chosen < 0; ++k)
-    if (leg.limits().wrap_mask(q_all[k]) != 0.0) chosen = k;
-  if (chosen < 0) leg.limits().clamp_into(q_all[chosen = 0]);
-  for (int j = 0; j < 3; ++j) q_out[j] = T(q_all[chosen][j]);
+  double foot[3], q[3];
+  leg.nearest_reachable(p, foot, /*within_limits=*/true, q);
+  for (int j = 0; j < 3; ++j) q_out[j] = T(q[j]);
 }
 
 // 1.0 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).
 SPOTKIN_INLINE double finite_mask(double x, double y, double z) noexcept {
   return ((x - x) == 0.0) & ((y - y) == 0.0) & ((z - z) == 0.0) ? 1.0 : 0.0;
+}
+
+// The answer for a target the vector pass did not settle (no seed and the
+// preferred slot valid): a seed, a limit, the other hip branch, or no solution.
+template <typename T>
+SPOTKIN_INLINE Status settle(const Leg& leg, double x, double y, double z, const T* seed, T* qt, bool nearest_fallback,
+                             double tol) noexcept {
+  double q_all[Leg::kSlots][3], exists_hip[2];
+  leg.solve_all(x, y, z, q_all, true, tol, exists_hip);
+  if (exists_hip[0] == 0.0 && exists_hip[1] == 0.0) {
+    if (nearest_fallback)
+      unreachable_fallback(leg, x, y, z, qt);
+    else
+      qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
+    return Status::Unreachable;
+  }
+  return choose(leg, q_all, exists_hip, seed, qt, nullptr);
 }
 
 // Limit-aware IK: q (count, 3), status (count). seed may be null. An
@@ -385,15 +448,16 @@ template <typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   double x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
+  const double tol = Leg::ratio_tolerance<T>();
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
     }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: slot 0 and its limits for every target
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: the preferred slot and its limits for every target
       double q0[3];
       const double finite = finite_mask(x[i], y[i], z[i]);
-      exists[i] = finite * leg.solve_slot0(x[i], y[i], z[i], q0, Leg::ratio_tolerance<T>());
+      exists[i] = finite * leg.solve_preferred(x[i], y[i], z[i], q0, tol);
       ok[i] = exists[i] * leg.limits().wrap_mask(q0);
       exists[i] = finite == 0.0 ? -1.0 : exists[i];  // -1: invalid input
       hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
@@ -402,7 +466,7 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 3 * t;
       const T* st = seed ? seed + 3 * t : nullptr;
-      if (ok[i] != 0.0 && !st) {  // the common case: slot 0 valid, no seed
+      if (ok[i] != 0.0 && !st) {  // the common case: the preferred slot valid, no seed
         qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
         status[t] = std::int8_t(Status::Ok);
         continue;
@@ -412,17 +476,7 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
         status[t] = std::int8_t(Status::InvalidInput);
         continue;
       }
-      if (exists[i] == 0.0) {
-        if (nearest_fallback)
-          unreachable_fallback(leg, x[i], y[i], z[i], qt);
-        else
-          qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
-        status[t] = std::int8_t(Status::Unreachable);
-        continue;
-      }
-      double q_all[Leg::kSlots][3];
-      leg.solve_all(x[i], y[i], z[i], q_all, true);
-      status[t] = std::int8_t(choose(leg, q_all, true, st, qt, nullptr));
+      status[t] = std::int8_t(settle(leg, x[i], y[i], z[i], st, qt, nearest_fallback, tol));
     }
   }
 }
@@ -433,16 +487,17 @@ SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid
                            std::int8_t* status, std::ptrdiff_t count) noexcept {
   constexpr double nan = quiet_nan<double>();
   double x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock];
-  double ex[kBlock], finite[kBlock];
+  double ex[2][kBlock], finite[kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
     }
     for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: all slots for every target
-      double q_all[Leg::kSlots][3];
+      double q_all[Leg::kSlots][3], e[2];
       finite[i] = finite_mask(x[i], y[i], z[i]);
-      ex[i] = finite[i] * leg.solve_all_mask(x[i], y[i], z[i], q_all, Leg::ratio_tolerance<T>());
+      leg.solve_all_mask(x[i], y[i], z[i], q_all, e, Leg::ratio_tolerance<T>());
+      ex[0][i] = finite[i] * e[0], ex[1][i] = finite[i] * e[1];
 #pragma GCC unroll 4
       for (int s = 0; s < Leg::kSlots; ++s)
 #pragma GCC unroll 3
@@ -452,8 +507,9 @@ SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid
     for (int s = 0; s < Leg::kSlots; ++s) {
       for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: limits per slot
         double qi[3] = {qs[s][0][i], qs[s][1][i], qs[s][2][i]};
-        ok[s][i] = ex[i] * leg.limits().wrap_mask(qi);
-        for (int j = 0; j < 3; ++j) qs[s][j][i] = ex[i] != 0.0 ? qi[j] : nan;
+        const double e = ex[s / 2][i];
+        ok[s][i] = e * leg.limits().wrap_mask(qi);
+        for (int j = 0; j < 3; ++j) qs[s][j][i] = e != 0.0 ? qi[j] : nan;
       }
     }
     for (std::ptrdiff_t i = 0; i < m; ++i) {
@@ -463,29 +519,31 @@ SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid
       for (int s = 0; s < Leg::kSlots; ++s) {
         for (int j = 0; j < 3; ++j) qt[3 * s + j] = T(qs[s][j][i]);
         valid[4 * t + s] = ok[s][i] != 0.0;
-        exists[4 * t + s] = ex[i] != 0.0;
+        exists[4 * t + s] = ex[s / 2][i] != 0.0;
         any_valid |= ok[s][i] != 0.0;
       }
+      const bool any_exists = ex[0][i] != 0.0 || ex[1][i] != 0.0;
       const Status st = finite[i] == 0.0 ? Status::InvalidInput
                         : any_valid     ? Status::Ok
-                        : ex[i] != 0.0  ? Status::JointLimit
+                        : any_exists    ? Status::JointLimit
                                         : Status::Unreachable;
       status[t] = std::int8_t(st);
     }
   }
 }
 
-// Sines and cosines of hx, hy and hy + kn for a block, vectorised.
+// Sines and cosines of theta1, theta2 and theta2 + theta3 for a block, vectorised.
 struct BlockAngles {
   double angle[3][kBlock], s[3][kBlock], c[3][kBlock];
 };
 
 template <typename T>
-SPOTKIN_INLINE void block_angles(const T* q, std::ptrdiff_t m, BlockAngles& a) noexcept {
+SPOTKIN_INLINE void block_angles(const Leg& leg, const T* q, std::ptrdiff_t m, BlockAngles& a) noexcept {
+  const double s1 = leg.sign(0), s2 = leg.sign(1), s3 = leg.sign(2);
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    a.angle[0][i] = double(q[3 * i]);
-    a.angle[1][i] = double(q[3 * i + 1]);
-    a.angle[2][i] = double(q[3 * i + 1]) + double(q[3 * i + 2]);
+    a.angle[0][i] = s1 * double(q[3 * i]);
+    a.angle[1][i] = s2 * double(q[3 * i + 1]);
+    a.angle[2][i] = s2 * double(q[3 * i + 1]) + s3 * double(q[3 * i + 2]);
   }
   for (int j = 0; j < 3; ++j) vector_math::sincos(a.angle[j], a.s[j], a.c[j], m);
 }
@@ -493,17 +551,17 @@ SPOTKIN_INLINE void block_angles(const T* q, std::ptrdiff_t m, BlockAngles& a) n
 template <typename T>
 SPOTKIN_INLINE void fk(const Leg& leg, const T* q, T* p, std::ptrdiff_t count) noexcept {
   BlockAngles a;
-  const LegGeometry& g = leg.geometry();
+  const double h = leg.lateral();
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    block_angles(q + 3 * b0, m, a);
+    block_angles(leg, q + 3 * b0, m, a);
     T* out = p + 3 * b0;
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // (M2)
-      const double X = g.knee_offset * a.c[1][i] - g.upper * a.s[1][i] - g.lower * a.s[2][i];
-      const double Zs = -g.knee_offset * a.s[1][i] - g.upper * a.c[1][i] - g.lower * a.c[2][i];
-      out[3 * i] = T(X);
-      out[3 * i + 1] = T(g.hip_offset * a.c[0][i] - Zs * a.s[0][i]);
-      out[3 * i + 2] = T(g.hip_offset * a.s[0][i] + Zs * a.c[0][i]);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // (R1)
+      double vx, vz;
+      leg.plane(a.c[1][i], a.s[1][i], a.c[2][i], a.s[2][i], vx, vz);
+      out[3 * i] = T(vx);
+      out[3 * i + 1] = T(h * a.c[0][i] - vz * a.s[0][i]);
+      out[3 * i + 2] = T(h * a.s[0][i] + vz * a.c[0][i]);
     }
   }
 }
@@ -511,20 +569,15 @@ SPOTKIN_INLINE void fk(const Leg& leg, const T* q, T* p, std::ptrdiff_t count) n
 template <typename T>
 SPOTKIN_INLINE void jacobian(const Leg& leg, const T* q, T* J, std::ptrdiff_t count) noexcept {
   BlockAngles a;
-  const LegGeometry& g = leg.geometry();
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    block_angles(q + 3 * b0, m, a);
+    block_angles(leg, q + 3 * b0, m, a);
     T* out = J + 9 * b0;
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // columns as in Leg::jacobian
-      const double s1 = a.s[0][i], c1 = a.c[0][i], s23 = a.s[2][i], c23 = a.c[2][i];
-      const double X = g.knee_offset * a.c[1][i] - g.upper * a.s[1][i] - g.lower * s23;
-      const double Zs = -g.knee_offset * a.s[1][i] - g.upper * a.c[1][i] - g.lower * c23;
-      const double py = g.hip_offset * c1 - Zs * s1, pz = g.hip_offset * s1 + Zs * c1;
-      T* Ji = out + 9 * i;
-      Ji[0] = T(0.0), Ji[1] = T(Zs), Ji[2] = T(-g.lower * c23);
-      Ji[3] = T(-pz), Ji[4] = T(X * s1), Ji[5] = T(-g.lower * s23 * s1);
-      Ji[6] = T(py), Ji[7] = T(-X * c1), Ji[8] = T(g.lower * s23 * c1);
+    for (std::ptrdiff_t i = 0; i < m; ++i) {  // as Leg::jacobian
+      const double c[3] = {a.c[0][i], a.c[1][i], a.c[2][i]}, s[3] = {a.s[0][i], a.s[1][i], a.s[2][i]};
+      double Ji[9];
+      leg.jacobian_from(c, s, Ji);
+      for (int k = 0; k < 9; ++k) out[9 * i + k] = T(Ji[k]);
     }
   }
 }

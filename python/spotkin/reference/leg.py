@@ -68,6 +68,8 @@ import math
 
 import numpy as np
 
+from . import rpp_leg
+
 OK = 0
 UNREACHABLE = 1
 JOINT_LIMIT = 2
@@ -218,11 +220,8 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
     ties to the lowest slot; with no seed the lowest valid slot. -> OK.
     Solutions exist but none valid -> (NaN, JOINT_LIMIT).
     Non-finite p -> (NaN, INVALID_INPUT).
-    No solution -> UNREACHABLE with a configuration inside the limits: the
-    four branches (ratios clamped) for nearest_reachable(p, knee_limits=(lower[2],
-    upper[2])), the leg stretched or folded toward the target as far as the
-    knee's limits allow; the first slot inside all the limits
-    (wrap_into_limits), else slot 0 with each joint clamped (clamp_into_limits).
+    No solution -> UNREACHABLE with the configuration inside the limits whose
+    foot is nearest to p (rpp_leg.nearest_in_limits, exact).
     """
     nan3 = np.full(3, np.nan)
     x, y, z = float(p[0]), float(p[1]), float(p[2])
@@ -247,23 +246,10 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
             return nan3, JOINT_LIMIT
         return best, OK
 
-    # Unreachable: the branches of the nearest point the knee reaches in its limits (ratios clamped).
-    xs, ys, zs = nearest_reachable(p, h1, U, L, k, knee_limits=(lower[2], upper[2]))
-    r = math.hypot(ys, zs)
-    a_hip = math.acos(min(1.0, max(-1.0, h1 / r))) if r > 0.0 else 0.0
-    ratio, beta = _knee_ratio(xs * xs + ys * ys + zs * zs - h1 * h1, U, L, k)
-    a_knee = math.acos(min(1.0, max(-1.0, ratio)))
-    slots = []
-    for hx in (math.atan2(zs, ys) + a_hip, math.atan2(zs, ys) - a_hip):
-        hx = hx if r > 0.0 else 0.0
-        for kn in (-beta - a_knee, -beta + a_knee):
-            hy = _hip_pitch(xs, ys, zs, hx, kn, U, L, k)
-            slots.append(np.array([wrap_angle(hx), wrap_angle(hy), wrap_angle(kn)]))
-    for q_slot in slots:
-        q_wrapped, ok = wrap_into_limits(q_slot, lower, upper)
-        if ok:
-            return q_wrapped, UNREACHABLE
-    return clamp_into_limits(slots[0], lower, upper), UNREACHABLE
+    # Unreachable: the in-limit configuration whose foot is nearest to p (the general leg's exact answer).
+    geometry = {"a": (0.0, h1, 0.0), "b": (k, 0.0, -U), "c": (0.0, 0.0, -L)}
+    q_near, _ = rpp_leg.nearest_in_limits(geometry, lower, upper, np.asarray(p, dtype=float))
+    return np.asarray(q_near, dtype=float), UNREACHABLE
 
 
 def clamp_into_limits(q, lower, upper):

@@ -1,0 +1,559 @@
+"""Legged robots from their descriptions: a body with any number of roll–pitch–pitch legs,
+and the arms it carries. Whole-body IK, FK, Jacobians and joint rates for every robot,
+built by :meth:`Robot.from_urdf`; :class:`spotkin.Spot` is one instance of it.
+
+Frames: the body frame is the URDF's root link frame. Each leg's frame has its origin at
+the leg's hip-roll joint and the body's axes (see :mod:`spotkin.leg`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _core, urdf
+from ._boundary import (
+    as_finite,
+    as_real,
+    as_scalar,
+    broadcast_lead,
+    check_trailing,
+    fallback_is_nearest,
+    quiet_float_errors,
+    real_dtype,
+)
+from .body import body_transform, pose_format, sequence_code
+from .chain import Chain
+from .leg import Leg
+
+__all__ = ["BodyFrames", "BodyIK", "BodyRates", "Robot"]
+
+
+class BodyIK(NamedTuple):
+    """Whole-body IK results, from :meth:`Robot.body_ik`."""
+
+    q: np.ndarray
+    """(..., 3 n) leg joint angles, in the order of :attr:`Robot.leg_joint_names`."""
+    status: np.ndarray
+    """(..., n) int8 :class:`Status` per leg, with the leg API's meaning and fallback."""
+
+
+class BodyRates(NamedTuple):
+    """Joint velocities that keep the feet fixed, from :meth:`Robot.body_rates`."""
+
+    qd: np.ndarray
+    """(..., 3 n) joint velocities; NaN for a singular leg."""
+    singular: np.ndarray
+    """(..., n) bool: the leg's Jacobian is singular (smallest singular value below ``tolerance``)."""
+
+
+class BodyFrames(NamedTuple):
+    """Frames of interest in the world frame, from :meth:`Robot.fk_all`."""
+
+    body: np.ndarray
+    """(..., 4, 4) world <- body."""
+    hips: np.ndarray
+    """(..., n, 3) hip-roll joint origins."""
+    knees: np.ndarray
+    """(..., n, 3) knee joint origins."""
+    feet: np.ndarray
+    """(..., n, 3) foot points."""
+    hand: np.ndarray | None
+    """(..., 4, 4) the arm's tool frame, or None without ``q_arm``."""
+
+
+_XYZ = sequence_code("XYZ")
+
+
+def _broadcast_to_lead(array: np.ndarray, trailing: int, lead: tuple[int, ...]) -> np.ndarray:
+    if array.shape[: array.ndim - trailing] == lead:
+        return array
+    return np.broadcast_to(array, (*lead, *array.shape[array.ndim - trailing :]))
+
+
+def _solve_rows(J: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x with J x = rhs for each J (n, 3, 3), rhs (n, 3); NaN rows where LAPACK finds J
+    exactly singular (the rest of the batch is unaffected)."""
+    try:
+        return np.linalg.solve(J, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # one exactly singular J: solve one by one
+        x = np.full(rhs.shape, np.nan)
+        for k in range(len(J)):
+            with contextlib.suppress(np.linalg.LinAlgError):
+                x[k] = np.linalg.solve(J[k], rhs[k])
+        return x
+
+
+class Robot:
+    """A legged robot: a body, its roll–pitch–pitch legs and the arms it carries.
+
+    Build one with :meth:`from_urdf` (or :meth:`from_urdf_string`). The legs are found in
+    the kinematic tree (:func:`spotkin.urdf.find_legs`): a path of three revolute joints from
+    the body to a leaf link whose axes at zero angles are ±x, ±y, ±y in the body frame. Arms
+    are 6-joint paths from the body that share no joint with a leg. :attr:`report` says what
+    was recognised and why other branches were not; every link is still reachable as a chain
+    (:meth:`chain`) with FK, Jacobians and differential IK.
+
+    Whole-body calls take ``q`` (..., 3 n) holding the legs' joints in the order of
+    :attr:`leg_joint_names` (the URDF's joint order), and give one status per leg.
+    """
+
+    __slots__ = (
+        "_arm",
+        "_arms",
+        "_body_core",
+        "_columns",
+        "_hips",
+        "_leg_joint_names",
+        "_leg_names",
+        "_legs",
+        "_model",
+        "_report",
+        "_source",
+    )
+
+    def __init__(self) -> None:
+        raise TypeError("build a Robot with Robot.from_urdf(path) or Robot.from_urdf_string(text)")
+
+    # -- construction --------------------------------------------------------------------------------
+    @classmethod
+    def from_urdf(
+        cls,
+        path: str | os.PathLike,
+        *,
+        feet=None,
+        contact_offset=None,
+        nominal=None,
+    ) -> Robot:
+        """Load a robot from a URDF file.
+
+        ``feet``: link names to use as the feet (default: found, see :func:`spotkin.urdf.find_legs`);
+        ``contact_offset``: a (3,) contact point offset in the foot link's frame, for every foot or
+        as a dict foot link -> (3,), when the leaf link's origin is not the contact point;
+        ``nominal``: a dict leg name -> (3,) joint angles of a typical stance, which sets each
+        leg's preferred branch (default: from the knee's limits). ``ValueError`` names the joint
+        or link for malformed descriptions (see :func:`spotkin.urdf.parse_urdf`).
+        """
+        model = urdf.load_urdf(path)
+        with open(path, "rb") as file:
+            text = file.read().decode("utf-8", errors="replace")
+        return cls._from_model(model, feet, contact_offset, nominal, text)
+
+    @classmethod
+    def from_urdf_string(cls, text: str, *, feet=None, contact_offset=None, nominal=None) -> Robot:
+        """As :meth:`from_urdf`, from the URDF's XML text."""
+        if not isinstance(text, str):
+            raise TypeError(f"text must be a str holding URDF XML, got {type(text).__name__}")
+        model = urdf.parse_urdf(text)
+        return cls._from_model(model, feet, contact_offset, nominal, text)
+
+    @classmethod
+    def _from_model(cls, model, feet, contact_offset, nominal, text) -> Robot:
+        specs, leg_report = urdf.find_legs(model, feet=feet, contact_offset=contact_offset)
+        arms, arm_report = urdf.find_arms(model, specs)
+        nominal = {} if nominal is None else dict(nominal)
+        unknown = set(nominal) - {spec.name for spec in specs}
+        if unknown:
+            raise ValueError(f"nominal names legs that were not recognised: {sorted(unknown)}")
+        legs = [
+            Leg.from_geometry(
+                spec.a, spec.b, spec.c, spec.signs, spec.limits, spec.name, nominal=nominal.get(spec.name)
+            )
+            for spec in specs
+        ]
+        robot = cls.__new__(cls)
+        robot._model = model
+        robot._source = (text, feet, contact_offset, nominal)
+        robot._report = tuple(leg_report) + tuple(arm_report)
+        arm_chains = tuple(robot.chain(arm.tip, base=arm.base) for arm in arms)
+        robot._arms = arm_chains
+        robot._set_legs(
+            legs,
+            [spec.hip_origin for spec in specs],
+            [spec.name for spec in specs],
+            [tuple(spec.joint_names) for spec in specs],
+            arm_chains[0] if arm_chains else None,
+        )
+        return robot
+
+    def _set_legs(self, legs, hips, names, joint_names, arm) -> None:
+        if not legs:
+            raise ValueError("no roll-pitch-pitch legs were recognised; see spotkin.urdf.find_legs's report")
+        self._legs = tuple(legs)
+        self._leg_names = tuple(names)
+        self._hips = np.array(hips, dtype=np.float64).reshape(len(legs), 3)
+        self._hips.flags.writeable = False
+        flat = [name for triple in joint_names for name in triple]
+        order = self._urdf_order(flat)
+        self._leg_joint_names = tuple(sorted(flat, key=order.__getitem__))
+        position = {name: k for k, name in enumerate(self._leg_joint_names)}
+        self._columns = np.array([[position[name] for name in triple] for triple in joint_names], dtype=np.int64)
+        contiguous = bool((self._columns == np.arange(3 * len(legs)).reshape(-1, 3)).all())
+        self._body_core = _core.Body(
+            [leg._core for leg in self._legs], self._hips, None if contiguous else self._columns.astype(float)
+        )
+        self._arm = arm
+
+    def _urdf_order(self, names):
+        model = getattr(self, "_model", None)
+        if model is None:
+            return {name: k for k, name in enumerate(names)}
+        index = {joint.name: joint.index for joint in model.actuated_joints}
+        return {name: index.get(name, k) for k, name in enumerate(names)}
+
+    # -- description ---------------------------------------------------------------------------------
+    @property
+    def name(self) -> str | None:
+        """The URDF's robot name."""
+        return None if self._model is None else self._model.name
+
+    @property
+    def model(self) -> urdf.Model | None:
+        """The parsed description (:class:`spotkin.urdf.Model`)."""
+        return self._model
+
+    @property
+    def legs(self) -> tuple[Leg, ...]:
+        """The recognised legs, in the URDF's order of their first joints."""
+        return self._legs
+
+    @property
+    def leg_names(self) -> tuple[str, ...]:
+        """The legs' names, in :attr:`legs` order."""
+        return self._leg_names
+
+    def leg(self, name: str) -> Leg:
+        """One leg by name (see :attr:`leg_names`)."""
+        try:
+            return self._legs[self._leg_names.index(name)]
+        except ValueError:
+            raise ValueError(f"leg name must be one of {self._leg_names}, got {name!r}") from None
+
+    @property
+    def n_legs(self) -> int:
+        return len(self._legs)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Every actuated joint of the description, in the URDF's order."""
+        return tuple(joint.name for joint in self._model.actuated_joints)
+
+    @property
+    def leg_joint_names(self) -> tuple[str, ...]:
+        """The legs' joints in the order of the whole-body ``q``: :attr:`joint_names` restricted to the legs."""
+        return self._leg_joint_names
+
+    @property
+    def hip_positions(self) -> np.ndarray:
+        """(n, 3) hip-roll joint origins in the body frame."""
+        return self._hips.copy()
+
+    @property
+    def arm(self):
+        """The first arm found on the body (a 6-joint :class:`Chain`; closed form when its last three axes
+        meet), or None."""
+        return self._arm
+
+    @property
+    def arms(self) -> tuple:
+        """Every arm found (see :attr:`arm`)."""
+        return self._arms
+
+    @property
+    def report(self) -> tuple[str, ...]:
+        """What was recognised, what was not, and why."""
+        return self._report
+
+    def describe(self) -> str:
+        """A readable summary: the tree, the legs and arms with their geometry, the report."""
+        specs, report = urdf.find_legs(self._model)
+        arms, arm_report = urdf.find_arms(self._model, specs)
+        return urdf.describe(self._model, specs, arms, tuple(report) + tuple(arm_report))
+
+    def chain(self, link: str, base: str | None = None) -> Chain:
+        """The serial chain from ``base`` (default: the body, the URDF's root) to ``link``, as a
+        :class:`Chain` with the URDF's joint names and limits: FK, frames, Jacobians, differential
+        IK, and the closed-form IK where the structure has one. Fixed joints are merged into the
+        placements; ``link`` may be any link, fixed ones (feet, hands, sensors) included."""
+        if self._model is None:
+            raise ValueError("this robot has no URDF description")
+        data = self._model.chain_data(link, base)
+        if len(data.joint_names) == 0:
+            raise ValueError(f"no actuated joint between {data.base!r} and {link!r}")
+        return Chain.from_joints(
+            data.placements, data.axes, data.types, tool=data.tool, limits=data.limits,
+            joint_names=data.joint_names,
+        )
+
+    # -- whole body ----------------------------------------------------------------------------------
+    def stance_feet(self, height: float = 0.5, foot_radius: float = 0.0) -> np.ndarray:
+        """(n, 3) world foot points of a nominal stance, for the body at [0, 0, height, 0, 0, 0].
+
+        Each foot is straight below its hip-pitch joint at the leg's lateral offset (hip roll 0),
+        with the foot point ``foot_radius`` above the ground z = 0.
+        """
+        height = as_scalar(height, "height")
+        foot_radius = as_finite(foot_radius, "foot_radius", 0.0)
+        feet = self.hip_positions
+        for k, leg in enumerate(self._legs):
+            feet[k, 0] += leg.a[0]
+            feet[k, 1] += leg.hip_offset
+        feet[:, 2] = foot_radius
+        for k, leg in enumerate(self._legs):
+            drop = height + self._hips[k, 2] + leg.a[2] - foot_radius
+            if not (0.0 < drop <= leg.reach[1] and drop >= leg.reach[0]):
+                raise ValueError(f"height {height} m puts the feet out of reach")
+        return feet
+
+    def body_ik(
+        self,
+        body_pose: ArrayLike,
+        feet: ArrayLike,
+        seed: ArrayLike | None = None,
+        seq: str = "XYZ",
+        fallback: str = "nearest",
+    ) -> BodyIK:
+        """The leg joints placing the body at ``body_pose`` with the feet at ``feet``.
+
+        ``body_pose`` is (..., 6) [x, y, z, a, b, c] with Euler angles in ``seq``
+        (default intrinsic X-Y'-Z''), (..., 4, 4), or (..., 7) [x, y, z, qx, qy, qz, qw]:
+        see :mod:`spotkin.body`. ``feet`` (..., n, 3) are world foot points; leading
+        dimensions broadcast (a single (n, 3) stance is shared without copying). Each
+        foot is brought into its hip frame, p = R^T (foot - t) - hip, and solved by the
+        limit-aware leg IK: each leg's status and fallback are exactly those of
+        :meth:`Leg.ik`, and a leg's failure never touches the other legs. ``seed``
+        (..., 3 n) picks the branch where several are valid. A pose with NaN, or a 4x4 /
+        quaternion that is not a rotation, gives INVALID_INPUT on every leg of that
+        sample only. ``fallback`` is the UNREACHABLE legs' answer, as in :meth:`Leg.ik`:
+        ``"nearest"`` (the in-limit configuration whose foot is nearest to the target) or
+        ``"nan"``. Computed in float32 when ``body_pose`` and ``feet`` both are float32, else
+        float64; ``seed`` takes that dtype.
+        """
+        n = len(self._legs)
+        if (
+            seed is None
+            and seq == "XYZ"
+            and fallback == "nearest"
+            and type(feet) is np.ndarray
+            and feet.shape == (n, 3)
+        ):
+            # the control-loop call, one shared stance: the core checks body_pose itself
+            return BodyIK._make(self._body_core.ik(body_pose, -1, _XYZ, feet, None))
+        nearest = fallback_is_nearest(fallback)
+        pose = as_real(body_pose, "body_pose")
+        fmt, pose_lead = pose_format(pose)
+        code = sequence_code(seq)
+        feet = as_real(feet, "feet")
+        feet_lead = check_trailing(feet, "feet", (n, 3))
+        if seed is not None:
+            seed = as_real(seed, "seed")
+            seed_lead = check_trailing(seed, "seed", (3 * n,))
+        # nothing to broadcast for a shared stance or one stance per pose, and one seed per pose
+        if (feet_lead and feet_lead != pose_lead) or (seed is not None and seed_lead != pose_lead):
+            leads = {"body_pose": (pose_lead, pose.shape), "feet": (feet_lead, feet.shape)}
+            if seed is not None:
+                leads["seed"] = (seed_lead, seed.shape)
+            lead = broadcast_lead(**leads)
+            if feet_lead and feet_lead != lead:  # a single stance is shared without copying
+                feet = feet.reshape(n, 3) if feet.size == 3 * n else np.broadcast_to(feet, (*lead, n, 3))
+            pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
+            if seed is not None:
+                seed = _broadcast_to_lead(seed, 1, lead)
+        return BodyIK(*self._body_core.ik(pose, fmt, code, feet, seed, nearest))
+
+    def body_fk(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+        """(..., n, 3) world foot points: foot = t + R (hip + leg.fk(q_leg)). Leading dimensions broadcast.
+
+        float32 when ``body_pose`` and ``q`` both are float32, else float64. A leg with a
+        NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample."""
+        pose, q, fmt, code = self._pose_and_q(body_pose, q, seq)
+        return self._body_core.fk(pose, fmt, code, q)
+
+    def body_jacobian(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+        """(..., 3 n, 6 + 3 n) d(feet world) / d(body twist [v; w], q).
+
+        The twist is the linear velocity of the body origin and the angular velocity,
+        both in the world frame: d foot_i = v + w x (foot_i - t) + R J_leg_i dq_i.
+        """
+        pose, q, fmt, code = self._pose_and_q(body_pose, q, seq)
+        return self._body_core.jacobian(pose, fmt, code, q)
+
+    _q_name = "q"
+
+    @quiet_float_errors
+    def body_rates(
+        self,
+        body_pose: ArrayLike,
+        q: ArrayLike,
+        twist: ArrayLike,
+        seq: str = "XYZ",
+        tolerance: float = 1e-6,
+    ) -> BodyRates:
+        """Joint velocities that keep every foot fixed while the body moves with ``twist``.
+
+        ``twist`` (..., 6) is [v; w] (world frame, as in :meth:`body_jacobian`). Per leg,
+        J_leg dq = -R^T (v + w x (foot - t)). Leading dimensions of ``body_pose``, ``q``
+        and ``twist`` broadcast; the result is float64.
+
+        A leg gets NaN velocities and ``singular = True`` when it has no usable answer:
+        its Jacobian's smallest singular value is not above ``tolerance`` (stretched,
+        folded, or on the hip-roll cylinder: it cannot follow every twist), or its
+        sample has a NaN or Inf joint angle, twist or body pose, or a body pose that is
+        not a rigid transform (as :meth:`body_fk` reads it). So ``qd`` is NaN exactly
+        where ``singular`` is True, and such a leg never affects another leg or sample.
+
+        ``tolerance`` must be a finite real number >= 0 (``TypeError`` for a non-number,
+        ``ValueError`` for NaN, Inf or a negative value). Non-numeric arrays raise
+        ``TypeError``, wrong or non-broadcasting shapes ``ValueError``, naming the argument.
+        """
+        tolerance = as_finite(tolerance, "tolerance", 0.0)
+        n_legs = len(self._legs)
+        width = 3 * n_legs
+        T, pose = self._world_from_body(body_pose, seq)
+        q = as_real(q, self._q_name, np.float64)
+        twist = as_real(twist, "twist", np.float64)
+        lead = broadcast_lead(
+            body_pose=(T.shape[:-2], pose.shape),
+            **{self._q_name: (check_trailing(q, self._q_name, (width,)), q.shape)},
+            twist=(check_trailing(twist, "twist", (6,)), twist.shape),
+        )
+        n = math.prod(lead)
+        R = np.broadcast_to(T[..., :3, :3], (*lead, 3, 3)).reshape(n, 3, 3)
+        q = np.broadcast_to(q, (*lead, width)).reshape(n, width)
+        twist = np.broadcast_to(twist, (*lead, 6)).reshape(n, 6)
+        v, w = twist[:, :3], twist[:, 3:]
+        qd = np.full((n, width), np.nan)
+        singular = np.ones((n, n_legs), dtype=bool)
+        for i, leg in enumerate(self._legs):
+            columns = self._columns[i]
+            q_leg = q[:, columns]
+            r = np.einsum("nij,nj->ni", R, self._hips[i] + leg.fk(q_leg))
+            rhs = -np.einsum("nji,nj->ni", R, v + np.cross(w, r))
+            J = leg.jacobian(q_leg)
+            sigma = leg.singularity(q_leg)[1]
+            # the finiteness checks do not rely on sigma, which NaN input need not make NaN
+            finite_input = np.isfinite(J).all((1, 2)) & np.isfinite(rhs).all(1)
+            usable = np.flatnonzero((sigma > tolerance) & finite_input)
+            solved = _solve_rows(J[usable], rhs[usable])
+            finite = np.isfinite(solved).all(1)
+            rows = usable[finite]
+            qd[rows[:, None], columns[None, :]] = solved[finite]
+            singular[rows, i] = False
+        return BodyRates(qd.reshape(*lead, width), singular.reshape(*lead, n_legs))
+
+    @quiet_float_errors
+    def fk_all(
+        self, body_pose: ArrayLike, q: ArrayLike, q_arm: ArrayLike | None = None, seq: str = "XYZ"
+    ) -> BodyFrames:
+        """Every frame of interest in the world frame: body, hips, knees, feet, and the hand.
+
+        Checked as :meth:`body_fk`: ``body_pose`` in any accepted form, ``q`` (..., 3 n)
+        and ``q_arm`` (..., 6) real arrays whose leading dimensions broadcast (``TypeError``
+        for non-numeric input such as None, ``ValueError`` naming the argument for another
+        shape). A body pose with NaN or Inf, or that is not a rigid transform (a 4x4 whose
+        rotation part is not a rotation or whose last row is not [0, 0, 0, 1], a non-unit
+        quaternion), gives NaN frames for that sample only, as :meth:`body_fk` gives NaN
+        feet. Every frame is float64. ``q_arm`` needs an :attr:`arm`.
+        """
+        n_legs = len(self._legs)
+        T, pose = self._world_from_body(body_pose, seq)
+        q = as_real(q, self._q_name, np.float64)
+        leads = {
+            "body_pose": (T.shape[:-2], pose.shape),
+            self._q_name: (check_trailing(q, self._q_name, (3 * n_legs,)), q.shape),
+        }
+        if q_arm is not None:
+            if self._arm is None:
+                raise ValueError("q_arm was given but this robot has no arm")
+            q_arm = as_real(q_arm, "q_arm", np.float64)
+            leads["q_arm"] = (check_trailing(q_arm, "q_arm", (6,)), q_arm.shape)
+        lead = broadcast_lead(**leads)
+        T = np.broadcast_to(T, (*lead, 4, 4))
+        q = np.broadcast_to(q, (*lead, 3 * n_legs))
+        R, t = T[..., :3, :3], T[..., :3, 3]
+
+        def world(p):
+            return t[..., None, :] + np.einsum("...ij,...kj->...ki", R, p)
+
+        hips = np.broadcast_to(self._hips, (*lead, n_legs, 3))
+        knees, feet = np.empty((*lead, n_legs, 3)), np.empty((*lead, n_legs, 3))
+        for i, leg in enumerate(self._legs):
+            q_leg = q[..., self._columns[i]]
+            knees[..., i, :] = self._hips[i] + leg.knee(q_leg)
+            feet[..., i, :] = self._hips[i] + leg.fk(q_leg)
+        hand = None if q_arm is None else T @ self._arm.fk(q_arm)
+        return BodyFrames(T.copy(), world(hips), world(knees), world(feet), hand)
+
+    @quiet_float_errors
+    def arm_ik_world(
+        self, body_pose: ArrayLike, T_world: ArrayLike, seed: ArrayLike | None = None, seq: str = "XYZ"
+    ):
+        """Arm IK for hand targets given in the world frame: (q (..., 6), status).
+
+        T_body = T_world_body^-1 T_world, then the arm's closed-form IK (one solution, nearest to
+        ``seed`` or the first valid). ``T_world`` is (..., 4, 4) and ``seed`` (..., 6); leading
+        dimensions of body poses, targets and seeds broadcast together (``ValueError`` naming them
+        otherwise). A body pose with NaN/Inf or that is not a rigid transform (as :meth:`body_fk`
+        reads it) gives INVALID_INPUT for that sample, like a bad target. q is float32 when
+        ``body_pose`` and ``T_world`` both are, float64 otherwise.
+        """
+        if self._arm is None:
+            raise ValueError("this robot has no arm")
+        T_wb, pose = self._world_from_body(body_pose, seq)
+        target = as_real(T_world, "T_world")
+        leads = {
+            "body_pose": (T_wb.shape[:-2], pose.shape),
+            "T_world": (check_trailing(target, "T_world", (4, 4)), target.shape),
+        }
+        if seed is not None:
+            seed = as_real(seed, "seed")
+            leads["seed"] = (check_trailing(seed, "seed", (6,)), seed.shape)
+        lead = broadcast_lead(**leads)
+        T_world64 = target.astype(np.float64, copy=False)
+        R, t = T_wb[..., :3, :3], T_wb[..., :3, 3]
+        T_bw = np.zeros_like(T_wb)
+        T_bw[..., :3, :3] = np.swapaxes(R, -1, -2)
+        T_bw[..., :3, 3] = -np.einsum("...ji,...j->...i", R, t)
+        T_bw[..., 3, 3] = 1.0
+        T_body = T_bw @ T_world64
+        T_body[..., 3, :] = T_world64[..., 3, :]  # keep the caller's last row, so a bad one is still reported
+        T_body = np.broadcast_to(T_body, (*lead, 4, 4)).astype(real_dtype(pose, target))
+        if seed is not None:
+            seed = _broadcast_to_lead(seed, 1, lead)
+        return self._arm_ik(T_body, seed)
+
+    def _arm_ik(self, T_body, seed):
+        return self._arm.ik_nearest(T_body, seed)
+
+    def _pose_and_q(self, body_pose, q, seq):
+        pose = as_real(body_pose, "body_pose")
+        fmt, pose_lead = pose_format(pose)
+        code = sequence_code(seq)
+        q = as_real(q, self._q_name)
+        q_lead = check_trailing(q, self._q_name, (3 * len(self._legs),))
+        if q_lead != pose_lead:
+            lead = broadcast_lead(body_pose=(pose_lead, pose.shape), **{self._q_name: (q_lead, q.shape)})
+            pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
+            q = _broadcast_to_lead(q, 1, lead)
+        return pose, q, fmt, code
+
+    def _world_from_body(self, body_pose, seq) -> tuple[np.ndarray, np.ndarray]:
+        """(T, pose): world <- body transforms (..., 4, 4) in float64, NaN for every pose the
+        core rejects (body_transform checks them as the core does), and ``body_pose`` as an array."""
+        pose = as_real(body_pose, "body_pose")
+        return body_transform(pose, seq), pose
+
+    def __reduce__(self):
+        return (_rebuild_robot, self._source)
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, legs={self._leg_names}, arm={'yes' if self._arm is not None else 'no'})"
+
+
+def _rebuild_robot(text, feet, contact_offset, nominal) -> Robot:
+    return Robot.from_urdf_string(text, feet=feet, contact_offset=contact_offset, nominal=nominal)
