@@ -229,8 +229,9 @@ def p2p_quintic(t: np.ndarray, q0: np.ndarray, qf: np.ndarray, tf: float):
     return q0 + D * s, D * ds, D * dds
 
 
-def p2p_trapezoid(t: np.ndarray, q0: np.ndarray, qf: np.ndarray, a: np.ndarray, v: np.ndarray,
-                  ta: np.ndarray, tf: float):
+def p2p_trapezoid(
+    t: np.ndarray, q0: np.ndarray, qf: np.ndarray, a: np.ndarray, v: np.ndarray, ta: np.ndarray, tf: float
+):
     """q, qd, qdd (N, n) of bang-coast-bang axes with signed acceleration a, cruise v and ramp ta."""
     tc = np.clip(t, 0.0, tf)[:, None]
     r = tf - tc
@@ -241,8 +242,16 @@ def p2p_trapezoid(t: np.ndarray, q0: np.ndarray, qf: np.ndarray, a: np.ndarray, 
     return q, qd, qdd
 
 
-def linear_path(t: np.ndarray, p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray,
-                V: float, A: float, tf: float) -> np.ndarray:
+def linear_path(
+    t: np.ndarray,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    q0: np.ndarray,
+    q1: np.ndarray,
+    V: float,
+    A: float,
+    tf: float,
+) -> np.ndarray:
     """(N, 4, 4) poses of a straight line with a trapezoidal s(t) (cruise V, acceleration A) and slerp."""
     tc = np.clip(t, 0.0, tf)
     ta = V / A
@@ -292,7 +301,9 @@ def rpp_leg_ik_one_branch(p: np.ndarray, a, b, c, signs) -> np.ndarray:
 CHUNK = 32768
 
 
-def robot_body_ik_chunked(poses: np.ndarray, feet: np.ndarray, hips: np.ndarray, legs: list[tuple]) -> np.ndarray:
+def robot_body_ik_chunked(
+    poses: np.ndarray, feet: np.ndarray, hips: np.ndarray, legs: list[tuple]
+) -> np.ndarray:
     """Whole-body IK for any number of RPP legs (a, b, c, signs), one branch, in 32768-row chunks
     (so that the temporaries stay in cache: the strong NumPy form)."""
     n_legs = len(legs)

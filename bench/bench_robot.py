@@ -22,7 +22,14 @@ SPOT_LEGS = [(leg.a, leg.b, leg.c, leg.signs) for leg in SPOT.legs]
 
 def poses(n: int, height: float) -> np.ndarray:
     rng = np.random.default_rng(0)
-    p = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0]) + rng.normal(0, 1, (n, 6)) * [0.02, 0.02, 0.02, 0.05, 0.05, 0.05]
+    p = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0]) + rng.normal(0, 1, (n, 6)) * [
+        0.02,
+        0.02,
+        0.02,
+        0.05,
+        0.05,
+        0.05,
+    ]
     return p[0] if n == 1 else p
 
 
@@ -31,7 +38,9 @@ def test_baseline_agrees_with_spotkin():
         p = poses(5000, height)
         res = robot.body_ik(p, feet)
         assert (res.status == 0).all()
-        np.testing.assert_allclose(robot_body_ik_chunked(p, feet, robot.hip_positions, legs), res.q, atol=1e-9)
+        np.testing.assert_allclose(
+            robot_body_ik_chunked(p, feet, robot.hip_positions, legs), res.q, atol=1e-9
+        )
 
 
 @pytest.mark.parametrize("n", [1, 1_000, 1_000_000])
@@ -39,7 +48,16 @@ def test_baseline_agrees_with_spotkin():
 def test_go2_body_ik(measure, impl, n):
     p = poses(n, 0.28)
     if impl.startswith("numpy"):
-        measure("go2.body_ik", n, impl, robot_body_ik_chunked, np.atleast_2d(p), GO2_FEET, GO2.hip_positions, GO2_LEGS)
+        measure(
+            "go2.body_ik",
+            n,
+            impl,
+            robot_body_ik_chunked,
+            np.atleast_2d(p),
+            GO2_FEET,
+            GO2.hip_positions,
+            GO2_LEGS,
+        )
     else:
         measure("go2.body_ik", n, impl, GO2.body_ik, p, GO2_FEET)
 
@@ -68,7 +86,9 @@ ARM_MDH = [
 ARM_URDF = sk.Robot.from_urdf(sk.robots.path("spot_with_arm")).chain("arm_hand")
 _BARE = sk.Chain.from_mdh(ARM_MDH, base=sk.translation(_A["mount"]))
 ARM_DH = sk.Chain.from_mdh(
-    ARM_MDH, base=sk.translation(_A["mount"]), tool=np.linalg.inv(_BARE.fk(np.zeros(6))) @ ARM_URDF.fk(np.zeros(6))
+    ARM_MDH,
+    base=sk.translation(_A["mount"]),
+    tool=np.linalg.inv(_BARE.fk(np.zeros(6))) @ ARM_URDF.fk(np.zeros(6)),
 )
 
 
@@ -102,5 +122,7 @@ def test_urdf_load_time(capsys):
         print()
         for name, seconds in timings.items():
             joints = len(sk.Robot.from_urdf(sk.robots.path(name)).joint_names)
-            print(f"Robot.from_urdf({name}.urdf, {joints} actuated joints): {seconds * 1e3:.2f} ms (best of 20)")
+            print(
+                f"Robot.from_urdf({name}.urdf, {joints} actuated joints): {seconds * 1e3:.2f} ms (best of 20)"
+            )
     assert all(seconds < 0.05 for seconds in timings.values())

@@ -15,7 +15,8 @@ Used by ``tests/test_fuzz.py`` (which documents the modes). Overview:
   ``Leg.fk`` on Spot's front-left leg): its slots, a generator of valid baseline samples, the
   outputs it documents (shape and dtype per leaf), and oracles.
 - A **case** fuzzes one slot (CI) or two (exhaustive) while the other slots keep a valid
-  baseline. The worker builds the arguments, calls, and judges the outcome:
+  baseline (a *light* entry, the same code as another entry's on another robot, runs fewer batch
+  variants in CI). The worker builds the arguments, calls, and judges the outcome:
 
   (a) leaves have the documented shape (leading dimensions kept) and dtype (float32 in, float32
       out; every other real dtype float64);
@@ -35,12 +36,15 @@ Used by ``tests/test_fuzz.py`` (which documents the modes). Overview:
 from __future__ import annotations
 
 import copy
+import functools
 import inspect
 import itertools
 import json
 import math
 import os
+import pathlib
 import pickle
+import re
 import selectors
 import subprocess
 import sys
@@ -876,7 +880,9 @@ def close(a, b, f32: bool) -> bool:
 
 def describe(value, limit: int = 160) -> str:
     try:
-        if isinstance(value, np.ndarray):
+        if isinstance(value, np.ma.MaskedArray):
+            text = f"masked {value!r}"
+        elif isinstance(value, np.ndarray):
             body = np.array2string(value, threshold=20, precision=6, max_line_width=10**6)
             text = f"array(shape={value.shape}, dtype={value.dtype}) {body}"
         else:
@@ -901,7 +907,9 @@ class Entry:
     every flag False, every status INVALID_INPUT); ``nan_rule="check"``: ``check`` judges every
     sample. ``probe(result, kw, ctx)`` judges a result without batch semantics. ``mixed``: the
     output dtype when float32 and float64 inputs mix ("either" or "f64"). ``expect``: the baseline
-    outcome (REJECT for a method this object does not support). ``after(ctx)`` restores state.
+    outcome (REJECT for a method this object does not support; ``why`` then names the error as for an
+    argument). ``also_raises``: exceptions beyond ValueError/TypeError/MemoryError that a rejection
+    may raise (OSError for a file that cannot be read). ``after(ctx)`` restores state.
     """
 
     name: str
@@ -915,10 +923,14 @@ class Entry:
     probe: Callable | None = None
     mixed: str = "either"
     expect: str = ACCEPT
+    why: str = ""  # with expect=REJECT: the error every call must raise ("type", "value", "" either)
     after: Callable | None = None
     combos: tuple = ("float32_all", "batch_all", "nan_all")
     pair_rule: Callable | None = None  # plan {slot: variant} -> an expectation for dependent slots, or None
     overflow_ok: bool = False  # the probe may see Inf when an argument is near the largest float
+    also_raises: tuple = ()
+    light: bool = False  # CI: fewer variants (see cases_for)
+    pairs: int | None = None  # CI: random pairs of variants (default CI_PAIRS, LIGHT_PAIRS if light)
 
     def slot(self, name):
         return next(s for s in self.slots if s.name == name)
@@ -1014,7 +1026,9 @@ def _urdf_joint(name, kind, parent, child, xyz, axis=None, limits=None) -> str:
         body += f'<axis xyz="{axis}"/>'
     if limits is not None:
         body += f'<limit lower="{limits[0]}" upper="{limits[1]}" effort="10" velocity="5"/>'
-    return f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
+    return (
+        f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
+    )
 
 
 def _hexapod_urdf() -> str:
@@ -1023,24 +1037,69 @@ def _hexapod_urdf() -> str:
     first, then thighs, then knees, so the whole-body q interleaves the legs (as tests/test_robot.py's
     hexapod)."""
     legs = [  # name, hip origin, axes, knee limits, a, b, c
-        ("L1", "0.3 0.12 0", ("1 0 0", "0 1 0", "0 1 0"), (-2.6, -0.2), "0 0.08 0", "0.02 0 -0.2", "0 0 -0.21"),
-        ("R1", "0.31 -0.1 0.01", ("-1 0 0", "0 -1 0", "0 -1 0"), (0.2, 2.6), "0 -0.07 0.01", "0.02 0 -0.2",
-         "0 0 -0.21"),
-        ("L2", "0.02 0.15 -0.01", ("1 0 0", "0 -1 0", "0 1 0"), (-2.6, -0.2), "0 0.08 0", "-0.015 0.005 -0.22",
-         "0 0 -0.21"),
-        ("R2", "-0.01 -0.16 0", ("1 0 0", "0 1 0", "0 -1 0"), (0.2, 2.6), "0.01 -0.09 0", "0.02 0 -0.2",
-         "0 0 -0.21"),
-        ("L3", "-0.33 0.11 0.005", ("-1 0 0", "0 1 0", "0 1 0"), (-2.6, -0.2), "0 0.08 0", "0.02 0 -0.2",
-         "0.01 0.01 -0.2"),
-        ("R3", "-0.3 -0.12 -0.02", ("-1 0 0", "0 -1 0", "0 1 0"), (-2.6, -0.2), "0 -0.085 -0.01", "0.02 0 -0.2",
-         "0 0 -0.21"),
+        (
+            "L1",
+            "0.3 0.12 0",
+            ("1 0 0", "0 1 0", "0 1 0"),
+            (-2.6, -0.2),
+            "0 0.08 0",
+            "0.02 0 -0.2",
+            "0 0 -0.21",
+        ),
+        (
+            "R1",
+            "0.31 -0.1 0.01",
+            ("-1 0 0", "0 -1 0", "0 -1 0"),
+            (0.2, 2.6),
+            "0 -0.07 0.01",
+            "0.02 0 -0.2",
+            "0 0 -0.21",
+        ),
+        (
+            "L2",
+            "0.02 0.15 -0.01",
+            ("1 0 0", "0 -1 0", "0 1 0"),
+            (-2.6, -0.2),
+            "0 0.08 0",
+            "-0.015 0.005 -0.22",
+            "0 0 -0.21",
+        ),
+        (
+            "R2",
+            "-0.01 -0.16 0",
+            ("1 0 0", "0 1 0", "0 -1 0"),
+            (0.2, 2.6),
+            "0.01 -0.09 0",
+            "0.02 0 -0.2",
+            "0 0 -0.21",
+        ),
+        (
+            "L3",
+            "-0.33 0.11 0.005",
+            ("-1 0 0", "0 1 0", "0 1 0"),
+            (-2.6, -0.2),
+            "0 0.08 0",
+            "0.02 0 -0.2",
+            "0.01 0.01 -0.2",
+        ),
+        (
+            "R3",
+            "-0.3 -0.12 -0.02",
+            ("-1 0 0", "0 -1 0", "0 1 0"),
+            (-2.6, -0.2),
+            "0 -0.085 -0.01",
+            "0.02 0 -0.2",
+            "0 0 -0.21",
+        ),
     ]
     links = ['<link name="base"/>']
     joints = [[], [], [], []]
     for name, hip, axes, knee, a, b, c in legs:
         parts = [f"{name}_{part}" for part in ("hip", "thigh", "calf", "foot")]
         links += [f'<link name="{part}"/>' for part in parts]
-        joints[0].append(_urdf_joint(f"{name}_hip_joint", "revolute", "base", parts[0], hip, axes[0], (-0.7, 0.7)))
+        joints[0].append(
+            _urdf_joint(f"{name}_hip_joint", "revolute", "base", parts[0], hip, axes[0], (-0.7, 0.7))
+        )
         joints[1].append(
             _urdf_joint(f"{name}_thigh_joint", "revolute", parts[0], parts[1], a, axes[1], (-2.2, 2.2))
         )
@@ -1118,6 +1177,10 @@ class Context:
         def make():
             if key == "hexapod":
                 return sk.Robot.from_urdf_string(HEXAPOD_URDF)
+            if key == "go2_feet":  # two of the legs, with a contact offset
+                return sk.Robot.from_urdf(
+                    sk.robots.path("go2"), feet=["FL_foot", "RR_foot"], contact_offset=(0.0, 0.0, -0.02)
+                )
             return sk.Robot.from_urdf(sk.robots.path(ROBOT_FILES[key]))
 
         return self.spot if key == "spot" else self._get(("robot", key), make)
@@ -1148,6 +1211,30 @@ class Context:
             return q
 
         return self._get(("nominal", key), make)
+
+    def files(self):
+        """URDF files for Robot.from_urdf: name -> path (in a temporary folder of this worker)."""
+
+        def make():
+            folder = tempfile.TemporaryDirectory(prefix="spotkin-fuzz-")
+            self._cache["folder"] = folder  # removed at exit
+            go2 = _go2_text()
+            body = go2.split("?>", 1)[1] if go2.startswith("<?xml") else go2
+            contents = {
+                "latin1": _latin1_urdf(),
+                "utf16": ('<?xml version="1.0" encoding="UTF-16"?>' + body).encode("utf-16"),
+                "empty": b"",
+                "not_xml": b"hello",
+                "loop": _bad_urdfs()["loop"][0].encode(),
+            }
+            paths = {"missing": os.path.join(folder.name, "missing.urdf"), "directory": folder.name}
+            for name, data in contents.items():
+                paths[name] = os.path.join(folder.name, f"{name}.urdf")
+                with open(paths[name], "wb") as file:
+                    file.write(data)
+            return paths
+
+        return self._get("files", make)
 
     def chain(self, key):
         def make():
@@ -1519,6 +1606,14 @@ def _leg_entries():
 
 # -- the arm --
 
+RIGID_EXTRA = {  # (4, 4) tools and bases
+    "scaled": (lambda c, v: 2 * np.eye(4), REJECT, "value"),
+    "last_row": (lambda c, v: np.diag([1.0, 1.0, 1.0, 2.0]), REJECT, "value"),
+    "zeros": (lambda c, v: np.zeros((4, 4)), REJECT, "value"),
+    "reflect": (lambda c, v: np.diag([-1.0, 1.0, 1.0, 1.0]), REJECT, "value"),
+    "rigid": (lambda c, v: rigid(euler_matrix([0.3, 0.2, 0.1]), [0.05, 0, 0.02]), ACCEPT, ""),
+}
+
 
 def _arm_entries():
     def arm_q(c, rng, n):
@@ -1599,13 +1694,7 @@ def _arm_entries():
             return "a pickled copy differs"
         return None
 
-    tool_extra = {
-        "scaled": (lambda c, v: 2 * np.eye(4), REJECT, "value"),
-        "last_row": (lambda c, v: np.diag([1.0, 1.0, 1.0, 2.0]), REJECT, "value"),
-        "zeros": (lambda c, v: np.zeros((4, 4)), REJECT, "value"),
-        "reflect": (lambda c, v: np.diag([-1.0, 1.0, 1.0, 1.0]), REJECT, "value"),
-        "rigid": (lambda c, v: rigid(euler_matrix([0.3, 0.2, 0.1]), [0.05, 0, 0.02]), ACCEPT, ""),
-    }
+    tool_extra = RIGID_EXTRA
     register(
         name="SpotArm",
         covers="spotkin.SpotArm",
@@ -1637,8 +1726,8 @@ def _arm_entries():
 
 
 def _chain_entries(tool_extra):
-    for key in CHAIN_ROWS:
-        dof = len(CHAIN_ROWS[key])
+    for key in (*CHAIN_ROWS, *URDF_CHAINS):
+        dof = len(CHAIN_ROWS[key]) if key in CHAIN_ROWS else URDF_CHAINS[key][2]
 
         def get(c, key=key):
             return c.chain(key)
@@ -1681,6 +1770,7 @@ def _chain_entries(tool_extra):
         q_slot = angle_slot("q", dof)
         tag = f"[{key}]"
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.fk{tag}",
             covers="spotkin.Chain.fk",
             call=lambda c, get=get, **k: get(c).fk(**k),
@@ -1690,6 +1780,7 @@ def _chain_entries(tool_extra):
             check=fk_check,
         )
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.frames{tag}",
             covers="spotkin.Chain.frames",
             call=lambda c, get=get, **k: get(c).frames(**k),
@@ -1699,6 +1790,7 @@ def _chain_entries(tool_extra):
             check=frames_check,
         )
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.jacobian{tag}",
             covers="spotkin.Chain.jacobian",
             call=lambda c, get=get, **k: get(c).jacobian(**k),
@@ -1708,6 +1800,7 @@ def _chain_entries(tool_extra):
             check=finite_check,
         )
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.position_jacobian{tag}",
             covers="spotkin.Chain.position_jacobian",
             call=lambda c, get=get, **k: get(c).position_jacobian(**k),
@@ -1725,6 +1818,7 @@ def _chain_entries(tool_extra):
 
         point_fk, pose_fk = fk_point(), fk_pose()
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.ik_position{tag}",
             covers="spotkin.Chain.ik_position",
             call=lambda c, get=get, **k: get(c).ik_position(**k),
@@ -1737,6 +1831,7 @@ def _chain_entries(tool_extra):
             )(x, out, kw, c),
         )
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.ik{tag}",
             covers="spotkin.Chain.ik",
             call=lambda c, get=get, **k: get(c).ik(**k),
@@ -1754,6 +1849,7 @@ def _chain_entries(tool_extra):
             else Batch("target", (4, 4), pose="T", aliases=("T",))
         )
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.ik_nearest{tag}",
             covers="spotkin.Chain.ik_nearest",
             call=lambda c, get=get, **k: get(c).ik_nearest(**k),
@@ -1788,6 +1884,7 @@ def _chain_entries(tool_extra):
 
         ikd_skip = ("batch2x1", "single", "list", "nan_single", "scalar", "zero_d", "empty2", "valid")
         register(
+            light=key in URDF_CHAINS,  # the DH chains' kernels
             name=f"Chain.ik_differential{tag}",
             covers="spotkin.Chain.ik_differential",
             call=lambda c, get=get, **k: get(c).ik_differential(**k),
@@ -1954,7 +2051,6 @@ class BodySpec:
 
 BODY_METHODS = ("body_ik", "body_fk", "body_jacobian", "body_rates", "fk_all", "arm_ik_world")
 SPOT_BODY = BodySpec("spot", "Spot", "q12")
-ROBOT_BODIES = (BodySpec("go2"), BodySpec("hexapod"))
 
 
 def arm_limits(arm) -> np.ndarray:
@@ -1977,7 +2073,11 @@ def knee_point(leg, q) -> np.ndarray:
             -1,
         )
         return np.stack(
-            [v[..., 0], np.cos(t1) * v[..., 1] - np.sin(t1) * v[..., 2], np.sin(t1) * v[..., 1] + np.cos(t1) * v[..., 2]],
+            [
+                v[..., 0],
+                np.cos(t1) * v[..., 1] - np.sin(t1) * v[..., 2],
+                np.sin(t1) * v[..., 1] + np.cos(t1) * v[..., 2],
+            ],
             -1,
         )
 
@@ -1997,7 +2097,9 @@ def _body_base(spec: BodySpec):
             q = c.nominal(spec.key) + rng.uniform(-0.1, 0.1, (n, 3 * legs))
             seed = c.nominal(spec.key) + rng.uniform(-0.1, 0.1, (n, 3 * legs))
             q_arm = None if robot.arm is None else in_limits(arm_limits(robot.arm), rng, n, margin=0.1)
-        feet = np.broadcast_to(robot.stance_feet(height), (n, legs, 3)) + rng.uniform(-0.02, 0.02, (n, legs, 3))
+        feet = np.broadcast_to(robot.stance_feet(height), (n, legs, 3)) + rng.uniform(
+            -0.02, 0.02, (n, legs, 3)
+        )
         world = np.array([pose_matrix(p) for p in pose])
         out = {
             "body_pose": pose,
@@ -2017,9 +2119,17 @@ def _body_base(spec: BodySpec):
     return base
 
 
-def _body_entries(spec: BodySpec, methods=BODY_METHODS):
+def _body_entries(spec: BodySpec, methods=BODY_METHODS, light=()):
     """The whole-body ``methods`` of one robot, against the documented formulas per leg (n legs,
-    each with its columns of the whole-body q)."""
+    each with its columns of the whole-body q); those in ``light`` are light entries (the code is
+    Spot's: the robot changes the numbers and shapes, not the paths)."""
+    first = len(REGISTRY)
+    _body_methods(spec, methods)
+    for entry in REGISTRY[first:]:
+        entry.light = any(entry.name == spec.name(method) for method in light)
+
+
+def _body_methods(spec, methods):
     qn = spec.qname
     base = _body_base(spec)
 
@@ -2069,21 +2179,21 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
 
     if "body_ik" in methods:
         register(
-        name=spec.name("body_ik"),
-        covers=spec.covers("body_ik"),
-        call=lambda c, **k: robot_of(c).body_ik(**k),
-        slots=[
-            body_pose_slot(),
-            Batch("feet", (ROBOT_LEGS[spec.key], 3)),
-            angle_slot("seed", 3 * ROBOT_LEGS[spec.key], optional=True, default="omit"),
-            seq_slot(),
-            Choice("fallback", "nearest", ("nearest", "nan"), default="omit"),
-        ],
-        baseline=base,
-        outputs=outs(("float", (3 * ROBOT_LEGS[spec.key],)), ("status", (ROBOT_LEGS[spec.key],))),
-        nan_rule="check",
-        check=body_ik_check,
-    )
+            name=spec.name("body_ik"),
+            covers=spec.covers("body_ik"),
+            call=lambda c, **k: robot_of(c).body_ik(**k),
+            slots=[
+                body_pose_slot(),
+                Batch("feet", (ROBOT_LEGS[spec.key], 3)),
+                angle_slot("seed", 3 * ROBOT_LEGS[spec.key], optional=True, default="omit"),
+                seq_slot(),
+                Choice("fallback", "nearest", ("nearest", "nan"), default="omit"),
+            ],
+            baseline=base,
+            outputs=outs(("float", (3 * ROBOT_LEGS[spec.key],)), ("status", (ROBOT_LEGS[spec.key],))),
+            nan_rule="check",
+            check=body_ik_check,
+        )
 
     def legs_bad(x, c):
         return [not finite(x[qn][cols]) for cols in c.columns(spec.key)]
@@ -2112,15 +2222,15 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
     n = ROBOT_LEGS[spec.key]
     if "body_fk" in methods:
         register(
-        name=spec.name("body_fk"),
-        covers=spec.covers("body_fk"),
-        call=lambda c, **k: robot_of(c).body_fk(**k),
-        slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
-        baseline=base,
-        outputs=outs(("float", (n, 3))),
-        nan_rule="check",
-        check=body_fk_check,
-    )
+            name=spec.name("body_fk"),
+            covers=spec.covers("body_fk"),
+            call=lambda c, **k: robot_of(c).body_fk(**k),
+            slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
+            baseline=base,
+            outputs=outs(("float", (n, 3))),
+            nan_rule="check",
+            check=body_fk_check,
+        )
 
     def body_jacobian_check(x, out, kw, c):
         (J,) = out
@@ -2152,15 +2262,15 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
 
     if "body_jacobian" in methods:
         register(
-        name=spec.name("body_jacobian"),
-        covers=spec.covers("body_jacobian"),
-        call=lambda c, **k: robot_of(c).body_jacobian(**k),
-        slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
-        baseline=base,
-        outputs=outs(("float", (3 * n, 6 + 3 * n))),
-        nan_rule="check",
-        check=body_jacobian_check,
-    )
+            name=spec.name("body_jacobian"),
+            covers=spec.covers("body_jacobian"),
+            call=lambda c, **k: robot_of(c).body_jacobian(**k),
+            slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
+            baseline=base,
+            outputs=outs(("float", (3 * n, 6 + 3 * n))),
+            nan_rule="check",
+            check=body_jacobian_check,
+        )
 
     def body_rates_check(x, out, kw, c):
         qd, singular = out
@@ -2185,7 +2295,10 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
             v, w = x["twist"][:3].astype(np.float64), x["twist"][3:].astype(np.float64)
             with np.errstate(all="ignore"):
                 rhs = -R.T @ (v + np.cross(w, R @ (hips[k] + leg.fk(qk))))
-                overflow = not finite(rhs) or (sigma > 0 and not finite(np.linalg.solve(J, rhs)))
+                try:
+                    overflow = not finite(rhs) or (sigma > 0 and not finite(np.linalg.solve(J, rhs)))
+                except np.linalg.LinAlgError:  # exactly singular (a stretched leg at integer angles)
+                    overflow = False
             if overflow:
                 continue  # the velocities themselves overflow: NaN and singular, or Inf
             if singular[k]:
@@ -2199,21 +2312,21 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
 
     if "body_rates" in methods:
         register(
-        name=spec.name("body_rates"),
-        covers=spec.covers("body_rates"),
-        call=lambda c, **k: robot_of(c).body_rates(**k),
-        slots=[
-            body_pose_slot(),
-            angle_slot(qn, 3 * n),
-            Batch("twist", (6,)),
-            seq_slot(),
-            Real("tolerance", 1e-6, "nonneg", default="omit"),
-        ],
-        baseline=base,
-        outputs=outs(("f64", (3 * n,)), ("bool", (n,))),
-        nan_rule="check",
-        check=body_rates_check,
-    )
+            name=spec.name("body_rates"),
+            covers=spec.covers("body_rates"),
+            call=lambda c, **k: robot_of(c).body_rates(**k),
+            slots=[
+                body_pose_slot(),
+                angle_slot(qn, 3 * n),
+                Batch("twist", (6,)),
+                seq_slot(),
+                Real("tolerance", 1e-6, "nonneg", default="omit"),
+            ],
+            baseline=base,
+            outputs=outs(("f64", (3 * n,)), ("bool", (n,))),
+            nan_rule="check",
+            check=body_rates_check,
+        )
 
     def fk_all_outputs(args, kw):
         hand = Out("hand", (4, 4)) if args["q_arm"].present else Out("none")
@@ -2268,15 +2381,15 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
         )
     if "fk_all" in methods:
         register(
-        name=spec.name("fk_all"),
-        covers=spec.covers("fk_all"),
-        call=lambda c, **k: robot_of(c).fk_all(**k),
-        slots=[body_pose_slot(), angle_slot(qn, 3 * n), q_arm, seq_slot()],
-        baseline=base,
-        outputs=fk_all_outputs,
-        nan_rule="check",
-        check=fk_all_check,
-    )
+            name=spec.name("fk_all"),
+            covers=spec.covers("fk_all"),
+            call=lambda c, **k: robot_of(c).fk_all(**k),
+            slots=[body_pose_slot(), angle_slot(qn, 3 * n), q_arm, seq_slot()],
+            baseline=base,
+            outputs=fk_all_outputs,
+            nan_rule="check",
+            check=fk_all_check,
+        )
 
     def arm_world_check(x, out, kw, c):
         q, status = out
@@ -2306,24 +2419,24 @@ def _body_entries(spec: BodySpec, methods=BODY_METHODS):
 
     if "arm_ik_world" in methods:
         register(
-        name=spec.name("arm_ik_world"),
-        covers=spec.covers("arm_ik_world"),
-        call=lambda c, **k: robot_of(c).arm_ik_world(**k),
-        slots=[
-            body_pose_slot(),
-            Batch("T_world", (4, 4), pose="T", quat_ok=False),
-            angle_slot("seed", 6, optional=True, default="omit", dtype_driver=False),
-            seq_slot(),
-        ],
-        baseline=arm_base,
-        outputs=outs(("float", (6,)), ("status", ())),
-        mixed="f64",
-        nan_rule="check",
-        check=arm_world_check,
-        # "this robot has no arm": ValueError whatever the arguments
-        expect=ACCEPT if ROBOT_ARMS[spec.key] else REJECT,
-        why="" if ROBOT_ARMS[spec.key] else "value",
-    )
+            name=spec.name("arm_ik_world"),
+            covers=spec.covers("arm_ik_world"),
+            call=lambda c, **k: robot_of(c).arm_ik_world(**k),
+            slots=[
+                body_pose_slot(),
+                Batch("T_world", (4, 4), pose="T", quat_ok=False),
+                angle_slot("seed", 6, optional=True, default="omit", dtype_driver=False),
+                seq_slot(),
+            ],
+            baseline=arm_base,
+            outputs=outs(("float", (6,)), ("status", ())),
+            mixed="f64",
+            nan_rule="check",
+            check=arm_world_check,
+            # "this robot has no arm": ValueError whatever the arguments
+            expect=ACCEPT if ROBOT_ARMS[spec.key] else REJECT,
+            why="" if ROBOT_ARMS[spec.key] else "value",
+        )
 
 
 ROBOT_LEGS = {"spot": 4, "go2": 4, "hexapod": 6, "spot_urdf": 4}
@@ -2432,6 +2545,935 @@ def _spot_entries():
             )
         ],
         probe=spot_probe,
+    )
+
+
+# -- robots from URDF, their legs and chains --
+
+
+@functools.cache
+def _go2_text() -> str:
+    return sk.robots.text("go2")
+
+
+@functools.cache
+def _go2_kinematics() -> str:
+    return re.sub(r"<inertial>.*?</inertial>", "", _go2_text(), flags=re.S)
+
+
+def _fmt(v) -> str:
+    """A vector as spotkin.urdf.describe prints it."""
+    return "(" + ", ".join(f"{round(float(x), 12) + 0.0:.6g}" for x in np.ravel(v)) + ")"
+
+
+def _urdf(body: str, name: str = "r") -> str:
+    return f'<?xml version="1.0"?><robot name="{name}">{body}</robot>'
+
+
+def _one_leg(prefix="L", parent="base", hip="0.2 0.1 0") -> str:
+    """Links and joints of one roll-pitch-pitch leg hanging from ``parent``."""
+    names = [f"{prefix}_{part}" for part in ("hip", "thigh", "calf", "foot")]
+    return "".join(f'<link name="{n}"/>' for n in names) + "".join(
+        [
+            _urdf_joint(f"{prefix}_hip_joint", "revolute", parent, names[0], hip, "1 0 0", (-0.7, 0.7)),
+            _urdf_joint(
+                f"{prefix}_thigh_joint", "revolute", names[0], names[1], "0 0.08 0", "0 1 0", (-2, 2)
+            ),
+            _urdf_joint(
+                f"{prefix}_calf_joint", "revolute", names[1], names[2], "0 0 -0.2", "0 1 0", (-2.6, -0.2)
+            ),
+            _urdf_joint(f"{prefix}_foot_joint", "fixed", names[2], names[3], "0 0 -0.2"),
+        ]
+    )
+
+
+@functools.cache
+def _bad_urdfs() -> dict:
+    """Malformed or unusable descriptions: name -> (text, expect, why)."""
+    leg = '<link name="base"/>' + _one_leg()
+    go2 = _go2_text()
+    laughs = "".join(f'<!ENTITY l{i + 1} "{f"&l{i};" * 10}">' for i in range(9))
+    return {
+        "empty": ("", REJECT, "value"),
+        "whitespace": (" \n\t", REJECT, "value"),
+        "not_xml": ("hello", REJECT, "value"),
+        "truncated": (go2[: len(go2) // 2], REJECT, "value"),
+        "not_robot": ('<sdf version="1.6"/>', REJECT, "value"),
+        "no_links": ('<robot name="r"/>', REJECT, "value"),
+        "loop": (
+            _urdf(
+                '<link name="base"/><link name="a"/><link name="b"/>'
+                + _urdf_joint("j0", "fixed", "base", "a", "0 0 0")
+                + _urdf_joint("j1", "revolute", "a", "b", "0 0 0", "1 0 0", (-1, 1))
+                + _urdf_joint("j2", "revolute", "b", "a", "0 0 0", "1 0 0", (-1, 1))
+            ),
+            REJECT,
+            "value",
+        ),
+        "self_parent": (
+            _urdf(leg.replace('parent link="L_thigh"', 'parent link="L_calf"')),
+            REJECT,
+            "value",
+        ),
+        "two_roots": (_urdf(leg + '<link name="orphan"/>'), REJECT, "value"),
+        "undeclared_link": (_urdf(leg.replace('<link name="L_calf"/>', "")), REJECT, "value"),
+        "duplicate_link": (_urdf(leg + '<link name="L_calf"/>'), REJECT, "value"),
+        "duplicate_joint": (_urdf(leg.replace("L_calf_joint", "L_thigh_joint")), REJECT, "value"),
+        "no_limit": (
+            _urdf(leg.replace('<limit lower="-2.6" upper="-0.2" effort="10" velocity="5"/>', "")),
+            REJECT,
+            "value",
+        ),
+        "inverted_limit": (
+            _urdf(leg.replace('lower="-2.6" upper="-0.2"', 'lower="-0.2" upper="-2.6"')),
+            REJECT,
+            "value",
+        ),
+        "nan_origin": (_urdf(leg.replace('xyz="0 0 -0.2"', 'xyz="nan 0 -0.2"', 1)), REJECT, "value"),
+        "inf_origin": (_urdf(leg.replace('xyz="0 0 -0.2"', 'xyz="1e999 0 -0.2"', 1)), REJECT, "value"),
+        "short_origin": (_urdf(leg.replace('xyz="0 0 -0.2"', 'xyz="0 -0.2"', 1)), REJECT, "value"),
+        "word_origin": (_urdf(leg.replace('xyz="0 0 -0.2"', 'xyz="0 zero -0.2"', 1)), REJECT, "value"),
+        "zero_axis": (_urdf(leg.replace('xyz="0 1 0"', 'xyz="0 0 0"', 1)), REJECT, "value"),
+        "floating": (_urdf(leg.replace('type="fixed"', 'type="floating"')), REJECT, "value"),
+        "unknown_type": (_urdf(leg.replace('type="fixed"', 'type="ball"')), REJECT, "value"),
+        "no_parent": (_urdf(leg.replace('<parent link="L_calf"/>', "")), REJECT, "value"),
+        "negative_mass": (
+            _urdf(
+                leg.replace(
+                    '<link name="L_hip"/>',
+                    '<link name="L_hip"><inertial><mass value="-1"/>'
+                    '<inertia ixx="1" iyy="1" izz="1"/></inertial></link>',
+                )
+            ),
+            REJECT,
+            "value",
+        ),
+        "asymmetric_inertia": (
+            _urdf(
+                leg.replace(
+                    '<link name="L_hip"/>',
+                    '<link name="L_hip"><inertial><mass value="1"/>'
+                    '<inertia ixx="1" iyy="1" izz="-5"/></inertial></link>',
+                )
+            ),
+            REJECT,
+            "value",
+        ),
+        "no_legs": (  # a 2-joint arm only: nothing recognised
+            _urdf(
+                '<link name="base"/><link name="a"/><link name="b"/>'
+                + _urdf_joint("j1", "revolute", "base", "a", "0 0 0.1", "0 0 1", (-1, 1))
+                + _urdf_joint("j2", "revolute", "a", "b", "0 0 0.3", "0 1 0", (-1, 1))
+            ),
+            REJECT,
+            "value",
+        ),
+        "yaw_leg": (_urdf(leg.replace('xyz="1 0 0"', 'xyz="0 0 1"', 1)), REJECT, "value"),  # z-y-y
+        "laughs": (  # entity expansion (a billion laughs): refused by the parser, quickly
+            f'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY l0 "lol">{laughs}]><robot name="&l9;">'
+            '<link name="a"/></robot>',
+            REJECT,
+            "value",
+        ),
+        "external_entity": (
+            '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
+            '<robot name="&x;"><link name="a"/></robot>',
+            REJECT,
+            "value",
+        ),
+        "nul": (go2.replace("<robot", "<robot\0", 1), REJECT, "value"),
+        "surrogate": (go2.replace('name="base"', 'name="\ud800"', 1), REJECT, ""),
+    }
+
+
+@functools.cache
+def _odd_urdfs() -> dict:
+    """Unusual but valid descriptions: name -> text."""
+    go2 = _go2_text()
+    body = go2.split("?>", 1)[1] if go2.startswith("<?xml") else go2
+    return {
+        "comments": go2.replace("<link", "<!-- a comment --><link", 3),
+        "no_declaration": body,
+        "extra_tags": go2.replace(
+            "</robot>",
+            '<gazebo reference="base"><material>x</material></gazebo><transmission name="t"/>'
+            '<material name="m"/></robot>',
+        ),
+        "mimic": _urdf(
+            '<link name="base"/>'
+            + _one_leg()
+            + _one_leg("R", hip="0.2 -0.1 0").replace(
+                '<limit lower="-2.6"', '<mimic joint="L_calf_joint"/><limit lower="-2.6"', 1
+            )
+        ),
+        "one_leg": _urdf('<link name="base"/>' + _one_leg()),
+        "deep_fixed": _urdf(  # the leg hangs below 300 fixed links
+            '<link name="base"/>'
+            + "".join(f'<link name="f{i}"/>' for i in range(300))
+            + "".join(
+                _urdf_joint(f"fj{i}", "fixed", "base" if i == 0 else f"f{i - 1}", f"f{i}", "0 0 0.001")
+                for i in range(300)
+            )
+            + _one_leg(parent="f299")
+        ),
+    }
+
+
+def _latin1_urdf() -> bytes:
+    """Go2 declared and encoded as ISO-8859-1, with a non-ASCII link name (not a leg's)."""
+    go2 = _go2_text()
+    body = go2.split("?>", 1)[1] if go2.startswith("<?xml") else go2
+    return ('<?xml version="1.0" encoding="ISO-8859-1"?>' + body.replace('"radar"', '"r\xe4dar"')).encode(
+        "latin-1"
+    )
+
+
+GO2_FEET = ("FL_foot", "FR_foot", "RL_foot", "RR_foot")
+GO2_NOMINAL = {
+    "FL": (0.0, 0.85, -1.7),
+    "FR": (0.05, 0.9, -1.6),
+    "RL": (0.0, 0.8, -1.5),
+    "RR": (-0.1, 1.0, -1.8),
+}
+
+
+def _robot_options():
+    """Custom slots for from_urdf's keyword options, valid for Go2's names."""
+
+    def arg(value, expect=ACCEPT, why=""):
+        return lambda c, r, b: Arg(value, expect, why)
+
+    feet = Custom(
+        "feet",
+        {
+            "none": arg(None),
+            "all": arg(list(GO2_FEET)),
+            "tuple": arg(GO2_FEET),
+            "reversed": arg(GO2_FEET[::-1]),
+            "one": arg("FL_foot"),
+            "two": arg(["FL_foot", "RR_foot"]),
+            "calf": arg(["FL_calf"], REJECT, "value"),  # the knee itself: no knee-to-foot vector
+            "thigh": arg(["FL_thigh"], REJECT, "value"),  # two joints above it
+            "base": arg(["base"], REJECT, "value"),
+            "unknown": arg(["FL_foot", "nope"], REJECT, "value"),
+            "twice": arg(["FL_foot", "FL_foot"], REJECT, "value"),
+            "same_leg": arg(["FL_foot", "FL_calf_rotor"], REJECT, "value"),
+            "empty": arg([], REJECT, "value"),
+            "int": arg(1, REJECT),
+            "none_item": arg([None], REJECT),
+            "nested": arg([["FL_foot"]], REJECT),
+            "bytes": arg(b"FL_foot", REJECT),
+        },
+        default="omit",
+    )
+    offset = np.array([0.0, 0.0, -0.02])
+    contact_offset = Custom(
+        "contact_offset",
+        {
+            "none": arg(None),
+            "vector": arg(offset),
+            "list": arg(offset.tolist()),
+            "ints": arg(np.zeros(3, dtype=np.int64)),
+            "float32": arg(offset.astype(np.float32)),
+            "dict": arg({"FL_foot": offset, "RR_foot": (0.01, 0.0, -0.02)}),
+            "dict_unknown": arg({"nope": offset}, REJECT, "value"),
+            "dict_not_foot": arg({"FL_calf": offset}, REJECT, "value"),
+            "dict_nan": arg({"FL_foot": (math.nan, 0.0, 0.0)}, REJECT, "value"),
+            "dict_none": arg({"FL_foot": None}, REJECT),
+            "nan": arg((math.nan, 0.0, 0.0), REJECT, "value"),
+            "inf": arg((0.0, math.inf, 0.0), REJECT, "value"),
+            "short": arg((0.0, 0.0), REJECT, "value"),
+            "2d": arg(np.zeros((4, 3)), REJECT, "value"),
+            "bool": arg(True, REJECT),
+            "str": arg("abc", REJECT),  # documented: TypeError for non-numeric input
+            "complex": arg(offset + 0j, REJECT, "type"),
+            "masked": arg(
+                np.ma.masked_array(offset, [True, False, False]), REJECT
+            ),  # its mask would be ignored
+        },
+        default="omit",
+    )
+    nominal = Custom(
+        "nominal",
+        {
+            "none": arg(None),
+            "one": arg({"FL": GO2_NOMINAL["FL"]}),
+            "all": arg(dict(GO2_NOMINAL)),
+            "forward": arg({"RL": (0.0, -0.6, 1.4)}),  # knee forward: out of the limits, still a slot
+            "array": arg({"FR": np.array(GO2_NOMINAL["FR"], dtype=np.float32)}),
+            "unknown": arg({"XX": (0.0, 0.8, -1.5)}, REJECT, "value"),
+            "nan": arg({"FL": (0.0, math.nan, -1.5)}, REJECT, "value"),
+            "short": arg({"FL": (0.0, 0.8)}, REJECT, "value"),
+            "str_value": arg({"FL": "abc"}, REJECT, "type"),
+            "none_value": arg({"FL": None}, EITHER),
+            "list": arg([(0.0, 0.8, -1.5)], REJECT),
+            "str": arg("FL", REJECT),
+        },
+        default="omit",
+    )
+    return feet, contact_offset, nominal
+
+
+def _option_pairs(plan):
+    """The options name Go2's feet and legs: a subset of feet leaves some nominal stances nameless."""
+    if plan.get("nominal") == "all" and plan.get("feet") in ("one", "two"):
+        return REJECT
+    if plan.get("nominal") in ("forward", "array") and plan.get("feet") in ("one", "two"):
+        return REJECT  # RL, FR not among FL, RR
+    if plan.get("contact_offset") == "dict" and plan.get("feet") == "one":
+        return REJECT  # RR_foot is not a foot then
+    if plan.get("feet") == "calf" and plan.get("contact_offset") in ("vector", "list", "float32"):
+        return ACCEPT  # the offset is the knee-to-foot vector: a leg
+    return None
+
+
+def robot_probe(robot, kw, c):
+    """A robot as its description says: every foot (body_fk) where the URDF tree puts the foot link
+    (plus its contact offset), the nominal stances in the preferred slots, and a faithful pickle."""
+    if not isinstance(robot, sk.Robot):
+        return f"not a Robot: {describe(robot)}"
+    n = robot.n_legs
+    if len(robot.leg_joint_names) != 3 * n or robot.hip_positions.shape != (n, 3) or len(robot.legs) != n:
+        return f"{n} legs but {len(robot.leg_joint_names)} leg joints"
+    model = robot.model
+    specs, _ = sk.urdf.find_legs(model, feet=kw.get("feet"), contact_offset=kw.get("contact_offset"))
+    if tuple(spec.name for spec in specs) != robot.leg_names:
+        return f"legs {robot.leg_names}, the description's {[spec.name for spec in specs]}"
+    q = np.random.default_rng(0).uniform(-0.6, 0.6, 3 * n)
+    pose = [0.1, -0.05, 0.3, 0.1, -0.2, 0.3]
+    T = pose_matrix(pose)
+    feet = robot.body_fk(pose, q)
+    values = dict(zip(robot.leg_joint_names, q.tolist()))
+    for k, spec in enumerate(specs):
+        F = model.placement(spec.foot, values)
+        ref = T[:3, 3] + T[:3, :3] @ (F[:3, 3] + F[:3, :3] @ spec.contact_offset)
+        if not close(feet[k], ref, False):
+            return f"leg {spec.name}: body_fk puts the foot at {feet[k]}, the URDF tree at {ref}"
+    nominal = kw.get("nominal")
+    if isinstance(nominal, dict):
+        for name, stance in nominal.items():
+            if stance is None:
+                continue
+            leg = robot.leg(name)
+            stance = np.asarray(stance, dtype=np.float64)
+            slot = leg.preferred_slot
+            held = leg.ik_all(leg.fk(stance)).q[slot]
+            if not np.allclose(np.angle(np.exp(1j * (held - stance))), 0.0, atol=1e-7):
+                return f"leg {name}: the preferred slot {slot} holds {held}, not the nominal stance {stance}"
+    try:
+        clone = pickle.loads(pickle.dumps(robot))
+    except Exception as error:
+        return f"a pickled copy cannot be rebuilt: {type(error).__name__}: {error}"[:400]
+    if not close(clone.body_fk(pose, q), feet, False):
+        return "a pickled copy differs"
+    if list(clone.model.links) != list(model.links) or clone.joint_names != robot.joint_names:
+        return f"a pickled copy has other names: links {sorted(set(clone.model.links) ^ set(model.links))}"
+    if [leg.preferred_slot for leg in clone.legs] != [leg.preferred_slot for leg in robot.legs]:
+        return "a pickled copy has other preferred slots"
+    return None
+
+
+def chain_of_link_probe(key):
+    """Robot.chain: the URDF's joints, limits and FK (the tree's placements) from base to link."""
+
+    def probe(chain, kw, c):
+        if not isinstance(chain, sk.Chain):
+            return f"not a Chain: {describe(chain)}"
+        model = c.robot(key).model
+        link, base = kw["link"], kw.get("base") or model.root
+        joints = [j for j in model.path(link, base) if j.actuated]
+        if chain.joint_names != tuple(j.name for j in joints) or chain.dof != len(joints):
+            return f"joints {chain.joint_names}, the description's {[j.name for j in joints]}"
+        if not (
+            close(chain.lower, [j.lower for j in joints], False)
+            and close(chain.upper, [j.upper for j in joints], False)
+        ):
+            return "limits differ from the description's"
+        q = np.random.default_rng(1).uniform(-1.0, 1.0, chain.dof)
+        values = {j.name: v for j, v in zip(joints, q.tolist())}
+        ref = np.linalg.inv(model.placement(base)) @ model.placement(link, values)
+        if not close(chain.fk(q), ref, False):
+            return f"fk {describe(chain.fk(q))}, the URDF tree's {describe(ref)}"
+        if not close(pickle.loads(pickle.dumps(chain)).fk(q), ref, False):
+            return "a pickled copy differs"
+        return None
+
+    return probe
+
+
+def link_table(valid, others):
+    """A Custom slot table of link names: valid ones, bad ones, non-strings."""
+    table = {name: (lambda c, r, b, v=value: Arg(v)) for name, value in valid.items()}
+    table.update({name: (lambda c, r, b, v=value: Arg(v, REJECT, "value")) for name, value in others.items()})
+    table.update(
+        {
+            "none": lambda c, r, b: Arg(None, REJECT),
+            "int": lambda c, r, b: Arg(1, REJECT),
+            "bytes": lambda c, r, b: Arg(valid["valid"].encode(), REJECT),
+            "list": lambda c, r, b: Arg([valid["valid"]], REJECT),
+            "np_str": lambda c, r, b: Arg(np.str_(valid["valid"])),
+            "empty": lambda c, r, b: Arg("", REJECT, "value"),
+            "space": lambda c, r, b: Arg(valid["valid"] + " ", REJECT, "value"),
+            "nul": lambda c, r, b: Arg(valid["valid"] + "\0", REJECT, "value"),
+        }
+    )
+    return table
+
+
+@functools.cache
+def _model_of(key):
+    return sk.urdf.parse_urdf(sk.robots.text(ROBOT_FILES.get(key, "spot_with_arm")))
+
+
+def chain_pairs(key, links, bases):
+    """link and base both names: accepted iff the link is below the base with a moving joint between."""
+
+    def rule(plan):
+        link, base = links.get(plan["link"]), bases.get(plan["base"])
+        if link is None or base is None:
+            return None  # not a name: the slots' own expectations
+        model = _model_of(key)
+        try:
+            moving = [j for j in model.path(link, base) if j.actuated]
+        except ValueError:
+            return REJECT
+        return ACCEPT if moving else REJECT
+
+    return rule
+
+
+def _ignored_nominal(plan):
+    """With a preferred_slot, nominal is not used: whether a bad one is still refused is not documented."""
+    given = ("valid", "min", "max", "np_int", "zero_d")
+    if plan["preferred_slot"] in given and plan["nominal"] not in ("omit", "none"):
+        return EITHER
+    return None
+
+
+def geometry_fk(a, b, c, signs, q):
+    """The documented leg FK p = Rx(s1 q1) (a + Ry(s2 q2) (b + Ry(s3 q3) c)), in NumPy."""
+
+    def rx(t):
+        return np.array([[1, 0, 0], [0, math.cos(t), -math.sin(t)], [0, math.sin(t), math.cos(t)]])
+
+    def ry(t):
+        return np.array([[math.cos(t), 0, math.sin(t)], [0, 1, 0], [-math.sin(t), 0, math.cos(t)]])
+
+    s1, s2, s3 = signs
+    return rx(s1 * q[0]) @ (a + ry(s2 * q[1]) @ (b + ry(s3 * q[2]) @ c))
+
+
+def geometry_probe(leg, kw, c):
+    if not isinstance(leg, sk.Leg):
+        return f"not a Leg: {describe(leg)}"
+    a, b, c3 = (np.asarray(kw[k], dtype=np.float64) for k in "abc")
+    signs = np.asarray(kw.get("signs", (1.0, 1.0, 1.0)), dtype=np.float64)
+    for name, got, want in (("a", leg.a, a), ("b", leg.b, b), ("c", leg.c, c3), ("signs", leg.signs, signs)):
+        if not close(got, want, False):
+            return f"leg.{name} is {got}, given {want}"
+    if not close(leg.hip_offset, a[1] + b[1] + c3[1], False):
+        return f"hip_offset {leg.hip_offset}, a_y + b_y + c_y = {a[1] + b[1] + c3[1]}"
+    q = in_limits(leg.limits, np.random.default_rng(2), 6, margin=0.01)
+    p = leg.fk(q)
+    ref = np.array([geometry_fk(a, b, c3, signs, qk) for qk in q])
+    if not close(p, ref, False):
+        return f"fk {describe(p)} is not Rx(s1 q1) (a + Ry(s2 q2) (b + Ry(s3 q3) c)) = {describe(ref)}"
+    if not close(leg.knee(q), knee_point(leg, q), False):
+        return "knee(q) is not Rx(s1 q1) (a + Ry(s2 q2) b)"
+    sol = leg.ik_all(p)
+    for k in range(len(q)):
+        wrapped = np.abs(np.angle(np.exp(1j * (sol.q[k] - q[k])))).max(axis=1)
+        if not (sol.exists[k] & (wrapped < 1e-6)).any():
+            return f"ik_all(fk(q)) does not hold q = {q[k]}: {describe(sol.q[k])}"
+    slot = kw.get("preferred_slot")
+    if slot is not None and leg.preferred_slot != int(slot):
+        return f"preferred_slot {leg.preferred_slot}, given {slot}"
+    nominal = kw.get("nominal")
+    if slot is None and nominal is not None:
+        stance = np.asarray(nominal, dtype=np.float64)
+        held = leg.ik_all(leg.fk(stance)).q[leg.preferred_slot]
+        if not np.allclose(np.angle(np.exp(1j * (held - stance))), 0.0, atol=1e-7):
+            return f"the preferred slot {leg.preferred_slot} holds {held}, not the nominal stance {stance}"
+    clone = pickle.loads(pickle.dumps(leg))
+    if not close(clone.fk(q), p, False) or clone.preferred_slot != leg.preferred_slot:
+        return "a pickled copy differs"
+    return None
+
+
+def joints_fk(placements, axes, types, base, tool, q):
+    """The documented chain FK base · prod(placements[j] · M_j(q_j)) · tool, in NumPy and SciPy."""
+    from scipy.spatial.transform import Rotation
+
+    T = np.array(base, dtype=np.float64)
+    for P, w, kind, value in zip(placements, axes, types, q):
+        w = np.asarray(w, dtype=np.float64) / np.linalg.norm(w)
+        M = np.eye(4)
+        if kind == 0:
+            M[:3, :3] = Rotation.from_rotvec(w * value).as_matrix()
+        else:
+            M[:3, 3] = w * value
+        T = T @ P @ M
+    return T @ tool
+
+
+def from_joints_probe(chain, kw, c):
+    if not isinstance(chain, sk.Chain):
+        return f"not a Chain: {describe(chain)}"
+    placements = np.asarray(kw["placements"], dtype=np.float64)
+    n = len(placements)
+    types = np.asarray(kw["types"] if kw.get("types") is not None else np.zeros(n), dtype=np.float64)
+    base = np.asarray(kw["base"] if kw.get("base") is not None else np.eye(4), dtype=np.float64)
+    tool = np.asarray(kw["tool"] if kw.get("tool") is not None else np.eye(4), dtype=np.float64)
+    if chain.dof != n or not np.array_equal(chain.sigma, types.astype(np.int8)):
+        return f"dof {chain.dof}, sigma {chain.sigma} for {n} joints of types {types}"
+    names = kw.get("joint_names")
+    if names is not None and chain.joint_names != tuple(str(name) for name in names):
+        return f"joint_names {chain.joint_names}, given {names}"
+    q = np.linspace(-0.9, 0.7, n)
+    ref = joints_fk(placements, np.asarray(kw["axes"], dtype=np.float64), types, base, tool, q)
+    T = chain.fk(q)
+    if not finite(T) or not close(T, ref, False):
+        return f"fk {describe(T)} is not base · prod(placement · motion) · tool = {describe(ref)}"
+    frames = chain.frames(q)
+    if not close(frames[-1], T, False) or not close(frames[0], base, False):
+        return "frames do not run from the base to fk(q)"
+    if not close(pickle.loads(pickle.dumps(chain)).fk(q), T, False):
+        return "a pickled copy differs"
+    return None
+
+
+def _robot_entries():
+    # Go2: Spot's code with other numbers; the hexapod: six legs, their joints interleaved in q
+    _body_entries(BodySpec("go2"), BODY_METHODS, light=BODY_METHODS)
+    _body_entries(BodySpec("hexapod"), BODY_METHODS[:-1], light=("body_jacobian", "body_rates", "fk_all"))
+    # Spot from its URDF: the arm is a Chain (closed form by ik_nearest)
+    _body_entries(BodySpec("spot_urdf"), ("fk_all", "arm_ik_world"), light=("fk_all", "arm_ik_world"))
+
+    # stance_feet, leg
+    def stance_probe(key):
+        def probe(feet, kw, c):
+            robot = c.robot(key)
+            height, radius = float(kw.get("height", 0.5)), float(kw.get("foot_radius", 0.0))
+            n = robot.n_legs
+            if not (isinstance(feet, np.ndarray) and feet.shape == (n, 3) and feet.dtype == np.float64):
+                return f"not (n, 3) float64 feet: {describe(feet)}"
+            hips = robot.hip_positions
+            for k, leg in enumerate(robot.legs):
+                want = [hips[k, 0] + leg.a[0], hips[k, 1] + leg.hip_offset, radius]
+                if not close(feet[k], want, False):
+                    return f"foot {k} is {feet[k]}, not below its hip-pitch joint at {want}"
+                drop, (lo, hi) = height + hips[k, 2] + leg.a[2] - radius, leg.reach
+                if not (0 < drop <= hi * (1 + 1e-12) and drop >= lo * (1 - 1e-12)):
+                    return f"height {height} accepted but leg {k} out of reach ({drop} not in [{lo}, {hi}])"
+            status = robot.body_ik([0.0, 0.0, height, 0.0, 0.0, 0.0], feet).status
+            if (status == INVALID).any():
+                return f"body_ik of the stance gives {status}"
+            return None
+
+        return probe
+
+    for key in ("go2", "hexapod"):
+        height = STANCE_HEIGHT[key]
+        register(
+            name=f"Robot.stance_feet[{key}]",
+            covers="spotkin.Robot.stance_feet",
+            call=lambda c, key=key, **k: c.robot(key).stance_feet(**k),
+            slots=[
+                Real("height", height, skip=("int", "np_int")),
+                Real("foot_radius", 0.02, "nonneg", default="omit", skip=("int", "np_int")),
+            ],
+            probe=stance_probe(key),
+        )
+    for key, names in (("go2", ("FL", "FR", "RL", "RR")), ("hexapod", HEXAPOD_LEGS)):
+        register(
+            name=f"Robot.leg[{key}]",
+            covers="spotkin.Robot.leg",
+            call=lambda c, key=key, **k: c.robot(key).leg(**k),
+            slots=[Choice("name", names[1], names)],
+            probe=lambda leg, kw, c, key=key: (
+                None
+                if isinstance(leg, sk.Leg)
+                and leg is c.robot(key).legs[c.robot(key).leg_names.index(kw["name"])]
+                else f"not the leg {kw['name']!r}: {describe(leg)}"
+            ),
+        )
+
+    # chains of links
+    chain_sets = {
+        "Robot.chain": (
+            "go2",
+            {"valid": "FL_foot", "calf": "RR_calf", "hip": "FR_hip", "rotor": "RL_thigh_rotor"},
+            {"valid": "base", "hip": "FL_hip", "other_leg": "FR_hip", "same": "FL_foot", "unknown": "nope"},
+        ),
+        "Spot.chain": (
+            "spot",
+            {
+                "valid": "arm_hand",
+                "finger": "arm_link_fngr",
+                "foot": "rear_right_foot",
+                "hr0": "arm_link_hr0",
+            },
+            {
+                "valid": "body",
+                "shoulder": "arm_link_sh0",
+                "leg": "front_left_hip",
+                "same": "arm_hand",
+                "unknown": "nope",
+            },
+        ),
+    }
+    for name, (key, links, bases) in chain_sets.items():
+        bad_links = {"root": bases["valid"], "unknown": "nope"}
+        if key == "go2":
+            bad_links["fixed_only"] = "radar"  # hangs from the base by a fixed joint
+        link = Custom("link", link_table(links, bad_links))
+        base_table = {
+            "none": lambda c, r, b: Arg(None),
+            **{
+                k: (lambda c, r, b, v=v: Arg(v))
+                for k, v in bases.items()
+                if k in ("valid", "hip", "shoulder")
+            },
+            **{
+                k: (lambda c, r, b, v=v: Arg(v, REJECT, "value"))
+                for k, v in bases.items()
+                if k in ("other_leg", "leg", "same", "unknown")
+            },
+            "int": lambda c, r, b: Arg(1, REJECT),
+            "list": lambda c, r, b, v=bases["valid"]: Arg([v], REJECT),
+        }
+        register(
+            name=name,
+            covers=f"spotkin.{name}",
+            call=lambda c, key=key, **k: c.robot(key).chain(**k),
+            slots=[link, Custom("base", base_table, default="omit")],
+            probe=chain_of_link_probe(key),
+            pair_rule=chain_pairs(
+                key, {**links, **bad_links}, {**bases, "omit": bases["valid"], "none": bases["valid"]}
+            ),
+        )
+
+    def describe_probe(key):
+        def probe(text, kw, c):
+            robot = c.robot(key)
+            if not isinstance(text, str):
+                return f"not a str: {describe(text)}"
+            if robot.model.name not in text or f"legs ({robot.n_legs}):" not in text:
+                return f"the summary does not name the robot or its {robot.n_legs} legs: {text[:200]!r}"
+            legs = text[text.index(f"legs ({robot.n_legs}):") :]
+            for name, leg in zip(robot.leg_names, robot.legs):
+                # Spot's summary is its URDF's, under the URDF's leg names (front_left for fl)
+                named = isinstance(robot, sk.Spot) or f"  {name}: joints" in legs
+                if not named or f"c = {_fmt(leg.c)}" not in legs:
+                    return f"the summary does not describe leg {name} (c = {_fmt(leg.c)}): {legs[:300]!r}"
+            return None
+
+        return probe
+
+    for name, key in (
+        ("Robot.describe", "hexapod"),
+        ("Robot.describe[go2_feet]", "go2_feet"),
+        ("Spot.describe", "spot"),
+    ):
+        register(
+            name=name,
+            covers=f"spotkin.{name.split('[')[0]}",
+            call=lambda c, key=key: c.robot(key).describe(),
+            probe=describe_probe(key),
+        )
+
+    # construction
+    feet, contact_offset, nominal = _robot_options()
+
+    def path_table():
+        def files(c):
+            return c.files()
+
+        def file(name, expect=ACCEPT, why=""):
+            return lambda c, r, b: Arg(files(c)[name], expect, why)
+
+        return {
+            "valid": lambda c, r, b: Arg(sk.robots.path("go2")),
+            "pathlib": lambda c, r, b: Arg(pathlib.Path(sk.robots.path("go2"))),
+            "bytes": lambda c, r, b: Arg(os.fsencode(sk.robots.path("go2")), EITHER),
+            "latin1": file("latin1"),  # declared ISO-8859-1
+            "utf16": file("utf16"),  # declared UTF-16, with a byte-order mark
+            "missing": file("missing", REJECT, "os"),
+            "directory": file("directory", REJECT, "os"),
+            "empty_path": lambda c, r, b: Arg("", REJECT, "os"),
+            "empty_file": file("empty", REJECT, "value"),
+            "not_xml": file("not_xml", REJECT, "value"),
+            "loop": file("loop", REJECT, "value"),
+            "nul": lambda c, r, b: Arg(sk.robots.path("go2") + "\0", REJECT),
+            # TypeError from os.fspath, which does not name the argument (not a numeric input)
+            "none": lambda c, r, b: Arg(None, REJECT),
+            "int": lambda c, r, b: Arg(3, REJECT),
+            "list": lambda c, r, b: Arg([sk.robots.path("go2")], REJECT),
+        }
+
+    def some(slot, names):  # from_urdf_string fuzzes the options in full
+        return Custom(slot.name, {name: slot.table[name] for name in names}, default=slot.default)
+
+    register(
+        name="Robot.from_urdf",
+        covers="spotkin.Robot.from_urdf",
+        pairs=20,
+        call=lambda c, **k: sk.Robot.from_urdf(**k),
+        slots=[
+            Custom("path", path_table()),
+            some(feet, ("none", "two", "calf", "int")),
+            some(contact_offset, ("vector", "dict", "nan")),
+            some(nominal, ("one", "unknown")),
+        ],
+        probe=robot_probe,
+        pair_rule=_option_pairs,
+        also_raises=(OSError,),
+    )
+
+    def text_table():
+        def text(value, expect=ACCEPT, why=""):
+            return lambda c, r, b: Arg(value() if callable(value) else value, expect, why)
+
+        table = {
+            "valid": text(_go2_kinematics),  # the options' cases: Go2 without its inertials (faster)
+            "inertials": text(_go2_text),
+            "np_str": text(lambda: np.str_(_go2_text())),
+            "bytes": text(lambda: _go2_text().encode(), REJECT, "type"),
+            "none": text(None, REJECT, "type"),
+            "int": text(1, REJECT, "type"),
+            "path": text(lambda: sk.robots.path("go2"), REJECT, "value"),
+        }
+        table.update({name: text(value) for name, value in _odd_urdfs().items()})
+        table.update({name: text(*spec) for name, spec in _bad_urdfs().items()})
+        return table
+
+    go2_texts = ("valid", "inertials", "np_str", "comments", "no_declaration", "extra_tags")
+    neutral = {
+        "feet": ("omit", "none"),
+        "contact_offset": ("omit", "none", "vector", "list", "ints", "float32"),
+        "nominal": ("omit", "none"),
+    }
+
+    def text_pairs(plan):
+        """Go2's texts take Go2's names; the other valid texts have none of them (options naming
+        Go2's feet or legs are refused, for that reason first)."""
+        if plan["text"] in go2_texts:
+            return _option_pairs(plan)
+        if plan["text"] in _odd_urdfs() and any(plan[k] not in v for k, v in neutral.items()):
+            return REJECT
+        return None
+
+    register(
+        name="Robot.from_urdf_string",
+        covers="spotkin.Robot.from_urdf_string",
+        pairs=20,
+        call=lambda c, **k: sk.Robot.from_urdf_string(**k),
+        slots=[Custom("text", text_table()), feet, contact_offset, nominal],
+        probe=robot_probe,
+        pair_rule=text_pairs,
+    )
+    register(
+        name="Robot",
+        covers="spotkin.Robot",
+        call=lambda c: sk.Robot(),
+        expect=REJECT,
+        why="type",  # built by from_urdf or from_urdf_string only
+    )
+    register(
+        name="Spot.from_urdf",
+        covers="spotkin.Spot.from_urdf",
+        call=lambda c: sk.Spot.from_urdf(sk.robots.path("spot_with_arm")),
+        expect=REJECT,
+        why="type",  # by design
+    )
+    register(
+        name="Spot.from_urdf_string",
+        covers="spotkin.Spot.from_urdf_string",
+        call=lambda c: sk.Spot.from_urdf_string(sk.robots.text("spot_with_arm")),
+        expect=REJECT,
+        why="type",
+    )
+
+    # legs of any geometry
+    def vector(name, value, **kw):
+        return Array(name, lambda c: value, **kw)
+
+    along_pitch = {
+        "pitch_axis": (lambda c, v: np.array([0.0, 0.1, 0.0]), REJECT, "value"),
+        "zeros": (lambda c, v: np.zeros(3), REJECT, "value"),
+    }
+    register(
+        name="Leg.from_geometry",
+        covers="spotkin.Leg.from_geometry",
+        call=lambda _ctx, **k: sk.Leg.from_geometry(**k),  # (c is an argument)
+        slots=[
+            vector("a", (0.01, 0.08, 0.01), extra={"zeros": (lambda c, v: np.zeros(3), ACCEPT, "")}),
+            vector("b", (0.02, 0.005, -0.2), extra=along_pitch),
+            vector("c", (0.01, 0.01, -0.21), extra=along_pitch),
+            vector(
+                "signs",
+                (1.0, -1.0, 1.0),
+                default="omit",
+                extra={
+                    "negative": (lambda c, v: -np.ones(3), ACCEPT, ""),
+                    "two": (lambda c, v: np.array([2.0, 1.0, 1.0]), REJECT, "value"),
+                    "zero": (lambda c, v: np.array([1.0, 0.0, 1.0]), REJECT, "value"),
+                    "half": (lambda c, v: np.array([1.0, 1.0, 0.5]), REJECT, "value"),
+                },
+            ),
+            Array(
+                "limits",
+                lambda c: [(-0.7, 0.7), (-2.2, 2.2), (-2.6, -0.2)],
+                inf_ok=True,
+                optional=True,
+                default="omit",
+                extra={
+                    "unbounded": (lambda c, v: [[-np.inf, np.inf]] * 3, ACCEPT, ""),
+                    "inverted": (lambda c, v: v[:, ::-1], REJECT, "value"),
+                    "transposed": (lambda c, v: v.T, REJECT, "shape"),
+                    "point": (lambda c, v: np.stack([v[:, 0], v[:, 0]], 1), ACCEPT, ""),
+                },
+            ),
+            Custom(
+                "name",
+                {
+                    "valid": lambda c, r, b: Arg("R1"),
+                    "none": lambda c, r, b: Arg(None),
+                    "empty": lambda c, r, b: Arg(""),
+                    "int": lambda c, r, b: Arg(1, EITHER),
+                },
+                default="omit",
+            ),
+            Int("preferred_slot", 1, 0, 4, optional=True, default="omit"),
+            vector("nominal", (0.1, 0.8, -1.4), optional=True, default="omit"),
+        ],
+        probe=geometry_probe,
+        overflow_ok=True,
+        pair_rule=_ignored_nominal,
+    )
+
+    # knee origins
+    for key, get in (
+        ("fl", lambda c: c.spot.leg("fl")),
+        ("hexapod_R1", lambda c: c.robot("hexapod").leg("R1")),
+    ):
+
+        def knee_check(x, out, kw, c, get=get):
+            (knee,) = out
+            ref = knee_point(get(c), x["q"])
+            if not close(knee, ref, x["q"].dtype == np.float32):
+                return f"{describe(knee)} is not Rx(s1 q1) (a + Ry(s2 q2) b) = {describe(ref)}"
+            return None
+
+        def knee_q(c, rng, n, get=get):
+            return {"q": in_limits(get(c).limits, rng, n)}
+
+        register(
+            name=f"Leg.knee[{key}]",
+            covers="spotkin.Leg.knee",
+            call=lambda c, get=get, **k: get(c).knee(**k),
+            slots=[angle_slot("q", 3)],
+            baseline=knee_q,
+            outputs=outs(("float", (3,))),
+            nan_rule="check",
+            check=knee_check,
+        )
+
+    # chains from joints
+    def fl(c):
+        return c.robot("go2").model.chain_data("FL_foot")
+
+    placements_extra = {
+        "one": (lambda c, v: v[:1], REJECT, ""),  # axes (3, 3) no longer fit
+        "six": (lambda c, v: np.concatenate([v, v]), REJECT, ""),
+        "zero": (lambda c, v: v[:0], REJECT, ""),
+        "2d": (lambda c, v: v[0], REJECT, "shape"),
+        "scaled": (lambda c, v: v * np.array([2.0, 2.0, 2.0, 1.0])[:, None], REJECT, "value"),
+        "reflect": (lambda c, v: v * np.array([-1.0, 1.0, 1.0, 1.0])[:, None], REJECT, "value"),
+        "last_row": (lambda c, v: v + np.diag([0.0, 0.0, 0.0, 1.0]), REJECT, "value"),
+        "skewed": (lambda c, v: v + np.pad(1e-6 * np.ones((3, 3)), ((0, 1), (0, 1))), REJECT, "value"),
+        "rotated": (
+            lambda c, v: np.array(
+                [rigid(euler_matrix([0.1 * k, 0.5, -0.3]), P[:3, 3]) for k, P in enumerate(v)]
+            ),
+            ACCEPT,
+            "",
+        ),
+    }
+    axes_extra = {
+        "one": (lambda c, v: v[:1], REJECT, ""),
+        "six": (lambda c, v: np.concatenate([v, v]), REJECT, ""),
+        "zero": (lambda c, v: v[:0], REJECT, ""),
+        "zero_axis": (lambda c, v: np.vstack([v[:1], np.zeros((1, 3)), v[2:]]), REJECT, "value"),
+        "scaled": (lambda c, v: 3.0 * v, ACCEPT, ""),
+        "negated": (lambda c, v: -v, ACCEPT, ""),
+        "oblique": (lambda c, v: v + [0.3, -0.2, 0.1], ACCEPT, ""),
+    }
+
+    def joint_count(plan):
+        counts = {"one": 1, "six": 6, "zero": 0}
+        n_p, n_a = counts.get(plan["placements"], 3), counts.get(plan["axes"], 3)
+        if n_p == n_a != 3:
+            fixed = ("types", "limits", "joint_names")
+            if all(plan[k] in ("omit", "none") for k in fixed):
+                return EITHER if n_p == 0 else ACCEPT
+            return REJECT
+        return None
+
+    register(
+        name="Chain.from_joints",
+        covers="spotkin.Chain.from_joints",
+        call=lambda c, **k: sk.Chain.from_joints(**k),
+        slots=[
+            Array("placements", lambda c: fl(c).placements, extra=placements_extra),
+            Array("axes", lambda c: fl(c).axes, extra=axes_extra),
+            Array(
+                "types",
+                lambda c: np.zeros(3),
+                optional=True,
+                default="omit",
+                extra={
+                    "prismatic": (lambda c, v: np.array([0.0, 0.0, 1.0]), ACCEPT, ""),
+                    "two": (lambda c, v: np.array([0.0, 2.0, 0.0]), REJECT, "value"),
+                    "half": (lambda c, v: np.array([0.0, 0.5, 0.0]), REJECT, "value"),
+                    "negative": (lambda c, v: np.array([-1.0, 0.0, 0.0]), REJECT, "value"),
+                },
+            ),
+            Array("base", lambda c: np.eye(4), optional=True, default="omit", extra=RIGID_EXTRA),
+            Array("tool", lambda c: fl(c).tool, optional=True, default="omit", extra=RIGID_EXTRA),
+            Array(
+                "limits",
+                lambda c: fl(c).limits,
+                inf_ok=True,
+                optional=True,
+                default="omit",
+                extra={
+                    "inverted": (lambda c, v: v[:, ::-1], REJECT, "value"),
+                    "unbounded": (lambda c, v: [[-np.inf, np.inf]] * 3, ACCEPT, ""),
+                },
+            ),
+            Custom(
+                "joint_names",
+                {
+                    "none": lambda c, r, b: Arg(None),
+                    "valid": lambda c, r, b: Arg(fl(c).joint_names),
+                    "list": lambda c, r, b: Arg(list(fl(c).joint_names)),
+                    "short": lambda c, r, b: Arg(fl(c).joint_names[:2], REJECT, "value"),
+                    "long": lambda c, r, b: Arg((*fl(c).joint_names, "extra"), REJECT, "value"),
+                    "empty": lambda c, r, b: Arg((), REJECT, "value"),
+                    "ints": lambda c, r, b: Arg((1, 2, 3), EITHER),
+                    "int": lambda c, r, b: Arg(5, REJECT),
+                },
+                default="omit",
+            ),
+        ],
+        probe=from_joints_probe,
+        overflow_ok=True,
+        pair_rule=joint_count,
+        combos=(
+            ("six_joints", {"placements": "six", "axes": "six"}, ACCEPT),
+            ("no_joints", {"placements": "zero", "axes": "zero"}, EITHER),
+        ),
     )
 
 
@@ -3282,8 +4324,16 @@ def _roundtrip_entries():
         "SpotArm": (lambda c: c.arm, lambda o: o.fk(np.full(6, 0.3))),
         **{
             f"Chain[{key}]": (lambda c, key=key: c.chain(key), lambda o: o.fk(np.full(o.dof, 0.3)))
-            for key in CHAIN_ROWS
+            for key in (*CHAIN_ROWS, *URDF_CHAINS)
         },
+        **{
+            f"Robot[{key}]": (
+                lambda c, key=key: c.robot(key),
+                lambda o: o.body_fk([0.0, 0.0, 0.3, 0.1, -0.1, 0.2], np.linspace(-0.5, 0.5, 3 * o.n_legs)),
+            )
+            for key in ("go2", "hexapod", "spot_urdf")
+        },
+        "Leg[geometry]": (lambda c: c.robot("hexapod").leg("R1"), lambda o: o.fk([0.1, 1.0, 1.5])),
         **{
             f"PointToPoint[{p}]": (lambda c, p=p: c.p2p(p), lambda o: o.sample(np.linspace(-1, 5, 7))[0])
             for p in PROFILES
@@ -3313,6 +4363,7 @@ def _roundtrip_entries():
 _leg_entries()
 _chain_entries(_arm_entries())
 _spot_entries()
+_robot_entries()
 _function_entries()
 _paul_entries()
 _trajectory_entries()
@@ -3454,13 +4505,62 @@ def case_seed(seed: int, *parts) -> int:
 CI_PAIRS = 40  # random pairs of variants of two slots per entry in CI mode
 
 
+# CI variants of a batch slot of a "light" entry (the same code as another entry's, on another robot):
+# the layouts, dtypes and objects that take other paths, every shape, NaN and huge values
+LIGHT = {
+    "single",
+    "batch",
+    "batch2x1",
+    "empty",
+    "list",
+    "zero_stride",
+    "neg_stride",
+    "fortran",
+    "float32",
+    "float32_nan",
+    "int64",
+    "bool",
+    "complex128",
+    "str_array",
+    "object_array",
+    "nan",
+    "inf",
+    "nan_all",
+    "nan_single",
+    "big",
+    "subnormal",
+    "mag_1e15",
+    "mag_1e300",
+    *SHAPES,
+    "none",
+    "str",
+    "masked",
+    "huge_batch",
+    "pose:matrix",
+    "pose:quat",
+    "pose:rot_scaled",
+    "pose:quat_nonunit",
+    "pose:last_row",
+}
+LIGHT_PAIRS = 12
+
+
+def ci_variants(entry: Entry, slot: Slot) -> list[str]:
+    names = slot.variants(False)
+    if entry.light and slot.batch:
+        names = [n for n in names if n in LIGHT or n in slot.extra]
+    return names
+
+
 def cases_for(entry: Entry, exhaustive: bool, seed: int) -> list[dict]:
     """The cases of one entry: its baseline; each variant of each slot (others at baseline; the
     randomly placed values three times); the combos; :data:`CI_PAIRS` random pairs of variants of two
-    slots. Exhaustive mode: every variant three times, and every pair of variants of every two slots."""
+    slots. Exhaustive mode: every variant three times, and every pair of variants of every two slots.
+    A ``light`` entry runs in CI the :data:`LIGHT` variants of its batch slots, once each, and
+    :data:`LIGHT_PAIRS` pairs (exhaustive mode: everything)."""
     plans = [[]]
     for slot in entry.slots:
-        plans += [[[slot.name, v]] for v in slot.variants(exhaustive)]
+        plans += [[[slot.name, v]] for v in (slot.variants(True) if exhaustive else ci_variants(entry, slot))]
     batch = [s for s in entry.slots if s.batch]
     for combo in entry.combos:
         if isinstance(combo, str):
@@ -3474,14 +4574,17 @@ def cases_for(entry: Entry, exhaustive: bool, seed: int) -> list[dict]:
                 plans += [[[a.name, va], [b.name, vb]] for vb in b.variants(True)]
     elif len(entry.slots) >= 2:
         rng = np.random.default_rng(case_seed(seed, entry.name, "pairs"))
-        for _ in range(CI_PAIRS):
+        for _ in range(entry.pairs if entry.pairs is not None else LIGHT_PAIRS if entry.light else CI_PAIRS):
             a, b = (entry.slots[k] for k in rng.choice(len(entry.slots), 2, replace=False))
             plans.append(
-                [[a.name, str(rng.choice(a.variants(False)))], [b.name, str(rng.choice(b.variants(False)))]]
+                [
+                    [a.name, str(rng.choice(ci_variants(entry, a)))],
+                    [b.name, str(rng.choice(ci_variants(entry, b)))],
+                ]
             )
     cases = []
     for plan in plans:
-        reps = 1 if len(plan) != 1 else 3 if exhaustive or plan[0][1] in REPEATED else 1
+        reps = 1 if len(plan) != 1 else 3 if exhaustive or (plan[0][1] in REPEATED and not entry.light) else 1
         for rep in range(reps):
             cases.append(
                 {"entry": entry.name, "variants": plan, "seed": case_seed(seed, entry.name, plan, rep)}
@@ -3537,7 +4640,7 @@ def expectation(entry: Entry, args: dict, override) -> tuple[str, str, tuple]:
     if override is not None:
         return override, "", ()
     if entry.expect == REJECT:
-        return REJECT, "", ()
+        return REJECT, entry.why, ()
     rejecting = [name for name, a in args.items() if a.expect == REJECT]
     batch = {n: a for n, a in args.items() if a.present}
     try:
@@ -3567,17 +4670,21 @@ def expectation(entry: Entry, args: dict, override) -> tuple[str, str, tuple]:
 
 
 def _names_in(message: str, names) -> bool:
-    import re
-
     return any(re.search(rf"(?<![A-Za-z0-9_]){re.escape(n)}(?![A-Za-z0-9_])", message) for n in names)
 
 
-def judge_error(error: BaseException, expect: str, why: str, names) -> None:
+def judge_error(error: BaseException, expect: str, why: str, names, also=()) -> None:
     kind, text = type(error).__name__, f"{type(error).__name__}: {error}"
     if isinstance(error, np.linalg.LinAlgError):
         raise Failure("LinAlgError", text)
     if isinstance(error, TypeError) and "incompatible function arguments" in str(error):
         raise Failure("pybind-signature-error", text.splitlines()[0])
+    if why == "os" and expect == REJECT and not isinstance(error, OSError):
+        raise Failure(f"unreadable file: {kind}, not OSError", text)
+    if also and isinstance(error, also) and not isinstance(error, ALLOWED) and expect != ACCEPT:
+        if why in ("type", "shape", "value", "memory"):
+            raise Failure(f"raised {kind}, not {'TypeError' if why == 'type' else 'ValueError'}", text)
+        return  # e.g. OSError for a file that cannot be read
     if not isinstance(error, ALLOWED):
         raise Failure(f"raised {kind}", text + "\n" + "".join(traceback.format_tb(error.__traceback__)[-3:]))
     if expect == ACCEPT:
@@ -3765,7 +4872,7 @@ def run_case(case: dict, ctx) -> dict:
                     f"{w.message} ({os.path.basename(w.filename)}:{w.lineno})",
                 )
             if error is not None:
-                judge_error(error, expect, why, names)
+                judge_error(error, expect, why, names, entry.also_raises)
                 return {"ok": True}
             if expect == REJECT:
                 bad = [f"{n}={describe(a.value, 80)}" for n, a in args.items() if a.expect == REJECT]

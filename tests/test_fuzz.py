@@ -4,9 +4,12 @@ What it covers
 --------------
 ``tests/fuzz_api.py`` holds a registry of spotkin's public API: every callable reachable from
 ``spotkin.__all__``, ``spotkin.paul.__all__`` and ``spotkin.trajectory.__all__`` (functions,
-constructors, classmethods and methods of ``Spot``, ``Leg``, ``SpotArm``, ``Chain`` built with
-``from_mdh``/``from_dh`` as 3-joint and 6-joint spherical-wrist chains, ``PointToPoint`` and
-``CartesianPath`` objects), plus the pickling and copying of every object.
+constructors, classmethods and methods of ``Spot``, ``Robot`` (the packaged Go2 and Spot URDFs, and
+a six-legged robot whose joints interleave in ``q``), ``Leg`` (Spot's, and of any geometry),
+``SpotArm``, ``Chain`` built with ``from_mdh``/``from_dh`` as 3-joint and 6-joint spherical-wrist
+chains and from URDFs (a Go2 leg, the Spot arm), ``PointToPoint`` and ``CartesianPath`` objects;
+URDF loading with malformed, hostile and oddly encoded descriptions), plus the pickling and copying
+of every object.
 :func:`test_registry_covers_the_public_api` fails when a public callable is missing from the
 registry, when the registry covers something no longer public, or when an entry's argument slots
 do not match the callable's parameters: new API is fuzzed by default, once described. The only
@@ -28,8 +31,9 @@ limited to 6 GiB of address space and one spotkin thread). A crash, an abort or 
 within the timeout) fails the case. Otherwise the only acceptable outcomes are a result that is
 correct per the documentation, or ``ValueError``/``TypeError``/``MemoryError`` where the input is
 invalid (``TypeError`` for non-numeric input, ``ValueError`` for a bad shape, each naming the
-argument; ``MemoryError`` for a batch too large to allocate). Other exceptions, ``LinAlgError``,
-pybind11's "incompatible function arguments", any warning, and an accepted invalid input fail.
+argument; ``MemoryError`` for a batch too large to allocate; ``OSError`` for a file that cannot be
+read). Other exceptions, ``LinAlgError``, pybind11's "incompatible function arguments", any
+warning, and an accepted invalid input fail.
 "Correct per the documentation" is checked by oracles:
 
 (a) shapes and dtypes follow the batch semantics (leading dimensions kept, float32 in gives
@@ -48,13 +52,14 @@ Modes
 CI (the default, ``python -m pytest tests/test_fuzz.py``): a fixed seed (``SEED`` below); every
 variant of every slot with the other slots at a valid baseline (the randomly placed NaN, Inf and
 huge values three times), three combinations per entry (all float32, all batched, batched with a
-NaN), and 40 random pairs of variants of two slots per entry: about 17,000 cases, about 15 s on
-two cores (plus the canaries, about 5 s).
+NaN), and 40 random pairs of variants of two slots per entry: about 21,500 cases, about 20 s on
+two cores (plus the canaries, about 5 s). "Light" entries (Spot's whole-body code on other robots,
+the URDF chains' shared kernels) run fewer batch variants, once each, and 12 pairs in CI.
 
 Exhaustive (``python -m pytest tests/test_fuzz.py -m fuzz_exhaustive``, or
 ``SPOTKIN_FUZZ=exhaustive python -m pytest tests/test_fuzz.py``): more variants (more dtypes,
 tuples, 1001 waypoints, ...), every variant three times with fresh random draws, and every pair
-of variants of every two slots: about 530,000 cases, about 4 minutes on two cores. It is skipped
+of variants of every two slots: about 860,000 cases, about 10 minutes on two cores. It is skipped
 unless selected.
 
 Environment: ``SPOTKIN_FUZZ_SEED`` (another seed, to explore), ``SPOTKIN_FUZZ_WORKERS`` (default:

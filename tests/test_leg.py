@@ -94,14 +94,12 @@ def test_ik_matches_reference_with_and_without_seed(rng, leg):
             q_ref, status_ref = ref.ik(pi, *params(leg), lower, upper, None if seed is None else seed[i])
             assert status[i] == status_ref
             if status_ref == sk.Status.UNREACHABLE:
-                # the fallback sits exactly on a singular set, where angles are only
-                # defined to sqrt(eps): compare where the foot goes (to sqrt(eps) too
-                # where a joint was brought to its bound: the others no longer compensate)
-                on_bound = np.isclose(q_ref, lower, 0, 1e-12) | np.isclose(q_ref, upper, 0, 1e-12)
-                foot_tol = 1e-8 if on_bound.any() else 1e-12
-                np.testing.assert_allclose(leg.fk(q[i]), ref.fk(q_ref, *params(leg)), rtol=0, atol=foot_tol)
-                np.testing.assert_allclose(q[i], q_ref, rtol=0, atol=1e-6)
+                # the nearest in-limit foot: its distance is what is defined (the minimiser can be
+                # flat, e.g. with the knee folded at a singular value): ours is at least as near
                 assert ((q[i] >= lower - 1e-12) & (q[i] <= upper + 1e-12)).all()
+                ours = np.linalg.norm(leg.fk(q[i]) - pi)
+                theirs = np.linalg.norm(ref.fk(q_ref, *params(leg)) - pi)
+                assert ours <= theirs + 1e-12, (pi, q[i], q_ref)
             else:
                 np.testing.assert_allclose(q[i], q_ref, rtol=0, atol=1e-11)
 

@@ -8,6 +8,7 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+import pinocchio  # the independent oracle (requirements-test.txt: pin); never skipped
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -26,13 +27,6 @@ from spotkin.urdf import (
     load_urdf,
     parse_urdf,
 )
-
-try:
-    import pinocchio
-except ImportError:  # pragma: no cover - pinocchio is a test dependency
-    pinocchio = None
-
-needs_pinocchio = pytest.mark.skipif(pinocchio is None, reason="pinocchio is not installed")
 
 SPOT = Path(su.__file__).resolve().parent / "robots" / "spot_with_arm.urdf"
 GO2 = Path(__file__).resolve().parent / "data" / "go2.urdf"
@@ -530,7 +524,6 @@ def test_mimic_is_accepted_and_not_applied():
 # --------------------------------------------------------------------------- Pinocchio oracle
 
 
-@needs_pinocchio
 @pytest.mark.parametrize("path", [SPOT, GO2], ids=["spot", "go2"])
 def test_frames_and_jacobians_match_pinocchio(path, rng):
     model = load_urdf(path)
@@ -540,7 +533,6 @@ def test_frames_and_jacobians_match_pinocchio(path, rng):
         check_against_pinocchio(model, pm, random_values(model, rng))
 
 
-@needs_pinocchio
 @settings(max_examples=25, deadline=None)
 @given(st.lists(st.floats(-2 * math.pi, 2 * math.pi), min_size=19, max_size=19))
 def test_spot_matches_pinocchio_hypothesis(q):
@@ -549,7 +541,6 @@ def test_spot_matches_pinocchio_hypothesis(q):
     check_against_pinocchio(model, pin_spot(), values, jacobians=False)
 
 
-@needs_pinocchio
 @pytest.mark.parametrize("name", ["twisted", "spinner", "ur", "non_rpp"])
 def test_small_urdfs_match_pinocchio(name, rng, tmp_path):
     text = {"twisted": TWISTED, "spinner": SPINNER, "ur": UR_ARM, "non_rpp": NON_RPP}[name]
@@ -1051,3 +1042,10 @@ def test_load_urdf_accepts_pathlike_and_str(tmp_path):
     path.write_text(TWISTED)
     assert load_urdf(path).name == "twisted"
     assert load_urdf(str(path)).name == "twisted"
+
+
+def test_packaged_go2_is_the_test_copy():
+    """The demo's packaged Go2 (spotkin/robots/go2.urdf) is byte-identical to the test data."""
+    import spotkin as sk
+
+    assert Path(sk.robots.path("go2")).read_bytes() == GO2.read_bytes()

@@ -9,13 +9,12 @@ import time
 
 import numpy as np
 
-from . import __version__
+from . import __version__, robots
 from ._runtime import get_num_threads
 from ._status import Status
 from ._transforms import translation
 from .body import body_transform
 from .chain import Chain
-from . import robots
 from .leg import SLOT_NAMES
 from .robot import Robot
 from .spot import Spot
@@ -128,8 +127,9 @@ def _demo_urdf_robot(samples: int) -> None:
     error = np.abs(go2.body_fk(poses, result.q) - feet)[ok].max(initial=0.0)
     counts = {s.name: int((result.status == s).sum()) for s in Status}
     print(
-        f"  body_ik: {samples:,} poses in {seconds * 1e3:.1f} ms ({seconds / samples * 1e9:.1f} ns per pose); "
-        f"worst foot error by body_fk {error:.1e} m; leg statuses {counts}"
+        f"  body_ik: {samples:,} poses in {seconds * 1e3:.1f} ms "
+        f"({seconds / samples * 1e9:.1f} ns per pose); worst foot error by body_fk {error:.1e} m; "
+        f"leg statuses {counts}"
     )
 
 

@@ -148,7 +148,9 @@ class Chain:
         types = types.astype(np.int8)
         chain._base = None if base is None else as_real(base, "base", np.float64).copy()
         chain._tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
-        chain._core = _core.Chain.from_joints(placements, axes, types.astype(np.float64), chain._base, chain._tool)
+        chain._core = _core.Chain.from_joints(
+            placements, axes, types.astype(np.float64), chain._base, chain._tool
+        )
         chain._rows = None
         chain._convention = "joints"
         chain._joints = (placements, axes, types)

@@ -47,7 +47,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_flag, as_index, as_real, as_scalar, broadcast_lead, fallback_is_nearest
+from ._boundary import (
+    as_flag,
+    as_index,
+    as_real,
+    as_scalar,
+    broadcast_lead,
+    fallback_is_nearest,
+    quiet_float_errors,
+)
 
 __all__ = ["Leg", "LegSolutions"]
 
@@ -277,11 +285,18 @@ class Leg:
         with |B|, |C| the pitch-plane lengths of b and c."""
         return self._core.min_reach, self._core.max_reach
 
+    @quiet_float_errors
     def knee(self, q: ArrayLike) -> np.ndarray:
-        """Knee joint origin in the leg frame: q (..., 3) -> (..., 3), Rx(s1 q1) (a + Ry(s2 q2) b)."""
-        q = as_real(q, "q", np.float64)
-        if q.ndim < 1 or q.shape[-1] != 3:
-            raise ValueError(f"q must have shape (..., 3), got {q.shape}")
+        """Knee joint origin in the leg frame: q (..., 3) -> (..., 3), Rx(s1 q1) (a + Ry(s2 q2) b).
+
+        float32 in gives float32 out (computed in float64); NaN or Inf joints give NaN."""
+        given = as_real(q, "q")
+        if given.ndim < 1 or given.shape[-1] != 3:
+            raise ValueError(f"q must have shape (..., 3), got {given.shape}")
+        knee = self._knee(given.astype(np.float64, copy=False))
+        return knee.astype(np.float32) if given.dtype == np.float32 else knee
+
+    def _knee(self, q: np.ndarray) -> np.ndarray:
         (a, b, _, signs) = self._geometry
         t1, t2 = signs[0] * q[..., 0], signs[1] * q[..., 1]
         vx = a[0] + np.cos(t2) * b[0] + np.sin(t2) * b[2]
@@ -343,7 +358,9 @@ class Leg:
         configurations within the joint limits (the foot of :meth:`ik`'s UNREACHABLE answer).
         Exact: the box-constrained minimum of |fk(q) - p| is found among the stationary
         points of every boundary subproblem (joints at bounds, singular sets), each solved in
-        closed form or as the real roots of a polynomial (see docs/derivations.md).
+        closed form or as the real roots of a polynomial (see docs/derivations.md). A target
+        farther than 1e8 m is solved at 1e8 m along its direction (the answer then tends to the
+        leg's farthest point that way; it moves by less than ~1e-8 m).
 
         Returns all NaN when p has NaN or Inf. ``p`` must be a real array of shape (3,)
         (``TypeError`` for non-numeric or masked input, ``ValueError`` for another shape) and

@@ -115,6 +115,7 @@ class Robot:
         "_model",
         "_report",
         "_source",
+        "_specs",
     )
 
     def __init__(self) -> None:
@@ -137,12 +138,16 @@ class Robot:
         as a dict foot link -> (3,), when the leaf link's origin is not the contact point;
         ``nominal``: a dict leg name -> (3,) joint angles of a typical stance, which sets each
         leg's preferred branch (default: from the knee's limits). ``ValueError`` names the joint
-        or link for malformed descriptions (see :func:`spotkin.urdf.parse_urdf`).
+        or link for malformed descriptions (see :func:`spotkin.urdf.parse_urdf`); an unreadable
+        path raises ``OSError`` (``FileNotFoundError``, ...); a path that is not a ``str`` or
+        ``os.PathLike`` raises ``TypeError``.
         """
-        model = urdf.load_urdf(path)
+        if not isinstance(path, (str, os.PathLike)):
+            raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
         with open(path, "rb") as file:
-            text = file.read().decode("utf-8", errors="replace")
-        return cls._from_model(model, feet, contact_offset, nominal, text)
+            data = file.read()  # kept as bytes: the XML's own encoding declaration decides
+        model = urdf.parse_urdf(data)
+        return cls._from_model(model, feet, contact_offset, nominal, data)
 
     @classmethod
     def from_urdf_string(cls, text: str, *, feet=None, contact_offset=None, nominal=None) -> Robot:
@@ -156,10 +161,17 @@ class Robot:
     def _from_model(cls, model, feet, contact_offset, nominal, text) -> Robot:
         specs, leg_report = urdf.find_legs(model, feet=feet, contact_offset=contact_offset)
         arms, arm_report = urdf.find_arms(model, specs)
+        if nominal is not None and not isinstance(nominal, dict):
+            raise TypeError(
+                f"nominal must be a dict leg name -> (3,) joint angles, got {type(nominal).__name__}"
+            )
         nominal = {} if nominal is None else dict(nominal)
         unknown = set(nominal) - {spec.name for spec in specs}
         if unknown:
             raise ValueError(f"nominal names legs that were not recognised: {sorted(unknown)}")
+        for name, value in nominal.items():
+            if value is None:
+                raise ValueError(f"nominal[{name!r}] must be (3,) joint angles, got None")
         legs = [
             Leg.from_geometry(
                 spec.a, spec.b, spec.c, spec.signs, spec.limits, spec.name, nominal=nominal.get(spec.name)
@@ -170,6 +182,7 @@ class Robot:
         robot._model = model
         robot._source = (text, feet, contact_offset, nominal)
         robot._report = tuple(leg_report) + tuple(arm_report)
+        robot._specs = (tuple(specs), tuple(arms))
         arm_chains = tuple(robot.chain(arm.tip, base=arm.base) for arm in arms)
         robot._arms = arm_chains
         robot._set_legs(
@@ -192,7 +205,9 @@ class Robot:
         order = self._urdf_order(flat)
         self._leg_joint_names = tuple(sorted(flat, key=order.__getitem__))
         position = {name: k for k, name in enumerate(self._leg_joint_names)}
-        self._columns = np.array([[position[name] for name in triple] for triple in joint_names], dtype=np.int64)
+        self._columns = np.array(
+            [[position[name] for name in triple] for triple in joint_names], dtype=np.int64
+        )
         contiguous = bool((self._columns == np.arange(3 * len(legs)).reshape(-1, 3)).all())
         self._body_core = _core.Body(
             [leg._core for leg in self._legs], self._hips, None if contiguous else self._columns.astype(float)
@@ -245,7 +260,8 @@ class Robot:
 
     @property
     def leg_joint_names(self) -> tuple[str, ...]:
-        """The legs' joints in the order of the whole-body ``q``: :attr:`joint_names` restricted to the legs."""
+        """The legs' joints in the order of the whole-body ``q``: :attr:`joint_names` restricted to
+        the legs."""
         return self._leg_joint_names
 
     @property
@@ -271,9 +287,8 @@ class Robot:
 
     def describe(self) -> str:
         """A readable summary: the tree, the legs and arms with their geometry, the report."""
-        specs, report = urdf.find_legs(self._model)
-        arms, arm_report = urdf.find_arms(self._model, specs)
-        return urdf.describe(self._model, specs, arms, tuple(report) + tuple(arm_report))
+        legs, arms = self._specs
+        return urdf.describe(self._model, legs, arms, self._report)
 
     def chain(self, link: str, base: str | None = None) -> Chain:
         """The serial chain from ``base`` (default: the body, the URDF's root) to ``link``, as a
@@ -286,7 +301,11 @@ class Robot:
         if len(data.joint_names) == 0:
             raise ValueError(f"no actuated joint between {data.base!r} and {link!r}")
         return Chain.from_joints(
-            data.placements, data.axes, data.types, tool=data.tool, limits=data.limits,
+            data.placements,
+            data.axes,
+            data.types,
+            tool=data.tool,
+            limits=data.limits,
             joint_names=data.joint_names,
         )
 
@@ -555,5 +574,6 @@ class Robot:
         return f"Robot({self.name!r}, legs={self._leg_names}, arm={'yes' if self._arm is not None else 'no'})"
 
 
-def _rebuild_robot(text, feet, contact_offset, nominal) -> Robot:
-    return Robot.from_urdf_string(text, feet=feet, contact_offset=contact_offset, nominal=nominal)
+def _rebuild_robot(source, feet, contact_offset, nominal) -> Robot:
+    """From the URDF's text (str) or the file's bytes, as the robot was loaded."""
+    return Robot._from_model(urdf.parse_urdf(source), feet, contact_offset, nominal, source)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Mapping
+
 import numpy as np
 
 from . import robots, urdf
@@ -100,7 +101,9 @@ def _checked_model(model: Mapping) -> dict:
     if "leg_limits" in model:
         per_leg = _section(model, "leg_limits", "model")
         checked["leg_limits"] = {
-            name: _limit_rows(per_leg, name, "model['leg_limits']", 3) for name in LEG_NAMES if name in per_leg
+            name: _limit_rows(per_leg, name, "model['leg_limits']", 3)
+            for name in LEG_NAMES
+            if name in per_leg
         }
     return checked
 
@@ -147,7 +150,8 @@ class Spot(Robot):
     a non-finite number, ``upper``, ``lower`` or ``upper_arm`` not positive, a negative
     ``hip_offset`` or ``foot_radius``, a point not of shape (3,), or limits with NaN or
     lower > upper raise ``ValueError`` naming the key; a non-dict or non-numeric value
-    raises ``TypeError``.
+    raises ``TypeError``. :meth:`chain` and :meth:`describe` always show the packaged
+    description (URDF link and leg names), also for a model dict.
     """
 
     __slots__ = ("_foot_radius", "_spot_model")
@@ -179,26 +183,37 @@ class Spot(Robot):
             hips = [spec.hip_origin for spec in specs]
             arm = _arm_from_urdf(description)
             self._foot_radius = SPOT["leg"]["foot_radius"]
-            _, arm_report = urdf.find_arms(description, tuple(specs))
+            arm_specs, arm_report = urdf.find_arms(description, tuple(specs))
             self._report = tuple(leg_report) + tuple(arm_report)
+            self._specs = (tuple(specs), tuple(arm_specs))
         else:
             checked = self._spot_model
             leg = checked["leg"]
             per_leg = checked.get("leg_limits", {})
             legs = [
                 Leg(
-                    leg["hip_offset"], leg["upper"], leg["lower"], leg["knee_offset"],
+                    leg["hip_offset"],
+                    leg["upper"],
+                    leg["lower"],
+                    leg["knee_offset"],
                     side="left" if name.endswith("l") else "right",
-                    limits=per_leg.get(name, leg["limits"]), name=name,
+                    limits=per_leg.get(name, leg["limits"]),
+                    name=name,
                 )
                 for name in LEG_NAMES
             ]
             hips = [checked["hip_positions"][name] for name in LEG_NAMES]
             arm = checked["arm"]
             self._foot_radius = leg["foot_radius"]
-            self._report = ("built from a model dict",)
+            self._report = ("built from a model dict: chain() and describe() show the packaged description",)
+            self._specs = ((), ())
         spot_arm = SpotArm(
-            arm["mount"], arm["upper_arm"], arm["forearm"], arm["forearm_offset"], arm["hand"], limits=arm["limits"]
+            arm["mount"],
+            arm["upper_arm"],
+            arm["forearm"],
+            arm["forearm_offset"],
+            arm["hand"],
+            limits=arm["limits"],
         )
         self._arms = (spot_arm,)
         triples = [tuple(f"{name}.{joint}" for joint in ("hx", "hy", "kn")) for name in LEG_NAMES]
@@ -216,7 +231,9 @@ class Spot(Robot):
     @classmethod
     def from_urdf_string(cls, *args, **kwargs):
         """Not for Spot (see :meth:`from_urdf`). Raises ``TypeError``."""
-        raise TypeError("Spot() is built from the packaged Spot description; use sk.Robot.from_urdf_string(text)")
+        raise TypeError(
+            "Spot() is built from the packaged Spot description; use sk.Robot.from_urdf_string(text)"
+        )
 
     @property
     def arm(self) -> SpotArm:

@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._boundary import as_real
+
 __all__ = [
     "ArmSpec",
     "ChainData",
@@ -59,7 +61,7 @@ _TIP_WORDS = re.compile(r"hand|tool|gripper|flange|tip|(?:^|[^a-z])ee(?:[^a-z]|$
 
 
 def _readonly(value, shape: tuple[int, ...], what: str) -> np.ndarray:
-    arr = np.array(value, dtype=float)
+    arr = np.array(as_real(value, what, np.float64), dtype=float)  # masked, complex, text: TypeError
     if arr.shape != shape:
         raise ValueError(f"{what}: expected shape {shape}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):

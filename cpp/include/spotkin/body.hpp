@@ -161,14 +161,15 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
   }
 }
 
-// (B2) + leg slot 0 for one leg over a block: vectorised.
-SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __restrict hip,
-                                            const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
-                                            const double* __restrict fx, const double* __restrict fy,
-                                            const double* __restrict fz, double* __restrict x, double* __restrict y,
-                                            double* __restrict z, double (*__restrict q0)[kBlock],
-                                            double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
-                                            double tol) noexcept {
+// (B2) + the leg's preferred slot for one leg over a block: vectorised (one
+// clone per slot, so that the branch signs are constants).
+template <int Slot>
+SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const double* __restrict hip,
+                                   const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
+                                   const double* __restrict fx, const double* __restrict fy,
+                                   const double* __restrict fz, double* __restrict x, double* __restrict y,
+                                   double* __restrict z, double (*__restrict q0)[kBlock], double* __restrict exists,
+                                   double* __restrict ok, std::ptrdiff_t m, double tol, double limit_tol) noexcept {
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     const double dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
     const double px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
@@ -177,10 +178,26 @@ SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __rest
     x[i] = px, y[i] = py, z[i] = pz;
     double q[3];
     const double finite = leg_batch::finite_mask(px, py, pz);
-    const double e = finite * leg.solve_preferred(px, py, pz, q, tol);
-    ok[i] = e * leg.limits().wrap_mask(q);
+    const double e = finite * leg.solve_slot<Slot>(px, py, pz, q, tol);
+    ok[i] = e * leg.limits().wrap_mask(q, limit_tol);
     exists[i] = finite == 0.0 ? -1.0 : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
+  }
+}
+
+SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg_in, const double* __restrict hip,
+                                            const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
+                                            const double* __restrict fx, const double* __restrict fy,
+                                            const double* __restrict fz, double* __restrict x, double* __restrict y,
+                                            double* __restrict z, double (*__restrict q0)[kBlock],
+                                            double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
+                                            double tol, double limit_tol) noexcept {
+  const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
+  switch (leg.preferred_slot()) {
+    case 0: return leg_block_slot<0>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
+    case 1: return leg_block_slot<1>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
+    case 2: return leg_block_slot<2>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
+    default: return leg_block_slot<3>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
   }
 }
 
@@ -209,7 +226,8 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
         const T* f = feet + (feet_shared ? 3 * l : 3 * n * (b0 + i) + 3 * l);
         fx[i] = double(f[0]), fy[i] = double(f[1]), fz[i] = double(f[2]);
       }
-      leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol);
+      leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol,
+                JointLimits<3>::tolerance<T>());
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
         T* qt = q + w * t;

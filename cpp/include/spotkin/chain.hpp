@@ -60,22 +60,29 @@ struct Placement {
     return s;
   }
 
+  // Written out per coefficient: Eigen's expression templates are not always
+  // inlined into the batch loops, and a call per joint costs more than the math.
   SPOTKIN_INLINE void apply(Rigid<Scalar>& T) const noexcept {
     switch (kind) {
       case PlacementKind::Identity:
         return;
-      case PlacementKind::XScrew: {
-        T.p.noalias() += a * T.R.col(0);
-        const Vec3<Scalar> y = T.R.col(1), z = T.R.col(2);
-        T.R.col(1) = cos_alpha * y + sin_alpha * z;
-        T.R.col(2) = cos_alpha * z - sin_alpha * y;
+      case PlacementKind::XScrew:
+        for (int r = 0; r < 3; ++r) {
+          T.p[r] += a * T.R(r, 0);
+          const Scalar y = T.R(r, 1), z = T.R(r, 2);
+          T.R(r, 1) = cos_alpha * y + sin_alpha * z;
+          T.R(r, 2) = cos_alpha * z - sin_alpha * y;
+        }
         return;
-      }
       case PlacementKind::Translation:
-        T.p.noalias() += T.R.lazyProduct(X.p);
+        for (int r = 0; r < 3; ++r) T.p[r] += T.R(r, 0) * X.p[0] + T.R(r, 1) * X.p[1] + T.R(r, 2) * X.p[2];
         return;
       case PlacementKind::General:
-        T = T * X;
+        for (int r = 0; r < 3; ++r) {
+          const Scalar r0 = T.R(r, 0), r1 = T.R(r, 1), r2 = T.R(r, 2);
+          T.p[r] += r0 * X.p[0] + r1 * X.p[1] + r2 * X.p[2];
+          for (int k = 0; k < 3; ++k) T.R(r, k) = r0 * X.R(0, k) + r1 * X.R(1, k) + r2 * X.R(2, k);
+        }
         return;
     }
   }
@@ -120,30 +127,54 @@ struct Joint {
 
   // T <- T . Rot(axis, angle) . Trans(axis, shift), given c = cos(angle), s = sin(angle).
   SPOTKIN_INLINE void apply_motion(Rigid<Scalar>& T, Scalar c, Scalar s, Scalar shift) const noexcept {
-    if (axis_kind == AxisKind::General) {
-      const Vec3<Scalar> w = T.R.lazyProduct(axis);  // R u
-      const Vec3<Scalar> c0 = T.R.col(0), c1 = T.R.col(1), c2 = T.R.col(2);
-      const Scalar one_c = Scalar(1) - c;
-      // R Rot(u, angle) = c R + s R [u]x + (1 - c) (R u) u^T (Rodrigues)
-      T.R.col(0) = c * c0 + s * (axis[2] * c1 - axis[1] * c2) + one_c * axis[0] * w;
-      T.R.col(1) = c * c1 + s * (axis[0] * c2 - axis[2] * c0) + one_c * axis[1] * w;
-      T.R.col(2) = c * c2 + s * (axis[1] * c0 - axis[0] * c1) + one_c * axis[2] * w;
-      T.p.noalias() += shift * w;
-      return;
+    switch (axis_kind) {
+      case AxisKind::X:
+        rotate_columns<1, 2>(T, c, axis_sign * s, axis_sign * shift);
+        return;
+      case AxisKind::Y:
+        rotate_columns<2, 0>(T, c, axis_sign * s, axis_sign * shift);
+        return;
+      case AxisKind::Z:
+        rotate_columns<0, 1>(T, c, axis_sign * s, axis_sign * shift);
+        return;
+      case AxisKind::General: {
+        const Scalar one_c = Scalar(1) - c, u0 = axis[0], u1 = axis[1], u2 = axis[2];
+        // R Rot(u, angle) = c R + s R [u]x + (1 - c) (R u) u^T (Rodrigues)
+        for (int r = 0; r < 3; ++r) {
+          const Scalar c0 = T.R(r, 0), c1 = T.R(r, 1), c2 = T.R(r, 2);
+          const Scalar w = c0 * u0 + c1 * u1 + c2 * u2;
+          T.R(r, 0) = c * c0 + s * (u2 * c1 - u1 * c2) + one_c * u0 * w;
+          T.R(r, 1) = c * c1 + s * (u0 * c2 - u2 * c0) + one_c * u1 * w;
+          T.R(r, 2) = c * c2 + s * (u1 * c0 - u0 * c1) + one_c * u2 * w;
+          T.p[r] += shift * w;
+        }
+        return;
+      }
     }
-    // Rotation about +-e_k mixes columns i = k+1 and j = k+2 (cyclic).
-    const int k = static_cast<int>(axis_kind), i = (k + 1) % 3, j = (k + 2) % 3;
-    const Scalar sk = axis_sign * s;
-    const Vec3<Scalar> ci = T.R.col(i), cj = T.R.col(j);
-    T.R.col(i) = c * ci + sk * cj;
-    T.R.col(j) = c * cj - sk * ci;
-    T.p.noalias() += (axis_sign * shift) * T.R.col(k);
+  }
+
+  // Rotation about +-e_k, k the third axis after I, J (cyclic): columns I and J mix.
+  template <int I, int J>
+  static SPOTKIN_INLINE void rotate_columns(Rigid<Scalar>& T, Scalar c, Scalar s, Scalar shift) noexcept {
+    constexpr int K = 3 - I - J;
+    for (int r = 0; r < 3; ++r) {
+      const Scalar ci = T.R(r, I), cj = T.R(r, J);
+      T.R(r, I) = c * ci + s * cj;
+      T.R(r, J) = c * cj - s * ci;
+      T.p[r] += shift * T.R(r, K);
+    }
   }
 
   // The joint axis in the frame T reached after pre.
   SPOTKIN_INLINE Vec3<Scalar> axis_in(const Rigid<Scalar>& T) const noexcept {
-    if (axis_kind == AxisKind::General) return T.R.lazyProduct(axis);
-    return axis_sign * T.R.col(static_cast<int>(axis_kind));
+    Vec3<Scalar> out;
+    if (axis_kind == AxisKind::General) {
+      for (int r = 0; r < 3; ++r) out[r] = T.R(r, 0) * axis[0] + T.R(r, 1) * axis[1] + T.R(r, 2) * axis[2];
+      return out;
+    }
+    const int k = static_cast<int>(axis_kind);
+    for (int r = 0; r < 3; ++r) out[r] = axis_sign * T.R(r, k);
+    return out;
   }
 
   // A rotation Q with Q e_z = axis: Rot(axis, t) = Q Rz(t) Q^T (for the z-axis

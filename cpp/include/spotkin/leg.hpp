@@ -51,21 +51,30 @@ struct JointLimits {
   }
 
   static constexpr double kTolerance = 1e-12;  // rad
+  // Solutions for float32 targets carry the targets' rounding (~1e-7 rad): a
+  // solution that far outside a limit, from an in-limit configuration, still fits.
+  static constexpr double kToleranceFloat = 2e-6;  // rad
+  template <typename T>
+  static constexpr double tolerance() noexcept {
+    return sizeof(T) < sizeof(double) ? kToleranceFloat : kTolerance;
+  }
 
-  // Wraps each joint by 0, -2pi or +2pi (the first that fits) into the limits,
-  // in place, and returns 1.0 if every joint fits, 0.0 otherwise (joints that
-  // fit no way are left as given). Branch-free, for vectorised loops.
-  SPOTKIN_INLINE double wrap_mask(double* q) const noexcept {
+  // Wraps each joint by 0, -2pi or +2pi (the first that fits, within tol) into
+  // the limits, in place, then onto them (a joint within tol outside a bound is
+  // set to the bound), and returns 1.0 if every joint fits, 0.0 otherwise
+  // (joints that fit no way are left as given). Branch-free, for vectorised loops.
+  SPOTKIN_INLINE double wrap_mask(double* q, double tol = kTolerance) const noexcept {
     constexpr double two_pi = 2.0 * kPi<double>;
     double all = 1.0;
 #pragma GCC unroll 8
     for (int j = 0; j < N; ++j) {
-      const double lo = lower[j] - kTolerance, hi = upper[j] + kTolerance;
+      const double lo = lower[j] - tol, hi = upper[j] + tol;
       const double v = q[j], minus = v - two_pi, plus = v + two_pi;
       const bool in0 = (v >= lo) & (v <= hi);
       const bool in_minus = (minus >= lo) & (minus <= hi);
       const bool in_plus = (plus >= lo) & (plus <= hi);
-      q[j] = in0 ? v : (in_minus ? minus : (in_plus ? plus : v));
+      const double fitted = std::min(std::max(in0 ? v : (in_minus ? minus : plus), lower[j]), upper[j]);
+      q[j] = (in0 | in_minus | in_plus) ? fitted : v;
       all = (in0 | in_minus | in_plus) ? all : 0.0;
     }
     return all;
@@ -217,15 +226,19 @@ class Leg {
     }
   }
 
-  // The preferred slot only: the walking controller's branch. Returns 1.0 if it exists.
-  SPOTKIN_INLINE double solve_preferred(double x, double y, double z, double q[3],
-                                        double tol = kRatioTolerance) const noexcept {
+  // One slot only (the preferred one, for the walking controller's fast path),
+  // with the branch signs known at compile time. Returns 1.0 if it exists.
+  template <int Slot>
+  SPOTKIN_INLINE double solve_slot(double x, double y, double z, double q[3],
+                                   double tol = kRatioTolerance) const noexcept {
+    constexpr double eps = Slot < 2 ? 1.0 : -1.0;
+    constexpr int kb = Slot % 2;
     const Hip hip = solve_hip(y, z, tol);
-    const double wx = x - g_.a[0], wz = -preferred_eps_ * hip.S - g_.a[2];
+    const double wx = x - g_.a[0], wz = -eps * hip.S - g_.a[2];
     const Knee knee = solve_knee(wx, wz, tol);
-    q[0] = hip_roll(y, z, hip, preferred_eps_);
-    q[1] = hip_pitch(wx, wz, knee, preferred_knee_);
-    q[2] = knee_angle(knee, preferred_knee_);
+    q[0] = hip_roll(y, z, hip, eps);
+    q[1] = hip_pitch(wx, wz, knee, kb);
+    q[2] = knee_angle(knee, kb);
     return hip.exists * knee.exists;
   }
 
@@ -237,9 +250,16 @@ class Leg {
                          double* q_out = nullptr) const noexcept {
     constexpr double inf = std::numeric_limits<double>::infinity();
     const double no_lower[3] = {-inf, -inf, -inf}, no_upper[3] = {inf, inf, inf};
-    double q[3];
-    rpp_nearest_in_limits(g_, within_limits ? limits_.lower : no_lower, within_limits ? limits_.upper : no_upper, p,
-                          q);
+    // A target farther than kFar is solved at kFar along its direction: the candidates' distances
+    // stay resolvable (~1e-8 m), and the nearest point moves by less than that (it tends to the
+    // support point in that direction).
+    constexpr double kFar = 1e8;
+    double target[3] = {p[0], p[1], p[2]}, q[3];
+    const double norm = std::hypot(p[0], std::hypot(p[1], p[2]));
+    if (norm > kFar && std::isfinite(norm))
+      for (double& v : target) v = v / norm * kFar;
+    rpp_nearest_in_limits(g_, within_limits ? limits_.lower : no_lower, within_limits ? limits_.upper : no_upper,
+                          target, q);
     if (q_out) q_out[0] = q[0], q_out[1] = q[1], q_out[2] = q[2];
     forward(q, out);
   }
@@ -351,16 +371,12 @@ class Leg {
     order_[0] = preferred_slot;
     for (int s = 0, k = 1; s < kSlots; ++s)
       if (s != preferred_slot) order_[k++] = s;
-    preferred_eps_ = preferred_slot < 2 ? 1.0 : -1.0;
-    preferred_knee_ = preferred_slot % 2;
   }
 
   RppGeometry g_;
   JointLimits<3> limits_;
   double sign1_ = 1, sign2_ = 1, sign3_ = 1, h_ = 0, Bz_ = 0, Bx_ = 0, Cz_ = 0, Cx_ = 0;
   double phi_ = 0, cos_phi_ = 1, sin_phi_ = 0, knee_sum_sq_ = 0, inv_2BC_ = 0, d_max_ = 0, d_min_ = 0;
-  double preferred_eps_ = 1.0;
-  int preferred_knee_ = 0;
   int order_[kSlots] = {0, 1, 2, 3};
 };
 
@@ -390,7 +406,7 @@ SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], const
   const int* order = leg.slot_order();
   for (int k = 0; k < Leg::kSlots; ++k) {
     const int s = order[k];
-    const bool ok = exists_hip[s / 2] != 0.0 && leg.limits().wrap_mask(q_all[s]) != 0.0;
+    const bool ok = exists_hip[s / 2] != 0.0 && leg.limits().wrap_mask(q_all[s], JointLimits<3>::tolerance<T>()) != 0.0;
     if (valid_out) valid_out[s] = ok;
     if (!ok) continue;
     if (!seed) {
@@ -441,6 +457,34 @@ SPOTKIN_INLINE Status settle(const Leg& leg, double x, double y, double z, const
   return choose(leg, q_all, exists_hip, seed, qt, nullptr);
 }
 
+// Vectorised: slot Slot and its limits for every target of a block; exists
+// -1 for invalid input.
+template <int Slot>
+SPOTKIN_INLINE void slot_pass(const Leg& leg, const double* x, const double* y, const double* z, double* hx,
+                              double* hy, double* kn, double* exists, double* ok, std::ptrdiff_t m, double tol,
+                              double limit_tol) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    double q0[3];
+    const double finite = finite_mask(x[i], y[i], z[i]);
+    exists[i] = finite * leg.solve_slot<Slot>(x[i], y[i], z[i], q0, tol);
+    ok[i] = exists[i] * leg.limits().wrap_mask(q0, limit_tol);
+    exists[i] = finite == 0.0 ? -1.0 : exists[i];
+    hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
+  }
+}
+
+SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const double* x, const double* y, const double* z, double* hx,
+                                   double* hy, double* kn, double* exists, double* ok, std::ptrdiff_t m, double tol,
+                                   double limit_tol) noexcept {
+  const Leg leg = leg_in;  // a local copy: the output arrays cannot alias its constants
+  switch (leg.preferred_slot()) {
+    case 0: return slot_pass<0>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
+    case 1: return slot_pass<1>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
+    case 2: return slot_pass<2>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
+    default: return slot_pass<3>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
+  }
+}
+
 // Limit-aware IK: q (count, 3), status (count). seed may be null. An
 // UNREACHABLE target gets unreachable_fallback's answer, or NaN when
 // !nearest_fallback.
@@ -454,14 +498,7 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
     }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: the preferred slot and its limits for every target
-      double q0[3];
-      const double finite = finite_mask(x[i], y[i], z[i]);
-      exists[i] = finite * leg.solve_preferred(x[i], y[i], z[i], q0, tol);
-      ok[i] = exists[i] * leg.limits().wrap_mask(q0);
-      exists[i] = finite == 0.0 ? -1.0 : exists[i];  // -1: invalid input
-      hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
-    }
+    preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, JointLimits<3>::tolerance<T>());
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 3 * t;
@@ -483,8 +520,9 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
 
 // Every branch: q (count, 4, 3), valid and exists (count, 4), status (count).
 template <typename T>
-SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
+SPOTKIN_INLINE void ik_all(const Leg& leg_in, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
                            std::int8_t* status, std::ptrdiff_t count) noexcept {
+  const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   constexpr double nan = quiet_nan<double>();
   double x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock];
   double ex[2][kBlock], finite[kBlock];
@@ -508,7 +546,7 @@ SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid
       for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: limits per slot
         double qi[3] = {qs[s][0][i], qs[s][1][i], qs[s][2][i]};
         const double e = ex[s / 2][i];
-        ok[s][i] = e * leg.limits().wrap_mask(qi);
+        ok[s][i] = e * leg.limits().wrap_mask(qi, JointLimits<3>::tolerance<T>());
         for (int j = 0; j < 3; ++j) qs[s][j][i] = e != 0.0 ? qi[j] : nan;
       }
     }
@@ -549,7 +587,8 @@ SPOTKIN_INLINE void block_angles(const Leg& leg, const T* q, std::ptrdiff_t m, B
 }
 
 template <typename T>
-SPOTKIN_INLINE void fk(const Leg& leg, const T* q, T* p, std::ptrdiff_t count) noexcept {
+SPOTKIN_INLINE void fk(const Leg& leg_in, const T* q, T* p, std::ptrdiff_t count) noexcept {
+  const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   BlockAngles a;
   const double h = leg.lateral();
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
@@ -567,7 +606,8 @@ SPOTKIN_INLINE void fk(const Leg& leg, const T* q, T* p, std::ptrdiff_t count) n
 }
 
 template <typename T>
-SPOTKIN_INLINE void jacobian(const Leg& leg, const T* q, T* J, std::ptrdiff_t count) noexcept {
+SPOTKIN_INLINE void jacobian(const Leg& leg_in, const T* q, T* J, std::ptrdiff_t count) noexcept {
+  const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   BlockAngles a;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
