@@ -79,17 +79,6 @@ struct JointLimits {
     }
     return all;
   }
-
-  // Each joint wrapped into its limits as wrap_mask does, or, where no 2 pi
-  // shift fits, set to the bound nearest on the circle: always in the limits.
-  void clamp_into(double* q) const noexcept {
-    wrap_mask(q);
-    for (int j = 0; j < N; ++j) {
-      if (q[j] >= lower[j] - kTolerance && q[j] <= upper[j] + kTolerance) continue;
-      const double to_lower = std::fabs(wrap_angle(q[j] - lower[j])), to_upper = std::fabs(wrap_angle(q[j] - upper[j]));
-      q[j] = to_lower <= to_upper ? lower[j] : upper[j];
-    }
-  }
 };
 
 // Largest single-joint move between a and b, measured on the circle.

@@ -252,17 +252,6 @@ def ik(p, h1, U, L, k, lower, upper, seed=None):
     return np.asarray(q_near, dtype=float), UNREACHABLE
 
 
-def clamp_into_limits(q, lower, upper):
-    """Each joint wrapped into its limits (wrap_into_limits), or, where no 2 pi shift fits, set to
-    the bound nearest to it on the circle."""
-    out, _ = wrap_into_limits(q, lower, upper)
-    for i in range(3):
-        if not (lower[i] - _LIMIT_TOL <= out[i] <= upper[i] + _LIMIT_TOL):
-            to_lower, to_upper = abs(wrap_angle(out[i] - lower[i])), abs(wrap_angle(out[i] - upper[i]))
-            out[i] = lower[i] if to_lower <= to_upper else upper[i]
-    return out
-
-
 def knee_reach(U, L, k, knee_limits=None):
     """(Dmin, Dmax): the distances hy -> foot the knee reaches, eq. (I3):
     D^2 = R^2 + L^2 + 2 L R cos(kn + beta), over every kn or over knee_limits (lo, hi).
