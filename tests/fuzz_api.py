@@ -58,6 +58,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from urdf_helpers import joint as _urdf_joint
+from urdf_helpers import links as _urdf_links
 
 import spotkin as sk
 
@@ -1020,17 +1022,6 @@ ROBOT_FILES = {"go2": "go2", "spot_urdf": "spot_with_arm"}
 STANCE_HEIGHT = {"spot": 0.5, "go2": 0.28, "hexapod": 0.3, "spot_urdf": 0.5}
 
 
-def _urdf_joint(name, kind, parent, child, xyz, axis=None, limits=None) -> str:
-    body = f'<origin xyz="{xyz}" rpy="0 0 0"/>'
-    if axis is not None:
-        body += f'<axis xyz="{axis}"/>'
-    if limits is not None:
-        body += f'<limit lower="{limits[0]}" upper="{limits[1]}" effort="10" velocity="5"/>'
-    return (
-        f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
-    )
-
-
 def _hexapod_urdf() -> str:
     """Six roll-pitch-pitch legs in three pairs at different x (and heights), with mixed axis signs
     (a knee about -y takes positive limits to bend back) and offsets; the joints are written hips
@@ -1092,20 +1083,26 @@ def _hexapod_urdf() -> str:
             "0 0 -0.21",
         ),
     ]
-    links = ['<link name="base"/>']
+    link_names = ["base"]
     joints = [[], [], [], []]
     for name, hip, axes, knee, a, b, c in legs:
         parts = [f"{name}_{part}" for part in ("hip", "thigh", "calf", "foot")]
-        links += [f'<link name="{part}"/>' for part in parts]
+        link_names += parts
         joints[0].append(
-            _urdf_joint(f"{name}_hip_joint", "revolute", "base", parts[0], hip, axes[0], (-0.7, 0.7))
+            _urdf_joint(
+                f"{name}_hip_joint", "revolute", "base", parts[0], hip, axis=axes[0], limits=(-0.7, 0.7)
+            )
         )
         joints[1].append(
-            _urdf_joint(f"{name}_thigh_joint", "revolute", parts[0], parts[1], a, axes[1], (-2.2, 2.2))
+            _urdf_joint(
+                f"{name}_thigh_joint", "revolute", parts[0], parts[1], a, axis=axes[1], limits=(-2.2, 2.2)
+            )
         )
-        joints[2].append(_urdf_joint(f"{name}_calf_joint", "revolute", parts[1], parts[2], b, axes[2], knee))
+        joints[2].append(
+            _urdf_joint(f"{name}_calf_joint", "revolute", parts[1], parts[2], b, axis=axes[2], limits=knee)
+        )
         joints[3].append(_urdf_joint(f"{name}_foot_joint", "fixed", parts[2], parts[3], c))
-    body = "".join(links) + "".join(j for group in joints for j in group)
+    body = _urdf_links(*link_names) + "".join(j for group in joints for j in group)
     return f'<?xml version="1.0"?><robot name="hexapod">{body}</robot>'
 
 
@@ -2573,14 +2570,28 @@ def _urdf(body: str, name: str = "r") -> str:
 def _one_leg(prefix="L", parent="base", hip="0.2 0.1 0") -> str:
     """Links and joints of one roll-pitch-pitch leg hanging from ``parent``."""
     names = [f"{prefix}_{part}" for part in ("hip", "thigh", "calf", "foot")]
-    return "".join(f'<link name="{n}"/>' for n in names) + "".join(
+    return _urdf_links(*names) + "".join(
         [
-            _urdf_joint(f"{prefix}_hip_joint", "revolute", parent, names[0], hip, "1 0 0", (-0.7, 0.7)),
             _urdf_joint(
-                f"{prefix}_thigh_joint", "revolute", names[0], names[1], "0 0.08 0", "0 1 0", (-2, 2)
+                f"{prefix}_hip_joint", "revolute", parent, names[0], hip, axis="1 0 0", limits=(-0.7, 0.7)
             ),
             _urdf_joint(
-                f"{prefix}_calf_joint", "revolute", names[1], names[2], "0 0 -0.2", "0 1 0", (-2.6, -0.2)
+                f"{prefix}_thigh_joint",
+                "revolute",
+                names[0],
+                names[1],
+                "0 0.08 0",
+                axis="0 1 0",
+                limits=(-2, 2),
+            ),
+            _urdf_joint(
+                f"{prefix}_calf_joint",
+                "revolute",
+                names[1],
+                names[2],
+                "0 0 -0.2",
+                axis="0 1 0",
+                limits=(-2.6, -0.2),
             ),
             _urdf_joint(f"{prefix}_foot_joint", "fixed", names[2], names[3], "0 0 -0.2"),
         ]
@@ -2604,8 +2615,8 @@ def _bad_urdfs() -> dict:
             _urdf(
                 '<link name="base"/><link name="a"/><link name="b"/>'
                 + _urdf_joint("j0", "fixed", "base", "a", "0 0 0")
-                + _urdf_joint("j1", "revolute", "a", "b", "0 0 0", "1 0 0", (-1, 1))
-                + _urdf_joint("j2", "revolute", "b", "a", "0 0 0", "1 0 0", (-1, 1))
+                + _urdf_joint("j1", "revolute", "a", "b", "0 0 0", axis="1 0 0", limits=(-1, 1))
+                + _urdf_joint("j2", "revolute", "b", "a", "0 0 0", axis="1 0 0", limits=(-1, 1))
             ),
             REJECT,
             "value",
@@ -2662,8 +2673,8 @@ def _bad_urdfs() -> dict:
         "no_legs": (  # a 2-joint arm only: nothing recognised
             _urdf(
                 '<link name="base"/><link name="a"/><link name="b"/>'
-                + _urdf_joint("j1", "revolute", "base", "a", "0 0 0.1", "0 0 1", (-1, 1))
-                + _urdf_joint("j2", "revolute", "a", "b", "0 0 0.3", "0 1 0", (-1, 1))
+                + _urdf_joint("j1", "revolute", "base", "a", "0 0 0.1", axis="0 0 1", limits=(-1, 1))
+                + _urdf_joint("j2", "revolute", "a", "b", "0 0 0.3", axis="0 1 0", limits=(-1, 1))
             ),
             REJECT,
             "value",
@@ -2709,7 +2720,7 @@ def _odd_urdfs() -> dict:
         "one_leg": _urdf('<link name="base"/>' + _one_leg()),
         "deep_fixed": _urdf(  # the leg hangs below 300 fixed links
             '<link name="base"/>'
-            + "".join(f'<link name="f{i}"/>' for i in range(300))
+            + _urdf_links(*(f"f{i}" for i in range(300)))
             + "".join(
                 _urdf_joint(f"fj{i}", "fixed", "base" if i == 0 else f"f{i - 1}", f"f{i}", "0 0 0.001")
                 for i in range(300)

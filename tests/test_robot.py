@@ -4,7 +4,6 @@ URDF against the built-in Spot; pickling."""
 
 from __future__ import annotations
 
-import math
 import pickle
 from functools import cache
 from pathlib import Path
@@ -15,6 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
+from urdf_helpers import joint, links, pin_q
 
 import spotkin as sk
 from spotkin import urdf as su
@@ -33,24 +33,8 @@ def rng() -> np.random.Generator:
 
 # --------------------------------------------------------------------------- small URDFs
 
-LIMIT = 'effort="10" velocity="5"'
 PI = "3.141592653589793"
 HALF_PI = "1.5707963267948966"
-
-
-def links(*names: str) -> str:
-    return "".join(f'<link name="{name}"/>' for name in names)
-
-
-def joint(name, jtype, parent, child, xyz="0 0 0", rpy="0 0 0", axis=None, limits=None) -> str:
-    body = f'<origin xyz="{xyz}" rpy="{rpy}"/>'
-    if axis is not None:
-        body += f'<axis xyz="{axis}"/>'
-    if limits is not None:
-        body += f'<limit lower="{limits[0]}" upper="{limits[1]}" {LIMIT}/>'
-    return (
-        f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
-    )
 
 
 def urdf_text(name: str, *parts: str, base: str = "base") -> str:
@@ -248,18 +232,6 @@ def columns(name: str, leg_name: str) -> list[int]:
     return [robot(name).leg_joint_names.index(j) for j in leg_spec(name, leg_name).joint_names]
 
 
-def pin_q(pm, names, values) -> np.ndarray:
-    """Pinocchio's configuration with the named joints at values (the others neutral)."""
-    q = pinocchio.neutral(pm)
-    for name, value in zip(names, values):
-        jm = pm.joints[pm.getJointId(name)]
-        if jm.nq == 2:  # continuous joints: (cos, sin)
-            q[jm.idx_q], q[jm.idx_q + 1] = math.cos(value), math.sin(value)
-        else:
-            q[jm.idx_q] = value
-    return q
-
-
 def pin_frame(pm, pd, link: str) -> np.ndarray:
     return pd.oMf[pm.getFrameId(link, pinocchio.FrameType.BODY)].homogeneous
 
@@ -386,14 +358,14 @@ def test_chain_matches_pinocchio_reference_and_differences(name, link, rng):
     T, F, J = chain.fk(q), chain.frames(q), chain.jacobian(q)
     assert T.shape == (12, 4, 4) and F.shape == (12, chain.dof + 2, 4, 4) and J.shape == (12, 6, chain.dof)
     for k in range(len(q)):
-        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, chain.joint_names, q[k]))
+        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, dict(zip(chain.joint_names, q[k]))))
         np.testing.assert_allclose(T[k], pin_frame(pm, pd, link), rtol=0, atol=1e-12)
         expected = [np.eye(4), *(pin_frame(pm, pd, child) for child in children), pin_frame(pm, pd, link)]
         np.testing.assert_allclose(F[k], expected, rtol=0, atol=1e-12)
         Jp = pinocchio.computeFrameJacobian(
             pm,
             pd,
-            pin_q(pm, chain.joint_names, q[k]),
+            pin_q(pm, dict(zip(chain.joint_names, q[k]))),
             pm.getFrameId(link, pinocchio.FrameType.BODY),
             pinocchio.LOCAL_WORLD_ALIGNED,
         )
@@ -475,7 +447,7 @@ def test_leg_matches_chain_pinocchio_and_reference(name, leg_name, rng):
     pm = pin_model(name)
     pd = pm.createData()
     for x in q[:20]:
-        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, spec.joint_names, x))
+        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, dict(zip(spec.joint_names, x))))
         np.testing.assert_allclose(leg.fk(x) + hip, pin_frame(pm, pd, spec.foot)[:3, 3], rtol=0, atol=1e-12)
     step = 1e-6
     for x in q[:30]:
@@ -489,7 +461,7 @@ def test_non_rpp_leg_still_has_a_chain(rng):
     chain = zoo.chain("YAW_foot")
     assert chain.joint_names == ("YAW_hip_joint", "YAW_thigh_joint", "YAW_calf_joint")
     for q in rng.uniform(-3, 3, (10, 3)):
-        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, chain.joint_names, q))
+        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, dict(zip(chain.joint_names, q))))
         np.testing.assert_allclose(chain.fk(q), pin_frame(pm, pd, "YAW_foot"), rtol=0, atol=1e-12)
     # a z-y-y leg has a closed form as a 3R chain
     q = np.array([0.3, -0.4, -1.1])
@@ -602,7 +574,7 @@ def test_body_fk_matches_pinocchio(name, rng):
     T = random_pose_matrix(rng, STANCE_HEIGHT[name])
     for _ in range(10):
         q = rng.uniform(-2, 2, 3 * r.n_legs)
-        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, r.leg_joint_names, q))
+        pinocchio.framesForwardKinematics(pm, pd, pin_q(pm, dict(zip(r.leg_joint_names, q))))
         feet = [leg_spec(name, leg).foot for leg in r.leg_names]
         expected = [T[:3, :3] @ pin_frame(pm, pd, foot)[:3, 3] + T[:3, 3] for foot in feet]
         np.testing.assert_allclose(r.body_fk(T, q), expected, rtol=0, atol=1e-12)

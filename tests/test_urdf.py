@@ -12,6 +12,8 @@ import pinocchio  # the independent oracle (requirements-test.txt: pin); never s
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from urdf_helpers import LIMIT, joint_xml, pin_q
+from urdf_helpers import joint as urdf_joint
 
 import spotkin.urdf as su
 from spotkin.reference import urdf as ref
@@ -50,8 +52,6 @@ def go2() -> Model:
 
 
 # --------------------------------------------------------------------------- small URDFs
-
-LIMIT = 'effort="10" velocity="5"'
 
 # One leg whose joint frames are rotated (yaw 90°, roll 180°, yaw 180°), with a negative and
 # an unnormalised axis, fixed joints between and after the moving ones, offsets along all
@@ -204,15 +204,9 @@ def leg3(
     out = [f'<link name="{n}"/>' for n in [*names, foot_name]]
     links = [parent, *names]
     for k in range(3):
-        out.append(
-            f'<joint name="{names[k]}_joint" type="revolute"><parent link="{links[k]}"/>'
-            f'<child link="{names[k]}"/><origin xyz="{origins[k]}"/><axis xyz="{axes[k]}"/>'
-            f'<limit lower="-1" upper="1" {LIMIT}/></joint>'
-        )
-    out.append(
-        f'<joint name="{prefix}_foot_joint" type="fixed"><parent link="{names[2]}"/>'
-        f'<child link="{foot_name}"/><origin xyz="{foot}"/></joint>'
-    )
+        body = f'<origin xyz="{origins[k]}"/><axis xyz="{axes[k]}"/><limit lower="-1" upper="1" {LIMIT}/>'
+        out.append(joint_xml(f"{names[k]}_joint", "revolute", links[k], names[k], body))
+    out.append(joint_xml(f"{prefix}_foot_joint", "fixed", names[2], foot_name, f'<origin xyz="{foot}"/>'))
     return "\n".join(out)
 
 
@@ -272,17 +266,6 @@ def random_values(model: Model, rng: np.random.Generator) -> dict[str, float]:
         else:
             out[j.name] = float(rng.uniform(-4.0, 4.0))
     return out
-
-
-def pin_q(pm, values: dict[str, float]) -> np.ndarray:
-    q = pinocchio.neutral(pm)
-    for name, value in values.items():
-        jm = pm.joints[pm.getJointId(name)]
-        if jm.nq == 2:  # continuous joints: (cos, sin)
-            q[jm.idx_q], q[jm.idx_q + 1] = math.cos(value), math.sin(value)
-        else:
-            q[jm.idx_q] = value
-    return q
 
 
 def check_against_pinocchio(model: Model, pm, values: dict[str, float], jacobians: bool = True) -> None:
@@ -809,11 +792,7 @@ def test_spherical_wrist_with_rotated_frames_and_offsets():
         ]
         parts = [f'<link name="{r[2]}"/>' for r in rows] + ['<link name="flange"/>']
         for name, parent, child, xyz, rpy, axis in rows:
-            parts.append(
-                f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
-                f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/><limit lower="-3" upper="3" {LIMIT}/>'
-                "</joint>"
-            )
+            parts.append(urdf_joint(name, "revolute", parent, child, xyz, rpy, axis, (-3, 3)))
         parts.append(
             '<joint name="f" type="fixed"><parent link="l6"/><child link="flange"/>'
             '<origin xyz="0 0 0.1"/></joint>'
@@ -859,9 +838,7 @@ def test_describe():
 
 def joint(name="j", jtype="revolute", parent="base", child="a", body=None):
     body = f'<limit lower="-1" upper="1" {LIMIT}/>' if body is None else body
-    return (
-        f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
-    )
+    return joint_xml(name, jtype, parent, child, body)
 
 
 def inertial_link(mass="1", inertia='ixx="1" iyy="1" izz="1"', origin=""):

@@ -216,6 +216,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   BlockPoses P;
   double fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock],
       ok[kBlock];
+  leg_batch::OpenTargets open;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     read_poses(poses + stride * b0, format, seq, stride, m, P);
@@ -228,29 +229,37 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
       }
       leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol,
                 JointLimits<3>::tolerance<T>());
+      open.count = 0;
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
         T* qt = q + w * t;
         std::int8_t& st = status[n * t + l];
-        T* out[3] = {qt + col[0], qt + col[1], qt + col[2]};
         if (ok[i] != 0.0 && P.ok[i] != 0.0 && !seed) {  // the common case
-          *out[0] = T(q0[0][i]), *out[1] = T(q0[1][i]), *out[2] = T(q0[2][i]);
+          qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
           st = std::int8_t(Status::Ok);
           continue;
         }
-        T sd[3];
+        const T* s = seed ? seed + w * t : nullptr;
+        if (P.ok[i] == 0.0 || exists[i] < 0.0 ||
+            (s && !(std::isfinite(double(s[col[0]])) && std::isfinite(double(s[col[1]])) &&
+                    std::isfinite(double(s[col[2]]))))) {
+          qt[col[0]] = qt[col[1]] = qt[col[2]] = T(quiet_nan<double>());
+          st = std::int8_t(Status::InvalidInput);
+          continue;
+        }
+        open.add(i, x[i], y[i], z[i]);
+      }
+      open.solve(leg, tol, JointLimits<3>::tolerance<T>());
+      for (std::ptrdiff_t k = 0; k < open.count; ++k) {
+        const std::ptrdiff_t t = b0 + open.index[k];
+        T* qt = q + w * t;
+        T sd[3], leg_q[3];
         if (seed) {
           const T* s = seed + w * t;
           sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
         }
-        T leg_q[3];
-        if (P.ok[i] == 0.0 || exists[i] < 0.0 || (seed && !leg_batch::finite3(sd))) {
-          leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
-          st = std::int8_t(Status::InvalidInput);
-        } else {
-          st = std::int8_t(leg_batch::settle(leg, x[i], y[i], z[i], seed ? sd : nullptr, leg_q, nearest_fallback, tol));
-        }
-        *out[0] = leg_q[0], *out[1] = leg_q[1], *out[2] = leg_q[2];
+        status[n * t + l] = std::int8_t(open.choose(leg, k, seed ? sd : nullptr, leg_q, nearest_fallback));
+        qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
       }
     }
   }

@@ -139,6 +139,8 @@ class Leg {
   int preferred_slot() const noexcept { return order_[0]; }
   // Slots in the order ik() tries them without a seed.
   const int* slot_order() const noexcept { return order_; }
+  // a_z = 0: the knee's solution does not depend on the hip branch.
+  bool shared_knee() const noexcept { return g_.a[2] == 0.0; }
 
   // (R1), with zeta = A + e^{i theta2} (B + e^{i theta3} C) the pitch-plane part.
   template <typename T>
@@ -195,15 +197,21 @@ class Leg {
 
   // As solve_all, writing 1.0 / 0.0 per hip branch (both knee slots of a hip
   // branch exist together): a form the compiler vectorises over samples.
+  // SharedKnee: the caller knows a_z = 0 (shared_knee()), so |W| and the knee
+  // are the same on both hip branches and are solved once.
+  template <bool SharedKnee = false>
   SPOTKIN_INLINE void solve_all_mask(double x, double y, double z, double q[kSlots][3], double exists_hip[2],
                                      double tol = kRatioTolerance) const noexcept {
     const Hip hip = solve_hip(y, z, tol);
+    const double wx = x - g_.a[0];
+    Knee shared;
+    if (SharedKnee) shared = solve_knee(wx, hip.S, tol);
 #pragma GCC unroll 2
     for (int hb = 0; hb < 2; ++hb) {
       const double eps = hb == 0 ? 1.0 : -1.0;
       const double hx = hip_roll(y, z, hip, eps);
-      const double wx = x - g_.a[0], wz = -eps * hip.S - g_.a[2];
-      const Knee knee = solve_knee(wx, wz, tol);
+      const double wz = SharedKnee ? -eps * hip.S : -eps * hip.S - g_.a[2];
+      const Knee knee = SharedKnee ? shared : solve_knee(wx, wz, tol);
       exists_hip[hb] = hip.exists * knee.exists;
 #pragma GCC unroll 2
       for (int kb = 0; kb < 2; ++kb) {
@@ -375,42 +383,59 @@ class Leg {
 namespace leg_batch {
 
 constexpr std::ptrdiff_t kBlock = 64;
+static_assert(kBlock % 8 == 0, "blocks hold whole 8-wide vectors");
+
+// Pads x, y, z after their first m entries with copies of entry m - 1, up to a
+// multiple of 8, and returns that count. Vector passes over the padded count
+// run every target in the loop's full lanes (its scalar remainder may round
+// differently), so that an answer never depends on the target's place in a
+// block, that is on how the batch was split between threads or calls.
+SPOTKIN_INLINE std::ptrdiff_t pad_block(double* x, double* y, double* z, std::ptrdiff_t m) noexcept {
+  const std::ptrdiff_t padded = std::min(kBlock, (m + 7) / 8 * 8);
+  for (std::ptrdiff_t k = m; k < padded; ++k) x[k] = x[m - 1], y[k] = y[m - 1], z[k] = z[m - 1];
+  return padded;
+}
 
 template <typename T>
 SPOTKIN_INLINE bool finite3(const T* v) noexcept {
   return std::isfinite(double(v[0])) && std::isfinite(double(v[1])) && std::isfinite(double(v[2]));
 }
 
-// Chooses among the four slots of one target (exists_hip: per hip branch).
-// Writes q (limit-wrapped) and returns the status; sets valid[] when given.
-// Without a seed: the first valid slot in the leg's slot order (the preferred
-// slot first); with one: the valid slot nearest to it (ties: that order).
-template <typename T>
-SPOTKIN_INLINE Status choose(const Leg& leg, double q_all[Leg::kSlots][3], const double exists_hip[2],
-                             const T* seed, T* q_out, std::uint8_t* valid_out) noexcept {
-  int best = -1;
-  double best_distance = std::numeric_limits<double>::infinity();
-  double seed_d[3] = {0, 0, 0};
-  if (seed) seed_d[0] = double(seed[0]), seed_d[1] = double(seed[1]), seed_d[2] = double(seed[2]);
-  const int* order = leg.slot_order();
-  for (int k = 0; k < Leg::kSlots; ++k) {
-    const int s = order[k];
-    const bool ok = exists_hip[s / 2] != 0.0 && leg.limits().wrap_mask(q_all[s], JointLimits<3>::tolerance<T>()) != 0.0;
-    if (valid_out) valid_out[s] = ok;
-    if (!ok) continue;
-    if (!seed) {
-      if (best < 0) best = s;
-      continue;
+// solve_slots' first pass: every slot of m targets, before the limits.
+template <bool SharedKnee>
+SPOTKIN_INLINE void solve_slots_raw(const Leg& leg, const double* x, const double* y, const double* z,
+                                    std::ptrdiff_t m, double tol, double (*q)[3][kBlock],
+                                    double (*exists_hip)[kBlock]) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    double q_all[Leg::kSlots][3], e[2];
+    leg.solve_all_mask<SharedKnee>(x[i], y[i], z[i], q_all, e, tol);
+    exists_hip[0][i] = e[0], exists_hip[1][i] = e[1];
+#pragma GCC unroll 4
+    for (int s = 0; s < Leg::kSlots; ++s)
+#pragma GCC unroll 3
+      for (int j = 0; j < 3; ++j) q[s][j][i] = q_all[s][j];
+  }
+}
+
+// Every slot of m targets (vectorised): q[s][j][i] wrapped into the limits
+// where it fits, ok[s][i] = 1.0 where slot s exists and fits, exists_hip[hb][i]
+// = 1.0 where hip branch hb exists (both of its knee slots then do).
+SPOTKIN_INLINE void solve_slots(const Leg& leg_in, const double* x, const double* y, const double* z,
+                                std::ptrdiff_t m, double tol, double limit_tol, double (*q)[3][kBlock],
+                                double (*ok)[kBlock], double (*exists_hip)[kBlock]) noexcept {
+  const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
+  if (leg.shared_knee())
+    solve_slots_raw<true>(leg, x, y, z, m, tol, q, exists_hip);
+  else
+    solve_slots_raw<false>(leg, x, y, z, m, tol, q, exists_hip);
+#pragma GCC unroll 4
+  for (int s = 0; s < Leg::kSlots; ++s) {
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      double qi[3] = {q[s][0][i], q[s][1][i], q[s][2][i]};
+      ok[s][i] = exists_hip[s / 2][i] * leg.limits().wrap_mask(qi, limit_tol);
+      q[s][0][i] = qi[0], q[s][1][i] = qi[1], q[s][2][i] = qi[2];
     }
-    const double d = circle_distance<3>(q_all[s], seed_d);
-    if (d < best_distance) best = s, best_distance = d;
   }
-  if (best >= 0) {
-    for (int j = 0; j < 3; ++j) q_out[j] = T(q_all[best][j]);
-    return Status::Ok;
-  }
-  for (int j = 0; j < 3; ++j) q_out[j] = T(quiet_nan<double>());
-  return exists_hip[0] != 0.0 || exists_hip[1] != 0.0 ? Status::JointLimit : Status::Unreachable;
 }
 
 // The documented UNREACHABLE answer, always inside the limits: the
@@ -429,22 +454,62 @@ SPOTKIN_INLINE double finite_mask(double x, double y, double z) noexcept {
   return ((x - x) == 0.0) & ((y - y) == 0.0) & ((z - z) == 0.0) ? 1.0 : 0.0;
 }
 
-// The answer for a target the vector pass did not settle (no seed and the
-// preferred slot valid): a seed, a limit, the other hip branch, or no solution.
-template <typename T>
-SPOTKIN_INLINE Status settle(const Leg& leg, double x, double y, double z, const T* seed, T* qt, bool nearest_fallback,
-                             double tol) noexcept {
-  double q_all[Leg::kSlots][3], exists_hip[2];
-  leg.solve_all(x, y, z, q_all, true, tol, exists_hip);
-  if (exists_hip[0] == 0.0 && exists_hip[1] == 0.0) {
+// The targets of a block that the preferred-slot pass did not settle (a seed,
+// a limit, the other hip branch, or no solution): gathered, solved in every
+// slot at once by solve_slots, then chosen one by one.
+struct OpenTargets {
+  std::ptrdiff_t count = 0;
+  std::ptrdiff_t index[kBlock];  // the target's place in the block
+  double x[kBlock], y[kBlock], z[kBlock];
+  double q[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock], exists_hip[2][kBlock];
+
+  SPOTKIN_INLINE void add(std::ptrdiff_t i, double xi, double yi, double zi) noexcept {
+    index[count] = i, x[count] = xi, y[count] = yi, z[count] = zi;
+    ++count;
+  }
+  // Padded (pad_block): an open target's answer must not depend on which of
+  // its neighbours are open too.
+  SPOTKIN_INLINE void solve(const Leg& leg, double tol, double limit_tol) noexcept {
+    if (count > 0) solve_slots(leg, x, y, z, pad_block(x, y, z, count), tol, limit_tol, q, ok, exists_hip);
+  }
+
+  // Open target k: writes q_out and returns its status. Without a seed, the
+  // first valid slot in the leg's slot order (the preferred slot first); with
+  // one, the valid slot nearest to it on the circle (ties: that order). No
+  // valid slot: NaN and JOINT_LIMIT, or UNREACHABLE with unreachable_fallback's
+  // answer (NaN when !nearest_fallback).
+  template <typename T>
+  Status choose(const Leg& leg, std::ptrdiff_t k, const T* seed, T* q_out, bool nearest_fallback) const noexcept {
+    int best = -1;
+    double best_distance = std::numeric_limits<double>::infinity();
+    const int* order = leg.slot_order();
+    for (int n = 0; n < Leg::kSlots; ++n) {
+      const int s = order[n];
+      if (ok[s][k] == 0.0) continue;
+      if (!seed) {
+        best = s;
+        break;
+      }
+      const double qs[3] = {q[s][0][k], q[s][1][k], q[s][2][k]};
+      const double seed_d[3] = {double(seed[0]), double(seed[1]), double(seed[2])};
+      const double d = circle_distance<3>(qs, seed_d);
+      if (d < best_distance) best = s, best_distance = d;
+    }
+    if (best >= 0) {
+      for (int j = 0; j < 3; ++j) q_out[j] = T(q[best][j][k]);
+      return Status::Ok;
+    }
+    if (exists_hip[0][k] != 0.0 || exists_hip[1][k] != 0.0) {
+      for (int j = 0; j < 3; ++j) q_out[j] = T(quiet_nan<double>());
+      return Status::JointLimit;
+    }
     if (nearest_fallback)
-      unreachable_fallback(leg, x, y, z, qt);
+      unreachable_fallback(leg, x[k], y[k], z[k], q_out);
     else
-      qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
+      q_out[0] = q_out[1] = q_out[2] = T(quiet_nan<double>());
     return Status::Unreachable;
   }
-  return choose(leg, q_all, exists_hip, seed, qt, nullptr);
-}
+};
 
 // Vectorised: slot Slot and its limits for every target of a block; exists
 // -1 for invalid input.
@@ -481,13 +546,19 @@ template <typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   double x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
-  const double tol = Leg::ratio_tolerance<T>();
+  OpenTargets open;
+  const double tol = Leg::ratio_tolerance<T>(), limit_tol = JointLimits<3>::tolerance<T>();
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
     }
-    preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, JointLimits<3>::tolerance<T>());
+    if (!seed) {
+      preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, pad_block(x, y, z, m), tol, limit_tol);
+    } else {  // every target is chosen among all the slots
+      for (std::ptrdiff_t i = 0; i < m; ++i) exists[i] = finite_mask(x[i], y[i], z[i]) - 1.0, ok[i] = 0.0;
+    }
+    open.count = 0;
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 3 * t;
@@ -495,23 +566,25 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
       if (ok[i] != 0.0 && !st) {  // the common case: the preferred slot valid, no seed
         qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
         status[t] = std::int8_t(Status::Ok);
-        continue;
-      }
-      if (exists[i] < 0.0 || (st && !finite3(st))) {
+      } else if (exists[i] < 0.0 || (st && !finite3(st))) {
         qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
         status[t] = std::int8_t(Status::InvalidInput);
-        continue;
+      } else {
+        open.add(i, x[i], y[i], z[i]);
       }
-      status[t] = std::int8_t(settle(leg, x[i], y[i], z[i], st, qt, nearest_fallback, tol));
+    }
+    open.solve(leg, tol, limit_tol);
+    for (std::ptrdiff_t k = 0; k < open.count; ++k) {
+      const std::ptrdiff_t t = b0 + open.index[k];
+      status[t] = std::int8_t(open.choose(leg, k, seed ? seed + 3 * t : nullptr, q + 3 * t, nearest_fallback));
     }
   }
 }
 
 // Every branch: q (count, 4, 3), valid and exists (count, 4), status (count).
 template <typename T>
-SPOTKIN_INLINE void ik_all(const Leg& leg_in, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
+SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
                            std::int8_t* status, std::ptrdiff_t count) noexcept {
-  const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   constexpr double nan = quiet_nan<double>();
   double x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock];
   double ex[2][kBlock], finite[kBlock];
@@ -519,41 +592,26 @@ SPOTKIN_INLINE void ik_all(const Leg& leg_in, const T* p, T* q, std::uint8_t* va
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
-    }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: all slots for every target
-      double q_all[Leg::kSlots][3], e[2];
       finite[i] = finite_mask(x[i], y[i], z[i]);
-      leg.solve_all_mask(x[i], y[i], z[i], q_all, e, Leg::ratio_tolerance<T>());
-      ex[0][i] = finite[i] * e[0], ex[1][i] = finite[i] * e[1];
-#pragma GCC unroll 4
-      for (int s = 0; s < Leg::kSlots; ++s)
-#pragma GCC unroll 3
-        for (int j = 0; j < 3; ++j) qs[s][j][i] = q_all[s][j];
     }
-#pragma GCC unroll 4
-    for (int s = 0; s < Leg::kSlots; ++s) {
-      for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: limits per slot
-        double qi[3] = {qs[s][0][i], qs[s][1][i], qs[s][2][i]};
-        const double e = ex[s / 2][i];
-        ok[s][i] = e * leg.limits().wrap_mask(qi, JointLimits<3>::tolerance<T>());
-        for (int j = 0; j < 3; ++j) qs[s][j][i] = e != 0.0 ? qi[j] : nan;
-      }
-    }
+    solve_slots(leg, x, y, z, pad_block(x, y, z, m), Leg::ratio_tolerance<T>(), JointLimits<3>::tolerance<T>(), qs,
+                ok, ex);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 12 * t;
+      const bool exists_hip[2] = {finite[i] != 0.0 && ex[0][i] != 0.0, finite[i] != 0.0 && ex[1][i] != 0.0};
       bool any_valid = false;
       for (int s = 0; s < Leg::kSlots; ++s) {
-        for (int j = 0; j < 3; ++j) qt[3 * s + j] = T(qs[s][j][i]);
-        valid[4 * t + s] = ok[s][i] != 0.0;
-        exists[4 * t + s] = ex[s / 2][i] != 0.0;
-        any_valid |= ok[s][i] != 0.0;
+        const bool e = exists_hip[s / 2], v = e && ok[s][i] != 0.0;
+        for (int j = 0; j < 3; ++j) qt[3 * s + j] = T(e ? qs[s][j][i] : nan);
+        valid[4 * t + s] = v;
+        exists[4 * t + s] = e;
+        any_valid |= v;
       }
-      const bool any_exists = ex[0][i] != 0.0 || ex[1][i] != 0.0;
-      const Status st = finite[i] == 0.0 ? Status::InvalidInput
-                        : any_valid     ? Status::Ok
-                        : any_exists    ? Status::JointLimit
-                                        : Status::Unreachable;
+      const Status st = finite[i] == 0.0                ? Status::InvalidInput
+                        : any_valid                     ? Status::Ok
+                        : exists_hip[0] || exists_hip[1] ? Status::JointLimit
+                                                        : Status::Unreachable;
       status[t] = std::int8_t(st);
     }
   }
