@@ -2,7 +2,36 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+
+CHUNK = 32768
+
+
+def chunked(func: Callable, n_arrays: int = 1) -> Callable:
+    """func over 32768-row chunks of its first n_arrays arguments (the others passed as they are),
+    results written into preallocated outputs: the strong NumPy form, whose temporaries stay in
+    cache. A 1-D first argument (one sample) is passed through whole."""
+
+    def run(*args):
+        arrays, rest = args[:n_arrays], args[n_arrays:]
+        n = arrays[0].shape[0] if arrays[0].ndim > 1 else 0
+        if n <= CHUNK:
+            return func(*args)
+        first = func(*(a[:CHUNK] for a in arrays), *rest)
+        single = not isinstance(first, tuple)
+        parts = (first,) if single else first
+        outs = tuple(np.empty((n, *x.shape[1:]), x.dtype) for x in parts)
+        for out, x in zip(outs, parts):
+            out[:CHUNK] = x
+        for start in range(CHUNK, n, CHUNK):
+            got = func(*(a[start : start + CHUNK] for a in arrays), *rest)
+            for out, x in zip(outs, (got,) if single else got):
+                out[start : start + CHUNK] = x
+        return outs[0] if single else outs
+
+    return run
 
 
 def _rot_x_trans_x(alpha: float, a: float) -> np.ndarray:
@@ -296,9 +325,6 @@ def rpp_leg_ik_one_branch(p: np.ndarray, a, b, c, signs) -> np.ndarray:
     t2 = np.arctan2(wx * dz - wz * dx, wz * dz + wx * dx)
     t3 = (t3 + np.pi) % (2 * np.pi) - np.pi
     return np.stack([signs[0] * t1, signs[1] * t2, signs[2] * t3], axis=-1)
-
-
-CHUNK = 32768
 
 
 def robot_body_ik_chunked(

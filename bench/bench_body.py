@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from baselines import body_fk, body_ik, body_jacobian
+from baselines import body_fk, body_ik, body_jacobian, chunked
 from conftest import SIZES
 
 SPOT = sk.Spot()
@@ -46,7 +46,7 @@ def test_baselines_agree_with_spotkin():
 def test_body_ik(measure, impl, n):
     p = poses(n)
     if impl == "numpy":
-        measure("body.ik", n, "numpy (slot 0 only)", body_ik, np.atleast_2d(p), FEET, HIPS, LEGS)
+        measure("body.ik", n, "numpy (chunked, slot 0)", chunked(body_ik), np.atleast_2d(p), FEET, HIPS, LEGS)
     else:
         measure("body.ik", n, impl, SPOT.body_ik, p, FEET)
 
@@ -59,7 +59,16 @@ def test_body_fk_jacobian(measure, op, impl, n):
     q12 = SPOT.body_ik(p, FEET).q
     if impl == "numpy":
         base = {"fk": body_fk, "jacobian": body_jacobian}[op]
-        measure(f"body.{op}", n, impl, base, np.atleast_2d(p), np.atleast_2d(q12), HIPS, LEGS)
+        measure(
+            f"body.{op}",
+            n,
+            "numpy (chunked)",
+            chunked(base, 2),
+            np.atleast_2d(p),
+            np.atleast_2d(q12),
+            HIPS,
+            LEGS,
+        )
     else:
         measure(f"body.{op}", n, impl, getattr(SPOT, f"body_{op}"), p, q12)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from baselines import leg_fk, leg_ik_one_branch, leg_jacobian
+from baselines import chunked, leg_fk, leg_ik_one_branch, leg_jacobian
 from conftest import SIZES
 
 LEG = sk.Spot().leg("fl")
@@ -35,7 +35,7 @@ def test_leg_fk_jacobian(measure, op, impl, n):
     q = configurations(n)
     if impl == "numpy":
         base = {"fk": leg_fk, "jacobian": leg_jacobian}[op]
-        measure(f"leg.{op}", n, impl, lambda a: base(a, *PARAMS), q)
+        measure(f"leg.{op}", n, "numpy (chunked)", chunked(lambda a: base(a, *PARAMS)), q)
     else:
         measure(f"leg.{op}", n, impl, getattr(LEG, op), q)
 
@@ -45,7 +45,7 @@ def test_leg_fk_jacobian(measure, op, impl, n):
 def test_leg_ik(measure, impl, n):
     p = LEG.fk(configurations(n))
     if impl == "numpy":
-        measure("leg.ik", n, "numpy (slot 0 only)", lambda a: leg_ik_one_branch(a, *PARAMS), p)
+        measure("leg.ik", n, "numpy (chunked, slot 0)", chunked(lambda a: leg_ik_one_branch(a, *PARAMS)), p)
     elif impl == "spotkin.ik_all":
         measure("leg.ik", n, impl, LEG.ik_all, p)
     else:

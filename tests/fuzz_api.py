@@ -2833,8 +2833,14 @@ def _option_pairs(plan):
         return REJECT  # RL, FR not among FL, RR
     if plan.get("contact_offset") == "dict" and plan.get("feet") == "one":
         return REJECT  # RR_foot is not a foot then
-    if plan.get("feet") == "calf" and plan.get("contact_offset") in ("vector", "list", "float32"):
-        return ACCEPT  # the offset is the knee-to-foot vector: a leg
+    if plan.get("feet") == "calf" and plan.get("contact_offset") in (
+        "vector",
+        "list",
+        "float32",
+        "dict_not_foot",
+    ):
+        # the offset is the knee-to-foot vector: a leg (and the calf is then a foot)
+        return ACCEPT
     return None
 
 
@@ -4809,7 +4815,9 @@ def judge_sample(entry, ctx, x, out, kw, spec, f32, where):
     equivalent = {}
     out_f32 = any(isinstance(leaf, (np.ndarray, np.generic)) and leaf.dtype == np.float32 for leaf in out)
     for name, sample in x.items():
-        if out_f32 and sample.dtype == np.float64:  # computed in float32: the angle is the float32 one
+        # computed in float32: the angle is the float32 one, except a seed's, which is reduced
+        # before it is narrowed (documented)
+        if out_f32 and sample.dtype == np.float64 and name != "seed":
             sample = sample.astype(np.float32)
         replacement = entry.slot(name).equiv(sample, ctx)
         if replacement is not None:

@@ -111,6 +111,41 @@ def test_dls_tends_to_pseudo_inverse(rng, shape):
 
 
 @pytest.mark.parametrize("shape", [(3, 3), (6, 6), (12, 18), (5, 8), (8, 5)])
+@pytest.mark.parametrize("damping", [1e-100, 1e-160, 1e-200, 5e-324])
+def test_dls_with_a_damping_below_rounding_is_the_pseudo_inverse_limit(rng, shape, damping):
+    """A damping whose square is below the rounding of J J^T (or underflows) is numerically zero:
+    the step is J^+ dx, for a singular J too (a Cholesky of J J^T + damping² I would factor rounding
+    noise there), on the fixed-size block path and the general one alike."""
+    m, n = shape
+    J = conditioned(rng, (40,), m, n, rank=min(m, n) - 1)
+    dx = rng.normal(size=(40, m))
+    expected = np.einsum("...ij,...j->...i", np.linalg.pinv(J), dx)
+    np.testing.assert_allclose(sk.dls(J, dx, damping=damping), expected, atol=1e-9)
+    np.testing.assert_allclose(sk.dls(J[0], dx[0], damping=damping), expected[0], atol=1e-9)
+    np.testing.assert_allclose(ref.dls(J[0], dx[0], damping), expected[0], atol=1e-9)
+
+
+def test_ik_differential_with_a_tiny_damping_at_a_limit_stays_finite():
+    """Joints held at their limits zero Jacobian columns; with a damping below rounding the step
+    is the pseudo-inverse one, not NaN (a fuzzing find)."""
+    arm = sk.Spot().chain("arm_hand")
+    T = np.array(
+        [
+            [0.14901586854489351, 0.9880591381670932, -0.03915878453568479, 0.7026143444750562],
+            [-0.43528902631021, 0.02998832997002488, -0.8997911777960031, -0.12107199146460712],
+            [-0.8878725891115912, 0.1511285530603337, 0.4345600372263532, -0.07876287231556375],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+    q0 = np.array(
+        [-0.07322401353124758, -0.9172158095301937, 1e-300, 1.7411595370267487, -0.4148944238, -0.3461887637]
+    )
+    for damping in (5e-324, 1e-200, 1e-100):
+        q, info = arm.ik_differential(T, q0=q0, damping=damping)
+        assert np.isfinite(q).all() and np.isfinite(info.position_error), damping
+
+
+@pytest.mark.parametrize("shape", [(3, 3), (6, 6), (12, 18), (5, 8), (8, 5)])
 @pytest.mark.parametrize("rank", [None, 1, 2])
 def test_moore_penrose_conditions(rng, shape, rank):
     m, n = shape

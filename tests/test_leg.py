@@ -310,8 +310,9 @@ def test_knee_limited_reach_matches_sampling():
         limits = np.array([(-np.pi, np.pi), (-np.pi, np.pi), knee_limits])
         leg = sk.Leg(H1, U, L, K, limits=limits)
         far = np.array([0.3, 0.4, -2.0])
-        np.testing.assert_allclose(np.linalg.norm(leg.nearest_reachable(far, within_limits=True)),
-                                   np.hypot(H1, d_max), atol=1e-12)
+        np.testing.assert_allclose(
+            np.linalg.norm(leg.nearest_reachable(far, within_limits=True)), np.hypot(H1, d_max), atol=1e-12
+        )
 
 
 def test_inner_dead_zone_and_hip_cylinder_fallbacks():

@@ -133,8 +133,15 @@ py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z
               for (int r = 0; r < Mv; ++r) dxs[r][i] = finite[i] ? di[r] : T(0);
             }
             diff::dls_block<T, Mv, Nv>(Js, dxs, lambda2, dqs);
-            for (int i = 0; i < k; ++i)
-              for (int c = 0; c < Nv; ++c) od[(b0 + i) * Nv + c] = finite[i] ? dqs[c][i] : quiet_nan<T>();
+            for (int i = 0; i < k; ++i) {
+              T* dq = od + (b0 + i) * Nv;
+              bool ok = finite[i];
+              for (int c = 0; c < Nv; ++c) ok = ok && std::isfinite(dqs[c][i]), dq[c] = finite[i] ? dqs[c][i] : quiet_nan<T>();
+              // a damping below the rounding of J J^T, or no positive pivot: the limit, J^+ dx
+              const T* Ji = jd + j_index(b0 + i) * Mv * Nv;
+              if (finite[i] && (!ok || diff::damping_below_rounding(Ji, Mv, Nv, lambda2)))
+                diff::pinv_solve<T>(Ji, dd + dx_index(b0 + i) * Mv, nullptr, Mv, Nv, dq);
+            }
           }
         });
       };

@@ -50,8 +50,10 @@ def dls(J: ArrayLike, dx: ArrayLike, damping: float = 1e-3, nullspace: ArrayLike
 
     ``dq = J^T (J J^T + damping² I)^-1 dx``, plus ``(I - J^+ J) nullspace`` when a
     secondary joint-space motion ``nullspace`` (..., n) is given. ``damping = 0`` gives
-    the minimum-norm least-squares solution ``J^+ dx``. ``damping`` must be finite and
-    >= 0 (ValueError otherwise).
+    the minimum-norm least-squares solution ``J^+ dx``; so does a damping that is numerically
+    zero, ``damping² <= eps · ‖J‖_F²`` (eps = 2.2e-16, for float32 input too): ``J J^T +
+    damping² I`` is then ``J J^T`` in floating point, and the step is the damped one's limit.
+    ``damping`` must be finite and >= 0 (ValueError otherwise).
     """
     damping = _nonnegative(damping, "damping")
     return _core.dls(J, dx, damping, nullspace)

@@ -535,12 +535,14 @@ class Robot:
         lead = broadcast_lead(**leads)
         T_world64 = target.astype(np.float64, copy=False)
         R, t = T_wb[..., :3, :3], T_wb[..., :3, 3]
-        T_bw = np.zeros_like(T_wb)
-        T_bw[..., :3, :3] = np.swapaxes(R, -1, -2)
-        T_bw[..., :3, 3] = -np.einsum("...ji,...j->...i", R, t)
-        T_bw[..., 3, 3] = 1.0
-        T_body = T_bw @ T_world64
-        T_body[..., 3, :] = T_world64[..., 3, :]  # keep the caller's last row, so a bad one is still reported
+        # the blocks apart, R^T R_w and R^T (p_w - t), so that the target's last row (checked by
+        # the arm as it is given) never mixes into them: a far body times a last row within
+        # tolerance of [0, 0, 0, 1] would otherwise tilt the rotation
+        lead_shape = np.broadcast_shapes(T_wb.shape[:-2], T_world64.shape[:-2])
+        T_body = np.empty((*lead_shape, 4, 4))
+        T_body[..., :3, :3] = np.einsum("...ji,...jk->...ik", R, T_world64[..., :3, :3])
+        T_body[..., :3, 3] = np.einsum("...ji,...j->...i", R, T_world64[..., :3, 3] - t)
+        T_body[..., 3, :] = T_world64[..., 3, :]  # the caller's last row, so a bad one is still reported
         T_body = np.broadcast_to(T_body, (*lead, 4, 4)).astype(real_dtype(pose, target))
         if seed is not None:
             seed = _broadcast_to_lead(seed, 1, lead)

@@ -220,6 +220,12 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     read_poses(poses + stride * b0, format, seq, stride, m, P);
+    // whole vectors (as leg_batch::pad_block): the padding repeats the last pose and foot
+    const std::ptrdiff_t padded = std::min(kBlock, (m + 7) / 8 * 8);
+    for (std::ptrdiff_t k = m; k < padded; ++k) {
+      for (int r = 0; r < 9; ++r) P.R[r][k] = P.R[r][m - 1];
+      for (int r = 0; r < 3; ++r) P.t[r][k] = P.t[r][m - 1];
+    }
     for (int l = 0; l < n; ++l) {
       const Leg& leg = body.legs[std::size_t(l)];
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
@@ -227,7 +233,8 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
         const T* f = feet + (feet_shared ? 3 * l : 3 * n * (b0 + i) + 3 * l);
         fx[i] = double(f[0]), fy[i] = double(f[1]), fz[i] = double(f[2]);
       }
-      leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol,
+      leg_batch::pad_block(fx, fy, fz, m);
+      leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol,
                 JointLimits<3>::tolerance<T>());
       open.count = 0;
       for (std::ptrdiff_t i = 0; i < m; ++i) {

@@ -86,13 +86,19 @@ SPOTKIN_INLINE Eigen::Map<const typename Types<S, M, N>::Jac> map_jacobian(const
   return Eigen::Map<const typename Types<S, M, N>::Jac>(J, m, n);
 }
 
+template <typename S>
+inline void pinv_solve(const S* Jp, const S* dxp, const S* zp, int m, int n, S* dqp) noexcept;
+
 // Damped least squares, lambda2 = damping^2 > 0:
 //   dq = J^T (J J^T + lambda^2 I_m)^-1 dx          (m <= n)
 //      = (J^T J + lambda^2 I_n)^-1 J^T dx          (m > n; the same matrix, since
 //        J^T (J J^T + l^2 I) = (J^T J + l^2 I) J^T)
-// solved by Cholesky on the smaller Gram matrix.
+// solved by Cholesky on the smaller Gram matrix (see damping_below_rounding for
+// a damping too small to matter; a factorisation that still meets a
+// non-positive pivot also gives J^+ dx, never NaN).
+// Returns false when the factorisation met a non-positive pivot.
 template <typename S, int M, int N>
-SPOTKIN_INLINE void dls_damped(const S* Jp, const S* dxp, S lambda2, int m, int n, S* dqp) noexcept {
+SPOTKIN_INLINE bool dls_damped_cholesky(const S* Jp, const S* dxp, S lambda2, int m, int n, S* dqp) noexcept {
   using T = Types<S, M, N>;
   const auto J = map_jacobian<S, M, N>(Jp, m, n);
   const Eigen::Map<const typename T::VecM> dx(dxp, m);
@@ -100,13 +106,36 @@ SPOTKIN_INLINE void dls_damped(const S* Jp, const S* dxp, S lambda2, int m, int 
   if (m <= n) {
     typename T::SquareM A = J * J.transpose();
     A.diagonal().array() += lambda2;
-    dq.noalias() = J.transpose() * Eigen::LLT<typename T::SquareM>(A).solve(dx);
-  } else {
-    typename T::SquareN A = J.transpose() * J;
-    A.diagonal().array() += lambda2;
-    const typename T::VecN rhs = J.transpose() * dx;
-    dq = Eigen::LLT<typename T::SquareN>(A).solve(rhs);
+    const Eigen::LLT<typename T::SquareM> llt(A);
+    dq.noalias() = J.transpose() * llt.solve(dx);
+    return llt.info() == Eigen::Success;
   }
+  typename T::SquareN A = J.transpose() * J;
+  A.diagonal().array() += lambda2;
+  const typename T::VecN rhs = J.transpose() * dx;
+  const Eigen::LLT<typename T::SquareN> llt(A);
+  dq = llt.solve(rhs);
+  return llt.info() == Eigen::Success;
+}
+
+// lambda^2 at or below the rounding of J J^T: (J J^T + lambda^2 I) is J J^T in
+// floating point, and a singular J's factorisation is rounding noise. Such a
+// damping is numerically zero: the step is its lambda -> 0 limit, J^+ dx. The
+// bound uses double's epsilon for both dtypes, so a float32 step with a usual
+// damping (1e-3) stays damped.
+template <typename S>
+SPOTKIN_INLINE bool damping_below_rounding(const S* J, int m, int n, S lambda2) noexcept {
+  double frobenius2 = 0.0;
+  for (int k = 0; k < m * n; ++k) frobenius2 += double(J[k]) * double(J[k]);
+  return double(lambda2) <= std::numeric_limits<double>::epsilon() * frobenius2;
+}
+
+template <typename S, int M, int N>
+SPOTKIN_INLINE void dls_damped(const S* Jp, const S* dxp, S lambda2, int m, int n, S* dqp) noexcept {
+  if (damping_below_rounding(Jp, m, n, lambda2)) return pinv_solve<S>(Jp, dxp, nullptr, m, n, dqp);
+  bool ok = dls_damped_cholesky<S, M, N>(Jp, dxp, lambda2, m, n, dqp);
+  for (int j = 0; j < n; ++j) ok = ok && std::isfinite(dqp[j]);
+  if (!ok) pinv_solve<S>(Jp, dxp, nullptr, m, n, dqp);
 }
 
 // dls_damped for a block of kDlsBlock samples at fixed M <= N, vectorised

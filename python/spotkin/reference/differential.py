@@ -19,6 +19,8 @@ def dls(J: np.ndarray, dx: np.ndarray, damping: float, z: np.ndarray | None = No
     J = np.asarray(J, dtype=np.float64)
     dx = np.asarray(dx, dtype=np.float64)
     m, n = J.shape
+    if damping**2 <= np.finfo(np.float64).eps * float(np.sum(J * J)):
+        damping = 0.0  # below the rounding of J J^T: numerically zero, the limit J^+ dx
     if damping > 0 and m <= n:
         dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(m), dx)
     elif damping > 0:
