@@ -10,7 +10,11 @@
 // URDF (python/spotkin/robots/spot_with_arm.urdf) gives them, and its arm.
 // Every kernel runs on one thread over n samples (default 1e6; the arm and the
 // 6-joint chain 1e5); the best of `repeats` runs is reported in ns per sample
-// and in TSC cycles per sample (the TSC rate is measured against steady_clock).
+// and in TSC cycles per sample (the TSC rate is measured against steady_clock),
+// beside a floor: the kernel's elementary operations (atan2, sincos, sqrt,
+// multiply-adds; counts in the Work constants below) times their measured
+// vectorised cost on this CPU (float64; the float32 kernels and the arm have
+// no floor here).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -79,6 +83,27 @@ HARNESS_KERNEL void chain_jacobian(const Chain<double>& chain, const double* q, 
   chain.jacobian_batch(q, out, n, 6, false);
 }
 
+// Elementary operations over arrays, vectorised as in the kernels: their
+// measured cost per element is the unit of the floor estimate.
+HARNESS_KERNEL void elementary_atan2(const double* y, const double* x, double* out, std::ptrdiff_t n) {
+  for (std::ptrdiff_t i = 0; i < n; ++i) out[i] = vector_math::atan2(y[i], x[i]);
+}
+HARNESS_KERNEL void elementary_sincos(const double* x, double* s, double* c, std::ptrdiff_t n) {
+  for (std::ptrdiff_t i = 0; i < n; ++i) vector_math::sincos_bounded(x[i], s[i], c[i]);
+}
+HARNESS_KERNEL void elementary_sqrt(const double* x, double* out, std::ptrdiff_t n) {
+  for (std::ptrdiff_t i = 0; i < n; ++i) out[i] = std::sqrt(x[i]);
+}
+// 32 dependent multiply-adds per element, over independent elements (throughput)
+HARNESS_KERNEL void elementary_fma32(const double* x, double* out, std::ptrdiff_t n) {
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    double v = x[i];
+#pragma GCC unroll 32
+    for (int k = 0; k < 32; ++k) v = v * 0.999 + 0.001;
+    out[i] = v;
+  }
+}
+
 double tsc_ghz() {
 #if defined(__x86_64__)
   const auto t0 = std::chrono::steady_clock::now();
@@ -104,13 +129,42 @@ double best_seconds(int repeats, F&& run) {
   return best;
 }
 
+// What a kernel must evaluate per sample, at least: the floor estimate is
+// the sum of these counts times the measured cost of each operation (memory
+// traffic, selects, branch and limit logic are left out, so the floor is low).
+struct Work {
+  double atan2 = 0, sincos = 0, sqrt = 0, fma = 0;
+};
+
+struct Costs {  // ns per element, measured
+  double atan2 = 0, sincos = 0, sqrt = 0, fma = 0;
+  double floor_ns(const Work& w) const { return w.atan2 * atan2 + w.sincos * sincos + w.sqrt * sqrt + w.fma * fma; }
+};
+
 struct Report {
   double ghz;
-  void operator()(const char* name, std::ptrdiff_t n, double seconds) const {
-    const double ns = seconds / double(n) * 1e9;
-    std::printf("%-28s %10td %10.2f %10.1f\n", name, n, ns, ns * ghz);
+  Costs costs;
+  void operator()(const char* name, std::ptrdiff_t n, double seconds, const Work& work = Work{}) const {
+    const double ns = seconds / double(n) * 1e9, floor = costs.floor_ns(work);
+    if (floor > 0.0)
+      std::printf("%-28s %10td %10.2f %10.1f %10.1f %8.1fx\n", name, n, ns, ns * ghz, floor * ghz, ns / floor);
+    else
+      std::printf("%-28s %10td %10.2f %10.1f %10s %9s\n", name, n, ns, ns * ghz, "-", "-");
   }
 };
+
+// Operation counts per sample, from the kernels' equations (leg.hpp (I1)-(I4)
+// and (R1), body.hpp (B1)-(B2), chain.hpp): a leg IK slot is one sqrt for the
+// hip, one sqrt + one atan2 for the knee's acos, one atan2 each for hip roll
+// and hip pitch, and about 40 multiply-adds; every slot (ik_all) shares the hip
+// sqrt and, for a_z = 0, the knee.
+constexpr Work kLegFk{0, 3, 0, 20};
+constexpr Work kLegIk{3, 0, 2, 40};
+constexpr Work kLegIkAll{7, 0, 2, 110};
+constexpr Work kBodyIk{12, 3, 8, 4 * 40 + 60};
+constexpr Work kBodyFk{0, 15, 0, 4 * 20 + 60};
+constexpr Work kChain6Fk{0, 6, 0, 6 * 27};
+constexpr Work kChain6Jacobian{0, 6, 0, 6 * 27 + 6 * 15};
 
 JointLimits<3> leg_limits(double knee_upper) {
   JointLimits<3> limits;
@@ -135,9 +189,24 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: spotkin_harness [samples > 0] [repeats > 0]\n");
     return 2;
   }
-  const Report report{tsc_ghz()};
+  Report report{tsc_ghz(), {}};
+  {
+    const std::ptrdiff_t m = 1 << 16;  // in cache
+    std::vector<double> a(m), b(m), c(m), d(m);
+    std::mt19937_64 gen(1);
+    for (std::ptrdiff_t i = 0; i < m; ++i)
+      a[i] = std::uniform_real_distribution<double>(-3, 3)(gen), b[i] = std::uniform_real_distribution<double>(-3, 3)(gen);
+    const int r = 20 * repeats;
+    report.costs.atan2 = best_seconds(r, [&] { elementary_atan2(a.data(), b.data(), c.data(), m); }) / m * 1e9;
+    report.costs.sincos = best_seconds(r, [&] { elementary_sincos(a.data(), c.data(), d.data(), m); }) / m * 1e9;
+    report.costs.sqrt = best_seconds(r, [&] { elementary_sqrt(b.data(), c.data(), m); }) / m * 1e9;  // NaN half: same cost
+    report.costs.fma = best_seconds(r, [&] { elementary_fma32(a.data(), c.data(), m); }) / m * 1e9 / 32.0;
+  }
   std::printf("spotkin C++ kernels, one thread, best of %d; TSC %.3f GHz\n", repeats, report.ghz);
-  std::printf("%-28s %10s %10s %10s\n", "kernel", "samples", "ns/sample", "cycles");
+  std::printf("elementary costs (vectorised, cycles/element): atan2 %.2f, sincos %.2f, sqrt %.2f, multiply-add %.3f\n",
+              report.costs.atan2 * report.ghz, report.costs.sincos * report.ghz, report.costs.sqrt * report.ghz,
+              report.costs.fma * report.ghz);
+  std::printf("%-28s %10s %10s %10s %10s %9s\n", "kernel", "samples", "ns/sample", "cycles", "floor cyc", "/floor");
 
   // Spot: legs fl, fr, hl, hr (hip roll x, hip pitch y, knee y); per-leg knee limits.
   const double knee_upper[4] = {-0.254801, -0.247563, -0.267153, -0.257725};
@@ -174,16 +243,19 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 6; ++k) poses[6 * i + k] = (k == 2 ? 0.5 : 0.0) + spread[k] * normal(rng);
   body_ik(body, poses.data(), feet, q12.data(), status.data(), n);
 
-  report("leg.fk", n, best_seconds(repeats, [&] { leg_fk(leg, q.data(), p.data(), n); }));
+  report("leg.fk", n, best_seconds(repeats, [&] { leg_fk(leg, q.data(), p.data(), n); }), kLegFk);
   report("leg.ik", n,
          best_seconds(repeats, [&] {
            leg_ik(leg, p.data(), static_cast<const double*>(nullptr), q_out.data(), status.data(), n);
-         }));
+         }),
+         kLegIk);
   report("leg.ik seeded", n,
-         best_seconds(repeats, [&] { leg_ik(leg, p.data(), seed.data(), q_out.data(), status.data(), n); }));
+         best_seconds(repeats, [&] { leg_ik(leg, p.data(), seed.data(), q_out.data(), status.data(), n); }),
+         kLegIkAll);
   report("leg.ik_all", n, best_seconds(repeats, [&] {
            leg_ik_all(leg, p.data(), q_all.data(), valid.data(), exists.data(), status.data(), n);
-         }));
+         }),
+         kLegIkAll);
   {
     const std::vector<float> pf = as<float>(p);
     std::vector<float> qf(3 * n);
@@ -192,7 +264,8 @@ int main(int argc, char** argv) {
              leg_ik(leg, pf.data(), static_cast<const float*>(nullptr), qf.data(), status.data(), n);
            }));
   }
-  report("body_ik", n, best_seconds(repeats, [&] { body_ik(body, poses.data(), feet, q12.data(), status.data(), n); }));
+  report("body_ik", n, best_seconds(repeats, [&] { body_ik(body, poses.data(), feet, q12.data(), status.data(), n); }),
+         kBodyIk);
   {
     const std::vector<float> posesf = as<float>(poses);
     const std::vector<float> feetf(feet, feet + 12);
@@ -202,7 +275,7 @@ int main(int argc, char** argv) {
            }));
   }
   report("body_fk", n,
-         best_seconds(repeats, [&] { body_fk(body, poses.data(), q12.data(), feet_out.data(), n); }));
+         best_seconds(repeats, [&] { body_fk(body, poses.data(), q12.data(), feet_out.data(), n); }), kBodyFk);
 
   // Spot's arm (its default geometry; no limits), targets from FK
   const Arm arm;
@@ -216,7 +289,9 @@ int main(int argc, char** argv) {
   const double rows[30] = {0, 0, 0, 0, 0,       0, 0, -kPi<double> / 2, 0, 0,      0, 0.3385, 0, 0, -kPi<double> / 2,
                            0, 0.075, -kPi<double> / 2, 0.4033, 0, 0, 0, kPi<double> / 2, 0, 0, 0, 0, -kPi<double> / 2, 0, 0};
   const Chain<double> chain = Chain<double>::from_table(Convention::ModifiedDH, rows, 6, Rigid<double>{}, Rigid<double>{});
-  report("chain6.fk", n_arm, best_seconds(repeats, [&] { chain_fk(chain, q6.data(), out16.data(), n_arm); }));
-  report("chain6.jacobian", n_arm, best_seconds(repeats, [&] { chain_jacobian(chain, q6.data(), J.data(), n_arm); }));
+  report("chain6.fk", n_arm, best_seconds(repeats, [&] { chain_fk(chain, q6.data(), out16.data(), n_arm); }),
+         kChain6Fk);
+  report("chain6.jacobian", n_arm,
+         best_seconds(repeats, [&] { chain_jacobian(chain, q6.data(), J.data(), n_arm); }), kChain6Jacobian);
   return 0;
 }
