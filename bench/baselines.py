@@ -34,6 +34,14 @@ def chunked(func: Callable, n_arrays: int = 1) -> Callable:
     return run
 
 
+def numpy_impl(impl: str, func: Callable, what: str = "", n_arrays: int = 1) -> tuple[str, Callable]:
+    """(label, callable) of a NumPy baseline: "numpy" is the chunked form, the one the targets
+    use; "numpy-unchunked" the same function over the whole array at once."""
+    if impl == "numpy-unchunked":
+        return f"numpy-unchunked ({what.strip() or 'whole array'})", func
+    return f"numpy (chunked{',' + what if what else ''})", chunked(func, n_arrays)
+
+
 def _rot_x_trans_x(alpha: float, a: float) -> np.ndarray:
     c, s = np.cos(alpha), np.sin(alpha)
     return np.array([[1, 0, 0, a], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])

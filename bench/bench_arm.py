@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from baselines import arm_fk, arm_jacobian, chunked
+from baselines import arm_fk, arm_jacobian, numpy_impl
 from conftest import SIZES
 
 ARM = sk.Spot().arm
@@ -60,13 +60,13 @@ def test_eaik_solves_the_same_arm():
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy", "numpy-unchunked"])
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
 def test_arm_fk_jacobian(measure, op, impl, n):
     q = configurations(n)
-    if impl == "numpy":
+    if impl.startswith("numpy"):
         base = {"fk": arm_fk, "jacobian": arm_jacobian}[op]
-        measure(f"arm.{op}", n, "numpy (chunked)", chunked(base), np.atleast_2d(q))
+        measure(f"arm.{op}", n, *numpy_impl(impl, base), np.atleast_2d(q))
     else:
         measure(f"arm.{op}", n, impl, getattr(ARM, op), q)
 

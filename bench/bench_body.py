@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from baselines import body_fk, body_ik, body_jacobian, chunked
+from baselines import body_fk, body_ik, body_jacobian, numpy_impl
 from conftest import SIZES
 
 SPOT = sk.Spot()
@@ -42,28 +42,27 @@ def test_baselines_agree_with_spotkin():
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy", "numpy-unchunked"])
 def test_body_ik(measure, impl, n):
     p = poses(n)
-    if impl == "numpy":
-        measure("body.ik", n, "numpy (chunked, slot 0)", chunked(body_ik), np.atleast_2d(p), FEET, HIPS, LEGS)
+    if impl.startswith("numpy"):
+        measure("body.ik", n, *numpy_impl(impl, body_ik, " slot 0"), np.atleast_2d(p), FEET, HIPS, LEGS)
     else:
         measure("body.ik", n, impl, SPOT.body_ik, p, FEET)
 
 
 @pytest.mark.parametrize("n", [1, 1_000, 1_000_000])
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy", "numpy-unchunked"])
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
 def test_body_fk_jacobian(measure, op, impl, n):
     p = poses(n)
     q12 = SPOT.body_ik(p, FEET).q
-    if impl == "numpy":
+    if impl.startswith("numpy"):
         base = {"fk": body_fk, "jacobian": body_jacobian}[op]
         measure(
             f"body.{op}",
             n,
-            "numpy (chunked)",
-            chunked(base, 2),
+            *numpy_impl(impl, base, n_arrays=2),
             np.atleast_2d(p),
             np.atleast_2d(q12),
             HIPS,

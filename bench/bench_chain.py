@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from baselines import chunked, mdh_fk, mdh_jacobian
+from baselines import mdh_fk, mdh_jacobian, numpy_impl
 from conftest import SIZES
 
 ROWS = np.array(
@@ -35,14 +35,12 @@ def test_baselines_agree_with_spotkin():
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy", "numpy-unchunked"])
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
 def test_chain6(measure, op, impl, n):
     q = joint_samples(n)
-    if impl == "numpy":
+    if impl.startswith("numpy"):
         func = {"fk": mdh_fk, "jacobian": mdh_jacobian}[op]
-        measure(
-            f"chain6.{op}", n, "numpy (chunked)", chunked(lambda a: func(ROWS, a, TOOL)), np.atleast_2d(q)
-        )
+        measure(f"chain6.{op}", n, *numpy_impl(impl, lambda a: func(ROWS, a, TOOL)), np.atleast_2d(q))
         return
     measure(f"chain6.{op}", n, impl, getattr(CHAIN, op), q)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from baselines import chunked, leg_fk, leg_ik_one_branch, leg_jacobian
+from baselines import leg_fk, leg_ik_one_branch, leg_jacobian, numpy_impl
 from conftest import SIZES
 
 LEG = sk.Spot().leg("fl")
@@ -29,23 +29,23 @@ def test_baselines_agree_with_spotkin():
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy"])
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy", "numpy-unchunked"])
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
 def test_leg_fk_jacobian(measure, op, impl, n):
     q = configurations(n)
-    if impl == "numpy":
+    if impl.startswith("numpy"):
         base = {"fk": leg_fk, "jacobian": leg_jacobian}[op]
-        measure(f"leg.{op}", n, "numpy (chunked)", chunked(lambda a: base(a, *PARAMS)), q)
+        measure(f"leg.{op}", n, *numpy_impl(impl, lambda a: base(a, *PARAMS)), q)
     else:
         measure(f"leg.{op}", n, impl, getattr(LEG, op), q)
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "spotkin.ik_all", "numpy"])
+@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "spotkin.ik_all", "numpy", "numpy-unchunked"])
 def test_leg_ik(measure, impl, n):
     p = LEG.fk(configurations(n))
-    if impl == "numpy":
-        measure("leg.ik", n, "numpy (chunked, slot 0)", chunked(lambda a: leg_ik_one_branch(a, *PARAMS)), p)
+    if impl.startswith("numpy"):
+        measure("leg.ik", n, *numpy_impl(impl, lambda a: leg_ik_one_branch(a, *PARAMS), " slot 0"), p)
     elif impl == "spotkin.ik_all":
         measure("leg.ik", n, impl, LEG.ik_all, p)
     else:
