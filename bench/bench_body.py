@@ -42,11 +42,15 @@ def test_baselines_agree_with_spotkin():
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "numpy", "numpy-unchunked"])
+@pytest.mark.parametrize(
+    "impl", ["spotkin", "spotkin-1thread", "spotkin-float32-1thread", "numpy", "numpy-unchunked"]
+)
 def test_body_ik(measure, impl, n):
     p = poses(n)
     if impl.startswith("numpy"):
         measure("body.ik", n, *numpy_impl(impl, body_ik, " slot 0"), np.atleast_2d(p), FEET, HIPS, LEGS)
+    elif "float32" in impl:
+        measure("body.ik", n, impl, SPOT.body_ik, p.astype(np.float32), FEET.astype(np.float32))
     else:
         measure("body.ik", n, impl, SPOT.body_ik, p, FEET)
 

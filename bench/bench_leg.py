@@ -41,9 +41,14 @@ def test_leg_fk_jacobian(measure, op, impl, n):
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "spotkin.ik_all", "numpy", "numpy-unchunked"])
+@pytest.mark.parametrize(
+    "impl",
+    ["spotkin", "spotkin-1thread", "spotkin-float32-1thread", "spotkin.ik_all", "numpy", "numpy-unchunked"],
+)
 def test_leg_ik(measure, impl, n):
     p = LEG.fk(configurations(n))
+    if "float32" in impl:
+        p = p.astype(np.float32)
     if impl.startswith("numpy"):
         measure("leg.ik", n, *numpy_impl(impl, lambda a: leg_ik_one_branch(a, *PARAMS), " slot 0"), p)
     elif impl == "spotkin.ik_all":

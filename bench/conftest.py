@@ -11,6 +11,19 @@ from collections import defaultdict
 import pytest
 
 import spotkin as sk
+from spotkin import _core
+
+# benchmark operation -> the kernel whose operation counts give its floor (spotkin/diagnostics.hpp)
+FLOOR_KERNELS = {
+    "leg.fk": "leg.fk",
+    "leg.ik": "leg.ik",
+    "body.ik": "body_ik",
+    "spot.body_ik": "body_ik",
+    "go2.body_ik": "body_ik",
+    "body.fk": "body_fk",
+    "chain6.fk": "chain6.fk",
+    "chain6.jacobian": "chain6.jacobian",
+}
 
 SIZES = [1, 1_000, 100_000, 1_000_000]
 _RESULTS: dict[tuple[str, int], dict[str, float]] = defaultdict(dict)
@@ -30,7 +43,8 @@ def rounds_for(n: int) -> dict:
 def measure(benchmark):
     """measure(op, n, impl, func, *args): time func(*args) and record the median.
 
-    An ``impl`` ending in "1thread" runs with spotkin limited to one thread.
+    An ``impl`` ending in "1thread" runs with spotkin limited to one thread; one
+    holding "float32" times float32 inputs (the caller passes them).
     """
 
     def run(op: str, n: int, impl: str, func, *args):
@@ -78,3 +92,48 @@ def pytest_terminal_summary(terminalreporter):
             ratio_unchunked = f"{unchunked / t:9.2f}x" if unchunked and spotkin else ""
             unit = f"{per * 1e9:9.1f} ns" if per < 1e-6 else f"{per * 1e6:9.2f} us"
             write(f"{op:<28}{n:>9}  {impl:<34}{unit:>12}{1 / per:>12.3g}{ratio:>10}{ratio_unchunked:>14}")
+
+    _where_the_time_goes(write)
+
+
+def _where_the_time_goes(write) -> None:
+    """Per kernel on one thread: ns and TSC cycles per item beside the floor estimate; float32
+    over float64; thread scaling. The floor is the kernel's elementary operations (atan2,
+    sincos, sqrt, multiply-adds) times their cost measured now, vectorised, in its dtype."""
+    rows = [
+        (op, n, impl, t)
+        for (op, n), impls in sorted(_RESULTS.items())
+        for impl, t in impls.items()
+        if op in FLOOR_KERNELS and n >= 100_000 and impl.startswith("spotkin") and impl.endswith("1thread")
+    ]
+    if not rows:
+        return
+    ghz = _core._tsc_ghz()
+    costs = {dtype: _core._elementary_costs(dtype) for dtype in ("float64", "float32")}
+    work = _core._kernel_work()
+    write("")
+    write(f"where the time goes (one thread; TSC {ghz:.3f} GHz; floor = elementary operations x their cost)")
+    for dtype, c in costs.items():
+        write(
+            f"  elementary costs {dtype}, cycles/element: atan2 {c['atan2'] * ghz:.2f}, sincos "
+            f"{c['sincos'] * ghz:.2f}, sqrt {c['sqrt'] * ghz:.2f}, multiply-add {c['fma'] * ghz:.3f}"
+        )
+    write(f"{'operation':<28}{'N':>9}  {'impl':<34}{'ns/item':>10}{'cycles':>10}{'floor':>10}{'/floor':>9}")
+    for op, n, impl, t in rows:
+        ns = t / n * 1e9
+        c = costs["float32" if "float32" in impl else "float64"]
+        floor = sum(count * c[name] for name, count in work[FLOOR_KERNELS[op]].items())
+        cycles, floor_cycles = ns * ghz, floor * ghz
+        write(f"{op:<28}{n:>9}  {impl:<34}{ns:>10.1f}{cycles:>10.0f}{floor_cycles:>10.0f}{ns / floor:>8.1f}x")
+    write("")
+    write("float32 over float64 (one thread; target >= 1.7x) and thread scaling (all threads over one)")
+    for (op, n), impls in sorted(_RESULTS.items()):
+        one = impls.get("spotkin-1thread")
+        if one is None or n < 100_000:
+            continue
+        single = impls.get("spotkin-float32-1thread")
+        if single is not None:
+            write(f"  {op:<26}{n:>9}  float32 {one / single:5.2f}x the float64 throughput")
+        both = impls.get("spotkin")
+        if both is not None:
+            write(f"  {op:<26}{n:>9}  {sk.get_num_threads()} threads {one / both:5.2f}x one thread")

@@ -12,9 +12,8 @@
 // 6-joint chain 1e5); the best of `repeats` runs is reported in ns per sample
 // and in TSC cycles per sample (the TSC rate is measured against steady_clock),
 // beside a floor: the kernel's elementary operations (atan2, sincos, sqrt,
-// multiply-adds; counts in the Work constants below) times their measured
-// vectorised cost on this CPU (float64; the float32 kernels and the arm have
-// no floor here).
+// multiply-adds; counts in spotkin/diagnostics.hpp) times their measured
+// vectorised cost on this CPU, in the kernel's dtype (the arm has no floor).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -24,16 +23,15 @@
 #include <cstdlib>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "spotkin/arm.hpp"
 #include "spotkin/body.hpp"
 #include "spotkin/chain.hpp"
+#include "spotkin/diagnostics.hpp"
 #include "spotkin/leg.hpp"
 
-#if defined(__x86_64__)
-#include <x86intrin.h>
-#endif
 
 using namespace spotkin;
 
@@ -83,88 +81,36 @@ HARNESS_KERNEL void chain_jacobian(const Chain<double>& chain, const double* q, 
   chain.jacobian_batch(q, out, n, 6, false);
 }
 
-// Elementary operations over arrays, vectorised as in the kernels: their
-// measured cost per element is the unit of the floor estimate.
-HARNESS_KERNEL void elementary_atan2(const double* y, const double* x, double* out, std::ptrdiff_t n) {
-  for (std::ptrdiff_t i = 0; i < n; ++i) out[i] = vector_math::atan2(y[i], x[i]);
-}
-HARNESS_KERNEL void elementary_sincos(const double* x, double* s, double* c, std::ptrdiff_t n) {
-  for (std::ptrdiff_t i = 0; i < n; ++i) vector_math::sincos_bounded(x[i], s[i], c[i]);
-}
-HARNESS_KERNEL void elementary_sqrt(const double* x, double* out, std::ptrdiff_t n) {
-  for (std::ptrdiff_t i = 0; i < n; ++i) out[i] = std::sqrt(x[i]);
-}
-// 32 dependent multiply-adds per element, over independent elements (throughput)
-HARNESS_KERNEL void elementary_fma32(const double* x, double* out, std::ptrdiff_t n) {
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    double v = x[i];
-#pragma GCC unroll 32
-    for (int k = 0; k < 32; ++k) v = v * 0.999 + 0.001;
-    out[i] = v;
-  }
-}
+namespace d = spotkin::diagnostics;
 
-double tsc_ghz() {
-#if defined(__x86_64__)
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::uint64_t c0 = __rdtsc();
-  while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(200)) {
-  }
-  const std::uint64_t c1 = __rdtsc();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return double(c1 - c0) / seconds * 1e-9;
-#else
-  return 0.0;
-#endif
-}
-
-template <class F>
-double best_seconds(int repeats, F&& run) {
-  double best = 1e30;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    run();
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
-  return best;
-}
-
-// What a kernel must evaluate per sample, at least: the floor estimate is
-// the sum of these counts times the measured cost of each operation (memory
-// traffic, selects, branch and limit logic are left out, so the floor is low).
-struct Work {
-  double atan2 = 0, sincos = 0, sqrt = 0, fma = 0;
+// The elementary operations (diagnostics.hpp), compiled as the kernels are.
+struct Loops {
+  template <typename T>
+  static HARNESS_KERNEL void atan2(const T* y, const T* x, T* out, std::ptrdiff_t n) { d::atan2_loop(y, x, out, n); }
+  template <typename T>
+  static HARNESS_KERNEL void sincos(const T* x, T* s, T* c, std::ptrdiff_t n) { d::sincos_loop(x, s, c, n); }
+  template <typename T>
+  static HARNESS_KERNEL void sqrt(const T* x, T* out, std::ptrdiff_t n) { d::sqrt_loop(x, out, n); }
+  template <typename T>
+  static HARNESS_KERNEL void fma32(const T* x, T* out, std::ptrdiff_t n) { d::fma32_loop(x, out, n); }
 };
 
-struct Costs {  // ns per element, measured
-  double atan2 = 0, sincos = 0, sqrt = 0, fma = 0;
-  double floor_ns(const Work& w) const { return w.atan2 * atan2 + w.sincos * sincos + w.sqrt * sqrt + w.fma * fma; }
-};
+using d::best_seconds;
 
 struct Report {
   double ghz;
-  Costs costs;
-  void operator()(const char* name, std::ptrdiff_t n, double seconds, const Work& work = Work{}) const {
-    const double ns = seconds / double(n) * 1e9, floor = costs.floor_ns(work);
+  d::Costs costs64, costs32;
+  // the floor of `kernel` (diagnostics.hpp's counts) in the costs of its dtype; none for an unnamed one
+  void operator()(const char* name, std::ptrdiff_t n, double seconds, const char* kernel = "",
+                  bool single = false) const {
+    const double ns = seconds / double(n) * 1e9;
+    const double floor = (single ? costs32 : costs64).floor_ns(d::work_of(kernel));
     if (floor > 0.0)
       std::printf("%-28s %10td %10.2f %10.1f %10.1f %8.1fx\n", name, n, ns, ns * ghz, floor * ghz, ns / floor);
     else
       std::printf("%-28s %10td %10.2f %10.1f %10s %9s\n", name, n, ns, ns * ghz, "-", "-");
   }
 };
-
-// Operation counts per sample, from the kernels' equations (leg.hpp (I1)-(I4)
-// and (R1), body.hpp (B1)-(B2), chain.hpp): a leg IK slot is one sqrt for the
-// hip, one sqrt + one atan2 for the knee's acos, one atan2 each for hip roll
-// and hip pitch, and about 40 multiply-adds; every slot (ik_all) shares the hip
-// sqrt and, for a_z = 0, the knee.
-constexpr Work kLegFk{0, 3, 0, 20};
-constexpr Work kLegIk{3, 0, 2, 40};
-constexpr Work kLegIkAll{7, 0, 2, 110};
-constexpr Work kBodyIk{12, 3, 8, 4 * 40 + 60};
-constexpr Work kBodyFk{0, 15, 0, 4 * 20 + 60};
-constexpr Work kChain6Fk{0, 6, 0, 6 * 27};
-constexpr Work kChain6Jacobian{0, 6, 0, 6 * 27 + 6 * 15};
 
 JointLimits<3> leg_limits(double knee_upper) {
   JointLimits<3> limits;
@@ -189,23 +135,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: spotkin_harness [samples > 0] [repeats > 0]\n");
     return 2;
   }
-  Report report{tsc_ghz(), {}};
-  {
-    const std::ptrdiff_t m = 1 << 16;  // in cache
-    std::vector<double> a(m), b(m), c(m), d(m);
-    std::mt19937_64 gen(1);
-    for (std::ptrdiff_t i = 0; i < m; ++i)
-      a[i] = std::uniform_real_distribution<double>(-3, 3)(gen), b[i] = std::uniform_real_distribution<double>(-3, 3)(gen);
-    const int r = 20 * repeats;
-    report.costs.atan2 = best_seconds(r, [&] { elementary_atan2(a.data(), b.data(), c.data(), m); }) / m * 1e9;
-    report.costs.sincos = best_seconds(r, [&] { elementary_sincos(a.data(), c.data(), d.data(), m); }) / m * 1e9;
-    report.costs.sqrt = best_seconds(r, [&] { elementary_sqrt(b.data(), c.data(), m); }) / m * 1e9;  // NaN half: same cost
-    report.costs.fma = best_seconds(r, [&] { elementary_fma32(a.data(), c.data(), m); }) / m * 1e9 / 32.0;
-  }
+  Report report{d::tsc_ghz(), d::measure_costs<double, Loops>(20 * repeats),
+                d::measure_costs<float, Loops>(20 * repeats)};
   std::printf("spotkin C++ kernels, one thread, best of %d; TSC %.3f GHz\n", repeats, report.ghz);
-  std::printf("elementary costs (vectorised, cycles/element): atan2 %.2f, sincos %.2f, sqrt %.2f, multiply-add %.3f\n",
-              report.costs.atan2 * report.ghz, report.costs.sincos * report.ghz, report.costs.sqrt * report.ghz,
-              report.costs.fma * report.ghz);
+  for (const auto& [label, c] : {std::pair{"float64", report.costs64}, std::pair{"float32", report.costs32}})
+    std::printf("elementary costs, %s (vectorised, cycles/element): atan2 %.2f, sincos %.2f, sqrt %.2f, "
+                "multiply-add %.3f\n",
+                label, c.atan2 * report.ghz, c.sincos * report.ghz, c.sqrt * report.ghz, c.fma * report.ghz);
   std::printf("%-28s %10s %10s %10s %10s %9s\n", "kernel", "samples", "ns/sample", "cycles", "floor cyc", "/floor");
 
   // Spot: legs fl, fr, hl, hr (hip roll x, hip pitch y, knee y); per-leg knee limits.
@@ -243,39 +179,48 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 6; ++k) poses[6 * i + k] = (k == 2 ? 0.5 : 0.0) + spread[k] * normal(rng);
   body_ik(body, poses.data(), feet, q12.data(), status.data(), n);
 
-  report("leg.fk", n, best_seconds(repeats, [&] { leg_fk(leg, q.data(), p.data(), n); }), kLegFk);
+  report("leg.fk", n, best_seconds(repeats, [&] { leg_fk(leg, q.data(), p.data(), n); }), "leg.fk");
   report("leg.ik", n,
          best_seconds(repeats, [&] {
            leg_ik(leg, p.data(), static_cast<const double*>(nullptr), q_out.data(), status.data(), n);
          }),
-         kLegIk);
+         "leg.ik");
   report("leg.ik seeded", n,
          best_seconds(repeats, [&] { leg_ik(leg, p.data(), seed.data(), q_out.data(), status.data(), n); }),
-         kLegIkAll);
+         "leg.ik_all");
   report("leg.ik_all", n, best_seconds(repeats, [&] {
            leg_ik_all(leg, p.data(), q_all.data(), valid.data(), exists.data(), status.data(), n);
          }),
-         kLegIkAll);
+         "leg.ik_all");
   {
     const std::vector<float> pf = as<float>(p);
     std::vector<float> qf(3 * n);
     report("leg.ik float32", n,
            best_seconds(repeats, [&] {
              leg_ik(leg, pf.data(), static_cast<const float*>(nullptr), qf.data(), status.data(), n);
-           }));
+           }),
+           "leg.ik", true);
   }
   report("body_ik", n, best_seconds(repeats, [&] { body_ik(body, poses.data(), feet, q12.data(), status.data(), n); }),
-         kBodyIk);
+         "body_ik");
   {
     const std::vector<float> posesf = as<float>(poses);
     const std::vector<float> feetf(feet, feet + 12);
     std::vector<float> qf(12 * n);
     report("body_ik float32", n, best_seconds(repeats, [&] {
              body_ik(body, posesf.data(), feetf.data(), qf.data(), status.data(), n);
+           }),
+           "body_ik", true);
+  }
+  {  // one pose per call, as a control loop calls it (the block is padded to whole vectors)
+    const std::ptrdiff_t calls = std::max<std::ptrdiff_t>(1, n / 10);
+    report("body_ik one pose per call", calls, best_seconds(repeats, [&] {
+             for (std::ptrdiff_t i = 0; i < calls; ++i)
+               body_ik(body, poses.data() + 6 * (i & 1023), feet, q12.data(), status.data(), 1);
            }));
   }
   report("body_fk", n,
-         best_seconds(repeats, [&] { body_fk(body, poses.data(), q12.data(), feet_out.data(), n); }), kBodyFk);
+         best_seconds(repeats, [&] { body_fk(body, poses.data(), q12.data(), feet_out.data(), n); }), "body_fk");
 
   // Spot's arm (its default geometry; no limits), targets from FK
   const Arm arm;
@@ -290,8 +235,8 @@ int main(int argc, char** argv) {
                            0, 0.075, -kPi<double> / 2, 0.4033, 0, 0, 0, kPi<double> / 2, 0, 0, 0, 0, -kPi<double> / 2, 0, 0};
   const Chain<double> chain = Chain<double>::from_table(Convention::ModifiedDH, rows, 6, Rigid<double>{}, Rigid<double>{});
   report("chain6.fk", n_arm, best_seconds(repeats, [&] { chain_fk(chain, q6.data(), out16.data(), n_arm); }),
-         kChain6Fk);
+         "chain6.fk");
   report("chain6.jacobian", n_arm,
-         best_seconds(repeats, [&] { chain_jacobian(chain, q6.data(), J.data(), n_arm); }), kChain6Jacobian);
+         best_seconds(repeats, [&] { chain_jacobian(chain, q6.data(), J.data(), n_arm); }), "chain6.jacobian");
   return 0;
 }

@@ -13,4 +13,5 @@ void bind_paul(pybind11::module_& m);
 void bind_chain_ik(pybind11::module_& m);
 void bind_trajectory(pybind11::module_& m);
 void bind_differential(pybind11::module_& m);
+void bind_diagnostics(pybind11::module_& m);
 }  // namespace spotkin::bindings

@@ -14,4 +14,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_chain_ik(m);
   spotkin::bindings::bind_trajectory(m);
   spotkin::bindings::bind_differential(m);
+  spotkin::bindings::bind_diagnostics(m);
 }

@@ -93,29 +93,31 @@ namespace body_batch {
 
 constexpr std::ptrdiff_t kBlock = 64;
 
-// Rotation, translation and validity (1.0 / 0.0) of body poses for a block, SoA.
+// Rotation, translation and validity (1 / 0) of body poses for a block, SoA,
+// in the compute type C.
+template <typename C = double>
 struct BlockPoses {
-  double R[9][kBlock], t[3][kBlock], ok[kBlock];
+  C R[9][kBlock], t[3][kBlock], ok[kBlock];
 };
 
-template <typename T>
+template <typename T, typename C>
 SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const EulerSequence& seq, std::ptrdiff_t stride,
-                               std::ptrdiff_t m, BlockPoses& out) noexcept {
+                               std::ptrdiff_t m, BlockPoses<C>& out) noexcept {
   const bool intrinsic_xyz = seq.axis[0] == 0 && seq.axis[1] == 1 && seq.axis[2] == 2 && seq.order[0] == 0 &&
                              seq.order[1] == 1 && seq.order[2] == 2;
   const bool extrinsic_xyz = seq.axis[0] == 2 && seq.axis[1] == 1 && seq.axis[2] == 0 && seq.order[0] == 2 &&
                              seq.order[1] == 1 && seq.order[2] == 0;
   if (format == BodyPoseFormat::Euler && (intrinsic_xyz || extrinsic_xyz)) {
     // Fast paths, vectorised: Rx(a) Ry(b) Rz(c) ("XYZ") and Rz(c) Ry(b) Rx(a) ("xyz").
-    double angle[3][kBlock], s[3][kBlock], c[3][kBlock];
+    C angle[3][kBlock], s[3][kBlock], c[3][kBlock];
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const T* in = poses + 6 * i;
-      for (int k = 0; k < 3; ++k) out.t[k][i] = double(in[k]), angle[k][i] = double(in[3 + k]);
+      for (int k = 0; k < 3; ++k) out.t[k][i] = C(in[k]), angle[k][i] = C(in[3 + k]);
     }
     for (int k = 0; k < 3; ++k) vector_math::sincos(angle[k], s[k], c[k], m);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const double sa = s[0][i], ca = c[0][i], sb = s[1][i], cb = c[1][i], sc = s[2][i], cc = c[2][i];
-      const double R[9] = {
+      const C sa = s[0][i], ca = c[0][i], sb = s[1][i], cb = c[1][i], sc = s[2][i], cc = c[2][i];
+      const C R[9] = {
           intrinsic_xyz ? cb * cc : cb * cc,
           intrinsic_xyz ? -cb * sc : sa * sb * cc - ca * sc,
           intrinsic_xyz ? sb : ca * sb * cc + sa * sc,
@@ -126,9 +128,9 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
           intrinsic_xyz ? sa * cc + ca * sb * sc : sa * cb,
           intrinsic_xyz ? ca * cb : ca * cb,
       };
-      double sum = out.t[0][i] + out.t[1][i] + out.t[2][i];
+      C sum = out.t[0][i] + out.t[1][i] + out.t[2][i];
       for (int k = 0; k < 9; ++k) out.R[k][i] = R[k], sum += R[k];
-      out.ok[i] = (sum - sum) == 0.0 ? 1.0 : 0.0;
+      out.ok[i] = (sum - sum) == C(0) ? C(1) : C(0);
     }
     return;
   }
@@ -153,45 +155,43 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
     }
     double sum = t[0] + t[1] + t[2];
     for (int r = 0; r < 3; ++r) sum += R[r][0] + R[r][1] + R[r][2];
-    out.ok[i] = (sum - sum) == 0.0 ? ok : 0.0;
+    out.ok[i] = (sum - sum) == 0.0 ? C(ok) : C(0);
     for (int r = 0; r < 3; ++r) {
-      for (int k = 0; k < 3; ++k) out.R[3 * r + k][i] = R[r][k];
-      out.t[r][i] = t[r];
+      for (int k = 0; k < 3; ++k) out.R[3 * r + k][i] = C(R[r][k]);
+      out.t[r][i] = C(t[r]);
     }
   }
 }
 
 // (B2) + the leg's preferred slot for one leg over a block: vectorised (one
 // clone per slot, so that the branch signs are constants).
-template <int Slot>
-SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const double* __restrict hip,
-                                   const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
-                                   const double* __restrict fx, const double* __restrict fy,
-                                   const double* __restrict fz, double* __restrict x, double* __restrict y,
-                                   double* __restrict z, double (*__restrict q0)[kBlock], double* __restrict exists,
-                                   double* __restrict ok, std::ptrdiff_t m, double tol, double limit_tol) noexcept {
+template <int Slot, typename C>
+SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip, const C (*__restrict R)[kBlock],
+                                   const C (*__restrict t)[kBlock], const C* __restrict fx, const C* __restrict fy,
+                                   const C* __restrict fz, C* __restrict x, C* __restrict y, C* __restrict z,
+                                   C (*__restrict q0)[kBlock], C* __restrict exists, C* __restrict ok,
+                                   std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    const double dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
-    const double px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
-    const double py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
-    const double pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
+    const C dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
+    const C px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
+    const C py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
+    const C pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
     x[i] = px, y[i] = py, z[i] = pz;
-    double q[3];
-    const double finite = leg_batch::finite_mask(px, py, pz);
-    const double e = finite * leg.solve_slot<Slot>(px, py, pz, q, tol);
+    C q[3];
+    const C finite = leg_batch::finite_mask(px, py, pz);
+    const C e = finite * leg.solve_slot<Slot>(px, py, pz, q, tol);
     ok[i] = e * leg.limits().wrap_mask(q, limit_tol);
-    exists[i] = finite == 0.0 ? -1.0 : e;
+    exists[i] = finite == C(0) ? C(-1) : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
   }
 }
 
-SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg_in, const double* __restrict hip,
-                                            const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
-                                            const double* __restrict fx, const double* __restrict fy,
-                                            const double* __restrict fz, double* __restrict x, double* __restrict y,
-                                            double* __restrict z, double (*__restrict q0)[kBlock],
-                                            double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
-                                            double tol, double limit_tol) noexcept {
+template <typename C>
+SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip, const C (*__restrict R)[kBlock],
+                                   const C (*__restrict t)[kBlock], const C* __restrict fx, const C* __restrict fy,
+                                   const C* __restrict fz, C* __restrict x, C* __restrict y, C* __restrict z,
+                                   C (*__restrict q0)[kBlock], C* __restrict exists, C* __restrict ok,
+                                   std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   switch (leg.preferred_slot()) {
     case 0: return leg_block_slot<0>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
@@ -199,6 +199,26 @@ SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg_in, const double* __r
     case 2: return leg_block_slot<2>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
     default: return leg_block_slot<3>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
   }
+}
+
+// One run-time dispatched kernel per compute type (target_clones takes no templates).
+SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __restrict hip,
+                                            const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
+                                            const double* __restrict fx, const double* __restrict fy,
+                                            const double* __restrict fz, double* __restrict x, double* __restrict y,
+                                            double* __restrict z, double (*__restrict q0)[kBlock],
+                                            double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
+                                            double tol, double limit_tol) noexcept {
+  leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
+}
+SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const float* __restrict hip,
+                                            const float (*__restrict R)[kBlock], const float (*__restrict t)[kBlock],
+                                            const float* __restrict fx, const float* __restrict fy,
+                                            const float* __restrict fz, float* __restrict x, float* __restrict y,
+                                            float* __restrict z, float (*__restrict q0)[kBlock],
+                                            float* __restrict exists, float* __restrict ok, std::ptrdiff_t m,
+                                            float tol, float limit_tol) noexcept {
+  leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
 }
 
 // Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
@@ -211,17 +231,17 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
                        const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  using C = leg_batch::Compute<T>;
   const int n = body.n_legs(), w = body.width();
-  const double tol = Leg::ratio_tolerance<T>();
-  BlockPoses P;
-  double fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock],
-      ok[kBlock];
-  leg_batch::OpenTargets open;
+  const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
+  BlockPoses<C> P;
+  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock], ok[kBlock];
+  leg_batch::OpenTargets<C> open;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     read_poses(poses + stride * b0, format, seq, stride, m, P);
     // whole vectors (as leg_batch::pad_block): the padding repeats the last pose and foot
-    const std::ptrdiff_t padded = std::min(kBlock, (m + 7) / 8 * 8);
+    const std::ptrdiff_t padded = leg_batch::padded_count<C>(m);
     for (std::ptrdiff_t k = m; k < padded; ++k) {
       for (int r = 0; r < 9; ++r) P.R[r][k] = P.R[r][m - 1];
       for (int r = 0; r < 3; ++r) P.t[r][k] = P.t[r][m - 1];
@@ -231,23 +251,24 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const T* f = feet + (feet_shared ? 3 * l : 3 * n * (b0 + i) + 3 * l);
-        fx[i] = double(f[0]), fy[i] = double(f[1]), fz[i] = double(f[2]);
+        fx[i] = C(f[0]), fy[i] = C(f[1]), fz[i] = C(f[2]);
       }
       leg_batch::pad_block(fx, fy, fz, m);
-      leg_block(leg, body.hips[std::size_t(l)].data(), P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol,
-                JointLimits<3>::tolerance<T>());
+      const std::array<double, 3>& hip = body.hips[std::size_t(l)];
+      const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
+      leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol, limit_tol);
       open.count = 0;
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
         T* qt = q + w * t;
         std::int8_t& st = status[n * t + l];
-        if (ok[i] != 0.0 && P.ok[i] != 0.0 && !seed) {  // the common case
+        if (ok[i] != C(0) && P.ok[i] != C(0) && !seed) {  // the common case
           qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
           st = std::int8_t(Status::Ok);
           continue;
         }
         const T* s = seed ? seed + w * t : nullptr;
-        if (P.ok[i] == 0.0 || exists[i] < 0.0 ||
+        if (P.ok[i] == C(0) || exists[i] < C(0) ||
             (s && !(std::isfinite(double(s[col[0]])) && std::isfinite(double(s[col[1]])) &&
                     std::isfinite(double(s[col[2]]))))) {
           qt[col[0]] = qt[col[1]] = qt[col[2]] = T(quiet_nan<double>());
@@ -256,7 +277,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
         }
         open.add(i, x[i], y[i], z[i]);
       }
-      open.solve(leg, tol, JointLimits<3>::tolerance<T>());
+      open.solve(leg, tol, limit_tol);
       for (std::ptrdiff_t k = 0; k < open.count; ++k) {
         const std::ptrdiff_t t = b0 + open.index[k];
         T* qt = q + w * t;
@@ -278,7 +299,7 @@ SPOTKIN_INLINE void fk(const Body& body, const T* poses, BodyPoseFormat format, 
                        const T* q, T* feet, std::ptrdiff_t count) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   const int n = body.n_legs(), w = body.width();
-  BlockPoses P;
+  BlockPoses<double> P;
   double legq[kBlock * 3], p[kBlock * 3];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
@@ -309,7 +330,7 @@ SPOTKIN_INLINE void jacobian(const Body& body, const T* poses, BodyPoseFormat fo
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   const int n = body.n_legs(), w = body.width(), cols = 6 + w;
   const std::ptrdiff_t size = std::ptrdiff_t(3 * n) * cols;
-  BlockPoses P;
+  BlockPoses<double> P;
   double legq[kBlock * 3], p[kBlock * 3], Jl[kBlock * 9];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);

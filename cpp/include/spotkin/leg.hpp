@@ -30,6 +30,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "spotkin/common.hpp"
 #include "spotkin/rpp_geometry.hpp"
@@ -62,20 +63,23 @@ struct JointLimits {
   // Wraps each joint by 0, -2pi or +2pi (the first that fits, within tol) into
   // the limits, in place, then onto them (a joint within tol outside a bound is
   // set to the bound), and returns 1.0 if every joint fits, 0.0 otherwise
-  // (joints that fit no way are left as given). Branch-free, for vectorised loops.
-  SPOTKIN_INLINE double wrap_mask(double* q, double tol = kTolerance) const noexcept {
-    constexpr double two_pi = 2.0 * kPi<double>;
-    double all = 1.0;
+  // (joints that fit no way are left as given). Branch-free, for vectorised
+  // loops; C is the kernel's compute type (float for the float32 kernels).
+  template <typename C = double>
+  SPOTKIN_INLINE C wrap_mask(C* q, C tol = C(kTolerance)) const noexcept {
+    constexpr C two_pi = C(2) * kPi<C>;
+    C all = 1;
 #pragma GCC unroll 8
     for (int j = 0; j < N; ++j) {
-      const double lo = lower[j] - tol, hi = upper[j] + tol;
-      const double v = q[j], minus = v - two_pi, plus = v + two_pi;
+      const C lower_j = C(lower[j]), upper_j = C(upper[j]);
+      const C lo = lower_j - tol, hi = upper_j + tol;
+      const C v = q[j], minus = v - two_pi, plus = v + two_pi;
       const bool in0 = (v >= lo) & (v <= hi);
       const bool in_minus = (minus >= lo) & (minus <= hi);
       const bool in_plus = (plus >= lo) & (plus <= hi);
-      const double fitted = std::min(std::max(in0 ? v : (in_minus ? minus : plus), lower[j]), upper[j]);
+      const C fitted = std::min(std::max(in0 ? v : (in_minus ? minus : plus), lower_j), upper_j);
       q[j] = (in0 | in_minus | in_plus) ? fitted : v;
-      all = (in0 | in_minus | in_plus) ? all : 0.0;
+      all = (in0 | in_minus | in_plus) ? all : C(0);
     }
     return all;
   }
@@ -184,38 +188,30 @@ class Leg {
     *sigma_min = T(Eigen::JacobiSVD<Eigen::Matrix3d>(J).singularValues()[2]);
   }
 
-  // All four branches of (I1)-(I4) for one target, angles in (-pi, pi].
-  // Returns whether any exists; when `force`, ratios are clamped into [-1, 1]
-  // whatever their size and true is returned.
-  SPOTKIN_INLINE bool solve_all(double x, double y, double z, double q[kSlots][3], bool force = false,
-                                double tol = kRatioTolerance, double* exists_hip = nullptr) const noexcept {
-    double hip_exists[2];
-    solve_all_mask(x, y, z, q, hip_exists, tol);
-    if (exists_hip) exists_hip[0] = hip_exists[0], exists_hip[1] = hip_exists[1];
-    return hip_exists[0] != 0.0 || hip_exists[1] != 0.0 || force;
-  }
-
-  // As solve_all, writing 1.0 / 0.0 per hip branch (both knee slots of a hip
-  // branch exist together): a form the compiler vectorises over samples.
+  // All four branches of (I1)-(I4) for one target, angles in (-pi, pi], and
+  // 1.0 / 0.0 per hip branch for whether it exists (both knee slots of a hip
+  // branch exist together; ratios are clamped into [-1, 1] either way): a form
+  // the compiler vectorises over samples.
   // SharedKnee: the caller knows a_z = 0 (shared_knee()), so |W| and the knee
   // are the same on both hip branches and are solved once.
-  template <bool SharedKnee = false>
-  SPOTKIN_INLINE void solve_all_mask(double x, double y, double z, double q[kSlots][3], double exists_hip[2],
-                                     double tol = kRatioTolerance) const noexcept {
-    const Hip hip = solve_hip(y, z, tol);
-    const double wx = x - g_.a[0];
-    Knee shared;
+  // C: the compute type (double, or float for the float32 kernels).
+  template <bool SharedKnee = false, typename C = double>
+  SPOTKIN_INLINE void solve_all_mask(C x, C y, C z, C q[kSlots][3], C exists_hip[2],
+                                     C tol = C(kRatioTolerance)) const noexcept {
+    const Hip<C> hip = solve_hip(y, z, tol);
+    const C wx = x - C(g_.a[0]);
+    Knee<C> shared;
     if (SharedKnee) shared = solve_knee(wx, hip.S, tol);
 #pragma GCC unroll 2
     for (int hb = 0; hb < 2; ++hb) {
-      const double eps = hb == 0 ? 1.0 : -1.0;
-      const double hx = hip_roll(y, z, hip, eps);
-      const double wz = SharedKnee ? -eps * hip.S : -eps * hip.S - g_.a[2];
-      const Knee knee = SharedKnee ? shared : solve_knee(wx, wz, tol);
+      const C eps = hb == 0 ? C(1) : C(-1);
+      const C hx = hip_roll(y, z, hip, eps);
+      const C wz = SharedKnee ? -eps * hip.S : -eps * hip.S - C(g_.a[2]);
+      const Knee<C> knee = SharedKnee ? shared : solve_knee(wx, wz, tol);
       exists_hip[hb] = hip.exists * knee.exists;
 #pragma GCC unroll 2
       for (int kb = 0; kb < 2; ++kb) {
-        double* slot = q[2 * hb + kb];
+        C* slot = q[2 * hb + kb];
         slot[0] = hx;
         slot[1] = hip_pitch(wx, wz, knee, kb);
         slot[2] = knee_angle(knee, kb);
@@ -225,14 +221,13 @@ class Leg {
 
   // One slot only (the preferred one, for the walking controller's fast path),
   // with the branch signs known at compile time. Returns 1.0 if it exists.
-  template <int Slot>
-  SPOTKIN_INLINE double solve_slot(double x, double y, double z, double q[3],
-                                   double tol = kRatioTolerance) const noexcept {
-    constexpr double eps = Slot < 2 ? 1.0 : -1.0;
+  template <int Slot, typename C = double>
+  SPOTKIN_INLINE C solve_slot(C x, C y, C z, C q[3], C tol = C(kRatioTolerance)) const noexcept {
+    constexpr C eps = Slot < 2 ? C(1) : C(-1);
     constexpr int kb = Slot % 2;
-    const Hip hip = solve_hip(y, z, tol);
-    const double wx = x - g_.a[0], wz = -eps * hip.S - g_.a[2];
-    const Knee knee = solve_knee(wx, wz, tol);
+    const Hip<C> hip = solve_hip(y, z, tol);
+    const C wx = x - C(g_.a[0]), wz = -eps * hip.S - C(g_.a[2]);
+    const Knee<C> knee = solve_knee(wx, wz, tol);
     q[0] = hip_roll(y, z, hip, eps);
     q[1] = hip_pitch(wx, wz, knee, kb);
     q[2] = knee_angle(knee, kb);
@@ -295,56 +290,83 @@ class Leg {
   }
 
  private:
-  // `exists` is 1.0 or 0.0 (a double, so that the solve loops vectorise).
+  // `exists` is 1 or 0 (of the compute type C, so that the solve loops vectorise).
+  template <typename C>
   struct Hip {
-    double r2, S, exists;
+    C r2, S, exists;
   };
+  template <typename C>
   struct Knee {
-    double cos_psi, sin_psi, acos_psi, exists;  // knee branch 0: psi = -acos
+    C cos_psi, sin_psi, acos_psi, exists;  // knee branch 0: psi = -acos
   };
 
-  SPOTKIN_INLINE Hip solve_hip(double y, double z, double tol) const noexcept {
-    Hip hp;
+  template <typename C>
+  SPOTKIN_INLINE Hip<C> solve_hip(C y, C z, C tol) const noexcept {
+    const C h = C(h_);
+    Hip<C> hp;
     hp.r2 = y * y + z * z;
-    const double disc = hp.r2 - h_ * h_;
-    hp.exists = disc >= -tol * 2.0 * h_ * h_ ? 1.0 : 0.0;  // (h/r)^2 <= 1 + 2 tol
-    hp.S = std::sqrt(std::max(disc, 0.0));
+    // r^2 - h^2 cancels where the foot nears the hip-roll circle (S -> 0, where
+    // the hip pitch then depends on S): float kernels form it in double.
+    C disc;
+    if constexpr (std::is_same_v<C, float>)
+      disc = C(double(y) * double(y) + double(z) * double(z) - h_ * h_);
+    else
+      disc = hp.r2 - h * h;
+    hp.exists = disc >= -tol * C(2) * h * h ? C(1) : C(0);  // (h/r)^2 <= 1 + 2 tol
+    hp.S = std::sqrt(std::max(disc, C(0)));
     return hp;
   }
 
-  SPOTKIN_INLINE Knee solve_knee(double wx, double wz, double tol) const noexcept {
-    Knee k;
-    const double ratio = (wx * wx + wz * wz - knee_sum_sq_) * inv_2BC_;
-    k.exists = std::fabs(ratio) <= 1.0 + tol ? 1.0 : 0.0;
-    k.cos_psi = std::clamp(ratio, -1.0, 1.0);
-    k.sin_psi = std::sqrt((1.0 - k.cos_psi) * (1.0 + k.cos_psi));
+  template <typename C>
+  SPOTKIN_INLINE Knee<C> solve_knee(C wx, C wz, C tol) const noexcept {
+    Knee<C> k;
+    if constexpr (std::is_same_v<C, float>) {
+      // Near the stretched and folded knee (ratio -> +-1) psi is sqrt-sensitive to the
+      // ratio's rounding, and |B|^2 + |C|^2 rounded to float alone would cost ~1e-4 rad:
+      // the ratio and 1 - ratio^2 are formed in double.
+      const double ratio = (double(wx) * double(wx) + double(wz) * double(wz) - knee_sum_sq_) * inv_2BC_;
+      k.exists = std::fabs(ratio) <= 1.0 + double(tol) ? C(1) : C(0);
+      const double cos_psi = std::clamp(ratio, -1.0, 1.0);
+      k.cos_psi = C(cos_psi);
+      k.sin_psi = std::sqrt(C((1.0 - cos_psi) * (1.0 + cos_psi)));
+    } else {
+      const C ratio = (wx * wx + wz * wz - C(knee_sum_sq_)) * C(inv_2BC_);
+      k.exists = std::fabs(ratio) <= C(1) + tol ? C(1) : C(0);
+      k.cos_psi = std::clamp(ratio, C(-1), C(1));
+      k.sin_psi = std::sqrt((C(1) - k.cos_psi) * (C(1) + k.cos_psi));
+    }
     k.acos_psi = vector_math::atan2(k.sin_psi, k.cos_psi);
     return k;
   }
 
   // (I1): theta1 for hip branch eps; atan2 is scale-invariant, so the cos/sin
   // are used without their common 1 / r^2. 0 when r = 0 (every angle works).
-  SPOTKIN_INLINE double hip_roll(double y, double z, const Hip& hip, double eps) const noexcept {
-    const double t1 = vector_math::atan2(z * h_ + eps * y * hip.S, y * h_ - eps * z * hip.S);
-    return hip.r2 > 0.0 ? sign1_ * t1 : 0.0;
+  template <typename C>
+  SPOTKIN_INLINE C hip_roll(C y, C z, const Hip<C>& hip, C eps) const noexcept {
+    const C h = C(h_);
+    const C t1 = vector_math::atan2(z * h + eps * y * hip.S, y * h - eps * z * hip.S);
+    return hip.r2 > C(0) ? C(sign1_) * t1 : C(0);
   }
 
   // theta3 = psi - phi, then q3 = s3 theta3 in (-pi, pi].
-  SPOTKIN_INLINE double knee_angle(const Knee& k, int kb) const noexcept {
-    const double t3 = (kb == 0 ? -k.acos_psi : k.acos_psi) - phi_;
-    const double q3 = sign3_ * t3;  // in (-2pi, 2pi)
-    const double wrapped = q3 <= -kPi<double> ? q3 + 2.0 * kPi<double> : q3;
-    return wrapped > kPi<double> ? wrapped - 2.0 * kPi<double> : wrapped;
+  template <typename C>
+  SPOTKIN_INLINE C knee_angle(const Knee<C>& k, int kb) const noexcept {
+    const C t3 = (kb == 0 ? -k.acos_psi : k.acos_psi) - C(phi_);
+    const C q3 = C(sign3_) * t3;  // in (-2pi, 2pi)
+    const C wrapped = q3 <= -kPi<C> ? q3 + C(2) * kPi<C> : q3;
+    return wrapped > kPi<C> ? wrapped - C(2) * kPi<C> : wrapped;
   }
 
   // (I4) with e^{i theta3} from psi: theta3 = psi - phi.
-  SPOTKIN_INLINE double hip_pitch(double wx, double wz, const Knee& k, int kb) const noexcept {
-    const double sin_psi = kb == 0 ? -k.sin_psi : k.sin_psi;
-    const double c3 = k.cos_psi * cos_phi_ + sin_psi * sin_phi_;
-    const double s3 = sin_psi * cos_phi_ - k.cos_psi * sin_phi_;
-    const double dz = Bz_ + c3 * Cz_ - s3 * Cx_, dx = Bx_ + c3 * Cx_ + s3 * Cz_;
-    const double t2 = vector_math::atan2(wx * dz - wz * dx, wz * dz + wx * dx);
-    return sign2_ * t2;
+  template <typename C>
+  SPOTKIN_INLINE C hip_pitch(C wx, C wz, const Knee<C>& k, int kb) const noexcept {
+    const C Bz = C(Bz_), Bx = C(Bx_), Cz = C(Cz_), Cx = C(Cx_), cos_phi = C(cos_phi_), sin_phi = C(sin_phi_);
+    const C sin_psi = kb == 0 ? -k.sin_psi : k.sin_psi;
+    const C c3 = k.cos_psi * cos_phi + sin_psi * sin_phi;
+    const C s3 = sin_psi * cos_phi - k.cos_psi * sin_phi;
+    const C dz = Bz + c3 * Cz - s3 * Cx, dx = Bx + c3 * Cx + s3 * Cz;
+    const C t2 = vector_math::atan2(wx * dz - wz * dx, wz * dz + wx * dx);
+    return C(sign2_) * t2;
   }
 
   void update(int preferred_slot) noexcept {
@@ -383,15 +405,31 @@ class Leg {
 namespace leg_batch {
 
 constexpr std::ptrdiff_t kBlock = 64;
-static_assert(kBlock % 8 == 0, "blocks hold whole 8-wide vectors");
 
-// Pads x, y, z after their first m entries with copies of entry m - 1, up to a
-// multiple of 8, and returns that count. Vector passes over the padded count
-// run every target in the loop's full lanes (its scalar remainder may round
-// differently), so that an answer never depends on the target's place in a
-// block, that is on how the batch was split between threads or calls.
-SPOTKIN_INLINE std::ptrdiff_t pad_block(double* x, double* y, double* z, std::ptrdiff_t m) noexcept {
-  const std::ptrdiff_t padded = std::min(kBlock, (m + 7) / 8 * 8);
+// The compute type of the kernels for T: float32 data is solved in float,
+// twice as many lanes per vector as double (accuracy: docs/derivations.md).
+template <typename T>
+using Compute = std::conditional_t<std::is_same_v<T, float>, float, double>;
+
+// Lanes of the widest vector (64 bytes) of C: a block holds whole vectors.
+template <typename C>
+constexpr std::ptrdiff_t kLanes = 64 / std::ptrdiff_t(sizeof(C));
+static_assert(kBlock % kLanes<float> == 0, "blocks hold whole vectors");
+
+// m rounded up to whole vectors of C (at most kBlock).
+template <typename C>
+constexpr std::ptrdiff_t padded_count(std::ptrdiff_t m) noexcept {
+  return std::min(kBlock, (m + kLanes<C> - 1) / kLanes<C> * kLanes<C>);
+}
+
+// Pads x, y, z after their first m entries with copies of entry m - 1, up to
+// whole vectors (padded_count), and returns that count. Vector passes over the
+// padded count run every target in the loop's full lanes (its scalar remainder
+// may round differently), so that an answer never depends on the target's
+// place in a block, that is on how the batch was split between threads or calls.
+template <typename C>
+SPOTKIN_INLINE std::ptrdiff_t pad_block(C* x, C* y, C* z, std::ptrdiff_t m) noexcept {
+  const std::ptrdiff_t padded = padded_count<C>(m);
   for (std::ptrdiff_t k = m; k < padded; ++k) x[k] = x[m - 1], y[k] = y[m - 1], z[k] = z[m - 1];
   return padded;
 }
@@ -402,12 +440,11 @@ SPOTKIN_INLINE bool finite3(const T* v) noexcept {
 }
 
 // solve_slots' first pass: every slot of m targets, before the limits.
-template <bool SharedKnee>
-SPOTKIN_INLINE void solve_slots_raw(const Leg& leg, const double* x, const double* y, const double* z,
-                                    std::ptrdiff_t m, double tol, double (*q)[3][kBlock],
-                                    double (*exists_hip)[kBlock]) noexcept {
+template <bool SharedKnee, typename C>
+SPOTKIN_INLINE void solve_slots_raw(const Leg& leg, const C* x, const C* y, const C* z, std::ptrdiff_t m, C tol,
+                                    C (*q)[3][kBlock], C (*exists_hip)[kBlock]) noexcept {
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    double q_all[Leg::kSlots][3], e[2];
+    C q_all[Leg::kSlots][3], e[2];
     leg.solve_all_mask<SharedKnee>(x[i], y[i], z[i], q_all, e, tol);
     exists_hip[0][i] = e[0], exists_hip[1][i] = e[1];
 #pragma GCC unroll 4
@@ -420,9 +457,9 @@ SPOTKIN_INLINE void solve_slots_raw(const Leg& leg, const double* x, const doubl
 // Every slot of m targets (vectorised): q[s][j][i] wrapped into the limits
 // where it fits, ok[s][i] = 1.0 where slot s exists and fits, exists_hip[hb][i]
 // = 1.0 where hip branch hb exists (both of its knee slots then do).
-SPOTKIN_INLINE void solve_slots(const Leg& leg_in, const double* x, const double* y, const double* z,
-                                std::ptrdiff_t m, double tol, double limit_tol, double (*q)[3][kBlock],
-                                double (*ok)[kBlock], double (*exists_hip)[kBlock]) noexcept {
+template <typename C>
+SPOTKIN_INLINE void solve_slots(const Leg& leg_in, const C* x, const C* y, const C* z, std::ptrdiff_t m, C tol,
+                                C limit_tol, C (*q)[3][kBlock], C (*ok)[kBlock], C (*exists_hip)[kBlock]) noexcept {
   const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   if (leg.shared_knee())
     solve_slots_raw<true>(leg, x, y, z, m, tol, q, exists_hip);
@@ -431,7 +468,7 @@ SPOTKIN_INLINE void solve_slots(const Leg& leg_in, const double* x, const double
 #pragma GCC unroll 4
   for (int s = 0; s < Leg::kSlots; ++s) {
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      double qi[3] = {q[s][0][i], q[s][1][i], q[s][2][i]};
+      C qi[3] = {q[s][0][i], q[s][1][i], q[s][2][i]};
       ok[s][i] = exists_hip[s / 2][i] * leg.limits().wrap_mask(qi, limit_tol);
       q[s][0][i] = qi[0], q[s][1][i] = qi[1], q[s][2][i] = qi[2];
     }
@@ -449,27 +486,29 @@ SPOTKIN_INLINE void unreachable_fallback(const Leg& leg, double x, double y, dou
   for (int j = 0; j < 3; ++j) q_out[j] = T(q[j]);
 }
 
-// 1.0 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).
-SPOTKIN_INLINE double finite_mask(double x, double y, double z) noexcept {
-  return ((x - x) == 0.0) & ((y - y) == 0.0) & ((z - z) == 0.0) ? 1.0 : 0.0;
+// 1 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).
+template <typename C>
+SPOTKIN_INLINE C finite_mask(C x, C y, C z) noexcept {
+  return ((x - x) == C(0)) & ((y - y) == C(0)) & ((z - z) == C(0)) ? C(1) : C(0);
 }
 
 // The targets of a block that the preferred-slot pass did not settle (a seed,
 // a limit, the other hip branch, or no solution): gathered, solved in every
 // slot at once by solve_slots, then chosen one by one.
+template <typename C>
 struct OpenTargets {
   std::ptrdiff_t count = 0;
   std::ptrdiff_t index[kBlock];  // the target's place in the block
-  double x[kBlock], y[kBlock], z[kBlock];
-  double q[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock], exists_hip[2][kBlock];
+  C x[kBlock], y[kBlock], z[kBlock];
+  C q[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock], exists_hip[2][kBlock];
 
-  SPOTKIN_INLINE void add(std::ptrdiff_t i, double xi, double yi, double zi) noexcept {
+  SPOTKIN_INLINE void add(std::ptrdiff_t i, C xi, C yi, C zi) noexcept {
     index[count] = i, x[count] = xi, y[count] = yi, z[count] = zi;
     ++count;
   }
   // Padded (pad_block): an open target's answer must not depend on which of
   // its neighbours are open too.
-  SPOTKIN_INLINE void solve(const Leg& leg, double tol, double limit_tol) noexcept {
+  SPOTKIN_INLINE void solve(const Leg& leg, C tol, C limit_tol) noexcept {
     if (count > 0) solve_slots(leg, x, y, z, pad_block(x, y, z, count), tol, limit_tol, q, ok, exists_hip);
   }
 
@@ -485,12 +524,12 @@ struct OpenTargets {
     const int* order = leg.slot_order();
     for (int n = 0; n < Leg::kSlots; ++n) {
       const int s = order[n];
-      if (ok[s][k] == 0.0) continue;
+      if (ok[s][k] == C(0)) continue;
       if (!seed) {
         best = s;
         break;
       }
-      const double qs[3] = {q[s][0][k], q[s][1][k], q[s][2][k]};
+      const double qs[3] = {double(q[s][0][k]), double(q[s][1][k]), double(q[s][2][k])};
       const double seed_d[3] = {double(seed[0]), double(seed[1]), double(seed[2])};
       const double d = circle_distance<3>(qs, seed_d);
       if (d < best_distance) best = s, best_distance = d;
@@ -499,12 +538,12 @@ struct OpenTargets {
       for (int j = 0; j < 3; ++j) q_out[j] = T(q[best][j][k]);
       return Status::Ok;
     }
-    if (exists_hip[0][k] != 0.0 || exists_hip[1][k] != 0.0) {
+    if (exists_hip[0][k] != C(0) || exists_hip[1][k] != C(0)) {
       for (int j = 0; j < 3; ++j) q_out[j] = T(quiet_nan<double>());
       return Status::JointLimit;
     }
     if (nearest_fallback)
-      unreachable_fallback(leg, x[k], y[k], z[k], q_out);
+      unreachable_fallback(leg, double(x[k]), double(y[k]), double(z[k]), q_out);
     else
       q_out[0] = q_out[1] = q_out[2] = T(quiet_nan<double>());
     return Status::Unreachable;
@@ -513,23 +552,22 @@ struct OpenTargets {
 
 // Vectorised: slot Slot and its limits for every target of a block; exists
 // -1 for invalid input.
-template <int Slot>
-SPOTKIN_INLINE void slot_pass(const Leg& leg, const double* x, const double* y, const double* z, double* hx,
-                              double* hy, double* kn, double* exists, double* ok, std::ptrdiff_t m, double tol,
-                              double limit_tol) noexcept {
+template <int Slot, typename C>
+SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z, C* hx, C* hy, C* kn, C* exists,
+                              C* ok, std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    double q0[3];
-    const double finite = finite_mask(x[i], y[i], z[i]);
+    C q0[3];
+    const C finite = finite_mask(x[i], y[i], z[i]);
     exists[i] = finite * leg.solve_slot<Slot>(x[i], y[i], z[i], q0, tol);
     ok[i] = exists[i] * leg.limits().wrap_mask(q0, limit_tol);
-    exists[i] = finite == 0.0 ? -1.0 : exists[i];
+    exists[i] = finite == C(0) ? C(-1) : exists[i];
     hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
   }
 }
 
-SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const double* x, const double* y, const double* z, double* hx,
-                                   double* hy, double* kn, double* exists, double* ok, std::ptrdiff_t m, double tol,
-                                   double limit_tol) noexcept {
+template <typename C>
+SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, const C* z, C* hx, C* hy, C* kn,
+                                   C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   const Leg leg = leg_in;  // a local copy: the output arrays cannot alias its constants
   switch (leg.preferred_slot()) {
     case 0: return slot_pass<0>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
@@ -545,28 +583,29 @@ SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const double* x, const dou
 template <typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
-  double x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
-  OpenTargets open;
-  const double tol = Leg::ratio_tolerance<T>(), limit_tol = JointLimits<3>::tolerance<T>();
+  using C = Compute<T>;
+  C x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
+  OpenTargets<C> open;
+  const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
+      x[i] = C(p[3 * (b0 + i)]), y[i] = C(p[3 * (b0 + i) + 1]), z[i] = C(p[3 * (b0 + i) + 2]);
     }
     if (!seed) {
       preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, pad_block(x, y, z, m), tol, limit_tol);
     } else {  // every target is chosen among all the slots
-      for (std::ptrdiff_t i = 0; i < m; ++i) exists[i] = finite_mask(x[i], y[i], z[i]) - 1.0, ok[i] = 0.0;
+      for (std::ptrdiff_t i = 0; i < m; ++i) exists[i] = finite_mask(x[i], y[i], z[i]) - C(1), ok[i] = C(0);
     }
     open.count = 0;
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 3 * t;
       const T* st = seed ? seed + 3 * t : nullptr;
-      if (ok[i] != 0.0 && !st) {  // the common case: the preferred slot valid, no seed
+      if (ok[i] != C(0) && !st) {  // the common case: the preferred slot valid, no seed
         qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
         status[t] = std::int8_t(Status::Ok);
-      } else if (exists[i] < 0.0 || (st && !finite3(st))) {
+      } else if (exists[i] < C(0) || (st && !finite3(st))) {
         qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
         status[t] = std::int8_t(Status::InvalidInput);
       } else {
@@ -585,30 +624,31 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
 template <typename T>
 SPOTKIN_INLINE void ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
                            std::int8_t* status, std::ptrdiff_t count) noexcept {
-  constexpr double nan = quiet_nan<double>();
-  double x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock];
-  double ex[2][kBlock], finite[kBlock];
+  using C = Compute<T>;
+  constexpr C nan = quiet_nan<C>();
+  C x[kBlock], y[kBlock], z[kBlock], qs[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock];
+  C ex[2][kBlock], finite[kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
-      x[i] = double(p[3 * (b0 + i)]), y[i] = double(p[3 * (b0 + i) + 1]), z[i] = double(p[3 * (b0 + i) + 2]);
+      x[i] = C(p[3 * (b0 + i)]), y[i] = C(p[3 * (b0 + i) + 1]), z[i] = C(p[3 * (b0 + i) + 2]);
       finite[i] = finite_mask(x[i], y[i], z[i]);
     }
-    solve_slots(leg, x, y, z, pad_block(x, y, z, m), Leg::ratio_tolerance<T>(), JointLimits<3>::tolerance<T>(), qs,
-                ok, ex);
+    solve_slots(leg, x, y, z, pad_block(x, y, z, m), C(Leg::ratio_tolerance<T>()), C(JointLimits<3>::tolerance<T>()),
+                qs, ok, ex);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 12 * t;
-      const bool exists_hip[2] = {finite[i] != 0.0 && ex[0][i] != 0.0, finite[i] != 0.0 && ex[1][i] != 0.0};
+      const bool exists_hip[2] = {finite[i] != C(0) && ex[0][i] != C(0), finite[i] != C(0) && ex[1][i] != C(0)};
       bool any_valid = false;
       for (int s = 0; s < Leg::kSlots; ++s) {
-        const bool e = exists_hip[s / 2], v = e && ok[s][i] != 0.0;
+        const bool e = exists_hip[s / 2], v = e && ok[s][i] != C(0);
         for (int j = 0; j < 3; ++j) qt[3 * s + j] = T(e ? qs[s][j][i] : nan);
         valid[4 * t + s] = v;
         exists[4 * t + s] = e;
         any_valid |= v;
       }
-      const Status st = finite[i] == 0.0                ? Status::InvalidInput
+      const Status st = finite[i] == C(0)               ? Status::InvalidInput
                         : any_valid                     ? Status::Ok
                         : exists_hip[0] || exists_hip[1] ? Status::JointLimit
                                                         : Status::Unreachable;

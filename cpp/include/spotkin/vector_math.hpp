@@ -10,6 +10,12 @@
 // atan2: Cephes' atan rational approximation on [0, 0.66] and on the range
 // reduced by pi/4 for [0.66, 1] (the ratio min/max is in [0, 1]), then the
 // octant by selects; about 1 ulp. acos(x) = atan2(sqrt((1 - x)(1 + x)), x).
+//
+// float overloads, for the float32 kernels (twice the lanes per vector):
+// sincos by Cody-Waite in three float parts of pi/2 and Cephes' sinf / cosf
+// polynomials (about 1 ulp; beyond kReducibleLimitFloat, std::sin / std::cos in
+// double); atan2 by Cephes' atanf polynomial on [0, tan(pi/8)] and on the range
+// reduced by pi/4 above it, one division (about 2 ulp).
 #pragma once
 
 #include <cmath>
@@ -85,6 +91,41 @@ SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdif
   }
 }
 
+constexpr float kReducibleLimitFloat = 8192.0f;
+
+// sin and cos of one float argument, |x| < kReducibleLimitFloat.
+SPOTKIN_VM_INLINE void sincos_bounded(float x, float& s, float& c) noexcept {
+  // pi/2 = P1 + P2 + P3, P1 and P2 with few enough bits that k * P1, k * P2 are exact
+  constexpr float kTwoOverPi = 0.636619772367581f, P1 = 1.5703125f, P2 = 4.837512969970703125e-4f,
+                  P3 = 7.54978995489188216e-8f, kRoundMagic = 12582912.0f;  // 1.5 * 2^23
+  const float k = (x * kTwoOverPi + kRoundMagic) - kRoundMagic;
+  const float r = ((x - k * P1) - k * P2) - k * P3;
+  const float z = r * r;
+  const float sr = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+  const float cr = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z -
+                   0.5f * z + 1.0f;
+  const float k4 = k * 0.25f;
+  float floor_k4 = (k4 + kRoundMagic) - kRoundMagic;
+  floor_k4 -= floor_k4 > k4 ? 1.0f : 0.0f;
+  const float q = k - 4.0f * floor_k4;  // k mod 4
+  const float q_mod2 = q >= 2.0f ? q - 2.0f : q;
+  const float q_plus1 = q == 3.0f ? 0.0f : q + 1.0f;
+  const bool odd = q_mod2 == 1.0f;
+  const float sin_abs = odd ? cr : sr, cos_abs = odd ? sr : cr;
+  s = q >= 2.0f ? -sin_abs : sin_abs;
+  c = q_plus1 >= 2.0f ? -cos_abs : cos_abs;
+}
+
+SPOTKIN_VM_INLINE void sincos(const float* x, float* s, float* c, std::ptrdiff_t n) noexcept {
+  for (std::ptrdiff_t i = 0; i < n; ++i) sincos_bounded(x[i], s[i], c[i]);
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    if (std::fabs(x[i]) > kReducibleLimitFloat) {  // rare; also catches +-Inf (NaN either way)
+      s[i] = float(std::sin(double(x[i])));
+      c[i] = float(std::cos(double(x[i])));
+    }
+  }
+}
+
 // An angle beyond kReducibleLimit brought into [-pi, pi] with libm's exact
 // (Payne-Hanek) reduction inside sin and cos; smaller ones are returned as they
 // are. Kernels sum angles (hy + kn) before their sincos, and a sum of huge
@@ -107,7 +148,7 @@ SPOTKIN_VM_INLINE double atan_ratio(double lo, double hi) noexcept {
   constexpr double kPio4 = 7.85398163397448309616e-01, kMoreBits = 6.123233995736765886130e-17;
   const bool reduce = lo > 0.66 * hi;
   const double num = reduce ? lo - hi : lo, den = reduce ? lo + hi : hi;
-  const double x = den > 0.0 ? num / den : (den == den ? 0.0 : den);  // 0/0 -> 0, NaN stays
+  const double x = den > 0.0 ? num / den : num + den;  // 0/0 -> 0, a NaN stays
   const double z = x * x;
   const double p = (((P0 * z + P1) * z + P2) * z + P3) * z + P4;
   const double q = ((((z + Q0) * z + Q1) * z + Q2) * z + Q3) * z + Q4;
@@ -133,6 +174,31 @@ SPOTKIN_VM_INLINE double atan2(double y, double x) noexcept {
 // acos(x) for x in [-1, 1]; NaN outside.
 SPOTKIN_VM_INLINE double acos(double x) noexcept {
   return vector_math::atan2(std::sqrt((1.0 - x) * (1.0 + x)), x);
+}
+
+// atan2(y, x) for one float pair (NaN propagates).
+SPOTKIN_VM_INLINE float atan2(float y, float x) noexcept {
+  constexpr float kPio4 = 0.785398163397448f, kPio2 = 1.57079632679489662f, kPi = 3.14159265358979324f;
+  constexpr float kPio2Lo = -4.37113883e-8f, kPiLo = -8.74227766e-8f;  // pi/2 and pi minus their float values
+  constexpr float kTanPio8 = 0.414213562373095f;
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const bool steep = ay > ax;
+  const float hi = steep ? ay : ax, lo = steep ? ax : ay;
+  const bool reduce = lo > kTanPio8 * hi;
+  const float num = reduce ? lo - hi : lo, den = reduce ? lo + hi : hi;
+  const float t = den > 0.0f ? num / den : num + den;  // 0/0 -> 0, a NaN stays
+  const float z = t * t;
+  const float r = (((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) *
+                      z * t + t;
+  float a = reduce ? kPio4 + r : r;
+  a = steep ? (kPio2 - a) + kPio2Lo : a;
+  const bool x_negative = std::copysign(1.0f, x) < 0.0f;  // true for -0 too: atan2(0, -0) = pi
+  a = x_negative ? (kPi - a) + kPiLo : a;
+  return std::copysign(a, y);
+}
+
+SPOTKIN_VM_INLINE float acos(float x) noexcept {
+  return vector_math::atan2(std::sqrt((1.0f - x) * (1.0f + x)), x);
 }
 
 }  // namespace spotkin::vector_math
