@@ -488,6 +488,18 @@ def test_answers_do_not_depend_on_the_neighbouring_targets(rng, seeded):
     assert (body.status != 0).any() and (body.status == 0).any()
     for shift in (1, 5, 63):
         np.testing.assert_array_equal(SPOT.body_ik(poses[shift:], feet).q, body.q[shift:])
+    # one pose per call (the control-loop path: its own fast path in the core) and one target per
+    # call give the batch's rows bit for bit, and the same result type
+    for i in range(0, 2_001, 97):
+        single = SPOT.body_ik(poses[i], feet)
+        assert type(single) is sk.BodyIK and single.q.shape == (12,) and single.status.shape == (4,)
+        np.testing.assert_array_equal(single.q, body.q[i])
+        np.testing.assert_array_equal(single.status, body.status[i])
+    assert type(body) is sk.BodyIK
+    for i in range(0, 4_001, 211):
+        single_q, single_status = leg.ik(p[i], seed=None if seed is None else seed[i])
+        np.testing.assert_array_equal(single_q, whole_q[i])
+        assert single_status == whole_status[i]
 
 
 def test_threads_are_bit_identical_and_concurrent_calls_correct(rng):

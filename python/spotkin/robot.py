@@ -43,6 +43,9 @@ class BodyIK(NamedTuple):
     """(..., n) int8 :class:`Status` per leg, with the leg API's meaning and fallback."""
 
 
+_core._register_body_ik(BodyIK)  # the core returns BodyIK itself
+
+
 class BodyRates(NamedTuple):
     """Joint velocities that keep the feet fixed, from :meth:`Robot.body_rates`."""
 
@@ -67,7 +70,6 @@ class BodyFrames(NamedTuple):
     """(..., 4, 4) the arm's tool frame, or None without ``q_arm``."""
 
 
-_XYZ = sequence_code("XYZ")
 
 
 def _broadcast_to_lead(array: np.ndarray, trailing: int, lead: tuple[int, ...]) -> np.ndarray:
@@ -362,7 +364,7 @@ class Robot:
             and feet.shape == (n, 3)
         ):
             # the control-loop call, one shared stance: the core checks body_pose itself
-            return BodyIK._make(self._body_core.ik(body_pose, -1, _XYZ, feet, None))
+            return self._body_core.ik_one(body_pose, feet)
         nearest = fallback_is_nearest(fallback)
         pose = as_real(body_pose, "body_pose")
         fmt, pose_lead = pose_format(pose)
@@ -383,7 +385,7 @@ class Robot:
             pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
             if seed is not None:
                 seed = _broadcast_to_lead(seed, 1, lead)
-        return BodyIK(*self._body_core.ik(pose, fmt, code, feet, seed, nearest))
+        return self._body_core.ik(pose, fmt, code, feet, seed, nearest)
 
     def body_fk(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """(..., n, 3) world foot points: foot = t + R (hip + leg.fk(q_leg)). Leading dimensions broadcast.

@@ -109,13 +109,17 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
                              seq.order[1] == 1 && seq.order[2] == 0;
   if (format == BodyPoseFormat::Euler && (intrinsic_xyz || extrinsic_xyz)) {
     // Fast paths, vectorised: Rx(a) Ry(b) Rz(c) ("XYZ") and Rz(c) Ry(b) Rx(a) ("xyz").
+    // Whole vectors: the padding repeats the last pose, so that a pose's rotation
+    // never comes from a loop's scalar remainder (an answer must not depend on
+    // the batch around it; leg_batch::pad_block).
     C angle[3][kBlock], s[3][kBlock], c[3][kBlock];
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const T* in = poses + 6 * i;
+    const std::ptrdiff_t padded = leg_batch::padded_count<C>(m);
+    for (std::ptrdiff_t i = 0; i < padded; ++i) {
+      const T* in = poses + 6 * std::min(i, m - 1);
       for (int k = 0; k < 3; ++k) out.t[k][i] = C(in[k]), angle[k][i] = C(in[3 + k]);
     }
-    for (int k = 0; k < 3; ++k) vector_math::sincos(angle[k], s[k], c[k], m);
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
+    for (int k = 0; k < 3; ++k) vector_math::sincos(angle[k], s[k], c[k], padded);
+    for (std::ptrdiff_t i = 0; i < padded; ++i) {
       const C sa = s[0][i], ca = c[0][i], sb = s[1][i], cb = c[1][i], sc = s[2][i], cc = c[2][i];
       const C R[9] = {
           intrinsic_xyz ? cb * cc : cb * cc,

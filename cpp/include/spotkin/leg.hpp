@@ -498,7 +498,7 @@ SPOTKIN_INLINE C finite_mask(C x, C y, C z) noexcept {
 template <typename C>
 struct OpenTargets {
   std::ptrdiff_t count = 0;
-  std::ptrdiff_t index[kBlock];  // the target's place in the block
+  std::ptrdiff_t index[kBlock];  // the target's place in the block (leg_batch::ik: in the batch)
   C x[kBlock], y[kBlock], z[kBlock];
   C q[Leg::kSlots][3][kBlock], ok[Leg::kSlots][kBlock], exists_hip[2][kBlock];
 
@@ -577,6 +577,20 @@ SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, co
   }
 }
 
+// Solves and chooses the gathered targets (open.index: places in the batch),
+// then empties the list. Not a lambda: a lambda would not be compiled for the
+// caller's CPU level, and its loops would not be vectorised.
+template <typename C, typename T>
+SPOTKIN_INLINE void settle_open(OpenTargets<C>& open, const Leg& leg, const T* seed, T* q, std::int8_t* status,
+                                C tol, C limit_tol, bool nearest_fallback) noexcept {
+  open.solve(leg, tol, limit_tol);
+  for (std::ptrdiff_t k = 0; k < open.count; ++k) {
+    const std::ptrdiff_t t = open.index[k];
+    status[t] = std::int8_t(open.choose(leg, k, seed ? seed + 3 * t : nullptr, q + 3 * t, nearest_fallback));
+  }
+  open.count = 0;
+}
+
 // Limit-aware IK: q (count, 3), status (count). seed may be null. An
 // UNREACHABLE target gets unreachable_fallback's answer, or NaN when
 // !nearest_fallback.
@@ -587,8 +601,12 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
   C x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
   OpenTargets<C> open;
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
+  // Open targets gather across blocks (index: their place in the batch) and are
+  // solved once a block might overflow the list: a few per block would leave
+  // most lanes of the all-slot pass idle.
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    if (open.count + m > kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = C(p[3 * (b0 + i)]), y[i] = C(p[3 * (b0 + i) + 1]), z[i] = C(p[3 * (b0 + i) + 2]);
     }
@@ -597,7 +615,6 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
     } else {  // every target is chosen among all the slots
       for (std::ptrdiff_t i = 0; i < m; ++i) exists[i] = finite_mask(x[i], y[i], z[i]) - C(1), ok[i] = C(0);
     }
-    open.count = 0;
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 3 * t;
@@ -609,15 +626,11 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
         qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
         status[t] = std::int8_t(Status::InvalidInput);
       } else {
-        open.add(i, x[i], y[i], z[i]);
+        open.add(t, x[i], y[i], z[i]);
       }
     }
-    open.solve(leg, tol, limit_tol);
-    for (std::ptrdiff_t k = 0; k < open.count; ++k) {
-      const std::ptrdiff_t t = b0 + open.index[k];
-      status[t] = std::int8_t(open.choose(leg, k, seed ? seed + 3 * t : nullptr, q + 3 * t, nearest_fallback));
-    }
   }
+  settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
 }
 
 // Every branch: q (count, 4, 3), valid and exists (count, 4), status (count).
