@@ -1,4 +1,4 @@
-"""Chains from the course (seeds 000 and 004), and Jacobians against finite differences."""
+"""Chains from the course (its Spot problem and summary sheet), and Jacobians against finite differences."""
 
 from __future__ import annotations
 
@@ -11,15 +11,15 @@ from conftest import random_rigid, random_table, vee_so3
 H1, H2, H3 = 0.110945, 0.3205, 0.3365
 
 
-def exam_leg() -> sk.Chain:
-    """Seed 000 Q1.2: DHm rows (d, alpha, r, theta), foot at (h3, 0, 0) in frame 3."""
+def course_leg() -> sk.Chain:
+    """The course's Spot problem: DHm rows (d, alpha, r, theta), foot at (h3, 0, 0) in frame 3."""
     return sk.Chain.from_mdh(
         [(0, 0.0, -np.pi / 2, 0.0, 0.0), (0, 0.0, np.pi / 2, H1, 0.0), (0, H2, 0.0, 0.0, 0.0)],
         tool=sk.translation([H3, 0.0, 0.0]),
     )
 
 
-def test_exam_leg_fk_is_the_closed_form_of_q14(rng):
+def test_course_leg_fk_is_the_closed_form_of_q14(rng):
     th = rng.uniform(-np.pi, np.pi, (500, 3))
     t1, t2, t3 = th.T
     planar = H3 * np.cos(t2 + t3) + H2 * np.cos(t2)
@@ -31,18 +31,19 @@ def test_exam_leg_fk_is_the_closed_form_of_q14(rng):
         ],
         axis=-1,
     )
-    np.testing.assert_allclose(exam_leg().fk(th)[:, :3, 3], expected, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(course_leg().fk(th)[:, :3, 3], expected, rtol=0, atol=1e-14)
 
 
-def test_exam_leg_jacobian_determinant(rng):
+def test_course_leg_jacobian_determinant(rng):
     th = rng.uniform(-np.pi, np.pi, (500, 3))
     _, t2, t3 = th.T
     expected = -H2 * H3 * np.sin(t3) * (H2 * np.cos(t2) + H3 * np.cos(t2 + t3))
-    np.testing.assert_allclose(np.linalg.det(exam_leg().position_jacobian(th)), expected, rtol=0, atol=1e-14)
+    det = np.linalg.det(course_leg().position_jacobian(th))
+    np.testing.assert_allclose(det, expected, rtol=0, atol=1e-14)
 
 
-def test_exam_leg_both_singular_sets_drop_rank():
-    leg = exam_leg()
+def test_course_leg_both_singular_sets_drop_rank():
+    leg = course_leg()
     stretched = [0.3, 0.7, 0.0]  # sin(th3) = 0
     t2 = 0.4  # h2 cos(t2) + h3 cos(t2 + t3) = 0
     over_axis = [0.3, t2, np.arccos(-H2 * np.cos(t2) / H3) - t2]
@@ -52,7 +53,7 @@ def test_exam_leg_both_singular_sets_drop_rank():
 
 
 def test_seed004_rrr_jacobian_example(rng):
-    # T01 = RotZ(q1); T12: alpha = +90 deg; T23: d = a. Jacobian of O3 (seed 004).
+    # T01 = RotZ(q1); T12: alpha = +90 deg; T23: d = a. Jacobian of O3 (the course's summary sheet).
     a = 0.7
     rrr = sk.Chain.from_mdh([(0, 0, 0, 0, 0), (0, 0, np.pi / 2, 0, 0), (0, a, 0, 0, 0)])
     q = rng.uniform(-np.pi, np.pi, (200, 3))

@@ -208,15 +208,15 @@ def test_seed_003_jacobian_by_central_differences(rng):
 
 
 def test_spot_leg_as_chain_matches_the_leg_solver(rng):
-    """The exam's DHm leg (seed 000) through the general engine equals sk.Leg's closed form."""
-    exam = sk.Chain.from_mdh(
+    """The course's DHm leg (its Spot problem) through the general engine equals sk.Leg's closed form."""
+    course = sk.Chain.from_mdh(
         [(0, 0, -np.pi / 2, 0, 0), (0, 0, np.pi / 2, H1, 0), (0, H2, 0, 0, 0)],
         tool=sk.translation([H3, 0, 0]),
     )
     leg = sk.Leg(H1, H2, H3, knee_offset=0.0)
-    R_exam_from_leg = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]])
+    R_course_from_leg = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]])
     p_leg = leg.fk(rng.uniform(-np.pi, np.pi, (500, 3)))
-    ours = exam.ik_position(p_leg @ R_exam_from_leg.T)
+    ours = course.ik_position(p_leg @ R_course_from_leg.T)
     theirs = leg.ik_all(p_leg)
     for i in range(len(p_leg)):
         mapped = [(-hx, hy, kn) for hx, hy, kn in theirs.q[i][theirs.exists[i]]]

@@ -274,7 +274,7 @@ def test_combined_jacobian_by_finite_differences():
 
 
 def test_body_moves_while_hand_holds_its_pose():
-    """Redundancy (seed 004): hand pose as the primary task, body motion in the null space."""
+    """Redundancy (the course): hand pose as the primary task, body motion in the null space."""
     spot = sk.Spot()
     T_wb = sk.body_transform([0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
     q = np.array([0.0, -1.2, 1.9, 0.0, 0.6, 0.0])

@@ -150,7 +150,7 @@ def test_ik_returns_generating_configuration_for_standing_feet(rng):
 
 
 def test_limits_leave_a_single_branch_below_hip_height(rng):
-    # Seed 000 Q2.4 claims one branch survives the limits; it holds with the
+    # The course's Spot problem claims one branch survives the limits; it holds with the
     # official limits whenever the foot is more than 8 cm below the hx joint.
     for leg in SPOT.legs:
         p = leg.fk(in_limit_q(rng, 100_000, leg.limits))
@@ -238,7 +238,7 @@ def test_ik_near_singular_sets_stays_exact(rng):
 
 def test_singularity_measure_vanishes_on_both_sets():
     leg = sk.Leg(H1, U, L, 0.0)
-    # exam's det(J) = -h2 h3 sin(th3) (h2 cos th2 + h3 cos(th2 + th3)); th3 = kn, th2 = hy
+    # course's det(J) = -h2 h3 sin(th3) (h2 cos th2 + h3 cos(th2 + th3)); th3 = kn, th2 = hy
     hy = 0.4
     kn_over_axis = np.arccos(-U * np.cos(hy) / L) - hy
     for q in ([0.2, 0.5, 0.0], [0.2, hy, kn_over_axis]):
@@ -354,20 +354,20 @@ def test_invalid_input_statuses_do_not_poison_neighbours():
 # -- mapping to the course, mirroring ---------------------------------------------------------------------
 
 
-def test_exam_dhm_leg_maps_onto_the_leg_model(rng):
-    # Seed 000 Q1.2 DHm rows (d, alpha, r, theta): (0, -90, 0, th1), (0, 90, h1, th2), (h2, 0, 0, th3),
+def test_course_dhm_leg_maps_onto_the_leg_model(rng):
+    # The course's DHm rows (d, alpha, r, theta): (0, -90, 0, th1), (0, 90, h1, th2), (h2, 0, 0, th3),
     # foot (h3, 0, 0) in frame 3. With no knee offset it is this leg with th1 = -hx, th2 = hy,
-    # th3 = kn, seen from a base frame rotated by R (exam x = -leg z, y = -leg x, z = leg y).
-    exam = sk.Chain.from_mdh(
+    # th3 = kn, seen from a base frame rotated by R (course x = -leg z, y = -leg x, z = leg y).
+    course = sk.Chain.from_mdh(
         [(0, 0, -np.pi / 2, 0, 0), (0, 0, np.pi / 2, H1, 0), (0, U, 0, 0, 0)], tool=sk.translation([L, 0, 0])
     )
     leg = sk.Leg(H1, U, L, knee_offset=0.0)
-    R_exam_from_leg = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]])
+    R_course_from_leg = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]])
     q = rng.uniform(-np.pi, np.pi, (1000, 3))
     th = np.stack([-q[:, 0], q[:, 1], q[:, 2]], -1)
-    np.testing.assert_allclose(exam.fk(th)[:, :3, 3], leg.fk(q) @ R_exam_from_leg.T, atol=1e-15)
-    R_leg_from_exam, ref_q = ref.course_to_leg(th[0], H1)
-    np.testing.assert_allclose(R_leg_from_exam, R_exam_from_leg.T)
+    np.testing.assert_allclose(course.fk(th)[:, :3, 3], leg.fk(q) @ R_course_from_leg.T, atol=1e-15)
+    R_leg_from_course, ref_q = ref.course_to_leg(th[0], H1)
+    np.testing.assert_allclose(R_leg_from_course, R_course_from_leg.T)
     np.testing.assert_allclose(ref_q, q[0], atol=1e-15)
 
 

@@ -64,7 +64,7 @@ def test_arm_near_wrist_and_elbow_singularities(q, wrist, elbow, which):
 
 @given(q=st.lists(angles, min_size=3, max_size=3), offset=offsets)
 def test_chain_jacobian_rank_drops_smoothly_near_singularity(q, offset):
-    # the exam's DHm leg: det J = -h2 h3 sin(th3) (h2 cos th2 + h3 cos(th2 + th3)) stays exact near th3 = 0
+    # the course's DHm leg: det J = -h2 h3 sin(th3) (h2 cos th2 + h3 cos(th2 + th3)) stays exact near th3 = 0
     chain = sk.Chain.from_mdh(
         [(0, 0, -np.pi / 2, 0, 0), (0, 0, np.pi / 2, 0.110945, 0), (0, 0.3205, 0, 0, 0)],
         tool=sk.translation([0.3365, 0, 0]),

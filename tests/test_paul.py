@@ -1,4 +1,4 @@
-"""Paul's equation solvers: every case of the annex's table (corrected), random
+"""Paul's equation solvers: every case of the appendix's table (corrected), random
 equations built from known roots, broadcasting, bad input."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def wrap(a):
         (1.0, 1.0, np.sqrt(2.0), {np.pi / 4}),  # X^2 + Y^2 = Z^2: double root
     ],
 )
-def test_type2_cases_of_the_annex(X, Y, Z, expected):
+def test_type2_cases_of_the_appendix(X, Y, Z, expected):
     t, valid = sk.paul.type2(X, Y, Z)
     assert valid.all()
     assert {round(float(v), 12) for v in t} == {round(float(v), 12) for v in expected}
@@ -124,7 +124,7 @@ def test_solvers_match_the_pure_python_reference(rng):
     n = 400
     t, u = rng.uniform(-np.pi, np.pi, (2, n))
     X, Y, W, X2, Y2 = rng.normal(size=(5, n))
-    X[:20] = 0.0  # the annex's special cases
+    X[:20] = 0.0  # the appendix's special cases
     Y[20:40] = 0.0
     W[40:50] = 0.0
     Z = X * np.sin(t) + Y * np.cos(t)

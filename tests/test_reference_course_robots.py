@@ -1,4 +1,4 @@
-"""Course robots of seeds 001, 002, 003: FK vs spotkin.Chain and the printed formulas, IK, Jacobian."""
+"""The course's RRR arm, three-joint arm and classic-DH leg: FK vs sk.Chain and its formulas, IK, Jacobian."""
 
 from __future__ import annotations
 
@@ -162,7 +162,7 @@ def test_unreachable_targets_have_no_solution():
     assert not cr.leg_003_ik((r, 0.0, 0.0))[1].any()
 
 
-# --- Seed 001 worked example ----------------------------------------------------------------
+# --- The course's RRR arm worked example ----------------------------------------------------------------
 
 
 @pytest.mark.parametrize("lengths", [cr.RRR_001_LENGTHS, cr.RRR_001_STATED_LENGTHS])
@@ -195,7 +195,7 @@ def test_rrr_001_printed_answer_fails_fk():
         assert np.linalg.norm(reached - [1.0, 1.1, 1.2]) > 0.2
 
 
-# --- Seed 003 Jacobian --------------------------------------------------------------------------
+# --- The course's classic-DH leg: Jacobian ----------------------------------------------------------------
 
 
 def test_leg_003_jacobian_central_differences(rng):

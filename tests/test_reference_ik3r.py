@@ -173,10 +173,10 @@ def spot_leg() -> sk.Chain:
     return sk.Chain.from_mdh(SPOT_ROWS, tool=SPOT_TOOL)
 
 
-def spot_closed_form(p_exam) -> np.ndarray:
+def spot_closed_form(p_course) -> np.ndarray:
     """The leg's known closed form (reference.leg.ik_all, k = 0) mapped to the course angles, eq. (C1)."""
-    R_leg_from_exam, _ = ref_leg.course_to_leg(np.zeros(3), H1)
-    q_leg, exists = ref_leg.ik_all(R_leg_from_exam @ p_exam, H1, H2, H3, 0.0)
+    R_leg_from_course, _ = ref_leg.course_to_leg(np.zeros(3), H1)
+    q_leg, exists = ref_leg.ik_all(R_leg_from_course @ p_course, H1, H2, H3, 0.0)
     th = [[ref_leg.wrap_angle(v) for v in (-hx, hy, kn)] for hx, hy, kn in q_leg[exists]]
     return np.array(sorted(th))
 

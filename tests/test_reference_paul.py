@@ -1,4 +1,4 @@
-"""Paul's equation types 2, 3 and 6 (seed 000 annex), built from known roots."""
+"""Paul's equation types 2, 3 and 6 (the course's Spot problem, appendix), built from known roots."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ def contains(roots, valid, t, tol=1e-8) -> bool:
     return any(v and angle_gap(r, t) < tol for r, v in zip(roots, valid))
 
 
-# --- type 2: the annex table, case by case ------------------------------------------------------
+# --- type 2: the appendix table, case by case ------------------------------------------------------
 
 
 @pytest.mark.parametrize(
@@ -45,7 +45,7 @@ def contains(roots, valid, t, tol=1e-8) -> bool:
         (math.sqrt(3), 1.0, 1.0, {0.0, 2 * PI / 3}),  # general: 2 sin(t + 30deg) = 1
     ],
 )
-def test_type2_annex_cases(X, Y, Z, expected):
+def test_type2_appendix_cases(X, Y, Z, expected):
     roots, valid = type2(X, Y, Z)
     assert valid.all()
     assert len(expected) == 2
@@ -150,7 +150,7 @@ def test_type2_property_unreachable(X, Y, grow):
 # --- type 3 -----------------------------------------------------------------------------------
 
 
-def test_type3_annex_special_case_y1_x2_zero():
+def test_type3_appendix_special_case_y1_x2_zero():
     t = 2.5
     X1, Y2 = 0.7, -1.9
     got, ok = type3(X1, 0.0, X1 * math.sin(t), 0.0, Y2, Y2 * math.cos(t))

@@ -1,5 +1,5 @@
 // 6R arm with a spherical wrist (the Spot Arm): FK, geometric Jacobian,
-// singularity measures and closed-form IK with all 8 solutions (seed 000 §4,
+// singularity measures and closed-form IK with all 8 solutions (the course's Spot problem §4,
 // re-derived; python/spotkin/reference/arm.py has the same steps written plainly).
 //
 //   T = Trans(mount) Rz(sh0) Ry(sh1) Trans(a,0,0) Ry(el0) Trans(b,0,h) Rx(el1) Ry(wr0) Rx(wr1) X

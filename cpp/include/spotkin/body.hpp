@@ -1,4 +1,4 @@
-// Whole-body kinematics (seed 000 §3, for any number of legs): the body pose
+// Whole-body kinematics (the course's Spot problem §3, for any number of legs): the body pose
 // in the world, the feet fixed on the ground, three joints per leg.
 //
 //   foot_world_i = t + R (hip_i + fk_leg_i(q_i))                      (B1)
@@ -8,7 +8,7 @@
 // angular velocity, both in the world frame.
 //
 // Body orientation from Euler angles: intrinsic sequences (scipy's upper case,
-// e.g. "XYZ": R = R_X(a) R_Y(b) R_Z(c), seed 000 Q3.2) or extrinsic ones (lower
+// e.g. "XYZ": R = R_X(a) R_Y(b) R_Z(c), the course's Spot problem) or extrinsic ones (lower
 // case, e.g. "xyz": R = R_z(c) R_y(b) R_x(a), ROS roll-pitch-yaw).
 #pragma once
 

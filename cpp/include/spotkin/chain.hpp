@@ -11,7 +11,7 @@
 // their kind (identity, x screw, translation, general; x, y, z or general axis)
 // so that DH chains and URDF chains with axis-aligned joints pay only for
 // what they use. Forward kinematics, frames and the geometric Jacobian
-// (seed 004, "Jacobienne géométrique") are written once for every kind.
+// (the course's summary sheet, "Jacobienne géométrique") are written once for every kind.
 #pragma once
 
 #include <algorithm>
@@ -345,7 +345,7 @@ class Chain {
 
   // Geometric Jacobian [v; w] of the tool point, column j:
   //   revolute  [z_j x (p_tool - o_j); z_j],   prismatic [z_j; 0],
-  // with z_j, o_j the joint axis and a point on it (seed 004). Written
+  // with z_j, o_j the joint axis and a point on it (the course's summary sheet). Written
   // row-major into J (rows x n), rows = 6, or 3 for the position block.
   // In the tool frame, both blocks are rotated by R_tool^T.
   void jacobian(const Scalar* q, Scalar* J, int rows, bool in_tool_frame) const noexcept {

@@ -134,7 +134,7 @@ SPOTKIN_INLINE JointValue angle_difference_lane(double x1, double y1, double x2,
   return JointValue{(x1 * x2 + y1 * y2) * inv, (y1 * x2 - x1 * y2) * inv, 0.0};
 }
 
-// One solution of a cos x + b sin x = rhs (seed 000 annex, type 2): the angle
+// One solution of a cos x + b sin x = rhs (the course's Spot problem, appendix, type 2): the angle
 // of (a, b) plus (sign = +1) or minus (sign = -1) acos(rhs / hypot(a, b)),
 // without trigonometric calls and without branches (it runs inside loops
 // across samples). Writes (cos x, sin x); returns 1 if it exists, else 0.

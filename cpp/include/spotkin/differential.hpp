@@ -1,5 +1,5 @@
-// Differential inverse kinematics (seed 004, "modèle différentiel inverse",
-// "redondance"; seed 003, inverse model by the inverted Jacobian): damped least
+// Differential inverse kinematics (the course's summary sheet, "modèle différentiel inverse",
+// "redondance"; the course's classic-DH leg, inverse model by the inverted Jacobian): damped least
 // squares, the Moore-Penrose pseudo-inverse, null-space projection, singular
 // values, rank and manipulability, per sample; and closed-loop IK along a path
 // of targets for any Chain.

@@ -1,7 +1,7 @@
 // Roll-pitch-pitch legs (Spot's hx, hy, kn; Go2's hip, thigh, calf; any leg
 // whose axes at zero angles are +-x, +-y, +-y in the body frame): FK,
 // Jacobian and closed-form IK with every branch. Geometry and model (R1) in
-// rpp_geometry.hpp; derivation (re-derived from seed 000 Q2.1 and generalised;
+// rpp_geometry.hpp; derivation (re-derived from the course's Spot problem and generalised;
 // python/spotkin/reference/rpp_leg.py writes the same equations plainly):
 //
 //   (I1) hip roll, Paul type 2: v = Rx(theta1)^T p has v_y = h = a_y + b_y + c_y,

@@ -1,9 +1,9 @@
-// Paul's standard trigonometric equations (seed 000 annex, corrected per the
+// Paul's standard trigonometric equations (the course's Spot problem, appendix, corrected per the
 // errata), every root plus validity. Each solver is branch-free per sample.
 //
 // Type 2:  X sin t + Y cos t = Z.  With r^2 = X^2 + Y^2 and S = sqrt(r^2 - Z^2):
 //            cos t = (Y Z - eps X S) / r^2,   sin t = (X Z + eps Y S) / r^2,
-//          root 0: eps = +1, root 1: eps = -1. No root when r^2 < Z^2 (the annex
+//          root 0: eps = +1, root 1: eps = -1. No root when r^2 < Z^2 (the appendix
 //          says "singular" there; see ERRATA.md). X = Y = 0: no root if Z != 0;
 //          if Z = 0 every t solves it, reported as t = 0 (both roots valid).
 // Type 3:  X1 sin t + Y1 cos t = Z1, X2 sin t + Y2 cos t = Z2.  With

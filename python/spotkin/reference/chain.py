@@ -1,6 +1,6 @@
 """Reference serial-chain kinematics from DH tables, one sample at a time.
 
-Elementary transforms (seed 004 §1.3):
+Elementary transforms (the course's summary sheet §1.3):
   DHm  T(j-1,j) = RotX(alpha) · TransX(d) · RotZ(theta) · TransZ(r)
   DH   T(j-1,j) = RotZ(theta) · TransZ(d) · TransX(a) · RotX(alpha)
 Joint variable q_j adds to theta (sigma = 0) or to the z offset (sigma = 1).
@@ -66,7 +66,7 @@ def fk(rows, convention: str, q, base=None, tool=None) -> np.ndarray:
 
 
 def jacobian(rows, convention: str, q, base=None, tool=None, frame: str = "base") -> np.ndarray:
-    """Geometric Jacobian [v; w] of the tool point (seed 004).
+    """Geometric Jacobian [v; w] of the tool point (the course's summary sheet).
 
     Column j: revolute [z_j x (p_tool - o_j); z_j], prismatic [z_j; 0]. In DHm
     joint j moves about z of frame j; in classic DH about z of frame j-1.

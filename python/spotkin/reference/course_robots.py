@@ -1,4 +1,5 @@
-"""The course's small arms and leg (seeds 001, 002, 003), rebuilt and checked, one sample at a time.
+"""The course's small arms and leg (RRR arm, three-joint arm, classic-DH leg), rebuilt and checked,
+one sample at a time.
 
 Every IK is Paul's method with :mod:`spotkin.reference.paul` and returns EVERY solution:
 ``(q (4, 3), valid (4,))``, slot = 2 * (theta1 root) + (type-6 root), NaN where invalid,
@@ -6,7 +7,7 @@ angles in (-pi, pi]. Each robot also exports a classic-DH table ``(rows, base, t
 with rows ``(sigma, a, alpha, d, theta)`` for ``spotkin.Chain.from_dh``.
 DH(theta, d, a, alpha) = RotZ(theta) TransZ(d) TransX(a) RotX(alpha).
 
-Seed 001, RRR arm
+The course's RRR arm
 -----------------
 T1^0 = DH(q1, l1, 0, +90deg), T2^1 = DH(q2, 0, l2, 0), T3^2 = DH(q3, 0, 0, +90deg),
 E = TransZ(l3) (each matches the printed matrix; the printed T3^0 is garbled, T4^0 is right):
@@ -23,7 +24,7 @@ IK. (T1^0)^-1 p = (c1 px + s1 py, pz - l1, s1 px - c1 py) = (u, v, 0):
 The text's "T3^2 T4^3" has +C3 where -C3 belongs and takes q3 = atan2(a, b) instead of
 atan2(a, -b); its q3 = -+11 deg fail FK.
 
-Seed 002, 3-DOF arm
+The course's three-joint (3-DOF) arm
 -------------------
 T01 = DH(q1, a1, 0, +90deg); T12 = RotZ(q2) TransY(a2) (the printed translation (-a2 S2, a2 C2));
 T23 = RotZ(q3) TransX(a3), with C3/S3 in its translation (the printed C2/S2 is the typo: only
@@ -39,7 +40,7 @@ IK, with no hole at q1 = 45 deg: (T01)^-1 p = (C1 x + S1 y, z - a1, S1 x - C1 y)
           type 6 with W = a3, X = h, Y = -rho, Z1 = -a2, Z2 = 0 -> (q2, q3).
 The text gives no lengths; ARM_002_LENGTHS are illustrative.
 
-Seed 003, 3-DOF leg, classic DH with lateral offsets
+The course's 3-DOF leg, classic DH with lateral offsets
 ----------------------------------------------------
 Table (theta, a, d, alpha): 0->1 (q1, 0, h1, -90), 1->1' (q2, 0, h2, 90), 1'->2 (0, 0, l2, -90),
 2->2' (q3, 0, h3, 90), 2'->3 (0, 0, l3, 0). Product (checked with sympy), H = h2 + h3:
@@ -135,11 +136,11 @@ def _paul_3r(first: tuple[float, float, float], second) -> tuple[np.ndarray, np.
     return q, valid
 
 
-# --- Seed 001: RRR arm ------------------------------------------------------------------------
+# --- The course's RRR arm ------------------------------------------------------------------------
 
 
 def rrr_001_fk(q, lengths=RRR_001_LENGTHS) -> np.ndarray:
-    """T4^0 = T1^0 T2^1 T3^2 E (seed 001), (4, 4); position is (R1)."""
+    """T4^0 = T1^0 T2^1 T3^2 E (the course's RRR arm), (4, 4); position is (R1)."""
     l1, l2, l3 = lengths
     q1, q2, q3 = (float(v) for v in q)
     return dh(q1, l1, 0, _HALF_PI) @ dh(q2, 0, l2, 0) @ dh(q3, 0, 0, _HALF_PI) @ _trans(0, 0, l3)
@@ -164,11 +165,11 @@ def rrr_001_dh(lengths=RRR_001_LENGTHS) -> tuple[np.ndarray, np.ndarray, np.ndar
     return rows, np.eye(4), _trans(0, 0, l3)
 
 
-# --- Seed 002: 3-DOF arm ----------------------------------------------------------------------
+# --- The course's three-joint arm ----------------------------------------------------------------------
 
 
 def arm_002_fk(q, lengths=ARM_002_LENGTHS) -> np.ndarray:
-    """T03 = T01 T12 T23 with T23's translation (a3 C3, a3 S3) (seed 002, corrected), (4, 4)."""
+    """T03 = T01 T12 T23 with T23's translation (a3 C3, a3 S3) (corrected), (4, 4)."""
     a1, a2, a3 = lengths
     q1, q2, q3 = (float(v) for v in q)
     T01 = dh(q1, a1, 0, _HALF_PI)
@@ -196,11 +197,11 @@ def arm_002_dh(lengths=ARM_002_LENGTHS) -> tuple[np.ndarray, np.ndarray, np.ndar
     return rows, np.eye(4), np.eye(4)
 
 
-# --- Seed 003: 3-DOF leg ----------------------------------------------------------------------
+# --- The course's classic-DH leg ----------------------------------------------------------------------
 
 
 def leg_003_dh_table(lengths=LEG_003_LENGTHS) -> np.ndarray:
-    """Seed 003's five-row table as ``Chain.from_dh`` rows (sigma, a, alpha, d, theta).
+    """The course's classic-DH leg: its five-row table as ``Chain.from_dh`` rows (sigma, a, alpha, d, theta).
 
     Rows 1' -> 2 and 2' -> 3 are fixed: use q = (q1, q2, 0, q3, 0) with a chain built on it.
     """
@@ -217,7 +218,7 @@ def leg_003_dh_table(lengths=LEG_003_LENGTHS) -> np.ndarray:
 
 
 def leg_003_fk(q, lengths=LEG_003_LENGTHS) -> np.ndarray:
-    """3T0 as the product of the five DH matrices of seed 003, (4, 4); position is (L1)."""
+    """3T0 as the product of the five DH matrices of the course's classic-DH leg, (4, 4); position is (L1)."""
     h1, h2, h3, l2, l3 = lengths
     q1, q2, q3 = (float(v) for v in q)
     return (

@@ -50,18 +50,18 @@ foot (h3, 0, 0) in frame 3) is this model with k = 0, U = h2, L = h3, the SAME h
 (no sign flip), and
 
     (C1)  th1 = -hx,  th2 = hy,  th3 = kn,
-    (C2)  p_exam = R_exam_from_leg p_leg,  R_exam_from_leg = [[0, 0, -1],
+    (C2)  p_course = R_course_from_leg p_leg,  R_course_from_leg = [[0, 0, -1],
                                                               [-1, 0, 0],
                                                               [0, 1, 0]]
 
-(a proper rotation: exam x = leg -z, exam y = leg -x, exam z = leg y). The hip
-roll axis is exam y0 and the zero pose of the exam points the leg along exam +x.
+(a proper rotation: course x = leg -z, course y = leg -x, course z = leg y). The hip
+roll axis is course y0 and the zero pose of the course points the leg along course +x.
 The th1 offset is fixed only by the choice of frame: th1 = c - hx works for any
-constant c with R_exam_from_leg replaced by RotY_exam(c) R_exam_from_leg. The
+constant c with R_course_from_leg replaced by RotY_course(c) R_course_from_leg. The
 other exact proper correspondences are th1 = c + hx, th2 = hy + pi, th3 = kn
 (same h1), and, with h1 -> -h1, th1 = c + hx, th2 = -hy, th3 = -kn or
 th1 = c - hx, th2 = pi - hy, th3 = -kn. No correspondence has a +-pi/2 offset
-on th2, so the exam's own "th_u" is not Spot's hy. See course_to_leg.
+on th2, so the course's own "th_u" is not Spot's hy. See course_to_leg.
 """
 
 import math
@@ -307,12 +307,12 @@ def course_to_leg(th, h1):
     """Map the course's DHm leg angles th = (th1, th2, th3) onto this model.
 
     Eq. (C1)/(C2) of the module docstring, with k = 0, U = h2, L = h3 and the
-    same h1: q_leg = (-th1, th2, th3) and p_exam = R_exam_from_leg @ fk(q_leg).
-    Returns (R_leg_from_exam (3,3), q_leg (3,)), so that
-    fk(q_leg, h1, h2, h3, 0) = R_leg_from_exam @ p_exam(th). h1 is unchanged
+    same h1: q_leg = (-th1, th2, th3) and p_course = R_course_from_leg @ fk(q_leg).
+    Returns (R_leg_from_course (3,3), q_leg (3,)), so that
+    fk(q_leg, h1, h2, h3, 0) = R_leg_from_course @ p_course(th). h1 is unchanged
     (argument kept for call symmetry; no sign flip is needed).
     """
     del h1  # the correspondence does not depend on h1
-    R_exam_from_leg = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    R_course_from_leg = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     q_leg = np.array([-float(th[0]), float(th[1]), float(th[2])])
-    return R_exam_from_leg.T, q_leg
+    return R_course_from_leg.T, q_leg

@@ -1,6 +1,6 @@
 """Paul's method: the standard trigonometric equation types 2, 3 and 6, one sample at a time.
 
-Seed 000, annex "Équations". Every root is returned together with a validity flag;
+The course's Spot problem, appendix "Équations". Every root is returned together with a validity flag;
 invalid roots are NaN. Angles are wrapped to (-pi, pi].
 Each equation (each row, for type 3) is first divided by its largest |coefficient|: same
 roots, and squares such as X^2 + Y^2 can neither underflow nor overflow.
@@ -10,10 +10,10 @@ roots, and squares such as X^2 + Y^2 can neither underflow nor overflow.
       substitution: X s + Y c = Z and s^2 + c^2 = 1):
           cos t = (Y Z - eps X sqrt(D)) / r2,   sin t = (X Z + eps Y sqrt(D)) / r2,   eps = +-1.
       Root 0 takes eps = +1, root 1 eps = -1 (the same convention in every case below).
-      No real root when D < 0, i.e. X^2 + Y^2 < Z^2. The annex calls the last case
+      No real root when D < 0, i.e. X^2 + Y^2 < Z^2. The appendix calls the last case
       "configuration singulière si X != 0 et Y != 0", which is wrong (see docs/course-errata.md).
       D >= -1e-12 r2 counts as touching: D is clamped to 0 and the double root is returned twice.
-      Special cases of the annex table, all the eps formula above specialised:
+      Special cases of the appendix table, all the eps formula above specialised:
         X = 0, Y != 0:  cos t = Z / Y,  sin t = eps sign(Y) sqrt(1 - cos^2 t)
         Y = 0, X != 0:  sin t = Z / X,  cos t = -eps sign(X) sqrt(1 - sin^2 t)
         Z = 0:          t = atan2(eps Y, -eps X): root 0 = atan2(-Y, X) + pi, root 1 = atan2(-Y, X)
@@ -22,7 +22,7 @@ roots, and squares such as X^2 + Y^2 can neither underflow nor overflow.
                         circle must test for X == Y == Z == 0 themselves.
 
 (T3)  X1 sin t + Y1 cos t = Z1,  X2 sin t + Y2 cos t = Z2.
-      det = X1 Y2 - X2 Y1 != 0: Cramer's rule (the annex's formulas, verified correct):
+      det = X1 Y2 - X2 Y1 != 0: Cramer's rule (the appendix's formulas, verified correct):
           sin t = (Z1 Y2 - Z2 Y1) / det,   cos t = (X1 Z2 - X2 Z1) / det,   t = atan2(sin t, cos t),
       valid only if |sin^2 t + cos^2 t - 1| <= 1e-9 (otherwise the system has no solution).
       |det| <= 1e-12 |(X1, Y1)| |(X2, Y2)| is degenerate (parallel rows): the equation with the
