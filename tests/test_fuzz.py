@@ -9,7 +9,8 @@ a six-legged robot whose joints interleave in ``q``), ``Leg`` (Spot's, and of an
 ``SpotArm``, ``Chain`` built with ``from_mdh``/``from_dh`` as 3-joint and 6-joint spherical-wrist
 chains and from URDFs (a Go2 leg, the Spot arm), ``PointToPoint`` and ``CartesianPath`` objects;
 URDF loading with malformed, hostile and oddly encoded descriptions), plus the pickling and copying
-of every object.
+of every object. Optional modules (``fuzz_api.OPTIONAL_MODULES``: ``spotkin.sdk``, whose entries are
+in ``tests/fuzz_sdk.py``) are covered whenever their extra is installed, as the test requirements do.
 :func:`test_registry_covers_the_public_api` fails when a public callable is missing from the
 registry, when the registry covers something no longer public, or when an entry's argument slots
 do not match the callable's parameters: new API is fuzzed by default, once described. The only

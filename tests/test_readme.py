@@ -87,6 +87,9 @@ def test_the_documents_have_python_blocks():
 def test_python_block_runs(path, line, source, runs, restore_threads):
     if not runs:
         pytest.skip(f"{path.name}:{line}: marked not-run")
+    if "from spotkin import plot" in source:  # the optional extra: drawn into files with Agg
+        matplotlib = pytest.importorskip("matplotlib", reason='the block draws: pip install "spotkin[plot]"')
+        matplotlib.use("Agg")
     # pad with blank lines so that tracebacks give the Markdown file's own line numbers
     code = compile("\n" * (line - 1) + source, str(path), "exec")
     namespace = {"__name__": f"{path.stem}_block_{line}"}

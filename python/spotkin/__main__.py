@@ -1,15 +1,18 @@
-"""The ``spotkin`` command line: ``spotkin demo`` runs the showcase on built-in data;
-``spotkin inspect ROBOT.urdf`` shows what a description holds and what spotkin recognises."""
+"""The ``spotkin`` command line: ``spotkin demo`` runs the showcase on built-in data (``--plots DIR``
+also writes its pictures); ``spotkin inspect ROBOT.urdf`` shows what a description holds and what
+spotkin recognises; ``spotkin plot ROBOT.urdf`` draws a robot in its nominal or zero stance;
+``spotkin batch OPERATION`` runs a batch kernel over datasets on disk (``spotkin[dask]``)."""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
 import numpy as np
 
-from . import __version__, robots
+from . import __version__, _batch, robots
 from ._runtime import get_num_threads
 from ._status import Status
 from ._transforms import translation
@@ -18,7 +21,7 @@ from .chain import Chain
 from .leg import SLOT_NAMES
 from .robot import Robot
 from .spot import Spot
-from .trajectory import hold_branch, via_points
+from .trajectory import hold_branch, point_to_point, via_points
 
 # A Spot leg as a modified DH table (sigma, d, alpha, r, theta), knee offset left out: the leg model
 # of the course this library follows (docs/derivations.md, "The leg as a DH table").
@@ -39,10 +42,13 @@ def _throughput(func, arg, repeats: int = 3) -> float:
     return best
 
 
-def demo(samples: int = 1_000_000) -> int:
-    """Print the showcase: the whole body, a timed body path, one leg, the arm and a DH chain."""
+def demo(samples: int = 1_000_000, plots: str | None = None, dpi: int = 100) -> int:
+    """Print the showcase: the whole body, a timed body path, one leg, the arm and a DH chain; with
+    ``plots``, also write its pictures into that folder (:func:`write_plots`)."""
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
         raise ValueError(f"samples must be a positive integer, got {samples!r}")
+    if plots is not None:
+        _plotting()  # before the showcase: a missing matplotlib is reported at once
     print(f"spotkin {__version__} demo: the built-in Spot model")
     print()
     _demo_body(samples)
@@ -56,6 +62,11 @@ def demo(samples: int = 1_000_000) -> int:
     _demo_arm(samples)
     print()
     _demo_chain(samples)
+    if plots is not None:
+        print()
+        print(f"Pictures (spotkin.plot, {dpi} dpi):")
+        for path in write_plots(plots, dpi):
+            print(f"  wrote {path}")
     return 0
 
 
@@ -145,16 +156,8 @@ def _demo_path(rate: float = 1000.0) -> None:
     """The body on a timed via-point path (trapezoidal speed, blends) while the hand holds its pose."""
     spot = Spot()
     feet = spot.stance_feet(height=0.5)
-    waypoints = np.array(
-        [  # [x, y, z, roll, pitch, yaw]
-            [0.00, 0.00, 0.50, 0.00, 0.00, 0.00],
-            [0.05, 0.06, 0.46, 0.10, -0.08, 0.12],
-            [-0.04, 0.05, 0.44, -0.05, 0.12, -0.10],
-            [0.00, -0.06, 0.48, 0.08, 0.05, 0.05],
-            [0.00, 0.00, 0.50, 0.00, 0.00, 0.00],
-        ]
-    )
-    path = via_points(waypoints, vmax=0.1, amax=0.5, wmax=0.4, alphamax=2.0, blend=0.3)
+    waypoints = DEMO_WAYPOINTS
+    path = via_points(waypoints, **DEMO_PATH_LIMITS)
     t = np.arange(0.0, path.duration, 1.0 / rate)
     print(
         f"Timed body path: {len(waypoints)} via points, blends, |v| <= 0.1 m/s, |a| <= 0.5 m/s^2: "
@@ -166,7 +169,7 @@ def _demo_path(rate: float = 1000.0) -> None:
     T_body = path.sample(t)  # (K, 4, 4) world <- body
     arm_q0 = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
     hand = T_body[0] @ spot.arm.fk(arm_q0)  # held fixed in the world
-    T_arm = np.linalg.solve(T_body, hand)  # the hand target in the moving body frame
+    T_arm = np.linalg.solve(T_body, np.broadcast_to(hand, T_body.shape))  # the hand in the moving body frame
     arm = spot.arm.ik_all(T_arm)
     seconds = time.perf_counter() - start
     branch = int(np.argmin(np.abs(np.angle(np.exp(1j * (arm.q[0] - arm_q0)))).max(axis=-1)))
@@ -184,6 +187,19 @@ def _demo_path(rate: float = 1000.0) -> None:
         f"continuous, worst hand pose error {hand_error:.1e}, branch jumps at samples "
         f"{held.jumps.tolist() or 'none'}"
     )
+
+
+DEMO_WAYPOINTS = np.array(
+    [  # the demo's body path, [x, y, z, roll, pitch, yaw] (Spot standing 0.5 m high)
+        [0.00, 0.00, 0.50, 0.00, 0.00, 0.00],
+        [0.05, 0.06, 0.46, 0.10, -0.08, 0.12],
+        [-0.04, 0.05, 0.44, -0.05, 0.12, -0.10],
+        [0.00, -0.06, 0.48, 0.08, 0.05, 0.05],
+        [0.00, 0.00, 0.50, 0.00, 0.00, 0.00],
+    ]
+)
+DEMO_PATH_LIMITS = {"vmax": 0.1, "amax": 0.5, "wmax": 0.4, "alphamax": 2.0, "blend": 0.3}
+DEMO_ARM_Q = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])  # the arm's joints at the start of the body path
 
 
 def _demo_leg(samples: int) -> None:
@@ -300,6 +316,167 @@ def _fd_error(chain: Chain, q: np.ndarray, step: float = 1e-6) -> float:
     return worst
 
 
+# ---- pictures (spotkin.plot, an optional extra) -----------------------------------------------------
+
+PLOT_EXTRA = 'pip install "spotkin[plot]"'
+GIF_FRAMES = 20
+GIF_SIZE = (3.6, 3.0)  # inches: 360 x 300 pixels at 100 dpi
+
+
+def _plotting():
+    """spotkin.plot, drawing into files (matplotlib's Agg backend); ImportError naming the extra."""
+    try:
+        import matplotlib
+    except ImportError:
+        raise ImportError(f"pictures need matplotlib: {PLOT_EXTRA}") from None
+    matplotlib.use("Agg")
+    from . import plot
+
+    return plot
+
+
+def write_plots(folder: str, dpi: int = 100) -> list[str]:
+    """Write the demo's pictures into ``folder`` (created if missing) for Spot and the Unitree Go2; returns
+    the paths written, in order. PNGs: ``ROBOT_stance`` (8 x 6 in), ``ROBOT_leg_branches`` (12 x 6.5 in;
+    Spot also ``spot_leg_branches_hip_height``, where two branches are valid), ``spot_arm_branches``
+    (13 x 7 in), ``ROBOT_workspace`` (9.5 x 6.5 in), ``ROBOT_trajectory`` (8 x 7 in), at ``dpi``; and
+    ``ROBOT_path.gif``, the demo's body path in 20 frames of 3.6 x 3.0 in (with the hand held in the
+    world, for a robot with an arm). Every figure is closed, also on error."""
+    plot = _plotting()
+    import matplotlib.pyplot as plt
+
+    os.makedirs(folder, exist_ok=True)
+    before = set(plt.get_fignums())
+    written: list[str] = []
+    try:
+        written += _robot_plots(plot, plt, folder, "spot", Spot(), 0.5, 1.0, dpi)
+        go2 = Robot.from_urdf(robots.path("go2"))
+        written += _robot_plots(plot, plt, folder, "go2", go2, 0.3, 0.5, dpi)
+    finally:
+        for number in set(plt.get_fignums()) - before:
+            plt.close(number)
+    return written
+
+
+def save_png(fig, path: str, dpi: float) -> None:
+    """Save a figure as a PNG on a palette of 256 colours, without dithering: line art looks the same and
+    the file is a few times smaller (the repository keeps its pictures under 200 KB)."""
+    import io
+
+    from PIL import Image  # a dependency of matplotlib
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="rgba", dpi=dpi)
+    width, height = fig.get_size_inches()
+    size = (int(width * dpi), int(height * dpi))  # as the Agg renderer sizes it
+    image = Image.frombuffer("RGBA", size, buffer.getbuffer()).convert("RGB")
+    image.quantize(colors=256, method=0, dither=0).save(path, format="PNG", optimize=True)
+
+
+def _scaled_waypoints(height: float, scale: float) -> np.ndarray:
+    """The demo's body path for a robot standing ``height`` high, its motions scaled by ``scale``."""
+    waypoints = DEMO_WAYPOINTS * scale
+    waypoints[:, 2] = height + (DEMO_WAYPOINTS[:, 2] - 0.5) * scale
+    return waypoints
+
+
+def _held_arm(robot: Robot, T_body: np.ndarray, rate_samples: int = 2000) -> np.ndarray:
+    """(K, 6) arm joints holding the hand fixed in the world along the body poses T_body (K, 4, 4): the
+    branch of DEMO_ARM_Q held continuously (checked on a fine resampling of the path), gaps filled with
+    the last reached joints."""
+    arm = robot.arm
+    hand = T_body[0] @ arm.fk(DEMO_ARM_Q)
+    sol = arm.ik_all(np.linalg.solve(T_body, np.broadcast_to(hand, T_body.shape)))
+    branch = int(np.argmin(np.abs(np.angle(np.exp(1j * (sol.q[0] - DEMO_ARM_Q)))).max(axis=-1)))
+    q = hold_branch(sol.q, sol.valid, branch).q
+    for k in range(len(q)):
+        if not np.isfinite(q[k]).all():
+            q[k] = q[k - 1] if k else DEMO_ARM_Q
+    return q
+
+
+def _robot_plots(plot, plt, folder, name, robot, height, scale, dpi) -> list[str]:
+    written = []
+
+    def save(fig, stem):
+        path = os.path.join(folder, f"{name}_{stem}")
+        save_png(fig, path, dpi)
+        plt.close(fig)
+        written.append(path)
+
+    pose = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0])
+    stance = robot.body_ik(pose, robot.stance_feet(height))
+    arm_q = DEMO_ARM_Q if robot.arm is not None else None
+    save(plot.robot(robot, pose, stance.q, arm_q, title=f"{name}: a nominal stance"), "stance.png")
+    leg = robot.legs[0]
+    q_leg = stance.q[robot._columns[0]]
+    save(plot.branches(leg, leg.fk(q_leg)), "leg_branches.png")
+    if name == "spot":
+        save(plot.branches(leg, [0.3, 0.13, 0.0]), "leg_branches_hip_height.png")
+        save(plot.branches(robot.arm, robot.arm.fk([0.4, -1.2, 1.9, 0.3, -0.6, 0.8])), "arm_branches.png")
+    save(plot.workspace(leg, "xz", offset=round(0.99 * leg.hip_offset, 3)), "workspace.png")
+    swing = point_to_point(q_leg, q_leg + [0.1, -0.4, 0.6], vmax=2.0, amax=8.0, profile="trapezoid")
+    save(plot.trajectory(swing, limits=leg.limits, names=("hip roll", "hip pitch", "knee")), "trajectory.png")
+    path = via_points(_scaled_waypoints(height, scale), **DEMO_PATH_LIMITS)
+    T_body = path.sample(np.linspace(0.0, path.duration, GIF_FRAMES))
+    legs = robot.body_ik(T_body, robot.stance_feet(height))
+    q_arm = _held_arm(robot, T_body) if robot.arm is not None else None
+    fig = plt.figure(figsize=GIF_SIZE)
+    interval = 1e3 * path.duration / (GIF_FRAMES - 1)
+    animation = plot.animate(robot, T_body, legs.q, q_arm, interval=interval, fig=fig)
+    gif = os.path.join(folder, f"{name}_path.gif")
+    animation.save(gif, dpi=dpi)
+    plt.close(fig)
+    written.append(gif)
+    return written
+
+
+def _load_robot(source: str) -> Robot:
+    """``spot`` (the built-in Spot), a packaged description's name, or a URDF path."""
+    if source == "spot":
+        return Spot()
+    if source in robots.NAMES:
+        return Robot.from_urdf(robots.path(source))
+    return Robot.from_urdf(source)
+
+
+def plot_stance(
+    source: str, out: str | None = None, stance: str = "nominal", size=(800, 600), dpi=100
+) -> int:
+    """Draw a robot (see :func:`_load_robot`) in its nominal stance (the feet below the hips at about 70 %
+    of the legs' reach, solved by body_ik; the zero stance when none solves) or its zero stance, into a
+    PNG of ``size`` pixels; print the path written."""
+    plot = _plotting()
+    import matplotlib.pyplot as plt
+
+    robot = _load_robot(source)
+    pose, q = plot._nominal_stance(robot) if stance == "nominal" else plot._zero_stance(robot)
+    if out is None:
+        out = f"{os.path.splitext(os.path.basename(source))[0]}_stance.png"
+    fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi))
+    try:
+        ax = fig.add_subplot(projection="3d")
+        name = robot.name or source
+        plot.robot(robot, pose, q, ax=ax, title=f"{name}: {stance} stance, body at {pose[2]:.3f} m")
+        save_png(fig, out, dpi)
+    finally:
+        plt.close(fig)
+    print(f"wrote {out}")
+    return 0
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        width, height = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected WIDTHxHEIGHT in pixels (e.g. 800x600), got {text!r}"
+        ) from None
+    if width < 16 or height < 16 or width > 10_000 or height > 10_000:
+        raise argparse.ArgumentTypeError(f"each side must be 16 to 10000 pixels, got {text!r}")
+    return width, height
+
+
 def _positive_int(text: str) -> int:
     try:
         value = int(text)
@@ -325,9 +502,39 @@ def main(argv: list[str] | None = None) -> int:
         "inspect", help="show a URDF's tree and the legs and arms spotkin recognises in it"
     )
     inspect_parser.add_argument("urdf", help="path of the URDF file")
+    demo_parser.add_argument(
+        "--plots",
+        metavar="DIR",
+        help=f"also write the demo's pictures (PNGs and GIFs) into DIR (needs matplotlib: {PLOT_EXTRA})",
+    )
+    dpi_help = "resolution of the pictures (default 100)"
+    demo_parser.add_argument("--dpi", type=_positive_int, default=100, help=dpi_help)
+    plot_parser = commands.add_parser(
+        "plot", help=f"draw a robot from its URDF in its nominal or zero stance (needs {PLOT_EXTRA})"
+    )
+    plot_parser.add_argument("urdf", help="path of the URDF file, or spot, spot_with_arm, go2 (packaged)")
+    plot_parser.add_argument("--out", help="the PNG to write (default: NAME_stance.png here)")
+    plot_parser.add_argument("--stance", choices=("nominal", "zero"), default="nominal")
+    plot_parser.add_argument(
+        "--size", type=_size, default=(800, 600), help="WIDTHxHEIGHT in pixels (800x600)"
+    )
+    plot_parser.add_argument("--dpi", type=_positive_int, default=100, help=dpi_help)
+    _batch.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/_batch.py)
     args = parser.parse_args(argv)
+    if args.command == "batch":
+        return _batch.main(args)
     if args.command == "demo":
-        return demo(args.samples)
+        try:
+            return demo(args.samples, args.plots, args.dpi)
+        except (ImportError, OSError) as error:
+            print(f"spotkin demo: {error}", file=sys.stderr)
+            return 1
+    if args.command == "plot":
+        try:
+            return plot_stance(args.urdf, args.out, args.stance, args.size, args.dpi)
+        except (ImportError, OSError, ValueError) as error:
+            print(f"spotkin plot: {error}", file=sys.stderr)
+            return 1
     if args.command == "inspect":
         try:
             return inspect(args.urdf)

@@ -139,7 +139,8 @@ class Spot(Robot):
     By default the model is the packaged Spot URDF (``spotkin/robots/spot_with_arm.urdf``,
     built by the same machinery as :meth:`Robot.from_urdf`, with per-leg joint limits),
     named as the SDK names it: legs fl, fr, hl, hr; joints fl.hx, ... hr.kn; the arm is a
-    :class:`SpotArm`.
+    :class:`SpotArm`. :meth:`q_from_names` and :meth:`names_from_q` also answer to the packaged
+    URDF's joint names (``front_left_hip_x``, ``arm_sh0``, ...).
 
     ``model`` is instead a dict shaped like :data:`spotkin.models.SPOT`: keys
     ``"hip_positions"`` (a (3,) point per leg name), ``"leg"`` (``hip_offset``,
@@ -244,6 +245,20 @@ class Spot(Robot):
     def urdf_joint_names(self) -> tuple[str, ...]:
         """The packaged description's actuated joints (legs, arm, gripper) in its order."""
         return tuple(joint.name for joint in self._model.actuated_joints)
+
+    def _joint_aliases(self) -> dict[str, str]:
+        """The SDK's joint names (legs, arm, ``arm0.hr0`` and the gripper ``arm0.f1x``) and the
+        packaged URDF's (``front_left_hip_x``, ``arm_sh0``, ...; every joint), each -> its SDK name."""
+        table = getattr(self, "_aliases", None)
+        if table is None:
+            table = {joint.name: joint.name for joint in self._model.joints}
+            legs = [f"{_URDF_LEGS[leg]}_{joint}" for leg in LEG_NAMES for joint in ("hip_x", "hip_y", "knee")]
+            arm = [*_URDF_ARM, "arm_hr0", "arm_f1x"]
+            sdk = [*self.joint_names, *self.arm_joint_names, "arm0.hr0", "arm0.f1x"]
+            table.update(zip(legs + arm, sdk))
+            table.update((name, name) for name in sdk)
+            self._aliases = table
+        return table
 
     def stance_feet(self, height: float = 0.5) -> np.ndarray:
         """(4, 3) world foot centres of a nominal stance, for the body at [0, 0, height, 0, 0, 0].

@@ -1,0 +1,405 @@
+"""The fuzz registry's entries for ``spotkin.plot`` (issue 18), the optional pictures (matplotlib).
+
+``tests/fuzz_api.py`` calls :func:`register_entries` with itself once its own entries are made; without
+matplotlib nothing is registered (and nothing of ``spotkin.plot`` is public there either). The workers
+draw with the Agg backend, in memory; every case closes its figures.
+
+Each function is called on real robots (Spot, Spot from its URDF, Go2, the six-legged robot), legs, arms,
+chains and trajectories, with hostile poses, joints, targets, options, axes and figures. The probes read
+the drawings back: the drawn feet are ``body_fk``'s, each drawn branch is one that ``ik_all`` finds, the
+map's counts are ``ik_all``'s at sampled pixels, the curves are the trajectory's own samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+PLOT_ARM_Q = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
+
+
+def _pyplot():
+    """matplotlib.pyplot on the Agg backend: the workers draw in memory only."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _close_figures(c):
+    _pyplot().close("all")
+
+
+def _gid_data(fig, gid):
+    """(m, 3) (3D) or (m, 2) data of the artist with this id, or None."""
+    for ax in fig.axes:
+        for artist in ax.get_children():
+            if artist.get_gid() == gid:
+                if hasattr(artist, "get_data_3d"):
+                    return np.array(artist.get_data_3d(), dtype=np.float64).T
+                return np.asarray(artist.get_xydata(), dtype=np.float64)
+    return None
+
+
+def register_entries(api) -> None:
+    try:
+        from matplotlib.animation import FuncAnimation
+        from matplotlib.figure import Figure
+
+        from spotkin import plot
+    except ImportError:  # the spotkin[plot] extra is not installed: spotkin.plot is not public here
+        return
+    _pyplot()
+    sk = api.sk
+    Arg, ACCEPT, REJECT = api.Arg, api.ACCEPT, api.REJECT
+    Array, Choice, Custom, Int, Real = api.Array, api.Choice, api.Custom, api.Int, api.Real
+    close, describe, register, seq_slot = api.close, api.describe, api.register, api.seq_slot
+    ROBOT_ARMS, STANCE_HEIGHT = api.ROBOT_ARMS, api.STANCE_HEIGHT
+
+    def const(value, expect=ACCEPT, why=""):
+        return lambda c, r, b: Arg(value(c) if callable(value) else value, expect, why)
+
+    def axes_table(three_d):
+        def axes(projection):
+            return lambda c: _pyplot().figure(figsize=(3, 2)).add_subplot(projection=projection)
+
+        return {
+            "3d": const(axes("3d"), ACCEPT if three_d else REJECT, "" if three_d else "value"),
+            "2d": const(axes(None), REJECT if three_d else ACCEPT, "value" if three_d else ""),
+            "none": const(None),
+            "figure": const(lambda c: _pyplot().figure(figsize=(3, 2)), REJECT, "type"),
+            "str": const("ax", REJECT, "type"),
+        }
+
+    fig_table = {
+        "figure": const(lambda c: _pyplot().figure(figsize=(4, 3))),
+        "none": const(None),
+        "axes": const(lambda c: _pyplot().figure(figsize=(3, 2)).add_subplot(), REJECT, "type"),
+        "str": const("fig", REJECT, "type"),
+    }
+
+    def robot_table(key):
+        return {
+            "valid": const(lambda c: c.robot(key)),
+            "leg": const(lambda c: c.leg, REJECT, "type"),
+            "str": const("spot", REJECT, "type"),
+            "none": const(None, REJECT, "type"),
+        }
+
+    def feet_probe(key, fig_of, pose_of, q_of):
+        def probe(result, kw, c):
+            fig = fig_of(result)
+            if not isinstance(fig, Figure):
+                return f"not a drawing: {describe(result)}"
+            robot = c.robot(key)
+            pose, q = pose_of(kw), q_of(kw)
+            if pose is None or q is None:
+                nominal = plot._nominal_stance(robot)
+                pose = nominal[0] if pose is None else pose
+                q = nominal[1] if q is None else q
+            want = robot.body_fk(
+                np.asarray(pose, np.float64), np.asarray(q, np.float64), kw.get("seq", "XYZ")
+            )
+            got = _gid_data(fig, "feet")
+            if got is None or not close(got, want, False):
+                return f"drawn feet {describe(got)} are not body_fk's {describe(want)}"
+            return None
+
+        return probe
+
+    # plot.robot on Spot (SpotArm), Spot from its URDF (a Chain arm), Go2 and the hexapod (no arm)
+    for key in ("spot", "spot_urdf", "go2", "hexapod"):
+        arm = ROBOT_ARMS[key]
+        height = STANCE_HEIGHT[key]
+        if arm:
+            q_arm = Array("q_arm", lambda c: PLOT_ARM_Q, optional=True, default="omit")
+        else:
+            q_arm = Custom(
+                "q_arm", {"none": const(None), "given": const(PLOT_ARM_Q, REJECT, "value")}, default="omit"
+            )
+        register(
+            name=f"plot.robot[{key}]",
+            covers="spotkin.plot.robot",
+            call=lambda c, **k: plot.robot(**k),
+            slots=[
+                Custom("robot", robot_table(key)),
+                Array(
+                    "body_pose", lambda c, h=height: [0.02, -0.01, h - 0.02, 0.05, -0.1, 0.2], optional=True
+                ),
+                Array("q", lambda c, key=key: c.nominal(key), optional=True),
+                q_arm,
+                seq_slot(),
+                Custom("ax", axes_table(True), default="omit"),
+                Custom(
+                    "title",
+                    {"text": const("a title"), "none": const(None), "int": const(3, REJECT, "type")},
+                    default="omit",
+                ),
+            ],
+            probe=feet_probe(key, lambda fig: fig, lambda kw: kw.get("body_pose"), lambda kw: kw.get("q")),
+            after=_close_figures,
+            combos=(),
+            pairs=8 if key in ("spot", "go2") else 4,
+        )
+
+    # plot.branches: legs (3,) targets; arms and 6R chains (4, 4) targets
+    def branches_probe(solve):
+        def probe(fig, kw, c):
+            if not isinstance(fig, Figure):
+                return f"not a Figure: {describe(fig)}"
+            solver, target = kw["solver"], np.asarray(kw["target"], dtype=np.float64)
+            sol = solve(solver, target)
+            drawn = sorted(  # a leg's slot is drawn twice (side and front views)
+                {
+                    int(line.get_gid()[5:])
+                    for ax in fig.axes
+                    for line in ax.get_lines()
+                    if (line.get_gid() or "").startswith("slot:")
+                }
+            )
+            if drawn != sorted(set(np.flatnonzero(sol.exists).tolist())):
+                return f"slots drawn {drawn}, but the existing ones are {np.flatnonzero(sol.exists).tolist()}"
+            return None
+
+        return probe
+
+    def solve_point(solver, p):
+        return solver.ik_all(p) if isinstance(solver, sk.Leg) else solver.ik_position(p)
+
+    def solve_pose(solver, T):
+        return solver.ik_all(T) if isinstance(solver, sk.SpotArm) else solver.ik(T)
+
+    def poke(value):
+        def make(c, v):
+            v.reshape(-1)[0] = value
+            return v
+
+        return make
+
+    drawn_anyway = {
+        "nan": (poke(math.nan), ACCEPT, ""),
+        "inf": (poke(math.inf), ACCEPT, ""),
+    }  # status in the title
+    register(
+        name="plot.branches[leg]",
+        covers="spotkin.plot.branches",
+        call=lambda c, **k: plot.branches(**k),
+        slots=[
+            Custom(
+                "solver",
+                {
+                    "valid": const(lambda c: c.leg),
+                    "go2": const(lambda c: c.robot("go2").legs[1]),
+                    "hexapod": const(lambda c: c.robot("hexapod").legs[3]),
+                    "chain3": const(lambda c: c.chain("mdh3")),
+                    "chain2": const(lambda c: sk.Chain.from_dh([(0, 0.3, 0, 0, 0)] * 2), REJECT, "value"),
+                    "str": const("leg", REJECT, "type"),
+                    "none": const(None, REJECT, "type"),
+                },
+            ),
+            Array("target", lambda c: c.leg.fk([0.05, 1.04, -1.8]), extra=drawn_anyway),
+            Custom("fig", fig_table, default="omit"),
+        ],
+        probe=branches_probe(solve_point),
+        after=_close_figures,
+        combos=(),
+        pairs=8,
+    )
+    register(
+        name="plot.branches[arm]",
+        covers="spotkin.plot.branches",
+        call=lambda c, **k: plot.branches(**k),
+        slots=[
+            Custom(
+                "solver",
+                {
+                    "valid": const(lambda c: c.arm),
+                    "chain6": const(lambda c: c.chain("mdh6")),
+                    "urdf_arm": const(lambda c: c.robot("spot_urdf").arm),
+                    "leg": const(lambda c: c.leg, REJECT, "value"),  # a (4, 4) target for a leg
+                    "str": const("arm", REJECT, "type"),
+                },
+            ),
+            Array("target", lambda c: c.arm.fk([0.4, -1.2, 1.9, 0.3, -0.6, 0.8]), extra=drawn_anyway),
+            Custom("fig", fig_table, default="omit"),
+        ],
+        probe=branches_probe(solve_pose),
+        after=_close_figures,
+        combos=(),
+        pairs=8,
+    )
+
+    # plot.workspace: the map's counts against ik_all at sampled pixels
+    def workspace_probe(fig, kw, c):
+        if not isinstance(fig, Figure):
+            return f"not a Figure: {describe(fig)}"
+        solver = kw["solver"]
+        ax = next(a for a in fig.axes if a.images)
+        counts = np.asarray(ax.images[0].get_array())
+        n = counts.shape[0]
+        i, j, k = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}[kw.get("plane", "xz")]
+        offset = kw.get("offset")
+        if offset is None:
+            leg = solver if isinstance(solver, sk.Leg) else None
+            offset = (
+                0.0
+                if leg is None
+                else {"xz": leg.hip_offset, "yz": leg.a[0], "xy": -0.75 * leg.reach[1]}[kw.get("plane", "xz")]
+            )
+        u, v = np.linspace(*ax.get_xlim(), n), np.linspace(*ax.get_ylim(), n)
+        rows, cols = np.arange(n) % n, (np.arange(n) * 7) % n
+        points = np.empty((n, 3))
+        points[:, i], points[:, j], points[:, k] = u[cols], v[rows], float(offset)
+        sol = solve_point(solver, points)
+        valid = sol.valid.sum(axis=-1)
+        want = np.where(valid > 0, np.minimum(valid, 3), np.where(sol.exists.any(axis=-1), -1, -2))
+        if not np.array_equal(counts[rows, cols], want):
+            return f"map counts {counts[rows, cols].tolist()} are not ik_all's {want.tolist()}"
+        return None
+
+    register(
+        name="plot.workspace",
+        covers="spotkin.plot.workspace",
+        call=lambda c, **k: plot.workspace(**k),
+        slots=[
+            Custom(
+                "solver",
+                {
+                    "valid": const(lambda c: c.leg),
+                    "go2": const(lambda c: c.robot("go2").legs[0]),
+                    "chain3": const(lambda c: c.chain("dh3")),
+                    "chain6": const(lambda c: c.chain("mdh6"), REJECT, "value"),
+                    "arm": const(lambda c: c.arm, REJECT, "type"),
+                    "str": const("leg", REJECT, "type"),
+                },
+            ),
+            Choice("plane", "xz", ("xz", "yz", "xy"), default="omit"),
+            Real("offset", 0.11, "finite", optional=True, default="omit"),
+            Int("resolution", 12, 2, 1001),
+            Array("extent", lambda c: [-0.7, 0.7, -0.8, 0.6], optional=True, default="omit"),
+            Custom("ax", axes_table(False), default="omit"),
+        ],
+        probe=workspace_probe,
+        after=_close_figures,
+        combos=(),
+        pairs=12,
+    )
+
+    # plot.trajectory: point-to-point motions and Cartesian paths
+    def trajectory_probe(fig, kw, c):
+        if not isinstance(fig, Figure):
+            return f"not a Figure: {describe(fig)}"
+        traj = kw["traj"]
+        t = kw.get("t")
+        t = np.linspace(0.0, traj.duration, 400) if t is None else np.asarray(t, dtype=np.float64)
+        if isinstance(traj, sk.trajectory.PointToPoint):
+            got, want = _gid_data(fig, "q:0"), traj.sample(t)[0][:, 0]
+        else:
+            got, want = _gid_data(fig, "x"), traj.sample(t)[:, 0, 3]
+        if got is None or not close(got[:, 1], want, False) or not close(got[:, 0], t, False):
+            return f"the curve {describe(got)} is not the trajectory's samples {describe(want)}"
+        return None
+
+    def cartesian_extras(plan):
+        if plan["traj"] in ("linear", "via") and (
+            plan["limits"] not in ("omit", "none") or plan["names"] not in ("omit", "none")
+        ):
+            return REJECT
+        return None
+
+    register(
+        name="plot.trajectory",
+        covers="spotkin.plot.trajectory",
+        call=lambda c, **k: plot.trajectory(**k),
+        slots=[
+            Custom(
+                "traj",
+                {
+                    "valid": const(lambda c: c.p2p("trapezoid")),
+                    "cubic": const(lambda c: c.p2p("cubic")),
+                    "quintic": const(lambda c: c.p2p("quintic")),
+                    "linear": const(lambda c: c.path("linear")),
+                    "via": const(lambda c: c.path("via")),
+                    "str": const("traj", REJECT, "type"),
+                    "array": const(np.zeros((3, 3)), REJECT, "type"),
+                },
+            ),
+            Array(
+                "t",
+                lambda c: np.linspace(-0.1, 2.0, 7),
+                optional=True,
+                default="omit",
+                extra={"wrong_shape": (lambda c, v: np.linspace(0.0, 1.0, 8), ACCEPT, "")},  # any count
+            ),
+            Array(
+                "limits",
+                lambda c: [(-1.0, 1.0), (-2.0, 2.0), (-3.0, 3.0)],
+                inf_ok=True,
+                optional=True,
+                default="omit",
+            ),
+            Custom(
+                "names",
+                {
+                    "three": const(("hx", "hy", "kn")),
+                    "list": const(["a", "b", "c"]),
+                    "none": const(None),
+                    "str": const("abc", REJECT, "type"),
+                    "ints": const((1, 2, 3), REJECT, "type"),
+                    "two": const(("a", "b"), REJECT, "value"),
+                },
+                default="omit",
+            ),
+            Custom("fig", fig_table, default="omit"),
+        ],
+        probe=trajectory_probe,
+        pair_rule=cartesian_extras,
+        after=_close_figures,
+        combos=(),
+        pairs=12,
+    )
+
+    # plot.animate: three frames of Spot on a small body path
+    def animate_poses(c):
+        return np.array(
+            [
+                [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
+                [0.02, 0.01, 0.48, 0.05, -0.05, 0.08],
+                [0.01, -0.02, 0.49, -0.05, 0.05, 0.0],
+            ]
+        )
+
+    def rendered(anim):
+        """The animation's figure. The harness drops the animation unplayed on purpose: marked as
+        started, so that matplotlib does not warn when it is collected (in a later case)."""
+        if not isinstance(anim, FuncAnimation):
+            return None
+        anim._draw_was_started = True
+        return anim.figure
+
+    register(
+        name="plot.animate",
+        covers="spotkin.plot.animate",
+        call=lambda c, **k: plot.animate(**k),
+        slots=[
+            Custom("robot", robot_table("spot")),
+            Array("body_poses", animate_poses),
+            Array("q", lambda c: np.tile(c.nominal("spot"), (3, 1))),
+            Array("q_arm", lambda c: np.tile(PLOT_ARM_Q, (3, 1)), optional=True, default="omit"),
+            seq_slot(),
+            Real("interval", 100.0, default="omit"),
+            Custom("fig", fig_table, default="omit"),
+        ],
+        probe=feet_probe(
+            "spot",
+            rendered,
+            lambda kw: np.asarray(kw["body_poses"], dtype=np.float64)[0],
+            lambda kw: np.asarray(kw["q"], dtype=np.float64)[0],
+        ),
+        after=_close_figures,
+        combos=(),
+        pairs=8,
+    )
