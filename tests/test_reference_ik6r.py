@@ -297,7 +297,7 @@ def ur5_singular(kind: str, rng, jitter: float) -> np.ndarray:
     [
         "shoulder",
         "elbow",
-        pytest.param("wrist", marks=pytest.mark.xfail(reason="open: q6 is ill-conditioned near q5 = 0")),
+        "wrist",
     ],
 )
 def test_near_singular_ur5(kind, rng):

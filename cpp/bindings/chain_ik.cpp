@@ -1,6 +1,7 @@
 // Bindings for the closed-form IK of chains (DH or URDF): 3-joint position
-// IK and 6R spherical-wrist IK.
+// IK and 6R IK by family (spherical wrist, parallel 2-3-4, spherical shoulder).
 #include "spotkin/chain_ik.hpp"
+#include "spotkin/chain_ik/arm6.hpp"
 
 #include <memory>
 #include <optional>
@@ -16,19 +17,30 @@ namespace {
 
 using chain_ik::Limits;
 using chain_ik::Position3;
-using chain_ik::SphericalWrist6;
+using chain_ik::Arm6;
 
 struct ChainIK {
-  std::optional<Position3> position;    // 3-joint chains
-  std::optional<SphericalWrist6> wrist;  // 6-joint chains
+  std::optional<Position3> position;  // 3-joint chains
+  std::optional<Arm6> arm;            // 6-joint chains
   Limits limits;
   std::uint64_t revolute_columns = 0;  // huge seed angles are reduced exactly
 
-  std::string kind() const { return position ? position->name() : "6R-spherical-wrist"; }
-  std::string position_kind() const { return position ? position->name() : wrist->position().name(); }
+  std::string kind() const { return position ? position->name() : arm->kind(); }
+  std::string position_kind() const { return position ? position->name() : arm->position_kind(); }
+  bool idealised() const { return arm && arm->idealised(); }
+  py::dict geometry() const {
+    py::dict out;
+    if (arm) {
+      const auto& g = arm->geometry();
+      out["wrist_meeting"] = g.wrist, out["shoulder_meeting"] = g.shoulder;
+      out["parallel_234"] = g.parallel234, out["parallel_123"] = g.parallel123;
+    }
+    return out;
+  }
 };
 
-ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle upper_obj) {
+ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle upper_obj, double angle_tolerance,
+                      double distance_tolerance) {
   const Chain<double>& chain = pair.f64;
   const std::ptrdiff_t dof = chain.dof();
   // Length scale: every fixed length of the chain plus the tool offset (1 if all are zero).
@@ -52,11 +64,15 @@ ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle up
     const chain_ik::V3 w = (chain.z_tail(2) * chain.tool()).p;
     ik.position.emplace(chain_ik::split_first_three(chain), w, scale);
   } else if (dof == 6) {
-    ik.wrist.emplace(SphericalWrist6::make(chain, scale));
+    if (!(angle_tolerance >= 0.0 && angle_tolerance < 0.1) || !(distance_tolerance < 0.1 * scale))
+      throw std::invalid_argument("the ik tolerances must be finite, angle in [0, 0.1) and distance below 0.1 times "
+                                  "the chain's length scale");
+    ik.arm.emplace(Arm6::make(chain, scale, {angle_tolerance, distance_tolerance}));
   } else {
     throw std::invalid_argument("no closed form here for a " + std::to_string(dof) +
                                 "-joint chain: closed-form IK covers 3-joint chains (tool position) and 6-joint "
-                                "chains whose last three axes meet (spherical wrist)");
+                                "chains with a spherical wrist, three parallel axes 2-3-4 or a spherical shoulder; "
+                                "use Chain.ik_differential");
   }
   return ik;
 }
@@ -72,13 +88,13 @@ SPOTKIN_MULTIVERSION void position_kernel(const Position3& solver, const Limits&
 }
 
 template <typename T>
-SPOTKIN_MULTIVERSION void wrist_kernel(const SphericalWrist6& solver, const Limits& limits, const T* poses,
-                                       PoseFormat format, T* q, std::uint8_t* valid, std::uint8_t* exists,
-                                       std::int8_t* status, std::ptrdiff_t n) {
+SPOTKIN_MULTIVERSION void arm6_kernel(const Arm6& solver, const Limits& limits, const T* poses, PoseFormat format,
+                                      T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t* exact,
+                                      std::int8_t* status, std::ptrdiff_t n) {
   if (format == PoseFormat::Matrix)
-    chain_ik::ik_wrist<PoseFormat::Matrix>(solver, limits, poses, q, valid, exists, status, n);
+    chain_ik::ik_arm6<PoseFormat::Matrix>(solver, limits, poses, q, valid, exists, exact, status, n);
   else
-    chain_ik::ik_wrist<PoseFormat::PositionQuaternion>(solver, limits, poses, q, valid, exists, status, n);
+    chain_ik::ik_arm6<PoseFormat::PositionQuaternion>(solver, limits, poses, q, valid, exists, exact, status, n);
 }
 
 template <typename T>
@@ -88,35 +104,40 @@ SPOTKIN_MULTIVERSION void position_nearest_kernel(const Position3& solver, const
 }
 
 template <typename T>
-SPOTKIN_MULTIVERSION void wrist_nearest_kernel(const SphericalWrist6& solver, const Limits& limits,
-                                               const T* poses, PoseFormat format, const T* seed, T* q,
-                                               std::int8_t* status, std::ptrdiff_t n) {
+SPOTKIN_MULTIVERSION void arm6_nearest_kernel(const Arm6& solver, const Limits& limits, const T* poses,
+                                              PoseFormat format, const T* seed, T* q, std::int8_t* status,
+                                              std::ptrdiff_t n) {
   if (format == PoseFormat::Matrix)
-    chain_ik::ik_wrist_nearest<PoseFormat::Matrix>(solver, limits, poses, seed, q, status, n);
+    chain_ik::ik_arm6_nearest<PoseFormat::Matrix>(solver, limits, poses, seed, q, status, n);
   else
-    chain_ik::ik_wrist_nearest<PoseFormat::PositionQuaternion>(solver, limits, poses, seed, q, status, n);
+    chain_ik::ik_arm6_nearest<PoseFormat::PositionQuaternion>(solver, limits, poses, seed, q, status, n);
 }
 
-// The shared tail: (q, valid, exists, status) arrays, filled on thread chunks.
+// The shared tail: (q, valid, exists, exact, status) arrays, filled on thread chunks
+// (exact is exists where the kernel has no exact output).
 template <typename T, typename Kernel>
 py::object solutions(const Shape& leading, py::ssize_t slots, py::ssize_t dof, std::ptrdiff_t in_width,
-                     const T* in, Kernel&& kernel) {
+                     const T* in, bool has_exact, Kernel&& kernel) {
   auto q = new_array<T>(leading, {slots, dof});
   auto valid = new_array<bool>(leading, {slots});
   auto exists = new_array<bool>(leading, {slots});
+  auto exact = new_array<bool>(leading, {slots});
   auto status = new_array<std::int8_t>(leading, {});
   T* qd = q.mutable_data();
   auto* vd = reinterpret_cast<std::uint8_t*>(valid.mutable_data());
   auto* ed = reinterpret_cast<std::uint8_t*>(exists.mutable_data());
+  auto* xd = reinterpret_cast<std::uint8_t*>(exact.mutable_data());
   std::int8_t* sd = status.mutable_data();
+  const std::ptrdiff_t n = count(leading);
   {
-    ReleaseGilFor release(count(leading));
-    parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      kernel(in + in_width * b, qd + slots * dof * b, vd + slots * b, ed + slots * b, sd + b, e - b);
+    ReleaseGilFor release(n);
+    parallel_for(n, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+      kernel(in + in_width * b, qd + slots * dof * b, vd + slots * b, ed + slots * b, xd + slots * b, sd + b, e - b);
     });
+    if (!has_exact) std::copy(ed, ed + slots * n, xd);
   }
-  if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));
-  return py::make_tuple(q, valid, exists, status);
+  if (leading.empty()) return py::make_tuple(q, valid, exists, exact, status_object(status.data()[0]));
+  return py::make_tuple(q, valid, exists, exact, status);
 }
 
 // One solution per target: (q (..., dof), status (...)), filled on thread chunks.
@@ -168,7 +189,7 @@ py::object ik_nearest(const ChainIK& ik, py::handle target_obj, py::handle seed_
     const PoseFormat fmt = format;
     return nearest<T>(leading, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(), seed_obj, "T",
                       ik.revolute_columns, [&](const T* in, const T* sd, T* q, std::int8_t* st, std::ptrdiff_t n) {
-                        wrist_nearest_kernel<T>(*ik.wrist, ik.limits, in, fmt, sd, q, st, n);
+                        arm6_nearest_kernel<T>(*ik.arm, ik.limits, in, fmt, sd, q, st, n);
                       });
   });
 }
@@ -181,23 +202,25 @@ py::object ik_position(const ChainIK& ik, py::handle p_obj) {
     using T = decltype(tag);
     const Shape leading = leading_shape(arr, "p", {3});
     auto p = contiguous<T>(arr);
-    return solutions<T>(leading, Position3::kSlots, 3, 3, p.data(), [&](const T* in, auto... out) {
-      position_kernel<T>(*ik.position, ik.limits, in, out...);
-    });
+    return solutions<T>(leading, Position3::kSlots, 3, 3, p.data(), false,
+                        [&](const T* in, T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t*,
+                            std::int8_t* status, std::ptrdiff_t n) {
+                          position_kernel<T>(*ik.position, ik.limits, in, q, valid, exists, status, n);
+                        });
   });
 }
 
 py::object ik_pose(const ChainIK& ik, py::handle T_obj) {
-  if (!ik.wrist)
-    throw py::value_error("ik(T) needs a 6-joint chain with a spherical wrist; this chain has 3 joints (" +
+  if (!ik.arm)
+    throw py::value_error("ik(T) needs a 6-joint chain; this chain has 3 joints (" +
                           ik.kind() + "): use ik_position(p)");
   return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
     const auto [format, leading] = pose_shape(arr, "T");
     auto poses = contiguous<T>(arr);
     const PoseFormat fmt = format;
-    return solutions<T>(leading, SphericalWrist6::kSlots, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(),
-                        [&](const T* in, auto... out) { wrist_kernel<T>(*ik.wrist, ik.limits, in, fmt, out...); });
+    return solutions<T>(leading, Arm6::kSlots, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(), true,
+                        [&](const T* in, auto... out) { arm6_kernel<T>(*ik.arm, ik.limits, in, fmt, out...); });
   });
 }
 
@@ -205,8 +228,11 @@ py::object ik_pose(const ChainIK& ik, py::handle T_obj) {
 
 void bind_chain_ik(py::module_& m) {
   py::class_<ChainIK>(m, "ChainIK")
-      .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"))
+      .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),
+           py::arg("angle_tolerance") = chain_ik::Tolerance::angle, py::arg("distance_tolerance") = -1.0)
       .def_property_readonly("kind", &ChainIK::kind)
+      .def_property_readonly("idealised", &ChainIK::idealised)
+      .def_property_readonly("geometry", &ChainIK::geometry)
       .def_property_readonly("position_kind", &ChainIK::position_kind)
       .def("ik_position", &ik_position, py::arg("p"))
       .def("ik", &ik_pose, py::arg("T"))

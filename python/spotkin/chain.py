@@ -60,6 +60,11 @@ class ChainSolutions(NamedTuple):
     """(..., slots) bool: the solution exists and is within the joint limits."""
     exists: np.ndarray
     """(..., slots) bool: the solution exists, limits aside."""
+    exact: np.ndarray
+    """(..., slots) bool: the solution is exact, its residual on the true chain (max of the position
+    error in m and the rotation error in rad) below 1e-10. It equals ``exists`` except on a chain
+    solved as an idealised family (:meth:`Chain.with_ik_tolerance`), whose solutions are Newton-polished
+    on the true chain: those that only converge to within 1e-6 exist but are not exact."""
     status: np.ndarray
     """(...,) int8 :class:`Status`: OK if any slot is valid, else JOINT_LIMIT (solutions exist, none
     within the limits), UNREACHABLE (no solution: every slot NaN) or INVALID_INPUT (NaN/Inf, or a
@@ -91,7 +96,18 @@ class Chain:
     computed in float64. NaN in ``q`` propagates to NaN in the result.
     """
 
-    __slots__ = ("_base", "_convention", "_core", "_ik", "_joints", "_limits", "_names", "_rows", "_tool")
+    __slots__ = (
+        "_base",
+        "_convention",
+        "_core",
+        "_ik",
+        "_ik_tolerance",
+        "_joints",
+        "_limits",
+        "_names",
+        "_rows",
+        "_tool",
+    )
 
     def __init__(
         self,
@@ -114,6 +130,7 @@ class Chain:
         self._core = _core.Chain(_CONVENTIONS[convention], table, self._base, self._tool)
         self._limits = _limits(limits, table.shape[0])
         self._ik = None
+        self._ik_tolerance = None
 
     @classmethod
     def from_joints(
@@ -159,6 +176,7 @@ class Chain:
             raise ValueError(f"joint_names must have {n} names, got {len(chain._names)}")
         chain._limits = _limits(limits, n)
         chain._ik = None
+        chain._ik_tolerance = None
         return chain
 
     @classmethod
@@ -270,8 +288,48 @@ class Chain:
 
     def _ik_core(self):
         if self._ik is None:
-            self._ik = _core.ChainIK(self._core, *self._limits)
+            angle, distance = self._ik_tolerance or (1e-9, -1.0)
+            self._ik = _core.ChainIK(self._core, *self._limits, angle, distance)
         return self._ik
+
+    def with_ik_tolerance(self, angle: float = 1e-3, distance: float = 1e-3) -> Chain:
+        """This chain, with a looser geometric tolerance for recognising a 6R closed-form family
+        (a calibrated robot whose axes are parallel or meet only nearly).
+
+        ``angle``: axes count as parallel when the sine of their angle is at most this;
+        ``distance`` (m): axes count as meeting when each passes within this of their common point.
+        A chain within the strict tolerances (1e-9, and 1e-9 times the chain's length scale) is
+        solved as before. A chain that fits a family only within these looser ones is solved on its
+        *idealised* chain (the parallel axes set to their mean direction, the meeting axes moved to
+        their common point), and each solution is then polished by Gauss–Newton steps on the true
+        chain: :attr:`ChainSolutions.exact` says which reached a residual below 1e-10 (m and rad);
+        a branch whose residual stays above 1e-6 is dropped. :attr:`ik_idealised` says whether this
+        happens. Returns a new Chain (the same model); the original keeps its tolerances.
+        """
+        angle = as_finite(angle, "angle", 0.0)
+        distance = as_finite(distance, "distance", 0.0)
+        if not angle < 0.1:
+            raise ValueError(f"angle must be below 0.1 (the sine of an angle), got {angle!r}")
+        chain = self.__class__.__new__(self.__class__)
+        for name in self.__slots__:
+            setattr(chain, name, getattr(self, name))
+        chain._ik = None
+        chain._ik_tolerance = (float(angle), float(distance))
+        return chain
+
+    @property
+    def ik_idealised(self) -> bool:
+        """Whether :meth:`ik` solves an idealised family and polishes on the true chain (see
+        :meth:`with_ik_tolerance`)."""
+        return bool(self._ik_core().idealised)
+
+    @property
+    def ik_geometry(self) -> dict:
+        """What the 6R family detection measured: ``wrist_meeting`` and ``shoulder_meeting`` (m, the
+        largest distance of axes 4-5-6, or 1-2-3, from their nearest common point; inf when they are
+        parallel), ``parallel_234`` and ``parallel_123`` (the largest sine of the angle between the
+        first axis of the three and the others). Empty for 3-joint chains."""
+        return dict(self._ik_core().geometry)
 
     @property
     def ik_kind(self) -> str:
@@ -313,17 +371,28 @@ class Chain:
         return ChainSolutions(*self._ik_core().ik_position(p))
 
     def ik(self, T: ArrayLike) -> ChainSolutions:
-        """Every joint solution for a tool pose, for a 6R chain with a spherical wrist.
+        """Every joint solution for a tool pose, for a 6R chain of a closed-form family (:attr:`ik_kind`).
 
         T (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw] in the base frame ->
-        :class:`ChainSolutions` with q (..., 8, 6). The wrist centre (where axes 4, 5 and 6
-        meet, detected to within 1e-9 s when the chain is built) fixes q1..q3 through
-        :meth:`ik_position`'s engine; then q5 solves e3 . B5 Rz(q5) b = w_z (Paul's type 2,
-        two roots), q4 and q6 follow from the remaining rotation. Slot 2 k + b holds the
-        position solution k and the wrist branch b: at most 4 x 2 = 8 solutions (the cap is
-        exact: the position part has at most 4, the wrist at most 2). In a wrist singularity
-        (axes 4 and 6 aligned) q4 is free and set to 0, q6 takes the whole rotation. A rotation
-        part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT.
+        :class:`ChainSolutions` with q (..., 8, 6): at most 8 solutions, slot ``2 k + b``.
+
+        - ``"6R-spherical-wrist"``: the wrist centre (where axes 4, 5 and 6 meet) fixes q1..q3
+          through :meth:`ik_position`'s engine (``k``, at most 4); then q5 solves
+          e3 . B5 Rz(q5) b = w_z (Paul's type 2: ``b`` its root), q4 and q6 follow from the
+          remaining rotation. In a wrist singularity (axes 4 and 6 aligned) q4 is free and set to
+          0, q6 takes the whole rotation.
+        - ``"6R-three-parallel-234"``: R2 R3 R4 is a rotation about the common axis, which leaves
+          two equations in q1 and q5 alone. ``k`` numbers the (q1, q5) pairs: when p56 lies along
+          axis 6 (UR arms, Z1) ``k = 2 i1 + i5`` with ``i1`` the shoulder root of q1 and ``i5`` the
+          wrist root of q5 (``+`` then ``-`` of ``angle(a, b) ± acos``), otherwise the real roots of
+          a quartic in increasing q1. q6 and q2 + q3 + q4 follow, then ``b`` is the elbow root of q3.
+          Where q6 is free (axes 2 and 6 aligned) it is set to 0.
+        - ``"6R-spherical-shoulder"``: the reversed chain has a spherical wrist; ``k`` numbers the
+          position solutions of joints 6, 5, 4 and ``b`` the root of q2.
+
+        Angles are in [-pi, pi], or shifted by 2 pi where that brings them into the limits. A rotation
+        part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT. The
+        derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
         return ChainSolutions(*self._ik_core().ik(T))
 

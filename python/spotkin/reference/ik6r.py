@@ -301,7 +301,9 @@ def sp6(A1: np.ndarray, A2: np.ndarray, e: np.ndarray) -> list[tuple[int, float,
         raise ValueError("degenerate geometry: the second angle does not enter the equations")
     if s[1] > 1e-2 * s[0]:  # rank 2; below, rank 1 (exactly or nearly: the idealised structure)
         return [(k, t1, t2) for k, (t1, t2) in enumerate(_sp6_quartic(A1, A2, e))]
-    n, m = U[:, 1], U[:, 0]  # left null vector of A2 and its range direction
+    # left null vector of A2 and its range direction, signed with their largest component positive
+    # (so that the root order does not depend on the SVD's signs)
+    n, m = (v if v[np.argmax(np.abs(v))] > 0 else -v for v in (U[:, 1], U[:, 0]))
     out = []
     na = n @ A1
     for i1, t1 in enumerate(solve_trig(na[0], na[1], float(n @ e))):
@@ -486,11 +488,26 @@ def _solve_234(chain: Chain6, G: np.ndarray) -> list[tuple[int, np.ndarray]]:
     out = []
     for k, q1, q5 in sp6(A1, A2, e):
         R1, R5 = rot(h[0], q1), rot(h[4], q5)
-        q6 = sp1(R.T @ R1 @ h2, R5.T @ h2, h[5])
-        R6 = rot(h[5], q6)
-        theta = angle_about(h2, R1.T @ R @ R6.T @ R5.T)
+        a, b = R.T @ R1 @ h2, R5.T @ h2
+        free6 = math.hypot(a @ b - (h[5] @ a) * (h[5] @ b), h[5] @ np.cross(a, b)) <= 1e-15
+        q6 = 0.0 if free6 else sp1(a, b, h[5])
+        theta = angle_about(h2, R1.T @ R @ rot(h[5], q6).T @ R5.T)
+        A, B = R1.T @ (t - R @ p6T - p01) - p12, p45 + R5 @ p56
+        if free6:
+            # wrist singularity (R_5 h6 = ±h2): only theta ∓ q6 is fixed; take theta with |w|² in the
+            # middle of the elbow's range |p23 + R_3 p34|² (or the nearest), then q6 = σ (theta0 − theta)
+            const3 = trig_coefficients(p23, h[2], p34)[0]
+            mid = p23 @ p23 + p34 @ p34 + 2 * const3
+            c, a_, b_ = trig_coefficients(A, h2, B)
+            r = math.hypot(a_, b_)
+            theta0 = theta
+            if r > 0:
+                ratio = max(-1.0, min(1.0, ((A @ A + B @ B - mid) / 2 - c) / r))
+                theta = math.atan2(b_, a_) + math.acos(ratio)
+            sigma = 1.0 if h2 @ (R5 @ h[5]) >= 0 else -1.0
+            q6 = sigma * (theta0 - theta)
         R234 = rot(h2, theta)
-        w = R1.T @ (t - R @ p6T - p01) - p12 - R234 @ (p45 + R5 @ p56)
+        w = A - R234 @ B
         for b, q3 in enumerate(sp3(p34, -p23, h[2], float(np.linalg.norm(w)))):
             R3 = rot(h[2], q3)
             q2 = sp1(p23 + R3 @ p34, w, h2)
@@ -647,9 +664,10 @@ def solve(
     ideal = idealise(chain, family)
     G = T @ np.linalg.inv(chain.tool)
     for slot, solution in _solve_family(ideal, G, family):
-        if polish:
-            solution = newton_polish(chain, solution, T)
         r = residual(chain, solution, T)
+        if polish or r > 1e-12:  # near a double root acos loses half the digits: Newton steps
+            solution = newton_polish(chain, solution, T)
+            r = residual(chain, solution, T)
         if not r < 1e-6:  # an idealised branch that does not exist on the true chain
             continue
         q[slot], valid[slot] = wrap_into(solution, lower, upper)

@@ -1,0 +1,272 @@
+// Closed-form IK of 6R chains by family: the spherical wrist (SphericalWrist6 on
+// the chain itself, the fast path), three parallel axes 2-3-4 (Parallel234), and the
+// spherical shoulder (SphericalWrist6 on the reversed chain). A chain that fits a
+// family only to within the caller's tolerances (a calibrated robot) is solved on
+// its idealised chain, then every solution is polished by Newton steps on the true
+// chain; only a residual below 1e-10 counts as exact.
+#pragma once
+
+#include <optional>
+#include <sstream>
+
+#include "spotkin/chain_ik/batch.hpp"
+#include "spotkin/chain_ik/parallel.hpp"
+
+namespace spotkin::chain_ik {
+
+// Geometric tolerances of the family detection: axes count as parallel when the sine
+// of their angle is <= angle, and as meeting when each passes within distance (m) of
+// their common point. The strict tolerances (1e-9, 1e-9 s) are what counts as exact.
+struct FamilyTolerance {
+  double angle = Tolerance::angle;
+  double distance = -1.0;  // negative: Tolerance::wrist * the chain's length scale
+};
+
+class Arm6 {
+ public:
+  static constexpr int kSlots = 8;
+  static constexpr double kExact = 1e-10;   // residual (m and rad) of an exact solution
+  static constexpr double kAccept = 1e-6;   // residual beyond which a polished branch is dropped
+
+  static Arm6 make(const Chain<double>& chain, double scale, FamilyTolerance tolerance) {
+    if (chain.dof() != 6)
+      throw std::invalid_argument("a 6R closed form needs 6 joints, got " + std::to_string(chain.dof()));
+    for (int j = 0; j < 6; ++j)
+      if (chain.joints()[std::size_t(j)].type != JointType::Revolute)
+        throw std::invalid_argument("no closed form: joint " + std::to_string(j + 1) +
+                                    " is prismatic; the 6R families need revolute joints");
+    const double strict_distance = Tolerance::wrist * scale;
+    if (!(tolerance.distance >= 0.0)) tolerance.distance = strict_distance;
+    tolerance.angle = std::max(tolerance.angle, Tolerance::angle);
+    tolerance.distance = std::max(tolerance.distance, strict_distance);
+    const Poe poe = poe_of(chain);
+    const Geometry6 geometry(poe);
+    Arm6 arm(chain);
+    arm.geometry_ = geometry;
+    // the order of the checks: spherical wrist, parallel 2-3-4, spherical shoulder
+    struct Check {
+      Family6 family;
+      double deviation, strict, tolerance;
+    };
+    const Check checks[] = {
+        {Family6::SphericalWrist, geometry.wrist, strict_distance, tolerance.distance},
+        {Family6::Parallel234, geometry.parallel234, Tolerance::angle, tolerance.angle},
+        {Family6::SphericalShoulder, geometry.shoulder, strict_distance, tolerance.distance},
+    };
+    const Check* chosen = nullptr;
+    for (const auto& check : checks)
+      if (check.deviation <= check.strict) {
+        chosen = &check;
+        break;
+      }
+    if (!chosen)
+      for (const auto& check : checks)
+        if (check.deviation <= check.tolerance) {
+          chosen = &check;
+          break;
+        }
+    if (!chosen) {
+      std::ostringstream message;
+      message.precision(3);
+      message << "no closed-form 6R family fits this chain: checked axes 4-5-6 meeting (off by " << geometry.wrist
+              << " m), axes 2-3-4 parallel (sin angle " << geometry.parallel234 << "), axes 1-2-3 meeting ("
+              << geometry.shoulder << " m), against tolerances of " << tolerance.angle << " (angle) and "
+              << tolerance.distance << " m; axes 1-2-3 parallel (sin angle " << geometry.parallel123
+              << ") has no closed form here yet. Use Chain.ik_differential, or a looser ik tolerance for a "
+                 "calibrated robot";
+      throw std::invalid_argument(message.str());
+    }
+    arm.family_ = chosen->family;
+    arm.idealised_ = chosen->deviation > chosen->strict;
+    const Poe ideal = arm.idealised_ ? idealise(poe, arm.family_, geometry) : poe;
+    arm.M_ = poe.M;
+    switch (arm.family_) {
+      case Family6::SphericalWrist:
+        arm.wrist_.emplace(SphericalWrist6::make(arm.idealised_ ? chain_of(ideal) : chain, scale));
+        break;
+      case Family6::Parallel234: {
+        arm.parallel_.emplace(ideal, std::max(tolerance.angle, 1e-9));
+        // a rank-1 form taken for an A2 of rank 2 within the tolerance is an idealisation too
+        arm.idealised_ = arm.idealised_ || (arm.parallel_->rank1() && arm.parallel_->rank_ratio() > 1e-9);
+        break;
+      }
+      case Family6::SphericalShoulder: {
+        const Chain<double> reversed_chain = chain_of(chain_ik::reversed(ideal));
+        arm.wrist_.emplace(SphericalWrist6::make(reversed_chain, reversed_chain.length_scale()));
+        arm.reversed_ = true;
+        break;
+      }
+    }
+    return arm;
+  }
+
+  Family6 family() const noexcept { return family_; }
+  bool idealised() const noexcept { return idealised_; }
+  bool reversed() const noexcept { return reversed_; }
+  // The spherical wrist of the chain itself, solved by the lane kernel (wrist_block).
+  bool direct_wrist() const noexcept { return family_ == Family6::SphericalWrist && !idealised_; }
+  const SphericalWrist6& wrist() const noexcept { return *wrist_; }
+  const Geometry6& geometry() const noexcept { return geometry_; }
+  std::string kind() const { return family_name(family_); }
+  std::string position_kind() const { return wrist_ ? wrist_->position().name() : "parallel-234"; }
+
+  // Every solution of one target pose as (cos, sin) per joint, in this chain's joint
+  // order (not for direct_wrist chains, which go by lanes); refine[slot]: the slot is near
+  // a double root and needs Newton steps (see Parallel234::solve).
+  SPOTKIN_INLINE void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots],
+                            bool refine[kSlots]) const noexcept {
+    for (int k = 0; k < kSlots; ++k) refine[k] = false;
+    if (parallel_) {
+      M3 R;
+      V3 t;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) R(r, c) = target.R[r][c];
+        t[r] = target.p[r];
+      }
+      const Rigid<double>& M_inv = parallel_->M_inv();  // G = T M^-1
+      parallel_->solve(R * M_inv.R, R * M_inv.p + t, q, exists, refine);
+      return;
+    }
+    if (!reversed_) {
+      wrist_->solve(target, q, exists);
+      return;
+    }
+    // G^-1 = M T^-1: the reversed chain's target; its joint i is joint 5 - i, negated
+    Rigid<double> T;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) T.R(r, c) = target.R[r][c];
+      T.p[r] = target.p[r];
+    }
+    const Rigid<double> inner = M_ * inverse_rigid(T);
+    Arm::Pose pose;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) pose.R[r][c] = inner.R(r, c);
+      pose.p[r] = inner.p[r];
+    }
+    JointValue x[kSlots][6];
+    wrist_->solve(pose, x, exists);
+    for (int k = 0; k < kSlots; ++k)
+      for (int j = 0; j < 6; ++j) q[k][j] = JointValue{x[k][5 - j].c, -x[k][5 - j].s, 0.0};
+  }
+
+  // Newton steps on the true chain from q (6 angles) towards target; the residual.
+  double polish(const Arm::Pose& target, double* q) const noexcept {
+    Rigid<double> T;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) T.R(r, c) = target.R[r][c];
+      T.p[r] = target.p[r];
+    }
+    return newton_polish(chain_, q, T);
+  }
+
+ private:
+  explicit Arm6(const Chain<double>& chain) : chain_(chain), geometry_(Poe{}) {}
+
+  Chain<double> chain_;  // the true chain
+  Geometry6 geometry_;
+  Family6 family_ = Family6::SphericalWrist;
+  bool idealised_ = false, reversed_ = false;
+  Rigid<double> M_;
+  std::optional<SphericalWrist6> wrist_;
+  std::optional<Parallel234> parallel_;
+};
+
+// A finished block of 6R solutions plus exact[k][i] (1: residual below 1e-10).
+struct Arm6Block : WristBlock {
+  double exact[Arm6::kSlots][SphericalWrist6::kLanes];
+};
+
+template <PoseFormat Format>
+SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
+                                      const double (*pose_in)[SphericalWrist6::kLanes], int m,
+                                      Arm6Block& out) noexcept {
+  constexpr int L = SphericalWrist6::kLanes, S = Arm6::kSlots;
+  if (solver.direct_wrist()) {
+    wrist_block<Format>(solver.wrist(), limits, pose_in, m, out);
+    for (int k = 0; k < S; ++k)
+      for (int i = 0; i < L; ++i) out.exact[k][i] = out.exists[k][i];
+    return;
+  }
+  constexpr int width = Format == PoseFormat::Matrix ? 16 : 7;
+  double c[S][6][L], s[S][6][L];
+  bool refine_slot[S][L] = {};
+  Arm::Pose targets[L];
+  for (int i = 0; i < L; ++i) {
+    if (i >= m) {  // unused lanes: any finite value
+      for (int k = 0; k < S; ++k)
+        for (int j = 0; j < 6; ++j) c[k][j][i] = 1.0, s[k][j][i] = 0.0;
+      continue;
+    }
+    double in[width];
+    for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
+    out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
+    JointValue q[S][6];
+    bool ok[S] = {}, refine[S] = {};
+    if (out.input_ok[i] != 0.0) solver.solve(targets[i], q, ok, refine);
+    for (int k = 0; k < S; ++k) {
+      refine_slot[k][i] = refine[k];
+      out.exists[k][i] = ok[k] ? 1.0 : 0.0;
+      for (int j = 0; j < 6; ++j) c[k][j][i] = ok[k] ? q[k][j].c : 1.0, s[k][j][i] = ok[k] ? q[k][j].s : 0.0;
+    }
+  }
+  for (int k = 0; k < S; ++k)
+    for (int j = 0; j < 6; ++j)
+      for (int i = 0; i < L; ++i) out.angle[k][j][i] = vector_math::atan2(s[k][j][i], c[k][j][i]);
+  for (int k = 0; k < S; ++k)
+    for (int i = 0; i < L; ++i) out.exact[k][i] = 1.0;
+  // Newton on the true chain for an idealised chain (a branch that does not converge there is
+  // dropped) and for slots near a double root
+  const bool idealised = solver.idealised();
+  for (int i = 0; i < m; ++i)
+      for (int k = 0; k < S; ++k) {
+        if (out.exists[k][i] == 0.0 || !(idealised || refine_slot[k][i])) continue;
+        double q[6];
+        for (int j = 0; j < 6; ++j) q[j] = out.angle[k][j][i];
+        const double residual = solver.polish(targets[i], q);
+        out.exists[k][i] = residual <= Arm6::kAccept ? 1.0 : 0.0;
+        out.exact[k][i] = residual < Arm6::kExact ? 1.0 : 0.0;
+        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = std::remainder(q[j], 2.0 * kPi<double>);
+      }
+  finish_lanes<false>(limits, m, out.input_ok, out.angle, out.exists, out.valid);
+  for (int k = 0; k < S; ++k)
+    for (int i = 0; i < m; ++i) out.exact[k][i] *= out.exists[k][i];
+  lane_status(m, out.input_ok, out.exists, out.valid, out.status);
+}
+
+template <PoseFormat Format, typename T, typename Store>
+SPOTKIN_INLINE void arm6_blocks(const Arm6& solver, const Limits& limits, const T* poses, std::ptrdiff_t count,
+                                Store&& store) noexcept {
+  constexpr int L = SphericalWrist6::kLanes, width = Format == PoseFormat::Matrix ? 16 : 7;
+  Arm6Block block;
+  double pose_in[width][L];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, count - b0));
+    for (int i = 0; i < m; ++i)
+      for (int e = 0; e < width; ++e) pose_in[e][i] = double(poses[width * (b0 + i) + e]);
+    arm6_block<Format>(solver, limits, pose_in, m, block);
+    for (int i = 0; i < m; ++i) store(block, i, b0 + i);
+  }
+}
+
+// Every solution: q (count, 8, 6), valid, exists and exact (count, 8), status (count).
+template <PoseFormat Format, typename T>
+SPOTKIN_INLINE void ik_arm6(const Arm6& solver, const Limits& limits, const T* poses, T* q, std::uint8_t* valid,
+                            std::uint8_t* exists, std::uint8_t* exact, std::int8_t* status,
+                            std::ptrdiff_t count) noexcept {
+  constexpr int S = Arm6::kSlots, W = S * 6;
+  arm6_blocks<Format>(solver, limits, poses, count, [&](const Arm6Block& block, int i, std::ptrdiff_t at) {
+    store_lane(block, i, q + W * at, valid + S * at, exists + S * at, status + at);
+    for (int k = 0; k < S; ++k) exact[S * at + k] = block.exact[k][i] != 0.0;
+  });
+}
+
+// One solution per pose (store_nearest): q (count, 6), status (count); seed (count, 6) or null.
+template <PoseFormat Format, typename T>
+SPOTKIN_INLINE void ik_arm6_nearest(const Arm6& solver, const Limits& limits, const T* poses, const T* seed, T* q,
+                                    std::int8_t* status, std::ptrdiff_t count) noexcept {
+  arm6_blocks<Format>(solver, limits, poses, count, [&](const Arm6Block& block, int i, std::ptrdiff_t at) {
+    store_nearest(block, i, limits, seed ? seed + 6 * at : nullptr, q + 6 * at, status + at);
+  });
+}
+
+}  // namespace spotkin::chain_ik

@@ -1,0 +1,253 @@
+// Closed-form IK of 6R chains whose axes 2, 3 and 4 are parallel (UR3/5/10,
+// Unitree Z1), in the POE form of poe.hpp; ported from
+// python/spotkin/reference/ik6r.py (_solve_234), equation labels as there.
+//
+// R_2 R_3 R_4 = Rot(h2, theta234) keeps h2^T x, so with G = T M^-1 = (R, t):
+//   (P1)  h2^T R_1^T R h6 = h2^T R_5 h6
+//   (P2)  h2^T R_1^T (t - R p6T - p01) - h2^T (p12 + p23 + p34 + p45) = h2^T R_5 p56
+// two equations in q1 and q5 alone: A1 x1 + A2 x5 = e with x = (cos, sin) (SP6).
+// A2 depends on the chain only. When it has rank 1 (p56 along h6, as on UR arms)
+// its left null vector n gives n^T A1 x1 = n^T e (two q1), then its range m gives
+// m^T A2 x5 = m^T (e - A1 x1) (two q5 per q1); with rank 2, |A2^-1 (e - A1 x1)| = 1
+// is a quartic in tan(q1 / 2). Then per (q1, q5): q6 by SP1 from
+// Rot(h6, q6) R^T R_1 h2 = R_5^T h2, theta234 from Rot(h2, theta234) = R_1^T R R_6^T R_5^T,
+//   w = R_1^T (t - R p6T - p01) - p12 - Rot(h2, theta234) (p45 + R_5 p56) = R_2 (p23 + R_3 p34),
+// q3 by SP3 (|p23 + R_3 p34| = |w|, the elbow), q2 by SP1 and q4 = s4 (theta234 - q2 - s3 q3),
+// s_j = sign(h_j . h2).
+// Slots 2 k + b: k numbers the (q1, q5) pairs (rank 1: k = 2 i1 + i5 with i1 the
+// root of q1, "+" then "-", and i5 that of q5; rank 2: increasing q1), b the elbow root.
+#pragma once
+
+#include <Eigen/SVD>
+
+#include "spotkin/chain_ik/poe.hpp"
+
+namespace spotkin::chain_ik {
+
+class Parallel234 {
+ public:
+  static constexpr int kSlots = 8;
+  static constexpr double kTangent = 1e-9;  // |C / hypot(A, B)| up to 1 + kTangent: a (double) root
+
+  // poe: 6 joints with h2, h3, h4 exactly parallel (the idealised chain).
+  // rank_tolerance: s2 / s1 of A2 at or below which the rank-1 form is used.
+  explicit Parallel234(const Poe& poe, double rank_tolerance) {
+    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
+    p01_ = poe.p[0];
+    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
+    p6T_ = -poe.p[5];
+    M_inv_ = inverse_rigid(poe.M);
+    const V3 &h1 = h_[0], &h2 = h_[1];
+    s3_ = h_[2].dot(h2) >= 0.0 ? 1.0 : -1.0;
+    s4_ = h_[3].dot(h2) >= 0.0 ? 1.0 : -1.0;
+    h2_perp_ = h2 - h1 * h1.dot(h2);
+    h1_x_h2_ = h1.cross(h2);
+    h12_ = h1.dot(h2);
+    // q5 side of (P1), (P2): h2^T R_5 x = const + a cos q5 + b sin q5, x = h6, p56
+    double c5a, a5a, b5a, c5b, a5b, b5b;
+    trig(h2, h_[4], h_[5], c5a, a5a, b5a);
+    trig(h2, h_[4], d_[4], c5b, a5b, b5b);
+    A2_ << -a5a, -b5a, -a5b, -b5b;
+    e_const_ << c5a, c5b + h2.dot(d_[0] + d_[1] + d_[2] + d_[3]);
+    Eigen::JacobiSVD<Eigen::Matrix2d> svd(A2_, Eigen::ComputeFullU);
+    const Eigen::Vector2d sv = svd.singularValues();
+    if (!(sv[0] > 0.0)) throw std::invalid_argument("degenerate geometry: q5 does not enter the equations");
+    rank_ratio_ = sv[1] / sv[0];
+    rank1_ = rank_ratio_ <= rank_tolerance;
+    // signs fixed (the largest component positive) so that the root order does not depend on the SVD
+    auto oriented = [](Eigen::Vector2d x) {
+      return Eigen::Vector2d((std::fabs(x[0]) >= std::fabs(x[1]) ? x[0] : x[1]) < 0.0 ? -x : x);
+    };
+    n_ = oriented(svd.matrixU().col(1)), m_ = oriented(svd.matrixU().col(0));
+    ma_ = m_.transpose() * A2_;
+    if (!rank1_) A2_inv_ = A2_.inverse();
+    // SP3 for q3: |Rot(h3, q3) p34 + p23| = |w| <=> (-p23)^T Rot(h3, q3) p34 = (|p34|^2 + |p23|^2 - |w|^2) / 2,
+    // written as the reference does (the sign fixes which root is b = 0)
+    trig(-d_[1], h_[2], d_[2], c3_, a3_, b3_);
+    base3_ = d_[2].squaredNorm() + d_[1].squaredNorm();
+    // a unit vector normal to h2, for theta234
+    V3 v = h2.cross(V3::UnitX());
+    if (v.norm() < 0.5) v = h2.cross(V3::UnitY());
+    v2_ = v.normalized();
+  }
+
+  bool rank1() const noexcept { return rank1_; }
+  double rank_ratio() const noexcept { return rank_ratio_; }
+  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
+
+  // Every solution for G = T M^-1 (R, t): q[slot] = (cos, sin) of the 6 angles.
+  // refine[slot]: a root of q1, q5 or q3 is within 1e-8 of a double root (|ratio| near 1), where
+  // acos loses half the digits: the caller refines that slot by Newton steps.
+  SPOTKIN_INLINE void solve(const M3& R, const V3& t, JointValue q[kSlots][6], bool exists[kSlots],
+                            bool refine[kSlots]) const noexcept {
+    for (int k = 0; k < kSlots; ++k) exists[k] = false, refine[k] = false;
+    const V3 &h2 = h_[1];
+    const V3 Rh6 = R * h_[5], tt = t - R * p6T_ - p01_;
+    // (P1), (P2), q1 side: trig(x, h1, h2) = (x.h1) h12, x.h2perp, x.(h1 x h2)
+    Eigen::Matrix2d A1;
+    A1 << Rh6.dot(h2_perp_), Rh6.dot(h1_x_h2_), tt.dot(h2_perp_), tt.dot(h1_x_h2_);
+    const Eigen::Vector2d e(e_const_[0] - Rh6.dot(h_[0]) * h12_, e_const_[1] - tt.dot(h_[0]) * h12_);
+    JointValue pair[4][2];  // (q1, q5)
+    bool found[4] = {}, near[4] = {};
+    if (rank1_) {
+      const Eigen::RowVector2d na = n_.transpose() * A1;
+      for (int i1 = 0; i1 < 2; ++i1) {
+        JointValue x1;
+        bool near1 = false;
+        if (!root(na[0], na[1], n_.dot(e), i1 == 0 ? 1.0 : -1.0, x1, false, &near1)) continue;
+        const double rhs = m_.dot(e - A1 * Eigen::Vector2d(x1.c, x1.s));
+        for (int i5 = 0; i5 < 2; ++i5) {
+          JointValue x5;
+          bool near5 = false;
+          if (!root(ma_[0], ma_[1], rhs, i5 == 0 ? 1.0 : -1.0, x5, false, &near5)) continue;
+          pair[2 * i1 + i5][0] = x1, pair[2 * i1 + i5][1] = x5, found[2 * i1 + i5] = true;
+          near[2 * i1 + i5] = near1 || near5;
+        }
+      }
+    } else {
+      quartic_pairs(A1, e, pair, found);
+    }
+    for (int k = 0; k < 4; ++k) {
+      if (!found[k]) continue;
+      const JointValue x1 = pair[k][0], x5 = pair[k][1];
+      // q6: Rot(h6, q6) R^T R_1 h2 = R_5^T h2 (SP1; free, 0, when both lie along h6)
+      const V3 a = R.transpose() * rotate(h_[0], x1.c, x1.s, h2), b = rotate(h_[4], x5.c, -x5.s, h2);
+      bool free6 = false;
+      JointValue x6 = sp1(a, b, h_[5], &free6);
+      // theta234: Rot(h2, theta) v = R_1^T R R_6^T R_5^T v
+      const V3 y = rotate(h_[0], x1.c, -x1.s, R * rotate(h_[5], x6.c, -x6.s, rotate(h_[4], x5.c, -x5.s, v2_)));
+      JointValue theta = sp1(v2_, y, h2);
+      const V3 A = rotate(h_[0], x1.c, -x1.s, tt) - d_[0], B = d_[3] + rotate(h_[4], x5.c, x5.s, d_[4]);
+      if (free6) {
+        // Wrist singularity (R_5 h6 = +-h2): only theta -+ q6 is fixed by the rotation, and
+        // w = A - Rot(h2, theta) B. Take theta with |w|^2 at the middle of the elbow's range,
+        // |p23|^2 + |p34|^2 + 2 c (c: the constant of p23^T Rot(h3, q3) p34), or the nearest.
+        double c, ta, tb;
+        trig(A, h2, B, c, ta, tb);
+        const JointValue theta0 = theta;
+        root(ta, tb, 0.5 * (A.squaredNorm() + B.squaredNorm() - (base3_ - 2.0 * c3_)) - c, 1.0, theta, true);
+        // q6 = sigma (theta0 - theta), sigma = sign(h2 . R_5 h6)
+        const double sigma = h2.dot(rotate(h_[4], x5.c, x5.s, h_[5])) >= 0.0 ? 1.0 : -1.0;
+        x6 = JointValue{theta0.c * theta.c + theta0.s * theta.s, sigma * (theta0.s * theta.c - theta0.c * theta.s), 0.0};
+      }
+      const V3 w = A - rotate(h2, theta.c, theta.s, B);
+      const double rhs3 = 0.5 * (base3_ - w.squaredNorm()) - c3_;
+      for (int b3 = 0; b3 < 2; ++b3) {
+        JointValue x3;
+        bool near3 = false;
+        if (!root(a3_, b3_, rhs3, b3 == 0 ? 1.0 : -1.0, x3, false, &near3)) continue;
+        const V3 u = d_[1] + rotate(h_[2], x3.c, x3.s, d_[2]);
+        const JointValue x2 = sp1(u, w, h2);
+        // q4 = s4 (theta - q2 - s3 q3), as unit complex numbers
+        const double c23 = x2.c * x3.c - s3_ * x2.s * x3.s, s23 = x2.s * x3.c + s3_ * x2.c * x3.s;
+        const double c4 = theta.c * c23 + theta.s * s23, s4 = theta.s * c23 - theta.c * s23;
+        const int slot = 2 * k + b3;
+        q[slot][0] = x1, q[slot][1] = x2, q[slot][2] = x3;
+        q[slot][3] = JointValue{c4, s4_ * s4, 0.0}, q[slot][4] = x5, q[slot][5] = x6;
+        exists[slot] = true;
+        refine[slot] = near[k] || near3 || free6;
+      }
+    }
+  }
+
+ private:
+  // h^T Rot(k, q) p = c + a cos q + b sin q
+  static void trig(const V3& h, const V3& k, const V3& p, double& c, double& a, double& b) {
+    const double along = k.dot(p);
+    c = h.dot(k) * along, a = h.dot(p - k * along), b = h.dot(k.cross(p));
+  }
+
+  // One root of a cos x + b sin x = rhs: angle(a, b) + sign acos(rhs / hypot(a, b)) (SP4);
+  // false if |rhs| / hypot > 1 + kTangent.
+  // clamp: take the nearest extreme when there is no root (returns true).
+  static SPOTKIN_INLINE bool root(double a, double b, double rhs, double sign, JointValue& x,
+                                  bool clamp = false, bool* near_double = nullptr) noexcept {
+    const double r2 = a * a + b * b;
+    if (!(r2 > 0.0)) return false;
+    const double inv = 1.0 / std::sqrt(r2), ratio = rhs * inv;
+    if (near_double) *near_double = std::fabs(ratio) > 1.0 - 1e-8;
+    if (!(std::fabs(ratio) <= 1.0 + kTangent) && !(clamp && std::isfinite(ratio))) return false;
+    const double c = std::min(1.0, std::max(-1.0, ratio)), k = sign * std::sqrt((1.0 - c) * (1.0 + c));
+    const double ca = a * inv, sa = b * inv;
+    x = JointValue{ca * c - sa * k, sa * c + ca * k, 0.0};
+    return true;
+  }
+
+  // (cos, sin) of the angle turning p to q about unit k (SP1); (1, 0) when free (p or q along k).
+  static SPOTKIN_INLINE JointValue sp1(const V3& p, const V3& q, const V3& k, bool* free = nullptr) noexcept {
+    const double c = p.dot(q) - k.dot(p) * k.dot(q), s = k.dot(p.cross(q));
+    const double r2 = c * c + s * s;
+    if (free) *free = !(r2 > 1e-30);
+    if (!(r2 > 1e-30)) return joint_zero();
+    const double inv = 1.0 / std::sqrt(r2);
+    return JointValue{c * inv, s * inv, 0.0};
+  }
+
+  // Rank 2: x5 = u - V x1 (V = A2^-1 A1, u = A2^-1 e) and |x5|^2 = 1, i.e.
+  //   f(t) = k0 + k1 cos t + k2 sin t + k3 cos 2t + k4 sin 2t = 0,
+  // times (1 + x^2)^2 with x = tan((t - phi) / 2) a real quartic whose leading
+  // coefficient is f(phi + pi) (phi the best of five samples). Real roots get Newton
+  // steps on f; pairs in increasing q1.
+  void quartic_pairs(const Eigen::Matrix2d& A1, const Eigen::Vector2d& e, JointValue pair[4][2],
+                     bool found[4]) const noexcept {
+    const Eigen::Matrix2d V = A2_inv_ * A1;
+    const Eigen::Vector2d u = A2_inv_ * e;
+    const Eigen::Matrix2d W = V.transpose() * V;
+    const Eigen::Vector2d g = V.transpose() * u;
+    const double k0 = u.squaredNorm() - 1.0 + 0.5 * (W(0, 0) + W(1, 1)), k1 = -2.0 * g[0], k2 = -2.0 * g[1],
+                 k3 = 0.5 * (W(0, 0) - W(1, 1)), k4 = W(0, 1);
+    auto f = [&](double t) {
+      return k0 + k1 * std::cos(t) + k2 * std::sin(t) + k3 * std::cos(2 * t) + k4 * std::sin(2 * t);
+    };
+    auto df = [&](double t) {
+      return -k1 * std::sin(t) + k2 * std::cos(t) - 2 * k3 * std::sin(2 * t) + 2 * k4 * std::cos(2 * t);
+    };
+    double phi = 0.0, best = -1.0;
+    for (int j = 0; j < 5; ++j) {
+      const double candidate = 2.0 * kPi<double> * j / 5.0, value = std::fabs(f(candidate + kPi<double>));
+      if (value > best) best = value, phi = candidate;
+    }
+    const double cp = std::cos(phi), sp = std::sin(phi), c2p = std::cos(2 * phi), s2p = std::sin(2 * phi);
+    const double k1p = k1 * cp + k2 * sp, k2p = k2 * cp - k1 * sp, k3p = k3 * c2p + k4 * s2p, k4p = k4 * c2p - k3 * s2p;
+    const double a[5] = {k0 + k1p + k3p, 2 * k2p + 4 * k4p, 2 * k0 - 6 * k3p, 2 * k2p - 4 * k4p, k0 - k1p + k3p};
+    const double scale = std::max({std::fabs(k0), std::fabs(k1), std::fabs(k2), std::fabs(k3), std::fabs(k4), 1.0});
+    detail::Complex roots[4];
+    const int count = detail::polynomial_roots(a, 4, roots);
+    double t_found[4];
+    int n = 0;
+    for (int r = 0; r < count; ++r) {
+      const double x = roots[r].real();
+      if (std::fabs(roots[r].imag()) > Tolerance::root * std::max(1.0, std::fabs(x))) continue;
+      double t = phi + 2.0 * std::atan(x);
+      for (int it = 0; it < 8; ++it) {
+        const double slope = df(t);
+        if (slope == 0.0) break;
+        t -= f(t) / slope;
+      }
+      if (!(std::fabs(f(t)) <= 1e-10 * scale)) continue;
+      t = std::remainder(t, 2.0 * kPi<double>);
+      bool duplicate = false;
+      for (int o = 0; o < n; ++o) duplicate |= std::fabs(std::remainder(t - t_found[o], 2.0 * kPi<double>)) < 1e-9;
+      if (!duplicate) t_found[n++] = t;
+    }
+    std::sort(t_found, t_found + n);
+    for (int k = 0; k < n; ++k) {
+      const double c1 = std::cos(t_found[k]), s1 = std::sin(t_found[k]);
+      const Eigen::Vector2d x5 = u - V * Eigen::Vector2d(c1, s1);
+      const double norm = x5.norm();
+      pair[k][0] = JointValue{c1, s1, 0.0};
+      pair[k][1] = norm > 0.0 ? JointValue{x5[0] / norm, x5[1] / norm, 0.0} : joint_zero();
+      found[k] = true;
+    }
+  }
+
+  V3 h_[6], d_[5], p01_, p6T_, h2_perp_, h1_x_h2_, v2_;
+  double h12_ = 0.0, s3_ = 1.0, s4_ = 1.0, a3_ = 0.0, b3_ = 0.0, c3_ = 0.0, base3_ = 0.0, rank_ratio_ = 0.0;
+  bool rank1_ = true;
+  Eigen::Matrix2d A2_, A2_inv_ = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d e_const_, n_, m_;
+  Eigen::RowVector2d ma_;
+  Rigid<double> M_inv_;
+};
+
+}  // namespace spotkin::chain_ik
