@@ -1360,11 +1360,13 @@ def nan_rule_rank(x, out, kw, ctx, spec):
 
 
 def solution_check(fk, target_of, limits, fallback_ok=False):
-    """ik_all-style (q (S, n), valid, exists, status): q finite exactly where it exists, fk(q) on
-    target, valid = exists and within limits, status consistent."""
+    """ik_all-style (q (S, n), valid, exists[, exact], status): q finite exactly where it exists,
+    fk(q) on target, valid = exists and within limits, exact only where it exists, status consistent."""
 
     def check(x, out, kw, ctx):
-        q, valid, exists, status = out
+        q, valid, exists, status = out[0], out[1], out[2], out[-1]
+        if len(out) == 5 and np.any(np.asarray(out[3]) & ~np.asarray(exists)):
+            return f"exact {out[3]} where no solution exists {exists}"
         status = int(status)
         target = target_of(x)
         tol = tol_for(*x.values())

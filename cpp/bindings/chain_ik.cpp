@@ -34,6 +34,7 @@ struct ChainIK {
       const auto& g = arm->geometry();
       out["wrist_meeting"] = g.wrist, out["shoulder_meeting"] = g.shoulder;
       out["parallel_234"] = g.parallel234, out["parallel_123"] = g.parallel123;
+      out["axes_5_6_gap"] = g.gap56, out["axes_4_5_gap"] = g.gap45;
     }
     return out;
   }

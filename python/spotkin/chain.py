@@ -328,7 +328,9 @@ class Chain:
         """What the 6R family detection measured: ``wrist_meeting`` and ``shoulder_meeting`` (m, the
         largest distance of axes 4-5-6, or 1-2-3, from their nearest common point; inf when they are
         parallel), ``parallel_234`` and ``parallel_123`` (the largest sine of the angle between the
-        first axis of the three and the others). Empty for 3-joint chains."""
+        first axis of the three and the others), ``axes_5_6_gap`` and ``axes_4_5_gap`` (m, the
+        distance between those two axes, 0 when parallel: where it is 0 the parallel families' pair
+        of equations has rank 1, as on UR arms and the Z1). Empty for 3-joint chains."""
         return dict(self._ik_core().geometry)
 
     @property
@@ -338,11 +340,17 @@ class Chain:
         3 joints: ``"3R-parallel"`` (two consecutive axes parallel: a degree-2 equation),
         ``"3R-intersecting"`` (two consecutive axes intersect: degree 2), ``"3R-general-quartic"``
         (both pairs skew: Pieper's quartic), or the joint pattern (``"PRR"``, ``"RPR"``, ``"RRP"``,
-        ...) for prismatic joints. 6 joints: ``"6R-spherical-wrist"`` (see :attr:`ik_position_kind`
-        for its first three joints). Raises ``ValueError``, saying which structure was found, for
-        chains without a closed form here: other joint counts, a tool point that three joints cannot
-        place in 3D (planar chains, coincident or concurrent axes), or a 6-joint chain whose last
-        three axes do not meet at one point.
+        ...) for prismatic joints. 6 revolute joints, checked in this order, the first that holds
+        deciding (like EAIK's ``kinematicFamily``): ``"6R-spherical-wrist"`` (axes 4, 5, 6 meet; see
+        :attr:`ik_position_kind` for its first three joints), ``"6R-three-parallel-234"`` (axes 2,
+        3, 4 parallel: UR3/5/10, Unitree Z1), ``"6R-three-parallel-123"`` (axes 1, 2, 3 parallel),
+        ``"6R-spherical-shoulder"`` (axes 1, 2, 3 meet). "Parallel" is a sine of the angle below
+        1e-9, "meet" every axis within 1e-9 s of their common point (s: the chain's length scale);
+        :meth:`with_ik_tolerance` loosens both for calibrated robots, whose chains are then solved
+        on the idealised family (:attr:`ik_idealised`) and polished. Raises ``ValueError``, saying
+        what was checked and by how much each check failed, for chains without a closed form here
+        (other joint counts, a tool point that three joints cannot place in 3D, a 6R chain of no
+        family); :meth:`ik_differential` solves those numerically.
         """
         return self._ik_core().kind
 
@@ -387,6 +395,9 @@ class Chain:
           wrist root of q5 (``+`` then ``-`` of ``angle(a, b) ± acos``), otherwise the real roots of
           a quartic in increasing q1. q6 and q2 + q3 + q4 follow, then ``b`` is the elbow root of q3.
           Where q6 is free (axes 2 and 6 aligned) it is set to 0.
+        - ``"6R-three-parallel-123"``: R1 R2 R3 is a rotation about the common axis; the same
+          kind of pair of equations in q6 and q4 (``k``: the (q6, -q4) pairs, ordered as above),
+          then q5, q1 + q2 + q3, and ``b`` the root of q2. Where q5 is free it is set to 0.
         - ``"6R-spherical-shoulder"``: the reversed chain has a spherical wrist; ``k`` numbers the
           position solutions of joints 6, 5, 4 and ``b`` the root of q2.
 

@@ -45,14 +45,14 @@ With ``G = T M^-1`` (rotation ``R``, translation ``t``) and the offsets ``p01 = 
   ``Rot(h2, θ234) = R_1ᵀ R R_6ᵀ R_5ᵀ``, and the planar part
   ``w = R_1ᵀ(t − R p6T − p01) − p12 − Rot(h2, θ234)(p45 + R_5 p56) = R_2 (p23 + R_3 p34)``:
   q3 by SP3 (``|p23 + R_3 p34| = |w|``, ``b`` = its root: the elbow), q2 by SP1, q4 from θ234.
-- ``"three_parallel_123"`` (h1 ∥ h2 ∥ h3). ``R_1 R_2 R_3 = Rot(h1, θ123)`` gives
-  ``R_4 R_5 R_6 (Rᵀ h1) = h1`` and the position equation
-  ``h1ᵀ(t − p01) − h1ᵀ(p12 + p23 + p34) = h1ᵀ R_4 (p45 + R_5 p56 + R_5 R_6 p6T)``. For each q6,
-  SP2 gives (q4, q5) from the first; the second is a scalar residual of q6, whose roots are found
-  by a 1-D scan (1440 steps) and bisection: a reference, not a closed form. ``k`` numbers the
-  roots in increasing q6. Then θ123 from ``Rot(h1, θ123) = R (R_4 R_5 R_6)ᵀ`` and the planar part
-  ``w = t − p01 − Rot(h1, θ123)(p34 + R_4 p45 + R_4 R_5 p56 + R_4 R_5 R_6 p6T) = R_1 (p12 + R_2 p23)``:
-  q2 by SP3 (``b`` its root), q1 by SP1, q3 from θ123.
+- ``"three_parallel_123"`` (h1 ∥ h2 ∥ h3). ``R_1 R_2 R_3 = Rot(h1, θ123)`` keeps ``h1ᵀ x``, so
+  with ``a = Rᵀ h1``, ``u = Rot(h4, −q4) h1`` and ``v = Rot(h6, q6) a`` the orientation reads
+  ``R_5ᵀ u = v``, which needs (Q1) ``h5ᵀ u = h5ᵀ v``, and the position projected on h1 reads
+  (Q2) ``p45ᵀ u + p56ᵀ v = h1ᵀ(t − R p6T − p01 − p12 − p23 − p34)``: SP6 again, ``A1 x6 + A2 x(−q4)
+  = e`` with the ``−q4`` side constant; ``k`` numbers the (q6, −q4) pairs as above. Then q5 by SP1
+  (``Rot(h5, q5) v = u``), θ123 from ``Rot(h1, θ123) = R (R_4 R_5 R_6)ᵀ`` and the planar part
+  ``w = t − R p6T − p01 − Rot(h1, θ123)(p34 + R_4 (p45 + R_5 p56)) = R_1 (p12 + R_2 p23)``:
+  q2 by SP3 (``b`` its root), q1 by SP1, ``q3 = s3 (θ123 − q1 − s2 q2)``.
 - ``"spherical_shoulder"`` (h1, h2, h3 meet at c; take p1 = p2 = p3 = c). (K2) gives
   ``u = Rᵀ(t − c) − p6T = R_6ᵀ R_5ᵀ R_4ᵀ p34 + R_6ᵀ R_5ᵀ p45 + R_6ᵀ p56``. For each q5, q6 by SP3 from
   ``|R_6 u − p56 − R_5ᵀ p45| = |p34|`` and then ``m = R_5 (R_6 u − p56) − p45 = R_4ᵀ p34`` requires
@@ -521,30 +521,28 @@ def _solve_123(chain: Chain6, G: np.ndarray) -> list[tuple[int, np.ndarray]]:
     R, t = G[:3, :3], G[:3, 3]
     p01, (p12, p23, p34, p45, p56), p6T = _offsets(chain)
     h1, a = h[0], R.T @ h[0]
-    target = float(h1 @ (t - p01) - h1 @ (p12 + p23 + p34))
-
-    def wrist(q6):
-        # R_4 R_5 (R_6 a) = h1: Rot(h4, −q4) h1 = Rot(h5, q5) R_6 a (SP2)
-        return [(-m4, q5) for m4, q5 in sp2(h1, rot(h[5], q6) @ a, h[3], h[4])]
-
-    def residuals(q6):
-        values = [math.nan, math.nan]
-        for i, (q4, q5) in enumerate(wrist(q6)):
-            R4, R5 = rot(h[3], q4), rot(h[4], q5)
-            values[i] = float(h1 @ R4 @ (p45 + R5 @ p56 + R5 @ rot(h[5], q6) @ p6T)) - target
-        return values
-
+    s2 = 1.0 if h[1] @ h1 >= 0 else -1.0
+    s3 = 1.0 if h[2] @ h1 >= 0 else -1.0
+    # (Q1) h5ᵀ Rot(h4, −q4) h1 = h5ᵀ Rot(h6, q6) a;  (Q2) p45ᵀ Rot(h4, −q4) h1 + p56ᵀ Rot(h6, q6) a = d
+    c4a, a4a, b4a = trig_coefficients(h[4], h[3], h1)
+    c4b, a4b, b4b = trig_coefficients(p45, h[3], h1)
+    c6a, a6a, b6a = trig_coefficients(h[4], h[5], a)
+    c6b, a6b, b6b = trig_coefficients(p56, h[5], a)
+    d = float(h1 @ (t - R @ p6T - p01 - p12 - p23 - p34))
+    A1 = np.array([[a6a, b6a], [a6b, b6b]])
+    A2 = np.array([[-a4a, -b4a], [a4b, b4b]])
+    e = np.array([c4a - c6a, d - c6b - c4b])
     out = []
-    for k, (q6, branch) in enumerate(scan_roots(residuals)[:4]):
-        q4, q5 = wrist(q6)[branch]
-        R456 = rot(h[3], q4) @ rot(h[4], q5) @ rot(h[5], q6)
-        theta = angle_about(h1, R @ R456.T)
+    for k, q6, minus_q4 in sp6(A1, A2, e):
+        q4 = -minus_q4
+        u, v = rot(h[3], -q4) @ h1, rot(h[5], q6) @ a
+        q5 = sp1(v, u, h[4])  # Rot(h5, q5) v = u (0 when both lie along h5)
         R4, R5 = rot(h[3], q4), rot(h[4], q5)
-        w = t - p01 - rot(h1, theta) @ (p34 + R4 @ p45 + R4 @ R5 @ p56 + R456 @ p6T)
+        theta = angle_about(h1, R @ (R4 @ R5 @ rot(h[5], q6)).T)
+        w = t - R @ p6T - p01 - rot(h1, theta) @ (p34 + R4 @ (p45 + R5 @ p56))
         for b, q2 in enumerate(sp3(p23, -p12, h[1], float(np.linalg.norm(w)))):
-            R2 = rot(h[1], q2)
-            q1 = sp1(p12 + R2 @ p23, w, h1)
-            q3 = angle_about(h[2], (rot(h1, q1) @ R2).T @ rot(h1, theta))
+            q1 = sp1(p12 + rot(h[1], q2) @ p23, w, h1)
+            q3 = s3 * (theta - q1 - s2 * q2)
             out.append((2 * k + b, np.array([q1, q2, q3, q4, q5, q6])))
     return out
 

@@ -1,5 +1,6 @@
 // Closed-form IK of 6R chains by family: the spherical wrist (SphericalWrist6 on
-// the chain itself, the fast path), three parallel axes 2-3-4 (Parallel234), and the
+// the chain itself, the fast path), three parallel axes 2-3-4 (Parallel234) or 1-2-3
+// (Parallel123), and the
 // spherical shoulder (SphericalWrist6 on the reversed chain). A chain that fits a
 // family only to within the caller's tolerances (a calibrated robot) is solved on
 // its idealised chain, then every solution is polished by Newton steps on the true
@@ -27,6 +28,8 @@ class Arm6 {
   static constexpr int kSlots = 8;
   static constexpr double kExact = 1e-10;   // residual (m and rad) of an exact solution
   static constexpr double kAccept = 1e-6;   // residual beyond which a polished branch is dropped
+  static constexpr double kMirror = 0.05;   // Sp6's mirror for idealised chains
+  static constexpr double kSame = 1e-8;     // polished slots this close (rad) are one solution
 
   static Arm6 make(const Chain<double>& chain, double scale, FamilyTolerance tolerance) {
     if (chain.dof() != 6)
@@ -43,7 +46,7 @@ class Arm6 {
     const Geometry6 geometry(poe);
     Arm6 arm(chain);
     arm.geometry_ = geometry;
-    // the order of the checks: spherical wrist, parallel 2-3-4, spherical shoulder
+    // the order of the checks: spherical wrist, parallel 2-3-4, parallel 1-2-3, spherical shoulder
     struct Check {
       Family6 family;
       double deviation, strict, tolerance;
@@ -51,6 +54,7 @@ class Arm6 {
     const Check checks[] = {
         {Family6::SphericalWrist, geometry.wrist, strict_distance, tolerance.distance},
         {Family6::Parallel234, geometry.parallel234, Tolerance::angle, tolerance.angle},
+        {Family6::Parallel123, geometry.parallel123, Tolerance::angle, tolerance.angle},
         {Family6::SphericalShoulder, geometry.shoulder, strict_distance, tolerance.distance},
     };
     const Check* chosen = nullptr;
@@ -69,27 +73,36 @@ class Arm6 {
       std::ostringstream message;
       message.precision(3);
       message << "no closed-form 6R family fits this chain: checked axes 4-5-6 meeting (off by " << geometry.wrist
-              << " m), axes 2-3-4 parallel (sin angle " << geometry.parallel234 << "), axes 1-2-3 meeting ("
-              << geometry.shoulder << " m), against tolerances of " << tolerance.angle << " (angle) and "
-              << tolerance.distance << " m; axes 1-2-3 parallel (sin angle " << geometry.parallel123
-              << ") has no closed form here yet. Use Chain.ik_differential, or a looser ik tolerance for a "
+              << " m), axes 2-3-4 parallel (sin angle " << geometry.parallel234 << "), axes 1-2-3 parallel (sin angle "
+              << geometry.parallel123 << "), axes 1-2-3 meeting (" << geometry.shoulder << " m), against tolerances of "
+              << tolerance.angle << " (angle) and " << tolerance.distance
+              << " m. Use Chain.ik_differential, or a looser ik tolerance (Chain.with_ik_tolerance) for a "
                  "calibrated robot";
       throw std::invalid_argument(message.str());
     }
     arm.family_ = chosen->family;
     arm.idealised_ = chosen->deviation > chosen->strict;
-    const Poe ideal = arm.idealised_ ? idealise(poe, arm.family_, geometry) : poe;
+    // the parallel families: a rank-1 subproblem 6 when a pair of axes meets (below)
+    const double gap = arm.family_ == Family6::Parallel234 ? geometry.gap56
+                       : arm.family_ == Family6::Parallel123 ? geometry.gap45
+                                                            : 0.0;
+    if (gap > strict_distance && gap <= tolerance.distance) arm.idealised_ = true;
+    // rank 1 exactly when that pair meets (idealised or within the strict distance): forced, so
+    // that the choice is geometric, not a threshold on a matrix of mixed units
+    const double rank_tolerance = gap <= tolerance.distance ? 1.0 : -1.0;
+    const Poe ideal = arm.idealised_ ? idealise(poe, arm.family_, geometry, tolerance.distance) : poe;
+    const double mirror = arm.idealised_ ? kMirror : 0.0;
     arm.M_ = poe.M;
     switch (arm.family_) {
       case Family6::SphericalWrist:
         arm.wrist_.emplace(SphericalWrist6::make(arm.idealised_ ? chain_of(ideal) : chain, scale));
         break;
-      case Family6::Parallel234: {
-        arm.parallel_.emplace(ideal, std::max(tolerance.angle, 1e-9));
-        // a rank-1 form taken for an A2 of rank 2 within the tolerance is an idealisation too
-        arm.idealised_ = arm.idealised_ || (arm.parallel_->rank1() && arm.parallel_->rank_ratio() > 1e-9);
+      case Family6::Parallel234:
+        arm.parallel_.emplace(ideal, rank_tolerance, mirror);
         break;
-      }
+      case Family6::Parallel123:
+        arm.parallel123_.emplace(ideal, rank_tolerance, mirror);
+        break;
       case Family6::SphericalShoulder: {
         const Chain<double> reversed_chain = chain_of(chain_ik::reversed(ideal));
         arm.wrist_.emplace(SphericalWrist6::make(reversed_chain, reversed_chain.length_scale()));
@@ -108,7 +121,9 @@ class Arm6 {
   const SphericalWrist6& wrist() const noexcept { return *wrist_; }
   const Geometry6& geometry() const noexcept { return geometry_; }
   std::string kind() const { return family_name(family_); }
-  std::string position_kind() const { return wrist_ ? wrist_->position().name() : "parallel-234"; }
+  std::string position_kind() const {
+    return wrist_ ? wrist_->position().name() : parallel_ ? "parallel-234" : "parallel-123";
+  }
 
   // Every solution of one target pose as (cos, sin) per joint, in this chain's joint
   // order (not for direct_wrist chains, which go by lanes); refine[slot]: the slot is near
@@ -125,6 +140,17 @@ class Arm6 {
       }
       const Rigid<double>& M_inv = parallel_->M_inv();  // G = T M^-1
       parallel_->solve(R * M_inv.R, R * M_inv.p + t, q, exists, refine);
+      return;
+    }
+    if (parallel123_) {
+      M3 R;
+      V3 t;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) R(r, c) = target.R[r][c];
+        t[r] = target.p[r];
+      }
+      const Rigid<double>& M_inv = parallel123_->M_inv();
+      parallel123_->solve(R * M_inv.R, R * M_inv.p + t, q, exists, refine);
       return;
     }
     if (!reversed_) {
@@ -160,7 +186,7 @@ class Arm6 {
   }
 
  private:
-  explicit Arm6(const Chain<double>& chain) : chain_(chain), geometry_(Poe{}) {}
+  explicit Arm6(const Chain<double>& chain) : chain_(chain) {}
 
   Chain<double> chain_;  // the true chain
   Geometry6 geometry_;
@@ -169,12 +195,33 @@ class Arm6 {
   Rigid<double> M_;
   std::optional<SphericalWrist6> wrist_;
   std::optional<Parallel234> parallel_;
+  std::optional<Parallel123> parallel123_;
 };
 
 // A finished block of 6R solutions plus exact[k][i] (1: residual below 1e-10).
 struct Arm6Block : WristBlock {
   double exact[Arm6::kSlots][SphericalWrist6::kLanes];
 };
+
+// The rotation of a matrix pose (orthonormal to 1e-6, as read_pose checks) made a rotation to
+// rounding by two Newton-Schulz steps R <- R (3 I - R^T R) / 2 (the error squares each step), so
+// that a float32 pose has an exact solution and the residual of an exact one can be 1e-10.
+inline void project_rotation(Arm::Pose& pose) noexcept {
+  for (int step = 0; step < 2; ++step) {
+    double gram[3][3], next[3][3];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        gram[a][b] = pose.R[0][a] * pose.R[0][b] + pose.R[1][a] * pose.R[1][b] + pose.R[2][a] * pose.R[2][b];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        double sum = 0.0;
+        for (int a = 0; a < 3; ++a) sum += pose.R[r][a] * ((a == c ? 3.0 : 0.0) - gram[a][c]);
+        next[r][c] = 0.5 * sum;
+      }
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) pose.R[r][c] = next[r][c];
+  }
+}
 
 template <PoseFormat Format>
 SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
@@ -200,6 +247,7 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
     double in[width];
     for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
     out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
+    if (Format == PoseFormat::Matrix && out.input_ok[i] != 0.0) project_rotation(targets[i]);
     JointValue q[S][6];
     bool ok[S] = {}, refine[S] = {};
     if (out.input_ok[i] != 0.0) solver.solve(targets[i], q, ok, refine);
@@ -227,6 +275,18 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
         out.exact[k][i] = residual < Arm6::kExact ? 1.0 : 0.0;
         for (int j = 0; j < 6; ++j) out.angle[k][j][i] = std::remainder(q[j], 2.0 * kPi<double>);
       }
+  // idealised chains: two starts polished to one solution keep the first slot
+  for (int i = 0; i < m && idealised; ++i)
+    for (int k = 1; k < S; ++k) {
+      if (out.exists[k][i] == 0.0) continue;
+      for (int o = 0; o < k && out.exists[k][i] != 0.0; ++o) {
+        if (out.exists[o][i] == 0.0) continue;
+        double gap = 0.0;
+        for (int j = 0; j < 6; ++j)
+          gap = std::max(gap, std::fabs(std::remainder(out.angle[k][j][i] - out.angle[o][j][i], 2.0 * kPi<double>)));
+        if (gap < Arm6::kSame) out.exists[k][i] = 0.0;
+      }
+    }
   finish_lanes<false>(limits, m, out.input_ok, out.angle, out.exists, out.valid);
   for (int k = 0; k < S; ++k)
     for (int i = 0; i < m; ++i) out.exact[k][i] *= out.exists[k][i];

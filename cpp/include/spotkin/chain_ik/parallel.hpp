@@ -1,6 +1,9 @@
-// Closed-form IK of 6R chains whose axes 2, 3 and 4 are parallel (UR3/5/10,
-// Unitree Z1), in the POE form of poe.hpp; ported from
-// python/spotkin/reference/ik6r.py (_solve_234), equation labels as there.
+// Closed-form IK of 6R chains with three consecutive parallel axes: 2, 3 and 4
+// (UR3/5/10, Unitree Z1; Parallel234) or 1, 2 and 3 (Parallel123), in the POE form
+// of poe.hpp; ported from python/spotkin/reference/ik6r.py (_solve_234, _solve_123),
+// equation labels as there. Both reduce to SP6 (class Sp6).
+//
+// Parallel234:
 //
 // R_2 R_3 R_4 = Rot(h2, theta234) keeps h2^T x, so with G = T M^-1 = (R, t):
 //   (P1)  h2^T R_1^T R h6 = h2^T R_5 h6
@@ -24,34 +27,68 @@
 
 namespace spotkin::chain_ik {
 
-class Parallel234 {
- public:
-  static constexpr int kSlots = 8;
-  static constexpr double kTangent = 1e-9;  // |C / hypot(A, B)| up to 1 + kTangent: a (double) root
+namespace detail6 {
 
-  // poe: 6 joints with h2, h3, h4 exactly parallel (the idealised chain).
-  // rank_tolerance: s2 / s1 of A2 at or below which the rank-1 form is used.
-  explicit Parallel234(const Poe& poe, double rank_tolerance) {
-    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
-    p01_ = poe.p[0];
-    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
-    p6T_ = -poe.p[5];
-    M_inv_ = inverse_rigid(poe.M);
-    const V3 &h1 = h_[0], &h2 = h_[1];
-    s3_ = h_[2].dot(h2) >= 0.0 ? 1.0 : -1.0;
-    s4_ = h_[3].dot(h2) >= 0.0 ? 1.0 : -1.0;
-    h2_perp_ = h2 - h1 * h1.dot(h2);
-    h1_x_h2_ = h1.cross(h2);
-    h12_ = h1.dot(h2);
-    // q5 side of (P1), (P2): h2^T R_5 x = const + a cos q5 + b sin q5, x = h6, p56
-    double c5a, a5a, b5a, c5b, a5b, b5b;
-    trig(h2, h_[4], h_[5], c5a, a5a, b5a);
-    trig(h2, h_[4], d_[4], c5b, a5b, b5b);
-    A2_ << -a5a, -b5a, -a5b, -b5b;
-    e_const_ << c5a, c5b + h2.dot(d_[0] + d_[1] + d_[2] + d_[3]);
+inline constexpr double kTangent = 1e-9;  // |C / hypot(A, B)| up to 1 + kTangent: a (double) root
+
+  // h^T Rot(k, q) p = c + a cos q + b sin q
+inline void trig(const V3& h, const V3& k, const V3& p, double& c, double& a, double& b) {
+  const double along = k.dot(p);
+  c = h.dot(k) * along, a = h.dot(p - k * along), b = h.dot(k.cross(p));
+}
+
+  // One root of a cos x + b sin x = rhs: angle(a, b) + sign acos(rhs / hypot(a, b)) (SP4);
+// false if |rhs| / hypot > 1 + kTangent.
+// clamp: take the nearest extreme when there is no root (returns true).
+// mirror: |ratio| in (1 + kTangent, 1 + mirror] starts from 2 sign(ratio) - ratio (near_double).
+SPOTKIN_INLINE bool root(double a, double b, double rhs, double sign, JointValue& x,
+                                bool clamp = false, bool* near_double = nullptr, double mirror = 0.0) noexcept {
+  const double r2 = a * a + b * b;
+  if (!(r2 > 0.0)) return false;
+  const double inv = 1.0 / std::sqrt(r2);
+  double ratio = rhs * inv;
+  if (near_double) *near_double = std::fabs(ratio) > 1.0 - 1e-8;
+  if (std::fabs(ratio) > 1.0 + kTangent && std::fabs(ratio) <= 1.0 + mirror)
+    ratio = std::copysign(2.0, ratio) - ratio;
+  if (!(std::fabs(ratio) <= 1.0 + kTangent) && !(clamp && std::isfinite(ratio))) return false;
+  const double c = std::min(1.0, std::max(-1.0, ratio)), k = sign * std::sqrt((1.0 - c) * (1.0 + c));
+  const double ca = a * inv, sa = b * inv;
+  x = JointValue{ca * c - sa * k, sa * c + ca * k, 0.0};
+  return true;
+}
+
+
+// (cos, sin) of the angle turning p to q about unit k (SP1); (1, 0) when free (p or q along k).
+// ill: p or q is within 1e-4 (relative) of k, where the angle loses digits (r2 = |p_perp|^2 |q_perp|^2).
+SPOTKIN_INLINE JointValue sp1(const V3& p, const V3& q, const V3& k, bool* free = nullptr,
+                              bool* ill = nullptr) noexcept {
+  const double c = p.dot(q) - k.dot(p) * k.dot(q), s = k.dot(p.cross(q));
+  const double r2 = c * c + s * s;
+  if (free) *free = !(r2 > 1e-30);
+  if (ill) *ill = !(r2 > 1e-16 * p.squaredNorm() * q.squaredNorm());
+  if (!(r2 > 1e-30)) return joint_zero();
+  const double inv = 1.0 / std::sqrt(r2);
+  return JointValue{c * inv, s * inv, 0.0};
+}
+
+
+}  // namespace detail6
+
+// SP6 for two angles: A1 x1 + A2 x2 = e, x = (cos, sin), A2 fixed by the chain and A1, e
+// by the target. When A2 has rank 1 (s2 / s1 <= rank_tolerance) its left null vector n gives
+// n^T A1 x1 = n^T e (two x1), then its range m gives m^T A2 x2 = m^T (e - A1 x1) (two x2 per
+// x1): pair k = 2 i1 + i2, "+" root first. With rank 2, |A2^-1 (e - A1 x1)| = 1 is a quartic
+// in tan(x1 / 2): pairs in increasing x1. near[k]: a root within 1e-8 of a double root.
+// mirror: for an idealised chain, a root missing by up to this much (|ratio| up to 1 + mirror,
+// or a complex quartic root within sqrt(mirror)) starts from the mirrored ratio
+// 2 sign(ratio) - ratio (the real part), flagged near: Newton steps on the true chain decide.
+class Sp6 {
+ public:
+  Sp6() = default;
+  Sp6(const Eigen::Matrix2d& A2, double rank_tolerance, double mirror) : A2_(A2), mirror_(mirror) {
     Eigen::JacobiSVD<Eigen::Matrix2d> svd(A2_, Eigen::ComputeFullU);
     const Eigen::Vector2d sv = svd.singularValues();
-    if (!(sv[0] > 0.0)) throw std::invalid_argument("degenerate geometry: q5 does not enter the equations");
+    if (!(sv[0] > 0.0)) throw std::invalid_argument("degenerate geometry: an angle does not enter the equations");
     rank_ratio_ = sv[1] / sv[0];
     rank1_ = rank_ratio_ <= rank_tolerance;
     // signs fixed (the largest component positive) so that the root order does not depend on the SVD
@@ -61,135 +98,46 @@ class Parallel234 {
     n_ = oriented(svd.matrixU().col(1)), m_ = oriented(svd.matrixU().col(0));
     ma_ = m_.transpose() * A2_;
     if (!rank1_) A2_inv_ = A2_.inverse();
-    // SP3 for q3: |Rot(h3, q3) p34 + p23| = |w| <=> (-p23)^T Rot(h3, q3) p34 = (|p34|^2 + |p23|^2 - |w|^2) / 2,
-    // written as the reference does (the sign fixes which root is b = 0)
-    trig(-d_[1], h_[2], d_[2], c3_, a3_, b3_);
-    base3_ = d_[2].squaredNorm() + d_[1].squaredNorm();
-    // a unit vector normal to h2, for theta234
-    V3 v = h2.cross(V3::UnitX());
-    if (v.norm() < 0.5) v = h2.cross(V3::UnitY());
-    v2_ = v.normalized();
   }
 
   bool rank1() const noexcept { return rank1_; }
   double rank_ratio() const noexcept { return rank_ratio_; }
-  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
+  double mirror() const noexcept { return mirror_; }
 
-  // Every solution for G = T M^-1 (R, t): q[slot] = (cos, sin) of the 6 angles.
-  // refine[slot]: a root of q1, q5 or q3 is within 1e-8 of a double root (|ratio| near 1), where
-  // acos loses half the digits: the caller refines that slot by Newton steps.
-  SPOTKIN_INLINE void solve(const M3& R, const V3& t, JointValue q[kSlots][6], bool exists[kSlots],
-                            bool refine[kSlots]) const noexcept {
-    for (int k = 0; k < kSlots; ++k) exists[k] = false, refine[k] = false;
-    const V3 &h2 = h_[1];
-    const V3 Rh6 = R * h_[5], tt = t - R * p6T_ - p01_;
-    // (P1), (P2), q1 side: trig(x, h1, h2) = (x.h1) h12, x.h2perp, x.(h1 x h2)
-    Eigen::Matrix2d A1;
-    A1 << Rh6.dot(h2_perp_), Rh6.dot(h1_x_h2_), tt.dot(h2_perp_), tt.dot(h1_x_h2_);
-    const Eigen::Vector2d e(e_const_[0] - Rh6.dot(h_[0]) * h12_, e_const_[1] - tt.dot(h_[0]) * h12_);
-    JointValue pair[4][2];  // (q1, q5)
-    bool found[4] = {}, near[4] = {};
-    if (rank1_) {
-      const Eigen::RowVector2d na = n_.transpose() * A1;
-      for (int i1 = 0; i1 < 2; ++i1) {
-        JointValue x1;
-        bool near1 = false;
-        if (!root(na[0], na[1], n_.dot(e), i1 == 0 ? 1.0 : -1.0, x1, false, &near1)) continue;
-        const double rhs = m_.dot(e - A1 * Eigen::Vector2d(x1.c, x1.s));
-        for (int i5 = 0; i5 < 2; ++i5) {
-          JointValue x5;
-          bool near5 = false;
-          if (!root(ma_[0], ma_[1], rhs, i5 == 0 ? 1.0 : -1.0, x5, false, &near5)) continue;
-          pair[2 * i1 + i5][0] = x1, pair[2 * i1 + i5][1] = x5, found[2 * i1 + i5] = true;
-          near[2 * i1 + i5] = near1 || near5;
-        }
-      }
-    } else {
-      quartic_pairs(A1, e, pair, found);
+  SPOTKIN_INLINE void pairs(const Eigen::Matrix2d& A1, const Eigen::Vector2d& e, JointValue pair[4][2],
+                            bool found[4], bool near[4]) const noexcept {
+    using detail6::root;
+    for (int k = 0; k < 4; ++k) found[k] = false, near[k] = false;
+    if (!rank1_) {
+      quartic_pairs(A1, e, pair, found, near);
+      return;
     }
-    for (int k = 0; k < 4; ++k) {
-      if (!found[k]) continue;
-      const JointValue x1 = pair[k][0], x5 = pair[k][1];
-      // q6: Rot(h6, q6) R^T R_1 h2 = R_5^T h2 (SP1; free, 0, when both lie along h6)
-      const V3 a = R.transpose() * rotate(h_[0], x1.c, x1.s, h2), b = rotate(h_[4], x5.c, -x5.s, h2);
-      bool free6 = false;
-      JointValue x6 = sp1(a, b, h_[5], &free6);
-      // theta234: Rot(h2, theta) v = R_1^T R R_6^T R_5^T v
-      const V3 y = rotate(h_[0], x1.c, -x1.s, R * rotate(h_[5], x6.c, -x6.s, rotate(h_[4], x5.c, -x5.s, v2_)));
-      JointValue theta = sp1(v2_, y, h2);
-      const V3 A = rotate(h_[0], x1.c, -x1.s, tt) - d_[0], B = d_[3] + rotate(h_[4], x5.c, x5.s, d_[4]);
-      if (free6) {
-        // Wrist singularity (R_5 h6 = +-h2): only theta -+ q6 is fixed by the rotation, and
-        // w = A - Rot(h2, theta) B. Take theta with |w|^2 at the middle of the elbow's range,
-        // |p23|^2 + |p34|^2 + 2 c (c: the constant of p23^T Rot(h3, q3) p34), or the nearest.
-        double c, ta, tb;
-        trig(A, h2, B, c, ta, tb);
-        const JointValue theta0 = theta;
-        root(ta, tb, 0.5 * (A.squaredNorm() + B.squaredNorm() - (base3_ - 2.0 * c3_)) - c, 1.0, theta, true);
-        // q6 = sigma (theta0 - theta), sigma = sign(h2 . R_5 h6)
-        const double sigma = h2.dot(rotate(h_[4], x5.c, x5.s, h_[5])) >= 0.0 ? 1.0 : -1.0;
-        x6 = JointValue{theta0.c * theta.c + theta0.s * theta.s, sigma * (theta0.s * theta.c - theta0.c * theta.s), 0.0};
-      }
-      const V3 w = A - rotate(h2, theta.c, theta.s, B);
-      const double rhs3 = 0.5 * (base3_ - w.squaredNorm()) - c3_;
-      for (int b3 = 0; b3 < 2; ++b3) {
-        JointValue x3;
-        bool near3 = false;
-        if (!root(a3_, b3_, rhs3, b3 == 0 ? 1.0 : -1.0, x3, false, &near3)) continue;
-        const V3 u = d_[1] + rotate(h_[2], x3.c, x3.s, d_[2]);
-        const JointValue x2 = sp1(u, w, h2);
-        // q4 = s4 (theta - q2 - s3 q3), as unit complex numbers
-        const double c23 = x2.c * x3.c - s3_ * x2.s * x3.s, s23 = x2.s * x3.c + s3_ * x2.c * x3.s;
-        const double c4 = theta.c * c23 + theta.s * s23, s4 = theta.s * c23 - theta.c * s23;
-        const int slot = 2 * k + b3;
-        q[slot][0] = x1, q[slot][1] = x2, q[slot][2] = x3;
-        q[slot][3] = JointValue{c4, s4_ * s4, 0.0}, q[slot][4] = x5, q[slot][5] = x6;
-        exists[slot] = true;
-        refine[slot] = near[k] || near3 || free6;
+    const Eigen::RowVector2d na = n_.transpose() * A1;
+    for (int i1 = 0; i1 < 2; ++i1) {
+      JointValue x1;
+      bool near1 = false;
+      if (!root(na[0], na[1], n_.dot(e), i1 == 0 ? 1.0 : -1.0, x1, false, &near1, mirror_)) continue;
+      const double rhs = m_.dot(e - A1 * Eigen::Vector2d(x1.c, x1.s));
+      for (int i2 = 0; i2 < 2; ++i2) {
+        JointValue x2;
+        bool near2 = false;
+        if (!root(ma_[0], ma_[1], rhs, i2 == 0 ? 1.0 : -1.0, x2, false, &near2, mirror_)) continue;
+        pair[2 * i1 + i2][0] = x1, pair[2 * i1 + i2][1] = x2, found[2 * i1 + i2] = true;
+        near[2 * i1 + i2] = near1 || near2;
       }
     }
   }
 
  private:
-  // h^T Rot(k, q) p = c + a cos q + b sin q
-  static void trig(const V3& h, const V3& k, const V3& p, double& c, double& a, double& b) {
-    const double along = k.dot(p);
-    c = h.dot(k) * along, a = h.dot(p - k * along), b = h.dot(k.cross(p));
-  }
-
-  // One root of a cos x + b sin x = rhs: angle(a, b) + sign acos(rhs / hypot(a, b)) (SP4);
-  // false if |rhs| / hypot > 1 + kTangent.
-  // clamp: take the nearest extreme when there is no root (returns true).
-  static SPOTKIN_INLINE bool root(double a, double b, double rhs, double sign, JointValue& x,
-                                  bool clamp = false, bool* near_double = nullptr) noexcept {
-    const double r2 = a * a + b * b;
-    if (!(r2 > 0.0)) return false;
-    const double inv = 1.0 / std::sqrt(r2), ratio = rhs * inv;
-    if (near_double) *near_double = std::fabs(ratio) > 1.0 - 1e-8;
-    if (!(std::fabs(ratio) <= 1.0 + kTangent) && !(clamp && std::isfinite(ratio))) return false;
-    const double c = std::min(1.0, std::max(-1.0, ratio)), k = sign * std::sqrt((1.0 - c) * (1.0 + c));
-    const double ca = a * inv, sa = b * inv;
-    x = JointValue{ca * c - sa * k, sa * c + ca * k, 0.0};
-    return true;
-  }
-
-  // (cos, sin) of the angle turning p to q about unit k (SP1); (1, 0) when free (p or q along k).
-  static SPOTKIN_INLINE JointValue sp1(const V3& p, const V3& q, const V3& k, bool* free = nullptr) noexcept {
-    const double c = p.dot(q) - k.dot(p) * k.dot(q), s = k.dot(p.cross(q));
-    const double r2 = c * c + s * s;
-    if (free) *free = !(r2 > 1e-30);
-    if (!(r2 > 1e-30)) return joint_zero();
-    const double inv = 1.0 / std::sqrt(r2);
-    return JointValue{c * inv, s * inv, 0.0};
-  }
-
-  // Rank 2: x5 = u - V x1 (V = A2^-1 A1, u = A2^-1 e) and |x5|^2 = 1, i.e.
+  // Rank 2: x2 = u - V x1 (V = A2^-1 A1, u = A2^-1 e) and |x5|^2 = 1, i.e.
   //   f(t) = k0 + k1 cos t + k2 sin t + k3 cos 2t + k4 sin 2t = 0,
   // times (1 + x^2)^2 with x = tan((t - phi) / 2) a real quartic whose leading
   // coefficient is f(phi + pi) (phi the best of five samples). Real roots get Newton
-  // steps on f; pairs in increasing q1.
-  void quartic_pairs(const Eigen::Matrix2d& A1, const Eigen::Vector2d& e, JointValue pair[4][2],
-                     bool found[4]) const noexcept {
+  // steps on f; pairs in increasing x1.
+  // With mirror > 0, a complex pair whose imaginary part is within sqrt(mirror) starts
+  // from its real part (flagged near: the polish decides).
+  SPOTKIN_INLINE void quartic_pairs(const Eigen::Matrix2d& A1, const Eigen::Vector2d& e, JointValue pair[4][2], bool found[4],
+                     bool near[4]) const noexcept {
     const Eigen::Matrix2d V = A2_inv_ * A1;
     const Eigen::Vector2d u = A2_inv_ * e;
     const Eigen::Matrix2d W = V.transpose() * V;
@@ -213,40 +161,249 @@ class Parallel234 {
     const double scale = std::max({std::fabs(k0), std::fabs(k1), std::fabs(k2), std::fabs(k3), std::fabs(k4), 1.0});
     detail::Complex roots[4];
     const int count = detail::polynomial_roots(a, 4, roots);
-    double t_found[4];
+    std::pair<double, bool> t_found[4];  // (q1, near)
     int n = 0;
     for (int r = 0; r < count; ++r) {
-      const double x = roots[r].real();
-      if (std::fabs(roots[r].imag()) > Tolerance::root * std::max(1.0, std::fabs(x))) continue;
+      const double x = roots[r].real(), bound = std::max(1.0, std::fabs(x));
+      const bool real = std::fabs(roots[r].imag()) <= Tolerance::root * bound;
+      if (!real && !(std::fabs(roots[r].imag()) <= std::sqrt(mirror_) * bound)) continue;
       double t = phi + 2.0 * std::atan(x);
-      for (int it = 0; it < 8; ++it) {
-        const double slope = df(t);
-        if (slope == 0.0) break;
-        t -= f(t) / slope;
+      if (real) {
+        for (int it = 0; it < 8; ++it) {
+          const double slope = df(t);
+          if (slope == 0.0) break;
+          t -= f(t) / slope;
+        }
+        if (!(std::fabs(f(t)) <= 1e-10 * scale)) continue;
       }
-      if (!(std::fabs(f(t)) <= 1e-10 * scale)) continue;
       t = std::remainder(t, 2.0 * kPi<double>);
       bool duplicate = false;
-      for (int o = 0; o < n; ++o) duplicate |= std::fabs(std::remainder(t - t_found[o], 2.0 * kPi<double>)) < 1e-9;
-      if (!duplicate) t_found[n++] = t;
+      for (int o = 0; o < n; ++o)
+        duplicate |= std::fabs(std::remainder(t - t_found[o].first, 2.0 * kPi<double>)) < 1e-9;
+      if (!duplicate) t_found[n++] = {t, !real};
     }
     std::sort(t_found, t_found + n);
     for (int k = 0; k < n; ++k) {
-      const double c1 = std::cos(t_found[k]), s1 = std::sin(t_found[k]);
-      const Eigen::Vector2d x5 = u - V * Eigen::Vector2d(c1, s1);
-      const double norm = x5.norm();
+      near[k] = t_found[k].second;
+      const double c1 = std::cos(t_found[k].first), s1 = std::sin(t_found[k].first);
+      const Eigen::Vector2d x2 = u - V * Eigen::Vector2d(c1, s1);
+      const double norm = x2.norm();
       pair[k][0] = JointValue{c1, s1, 0.0};
-      pair[k][1] = norm > 0.0 ? JointValue{x5[0] / norm, x5[1] / norm, 0.0} : joint_zero();
+      pair[k][1] = norm > 0.0 ? JointValue{x2[0] / norm, x2[1] / norm, 0.0} : joint_zero();
       found[k] = true;
     }
   }
 
-  V3 h_[6], d_[5], p01_, p6T_, h2_perp_, h1_x_h2_, v2_;
-  double h12_ = 0.0, s3_ = 1.0, s4_ = 1.0, a3_ = 0.0, b3_ = 0.0, c3_ = 0.0, base3_ = 0.0, rank_ratio_ = 0.0;
+  Eigen::Matrix2d A2_ = Eigen::Matrix2d::Identity(), A2_inv_ = Eigen::Matrix2d::Zero();
+  double mirror_ = 0.0, rank_ratio_ = 0.0;
   bool rank1_ = true;
-  Eigen::Matrix2d A2_, A2_inv_ = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d e_const_, n_, m_;
-  Eigen::RowVector2d ma_;
+  Eigen::Vector2d n_ = Eigen::Vector2d::Zero(), m_ = Eigen::Vector2d::Zero();
+  Eigen::RowVector2d ma_ = Eigen::RowVector2d::Zero();
+};
+
+class Parallel234 {
+ public:
+  static constexpr int kSlots = 8;
+
+  // poe: 6 joints with h2, h3, h4 exactly parallel (the idealised chain).
+  // rank_tolerance: s2 / s1 of A2 at or below which the rank-1 form is used.
+  // mirror: for an idealised chain, a root missing by up to this much (|ratio| up to
+  // 1 + mirror) starts from the mirrored ratio 2 sign(ratio) - ratio and is flagged for
+  // Newton steps on the true chain, where the pair of roots may exist (0: exact chains).
+  explicit Parallel234(const Poe& poe, double rank_tolerance, double mirror = 0.0) {
+    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
+    p01_ = poe.p[0];
+    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
+    p6T_ = -poe.p[5];
+    M_inv_ = inverse_rigid(poe.M);
+    const V3 &h1 = h_[0], &h2 = h_[1];
+    s3_ = h_[2].dot(h2) >= 0.0 ? 1.0 : -1.0;
+    s4_ = h_[3].dot(h2) >= 0.0 ? 1.0 : -1.0;
+    h2_perp_ = h2 - h1 * h1.dot(h2);
+    h1_x_h2_ = h1.cross(h2);
+    h12_ = h1.dot(h2);
+    // q5 side of (P1), (P2): h2^T R_5 x = const + a cos q5 + b sin q5, x = h6, p56
+    double c5a, a5a, b5a, c5b, a5b, b5b;
+    detail6::trig(h2, h_[4], h_[5], c5a, a5a, b5a);
+    detail6::trig(h2, h_[4], d_[4], c5b, a5b, b5b);
+    Eigen::Matrix2d A2;
+    A2 << -a5a, -b5a, -a5b, -b5b;
+    e_const_ << c5a, c5b + h2.dot(d_[0] + d_[1] + d_[2] + d_[3]);
+    sp6_ = Sp6(A2, rank_tolerance, mirror);
+    // SP3 for q3: |Rot(h3, q3) p34 + p23| = |w| <=> (-p23)^T Rot(h3, q3) p34 = (|p34|^2 + |p23|^2 - |w|^2) / 2,
+    // written as the reference does (the sign fixes which root is b = 0)
+    detail6::trig(-d_[1], h_[2], d_[2], c3_, a3_, b3_);
+    base3_ = d_[2].squaredNorm() + d_[1].squaredNorm();
+    // a unit vector normal to h2, for theta234
+    V3 v = h2.cross(V3::UnitX());
+    if (v.norm() < 0.5) v = h2.cross(V3::UnitY());
+    v2_ = v.normalized();
+  }
+
+  bool rank1() const noexcept { return sp6_.rank1(); }
+  double rank_ratio() const noexcept { return sp6_.rank_ratio(); }
+  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
+
+  // Every solution for G = T M^-1 (R, t): q[slot] = (cos, sin) of the 6 angles.
+  // refine[slot]: a root of q1, q5 or q3 is within 1e-8 of a double root (|ratio| near 1), where
+  // acos loses half the digits, or an SP1 angle is ill-conditioned (sp1's ill): the caller
+  // refines that slot by Newton steps.
+  SPOTKIN_INLINE void solve(const M3& R, const V3& t, JointValue q[kSlots][6], bool exists[kSlots],
+                            bool refine[kSlots]) const noexcept {
+    for (int k = 0; k < kSlots; ++k) exists[k] = false, refine[k] = false;
+    const V3 &h2 = h_[1];
+    const V3 Rh6 = R * h_[5], tt = t - R * p6T_ - p01_;
+    // (P1), (P2), q1 side: trig(x, h1, h2) = (x.h1) h12, x.h2perp, x.(h1 x h2)
+    Eigen::Matrix2d A1;
+    A1 << Rh6.dot(h2_perp_), Rh6.dot(h1_x_h2_), tt.dot(h2_perp_), tt.dot(h1_x_h2_);
+    const Eigen::Vector2d e(e_const_[0] - Rh6.dot(h_[0]) * h12_, e_const_[1] - tt.dot(h_[0]) * h12_);
+    JointValue pair[4][2];  // (q1, q5)
+    bool found[4], near[4];
+    sp6_.pairs(A1, e, pair, found, near);
+    for (int k = 0; k < 4; ++k) {
+      if (!found[k]) continue;
+      const JointValue x1 = pair[k][0], x5 = pair[k][1];
+      // q6: Rot(h6, q6) R^T R_1 h2 = R_5^T h2 (SP1; free, 0, when both lie along h6)
+      const V3 a = R.transpose() * rotate(h_[0], x1.c, x1.s, h2), b = rotate(h_[4], x5.c, -x5.s, h2);
+      bool free6 = false, ill6 = false;
+      JointValue x6 = detail6::sp1(a, b, h_[5], &free6, &ill6);
+      // theta234: Rot(h2, theta) v = R_1^T R R_6^T R_5^T v
+      const V3 y = rotate(h_[0], x1.c, -x1.s, R * rotate(h_[5], x6.c, -x6.s, rotate(h_[4], x5.c, -x5.s, v2_)));
+      JointValue theta = detail6::sp1(v2_, y, h2);
+      const V3 A = rotate(h_[0], x1.c, -x1.s, tt) - d_[0], B = d_[3] + rotate(h_[4], x5.c, x5.s, d_[4]);
+      if (free6) {
+        // Wrist singularity (R_5 h6 = +-h2): only theta -+ q6 is fixed by the rotation, and
+        // w = A - Rot(h2, theta) B. Take theta with |w|^2 at the middle of the elbow's range,
+        // |p23|^2 + |p34|^2 + 2 c (c: the constant of p23^T Rot(h3, q3) p34), or the nearest.
+        double c, ta, tb;
+        detail6::trig(A, h2, B, c, ta, tb);
+        const JointValue theta0 = theta;
+        detail6::root(ta, tb, 0.5 * (A.squaredNorm() + B.squaredNorm() - (base3_ - 2.0 * c3_)) - c, 1.0, theta, true);
+        // q6 = sigma (theta0 - theta), sigma = sign(h2 . R_5 h6)
+        const double sigma = h2.dot(rotate(h_[4], x5.c, x5.s, h_[5])) >= 0.0 ? 1.0 : -1.0;
+        x6 = JointValue{theta0.c * theta.c + theta0.s * theta.s, sigma * (theta0.s * theta.c - theta0.c * theta.s), 0.0};
+      }
+      const V3 w = A - rotate(h2, theta.c, theta.s, B);
+      const double rhs3 = 0.5 * (base3_ - w.squaredNorm()) - c3_;
+      for (int b3 = 0; b3 < 2; ++b3) {
+        JointValue x3;
+        bool near3 = false;
+        if (!detail6::root(a3_, b3_, rhs3, b3 == 0 ? 1.0 : -1.0, x3, false, &near3, sp6_.mirror())) continue;
+        const V3 u = d_[1] + rotate(h_[2], x3.c, x3.s, d_[2]);
+        bool ill2 = false;
+        const JointValue x2 = detail6::sp1(u, w, h2, nullptr, &ill2);
+        // q4 = s4 (theta - q2 - s3 q3), as unit complex numbers
+        const double c23 = x2.c * x3.c - s3_ * x2.s * x3.s, s23 = x2.s * x3.c + s3_ * x2.c * x3.s;
+        const double c4 = theta.c * c23 + theta.s * s23, s4 = theta.s * c23 - theta.c * s23;
+        const int slot = 2 * k + b3;
+        q[slot][0] = x1, q[slot][1] = x2, q[slot][2] = x3;
+        q[slot][3] = JointValue{c4, s4_ * s4, 0.0}, q[slot][4] = x5, q[slot][5] = x6;
+        exists[slot] = true;
+        refine[slot] = near[k] || near3 || ill6 || ill2;
+      }
+    }
+  }
+
+ private:
+  V3 h_[6], d_[5], p01_, p6T_, h2_perp_, h1_x_h2_, v2_;
+  double h12_ = 0.0, s3_ = 1.0, s4_ = 1.0, a3_ = 0.0, b3_ = 0.0, c3_ = 0.0, base3_ = 0.0;
+  Eigen::Vector2d e_const_;
+  Sp6 sp6_;
+  Rigid<double> M_inv_;
+};
+
+// 6R chains whose axes 1, 2 and 3 are parallel. R_1 R_2 R_3 = Rot(h1, theta), theta =
+// q1 + s2 q2 + s3 q3 (s_j = sign(h_j . h1)), keeps h1^T x, so with G = (R, t), a = R^T h1,
+// u = Rot(h4, -q4) h1 and v = Rot(h6, q6) a:
+//   orientation  R_5^T u = v, which needs (Q1) h5^T u = h5^T v
+//   position     (Q2) p45^T u + p56^T v = h1^T (t - R p6T - p01 - p12 - p23 - p34)
+// (h1^T R_4 R_5 R_6 p6T = a^T p6T moved right). Again A1 x6 + A2 x(-q4) = e (SP6), A2 fixed by
+// the chain. Per (q6, q4): q5 by SP1 (Rot(h5, q5) v = u), theta from Rot(h1, theta) =
+// R R_6^T R_5^T R_4^T, w = t - R p6T - p01 - Rot(h1, theta) (p34 + R_4 (p45 + R_5 p56)) =
+// R_1 (p12 + R_2 p23): q2 by SP3, q1 by SP1, q3 = s3 (theta - q1 - s2 q2).
+// Slots 2 k + b: k the (q6, -q4) pair of Sp6, b the root of q2. At the wrist singularity
+// (u along h5, q5 free) q5 is set to 0 and the slot flagged for Newton steps.
+class Parallel123 {
+ public:
+  static constexpr int kSlots = 8;
+
+  explicit Parallel123(const Poe& poe, double rank_tolerance, double mirror = 0.0) {
+    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
+    p01_ = poe.p[0];
+    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
+    p6T_ = -poe.p[5];
+    M_inv_ = inverse_rigid(poe.M);
+    const V3& h1 = h_[0];
+    s2_ = h_[1].dot(h1) >= 0.0 ? 1.0 : -1.0;
+    s3_ = h_[2].dot(h1) >= 0.0 ? 1.0 : -1.0;
+    // the -q4 side of (Q1), (Q2): h5^T Rot(h4, phi) h1 and p45^T Rot(h4, phi) h1
+    double a4a, b4a, a4b, b4b;
+    detail6::trig(h_[4], h_[3], h1, c4a_, a4a, b4a);
+    detail6::trig(d_[3], h_[3], h1, c4b_, a4b, b4b);
+    Eigen::Matrix2d A2;
+    A2 << -a4a, -b4a, a4b, b4b;
+    sp6_ = Sp6(A2, rank_tolerance, mirror);
+    offset_ = h1.dot(d_[0] + d_[1] + d_[2]);
+    // SP3 for q2: |p12 + Rot(h2, q2) p23| = |w| <=> (-p12)^T Rot(h2, q2) p23 = (|p12|^2 + |p23|^2 - |w|^2) / 2
+    detail6::trig(-d_[0], h_[1], d_[1], c2_, a2_, b2_);
+    base2_ = d_[0].squaredNorm() + d_[1].squaredNorm();
+    V3 v = h1.cross(V3::UnitX());
+    if (v.norm() < 0.5) v = h1.cross(V3::UnitY());
+    v1_ = v.normalized();
+  }
+
+  bool rank1() const noexcept { return sp6_.rank1(); }
+  double rank_ratio() const noexcept { return sp6_.rank_ratio(); }
+  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
+
+  SPOTKIN_INLINE void solve(const M3& R, const V3& t, JointValue q[kSlots][6], bool exists[kSlots],
+                            bool refine[kSlots]) const noexcept {
+    for (int k = 0; k < kSlots; ++k) exists[k] = false, refine[k] = false;
+    const V3& h1 = h_[0];
+    const V3 a = R.transpose() * h1, tt = t - R * p6T_ - p01_;
+    double c6a, a6a, b6a, c6b, a6b, b6b;
+    detail6::trig(h_[4], h_[5], a, c6a, a6a, b6a);
+    detail6::trig(d_[4], h_[5], a, c6b, a6b, b6b);
+    Eigen::Matrix2d A1;
+    A1 << a6a, b6a, a6b, b6b;
+    const Eigen::Vector2d e(c4a_ - c6a, h1.dot(tt) - offset_ - c6b - c4b_);
+    JointValue pair[4][2];  // (q6, -q4)
+    bool found[4], near[4];
+    sp6_.pairs(A1, e, pair, found, near);
+    for (int k = 0; k < 4; ++k) {
+      if (!found[k]) continue;
+      const JointValue x6 = pair[k][0], x4{pair[k][1].c, -pair[k][1].s, 0.0};
+      const V3 u = rotate(h_[3], x4.c, -x4.s, h1), v = rotate(h_[5], x6.c, x6.s, a);
+      bool ill5 = false;
+      const JointValue x5 = detail6::sp1(v, u, h_[4], nullptr, &ill5);
+      // theta: Rot(h1, theta) v1 = R R_6^T R_5^T R_4^T v1
+      const V3 y = R * rotate(h_[5], x6.c, -x6.s, rotate(h_[4], x5.c, -x5.s, rotate(h_[3], x4.c, -x4.s, v1_)));
+      const JointValue theta = detail6::sp1(v1_, y, h1);
+      const V3 w = tt - rotate(h1, theta.c, theta.s,
+                               d_[2] + rotate(h_[3], x4.c, x4.s, d_[3] + rotate(h_[4], x5.c, x5.s, d_[4])));
+      const double rhs2 = 0.5 * (base2_ - w.squaredNorm()) - c2_;
+      for (int b2 = 0; b2 < 2; ++b2) {
+        JointValue x2;
+        bool near2 = false;
+        if (!detail6::root(a2_, b2_, rhs2, b2 == 0 ? 1.0 : -1.0, x2, false, &near2, sp6_.mirror())) continue;
+        bool ill1 = false;
+        const JointValue x1 = detail6::sp1(d_[0] + rotate(h_[1], x2.c, x2.s, d_[1]), w, h1, nullptr, &ill1);
+        // q3 = s3 (theta - q1 - s2 q2), as unit complex numbers
+        const double c12 = x1.c * x2.c - s2_ * x1.s * x2.s, s12 = x1.s * x2.c + s2_ * x1.c * x2.s;
+        const double c3 = theta.c * c12 + theta.s * s12, s3 = theta.s * c12 - theta.c * s12;
+        const int slot = 2 * k + b2;
+        q[slot][0] = x1, q[slot][1] = x2, q[slot][2] = JointValue{c3, s3_ * s3, 0.0};
+        q[slot][3] = x4, q[slot][4] = x5, q[slot][5] = x6;
+        exists[slot] = true;
+        refine[slot] = near[k] || near2 || ill5 || ill1;
+      }
+    }
+  }
+
+ private:
+  V3 h_[6], d_[5], p01_, p6T_, v1_;
+  double s2_ = 1.0, s3_ = 1.0, c4a_ = 0.0, c4b_ = 0.0, offset_ = 0.0, a2_ = 0.0, b2_ = 0.0, c2_ = 0.0, base2_ = 0.0;
+  Sp6 sp6_;
   Rigid<double> M_inv_;
 };
 

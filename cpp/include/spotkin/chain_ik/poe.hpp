@@ -19,7 +19,12 @@ namespace spotkin::chain_ik {
 struct Poe {
   static constexpr int kMaxJoints = 7;
   int n = 0;
-  std::array<V3, kMaxJoints> h{}, p{};
+  std::array<V3, kMaxJoints> h = zeros(), p = zeros();
+  static std::array<V3, kMaxJoints> zeros() {
+    std::array<V3, kMaxJoints> out;
+    out.fill(V3::Zero());
+    return out;
+  }
   Rigid<double> M;
 };
 
@@ -97,12 +102,13 @@ inline Poe fix_joint(const Poe& poe, int k, double value) {
 
 // ---- the families -------------------------------------------------------------------------------
 
-enum class Family6 : std::int8_t { SphericalWrist, Parallel234, SphericalShoulder };
+enum class Family6 : std::int8_t { SphericalWrist, Parallel234, Parallel123, SphericalShoulder };
 
 inline const char* family_name(Family6 f) {
   switch (f) {
     case Family6::SphericalWrist: return "6R-spherical-wrist";
     case Family6::Parallel234: return "6R-three-parallel-234";
+    case Family6::Parallel123: return "6R-three-parallel-123";
     case Family6::SphericalShoulder: return "6R-spherical-shoulder";
   }
   return "?";
@@ -136,31 +142,67 @@ inline double meeting_error(const Poe& poe, int first, V3& point) {
   return worst;
 }
 
-// What the classification measured: the deviations from each family.
-struct Geometry6 {
-  double wrist, shoulder, parallel234, parallel123;  // m, m, sin, sin
-  V3 wrist_point, shoulder_point;
+// The distance between axes i and j, and the translation of axis j (normal to both) that makes
+// it meet axis i; 0 for parallel axes (they meet at infinity).
+inline double axis_gap(const Poe& poe, int i, int j, V3& shift) {
+  const V3 normal = poe.h[i].cross(poe.h[j]);
+  const double sine = normal.norm();
+  if (sine <= 1e-12) {
+    shift = V3::Zero();
+    return 0.0;
+  }
+  const V3 n = normal / sine;
+  const double distance = (poe.p[j] - poe.p[i]).dot(n);
+  shift = -distance * n;
+  return std::fabs(distance);
+}
 
-  explicit Geometry6(const Poe& poe)
-      : wrist(meeting_error(poe, 3, wrist_point)),
-        shoulder(meeting_error(poe, 0, shoulder_point)),
-        parallel234(parallel_error(poe, 1)),
-        parallel123(parallel_error(poe, 0)) {}
+// What the classification measured: the deviations from each family, and for the parallel
+// families whether the pair of axes that makes their subproblem 6 rank 1 meets (axes 5 and 6
+// for 2-3-4, 4 and 5 for 1-2-3; UR arms and the Z1 have both).
+struct Geometry6 {
+  double wrist = 0.0, shoulder = 0.0, parallel234 = 0.0, parallel123 = 0.0;  // m, m, sin, sin
+  double gap56 = 0.0, gap45 = 0.0;                                          // m
+  V3 wrist_point = V3::Zero(), shoulder_point = V3::Zero(), shift6 = V3::Zero(), shift5 = V3::Zero();
+
+  Geometry6() = default;
+  // (in the body: the points are written by the calls, after every member exists)
+  explicit Geometry6(const Poe& poe) {
+    wrist = meeting_error(poe, 3, wrist_point);
+    shoulder = meeting_error(poe, 0, shoulder_point);
+    parallel234 = parallel_error(poe, 1);
+    parallel123 = parallel_error(poe, 0);
+    gap56 = axis_gap(poe, 4, 5, shift6);
+    gap45 = axis_gap(poe, 3, 4, shift5);
+  }
 
   double deviation(Family6 f) const {
-    return f == Family6::SphericalWrist ? wrist : f == Family6::Parallel234 ? parallel234 : shoulder;
+    switch (f) {
+      case Family6::SphericalWrist: return wrist;
+      case Family6::Parallel234: return parallel234;
+      case Family6::Parallel123: return parallel123;
+      case Family6::SphericalShoulder: return shoulder;
+    }
+    return shoulder;
   }
 };
 
 // The chain made exactly of its family: parallel axes set to their mean direction
-// (signs kept), meeting axes moved to pass through their nearest common point.
-inline Poe idealise(const Poe& poe, Family6 family, const Geometry6& geometry) {
+// (signs kept), meeting axes moved to pass through their nearest common point. For the
+// parallel families, axes 5 and 6 (2-3-4) or 4 and 5 (1-2-3) that pass within meet_distance
+// (but not within 1e-12) are made to meet, by moving axis 6 (or 5) normal to both.
+inline Poe idealise(const Poe& poe, Family6 family, const Geometry6& geometry, double meet_distance) {
   Poe out = poe;
-  if (family == Family6::Parallel234) {
+  if (family == Family6::Parallel234 && geometry.gap56 > 1e-12 && geometry.gap56 <= meet_distance)
+    out.p[5] += geometry.shift6;
+  if (family == Family6::Parallel123 && geometry.gap45 > 1e-12 && geometry.gap45 <= meet_distance)
+    out.p[4] += geometry.shift5;
+  if (family == Family6::Parallel234 || family == Family6::Parallel123) {
+    const int first = family == Family6::Parallel234 ? 1 : 0;
     V3 mean = V3::Zero();
-    for (int j = 1; j < 4; ++j) mean += (poe.h[j].dot(poe.h[1]) >= 0.0 ? 1.0 : -1.0) * poe.h[j];
+    for (int j = first; j < first + 3; ++j) mean += (poe.h[j].dot(poe.h[first]) >= 0.0 ? 1.0 : -1.0) * poe.h[j];
     mean.normalize();
-    for (int j = 1; j < 4; ++j) out.h[j] = (poe.h[j].dot(poe.h[1]) >= 0.0 ? 1.0 : -1.0) * mean;
+    for (int j = first; j < first + 3; ++j) out.h[j] = (poe.h[j].dot(poe.h[first]) >= 0.0 ? 1.0 : -1.0) * mean;
   } else {
     const int first = family == Family6::SphericalWrist ? 3 : 0;
     const V3 c = family == Family6::SphericalWrist ? geometry.wrist_point : geometry.shoulder_point;
@@ -179,7 +221,9 @@ inline double pose_residual(const Chain<double>& chain, const double* q, const R
 }
 
 // Gauss-Newton steps q <- q + J^+ e on the true chain (at most 20; stops below 1e-14 or
-// when a step no longer lowers the residual); returns the final residual.
+// when neither the step nor its halves, down to 1/16, lower the residual); returns the final
+// residual. J^+ drops singular directions below 1e-9 of the largest (near a singularity a
+// full pseudo-inverse step would be huge along a direction that barely moves the pose).
 inline double newton_polish(const Chain<double>& chain, double* q, const Rigid<double>& target) {
   const int n = chain.dof();
   using Mat = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor, 6, Poe::kMaxJoints>;
@@ -189,13 +233,21 @@ inline double newton_polish(const Chain<double>& chain, double* q, const Rigid<d
     double e[6], trial[Poe::kMaxJoints];
     differential::pose_error(target, chain.forward(q), e);
     chain.jacobian(q, J.data(), 6, false);
+    Eigen::CompleteOrthogonalDecomposition<Mat> cod(J.rows(), J.cols());
+    cod.setThreshold(1e-9);
+    cod.compute(J);
     const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, Poe::kMaxJoints, 1> dq =
-        J.completeOrthogonalDecomposition().solve(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(e));
-    for (int j = 0; j < n; ++j) trial[j] = q[j] + dq[j];
-    const double next = pose_residual(chain, trial, target);
-    if (!(next < residual)) break;
-    residual = next;
-    for (int j = 0; j < n; ++j) q[j] = trial[j];
+        cod.solve(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(e));
+    bool improved = false;
+    for (double step = 1.0; step >= 1.0 / 16.0 && !improved; step *= 0.5) {
+      for (int j = 0; j < n; ++j) trial[j] = q[j] + step * dq[j];
+      const double next = pose_residual(chain, trial, target);
+      if (next < residual) {
+        residual = next, improved = true;
+        for (int j = 0; j < n; ++j) q[j] = trial[j];
+      }
+    }
+    if (!improved) break;
   }
   return residual;
 }
