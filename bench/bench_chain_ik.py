@@ -1,8 +1,15 @@
 """Closed-form IK from DH tables: the general 3-joint position solve (target: <= 300 ns per target
 per core with every solution) and the 6R spherical-wrist solve from a table (target: <= 2x the
-time of the Spot-arm fast path, which runs as "ref:" in the same group, so speed-up >= 0.5x)."""
+time of the Spot-arm fast path, which runs as "ref:" in the same group, so speed-up >= 0.5x).
+
+The 6R families beyond the wrist (issue targets: UR5, all 8 solutions, >= 15x EAIK's IK_batched
+per core, and <= 2x the spherical-wrist path, speed-up >= 0.5x against "ref:SpotArm.ik_all"):
+"6R 2-3-4 UR5 vs EAIK" (EAIK as ref: where it installs), "6R 2-3-4 UR5 vs the wrist path",
+and the 1-2-3 parallel family beside the wrist path."""
 
 from __future__ import annotations
+
+import importlib.util
 
 import numpy as np
 import pytest
@@ -38,6 +45,45 @@ def arm_chain() -> sk.Chain:
 
 
 ARM_CHAIN = arm_chain()
+HAS_EAIK = importlib.util.find_spec("eaik") is not None
+# UR5 (standard DH: d, a, alpha): axes 2, 3, 4 parallel
+UR5 = sk.Chain.from_dh(
+    [
+        (0, 0.089159, 0.0, np.pi / 2, 0.0),
+        (0, 0.0, -0.425, 0.0, 0.0),
+        (0, 0.0, -0.39225, 0.0, 0.0),
+        (0, 0.10915, 0.0, np.pi / 2, 0.0),
+        (0, 0.09465, 0.0, -np.pi / 2, 0.0),
+        (0, 0.0823, 0.0, 0.0, 0.0),
+    ]
+)
+
+
+def parallel_123_chain() -> sk.Chain:
+    """Axes 1, 2, 3 parallel (z), an offset wrist x, y, z whose axes 4 and 5 meet."""
+    points = np.array(
+        [[0, 0, 0], [0.35, 0, 0.05], [0.65, 0.02, 0.1], [0.8, 0, 0.15], [0.9, 0, 0.15], [0.95, 0.08, 0.15]]
+    )
+    axes = np.array([[0, 0, 1], [0, 0, 1], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    placements = np.tile(np.eye(4), (6, 1, 1))
+    placements[:, :3, 3] = np.diff(np.vstack([np.zeros(3), points]), axis=0)
+    tool = sk.translation(np.array([1.0, 0.08, 0.1]) - points[-1])
+    return sk.Chain.from_joints(placements, axes, tool=tool)
+
+
+PARALLEL_123 = parallel_123_chain()
+
+
+def ur5_eaik():
+    """EAIK's H, P description of UR5 (from the chain's Jacobian at q = 0), and the tool rotation
+    EAIK leaves out (its tool frame at q = 0 is the base's)."""
+    from eaik.IK_HP import HPRobot
+
+    M, J = UR5.fk(np.zeros(6)), UR5.jacobian(np.zeros(6))
+    axes = J[3:].T
+    points = np.array([np.cross(np.cross(h, M[:3, 3]) - v, h) for h, v in zip(axes, J[:3].T)])
+    P = np.vstack([points[0], np.diff(points, axis=0), M[:3, 3] - points[-1]])
+    return HPRobot(axes.copy(), P), M[:3, :3]
 
 
 def targets(chain: sk.Chain, n: int) -> np.ndarray:
@@ -46,6 +92,8 @@ def targets(chain: sk.Chain, n: int) -> np.ndarray:
 
 
 def test_kinds():
+    assert UR5.ik_kind == "6R-three-parallel-234"
+    assert PARALLEL_123.ik_kind == "6R-three-parallel-123"
     assert GENERAL.ik_kind == "3R-general-quartic"
     assert LEG.ik_kind == "3R-parallel"
     assert ARM_CHAIN.ik_kind == "6R-spherical-wrist"
@@ -78,3 +126,31 @@ def test_6r_nearest_from_table(measure, impl, n):
     T, seed = (T[0], seed[0]) if n == 1 else (T, seed)
     func = ARM.ik if impl.startswith("ref:") else ARM_CHAIN.ik_nearest
     measure("6R nearest to a seed", n, impl, func, T, seed)
+
+
+@pytest.mark.parametrize("n", [1, 100_000])
+@pytest.mark.parametrize("impl", ["Chain.ik-1thread", "Chain.ik", "ref:EAIK IK_batched"])
+def test_6r_parallel_234_vs_eaik(measure, impl, n):
+    T = UR5.fk(np.random.default_rng(3).uniform(-np.pi, np.pi, (n, 6)))
+    if impl.startswith("ref:"):
+        if not HAS_EAIK:
+            pytest.skip("EAIK not installed")
+        robot, tool_rotation = ur5_eaik()
+        poses = T.copy()
+        poses[:, :3, :3] = T[:, :3, :3] @ tool_rotation.T
+        measure("6R 2-3-4 UR5 vs EAIK, all 8", n, impl, robot.IK_batched, poses)
+    else:
+        measure("6R 2-3-4 UR5 vs EAIK, all 8", n, impl, UR5.ik, T[0] if n == 1 else T)
+
+
+@pytest.mark.parametrize("n", [1, 100_000])
+@pytest.mark.parametrize(
+    "impl", ["UR5 Chain.ik-1thread", "1-2-3 Chain.ik-1thread", "ref:SpotArm.ik_all-1thread"]
+)
+def test_6r_parallel_vs_wrist_path(measure, impl, n):
+    rng = np.random.default_rng(4)
+    chain = {"UR5": UR5, "1-2-3": PARALLEL_123}.get(impl.split()[0], None)
+    T = (chain or ARM).fk(rng.uniform(-np.pi, np.pi, (n, 6)))
+    T = T[0] if n == 1 else T
+    func = ARM.ik_all if chain is None else chain.ik
+    measure("6R parallel families vs the wrist path, all 8", n, impl, func, T)

@@ -1826,7 +1826,7 @@ def _chain_entries(tool_extra):
             call=lambda c, get=get, **k: get(c).ik_position(**k),
             slots=[Batch("p", (3,))],
             baseline=chain_q,
-            outputs=outs(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("status", ())),
+            outputs=outs(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("flag", (4,)), ("status", ())),
             expect=ACCEPT if dof == 3 else REJECT,
             check=lambda x, out, kw, c, fkp=point_fk, lim=limits_of: solution_check(
                 fkp(c), lambda x: x["p"], lim(c)
@@ -1839,11 +1839,30 @@ def _chain_entries(tool_extra):
             call=lambda c, get=get, **k: get(c).ik(**k),
             slots=[Batch("T", (4, 4), pose="T")],
             baseline=chain_q,
-            outputs=outs(("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("status", ())),
+            outputs=outs(("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("flag", (8,)), ("status", ())),
             expect=ACCEPT if dof == 6 else REJECT,
             check=lambda x, out, kw, c, fkp=pose_fk, lim=limits_of: solution_check(
                 fkp(c), lambda x: pose_matrix(x["T"]), lim(c)
             )(x, out, kw, c),
+        )
+        def tolerance_probe(result, kw, c, get=get):
+            if not isinstance(result, sk.Chain) or result.dof != get(c).dof:
+                return f"with_ik_tolerance returned {result!r}, not a Chain of the same joints"
+            if result is get(c):
+                return "with_ik_tolerance returned the chain itself, not a new one"
+            return None
+
+        register(
+            light=True,
+            name=f"Chain.with_ik_tolerance{tag}",
+            covers="spotkin.Chain.with_ik_tolerance",
+            call=lambda c, get=get, **k: get(c).with_ik_tolerance(**k),
+            slots=[
+                Real("angle", 1e-3, "nonneg", skip=("int", "np_int"), default="omit"),
+                Real("distance", 1e-3, "nonneg", default="omit"),
+            ],
+            probe=tolerance_probe,
+            overflow_ok=True,
         )
         target = (
             Batch("target", (3,), aliases=("p",))

@@ -387,7 +387,10 @@ def test_6r_non_rotation_is_invalid_input():
         ([(0, 0.3, 0.0, 0.0, 0.0), (0, 0.4, 0.0, 0.0, 0.0), (0, 0.2, 0.0, 0.0, 0.0)], "placed in 3D"),
         ([(0, 0.0, 0.0, 0.0, 0.0), (0, 0.0, 0.0, 0.1, 0.0), (0, 0.0, 0.0, 0.2, 0.0)], "placed in 3D"),
         ([(0, 0.0, 0.0, 0.0, 0.0)] * 4, "4-joint chain"),
-        ([(0, 0, 0, 0, 0), (0, 0.3, 1.0, 0, 0), (0, 0.4, 0.5, 0.1, 0)] * 2, "do not meet at one point"),
+        (
+            [(0, 0, 0, 0, 0), (0, 0.3, 1.0, 0, 0), (0, 0.4, 0.5, 0.1, 0)] * 2,
+            "no closed-form 6R family fits this chain: checked axes 4-5-6 meeting .*ik_differential",
+        ),
         (
             [(0, 0.0, 0.0, 0.0, 0.0), (0, 0.0, -1.5, 0.0, 0.0), (0, 0.4, 0.0, 0.0, 0.0)]
             + [(0, 0.0, -1.5, 0.4, 0.0), (0, 0.0, 0.0, 0.0, 0.0), (0, 0.0, 1.5, 0.0, 0.0)],
@@ -497,6 +500,7 @@ def stack_solutions(chain, method, targets):
         np.stack([r.q for r in parts]),
         np.stack([r.valid for r in parts]),
         np.stack([r.exists for r in parts]),
+        np.stack([r.exact for r in parts]),
         np.array([r.status for r in parts], dtype=np.int8),
     )
 

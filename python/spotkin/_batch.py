@@ -188,7 +188,7 @@ OPERATIONS: dict[str, Operation] = {
         (_CHAIN_TARGETS,),
         lambda m, a, o: _skd()._plan_ik_all(m, a["target"]),
         (),
-        "closed-form IK of the chain, every solution: q, valid, exists, status",
+        "closed-form IK of the chain, every solution: q, valid, exists, exact, status",
     ),
 }
 

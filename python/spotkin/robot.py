@@ -322,8 +322,9 @@ class Robot:
 
     @property
     def arm(self):
-        """The first arm found on the body (a 6-joint :class:`Chain`; closed form when its last three axes
-        meet), or None."""
+        """The first arm found on the body (a 6-joint :class:`Chain`), or None. Its :meth:`Chain.ik` is in
+        closed form when the arm is of a 6R family (:attr:`Chain.ik_kind`: a spherical wrist, three
+        parallel axes as on UR arms and the Unitree Z1, or a spherical shoulder)."""
         return self._arm
 
     @property

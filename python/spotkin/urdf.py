@@ -930,7 +930,10 @@ def find_arms(
             spherical = center is not None
         name = _common_name(key) or tip
         if not spherical:
-            report.append(f"arm {name!r}: wrist not spherical: {reason}")
+            report.append(
+                f"arm {name!r}: wrist not spherical ({reason}); its chain's ik_kind names the closed-form "
+                "6R family it has, if any (three parallel axes, spherical shoulder)"
+            )
         names.append(name)
         arms.append(
             dict(
