@@ -46,15 +46,15 @@ def arm_chain() -> sk.Chain:
 
 ARM_CHAIN = arm_chain()
 HAS_EAIK = importlib.util.find_spec("eaik") is not None
-# UR5 (standard DH: d, a, alpha): axes 2, 3, 4 parallel
+# UR5, Universal Robots' standard DH table as (sigma, a, alpha, d, theta): axes 2, 3, 4 parallel
 UR5 = sk.Chain.from_dh(
     [
-        (0, 0.089159, 0.0, np.pi / 2, 0.0),
-        (0, 0.0, -0.425, 0.0, 0.0),
-        (0, 0.0, -0.39225, 0.0, 0.0),
-        (0, 0.10915, 0.0, np.pi / 2, 0.0),
-        (0, 0.09465, 0.0, -np.pi / 2, 0.0),
-        (0, 0.0823, 0.0, 0.0, 0.0),
+        (0, 0.0, np.pi / 2, 0.089159, 0.0),
+        (0, -0.425, 0.0, 0.0, 0.0),
+        (0, -0.39225, 0.0, 0.0, 0.0),
+        (0, 0.0, np.pi / 2, 0.10915, 0.0),
+        (0, 0.0, -np.pi / 2, 0.09465, 0.0),
+        (0, 0.0, 0.0, 0.0823, 0.0),
     ]
 )
 
