@@ -27,6 +27,14 @@
 #define SPOTKIN_VECTOR_KERNEL
 #endif
 
+// A scalar routine called once per sample from a vector kernel: kept out of the kernel's
+// target clones so that its own callees (Eigen's fixed-size products) inline into it.
+#if defined(__GNUC__)
+#define SPOTKIN_SCALAR_PATH __attribute__((noinline))
+#else
+#define SPOTKIN_SCALAR_PATH
+#endif
+
 namespace spotkin {
 
 // One status per target; mirrored by the Python IntEnum `spotkin.Status`.

@@ -118,6 +118,10 @@ class Arm6 {
   bool reversed() const noexcept { return reversed_; }
   // The spherical wrist of the chain itself, solved by the lane kernel (wrist_block).
   bool direct_wrist() const noexcept { return family_ == Family6::SphericalWrist && !idealised_; }
+  // Three parallel axes 2-3-4 of rank-1 form on the chain itself: solved across lanes
+  // (Parallel234::solve_lanes), with solve() for the lanes it hands back.
+  bool lane_parallel() const noexcept { return parallel_ && !idealised_ && parallel_->rank1(); }
+  const Parallel234& parallel() const noexcept { return *parallel_; }
   const SphericalWrist6& wrist() const noexcept { return *wrist_; }
   const Geometry6& geometry() const noexcept { return geometry_; }
   std::string kind() const { return family_name(family_); }
@@ -128,8 +132,10 @@ class Arm6 {
   // Every solution of one target pose as (cos, sin) per joint, in this chain's joint
   // order (not for direct_wrist chains, which go by lanes); refine[slot]: the slot is near
   // a double root and needs Newton steps (see Parallel234::solve).
-  SPOTKIN_INLINE void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots],
-                            bool refine[kSlots]) const noexcept {
+  // Not inlined into the target-cloned lane kernels: compiled for the baseline target, where
+  // Eigen's small products inline (inside a clone they cannot, and become calls).
+  SPOTKIN_SCALAR_PATH void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots],
+                                 bool refine[kSlots]) const noexcept {
     for (int k = 0; k < kSlots; ++k) refine[k] = false;
     if (parallel_) {
       M3 R;
@@ -198,6 +204,8 @@ class Arm6 {
   std::optional<Parallel123> parallel123_;
 };
 
+static_assert(Parallel234::kLanes == SphericalWrist6::kLanes, "one block width for every 6R family");
+
 // A finished block of 6R solutions plus exact[k][i] (1: residual below 1e-10).
 struct Arm6Block : WristBlock {
   double exact[Arm6::kSlots][SphericalWrist6::kLanes];
@@ -238,23 +246,62 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
   double c[S][6][L], s[S][6][L];
   bool refine_slot[S][L] = {};
   Arm::Pose targets[L];
-  for (int i = 0; i < L; ++i) {
-    if (i >= m) {  // unused lanes: any finite value
-      for (int k = 0; k < S; ++k)
-        for (int j = 0; j < 6; ++j) c[k][j][i] = 1.0, s[k][j][i] = 0.0;
-      continue;
+  if (solver.lane_parallel()) {
+    // every lane, a short block's padded with its last pose, so that a pose's answer does not
+    // depend on its neighbours or on how a batch is split
+    double R[3][3][L], t[3][L], fallback[L], exists[S][L];
+    const Rigid<double>& M_inv = solver.parallel().M_inv();
+    for (int i = 0; i < L; ++i) {
+      double in[width];
+      for (int e = 0; e < width; ++e) in[e] = pose_in[e][std::min(i, m - 1)];
+      out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
+      if (Format == PoseFormat::Matrix && out.input_ok[i] != 0.0) project_rotation(targets[i]);
+      const Arm::Pose& T = targets[i];
+      for (int r = 0; r < 3; ++r) {  // G = T M^-1
+        for (int col = 0; col < 3; ++col)
+          R[r][col][i] = T.R[r][0] * M_inv.R(0, col) + T.R[r][1] * M_inv.R(1, col) + T.R[r][2] * M_inv.R(2, col);
+        t[r][i] = T.R[r][0] * M_inv.p[0] + T.R[r][1] * M_inv.p[1] + T.R[r][2] * M_inv.p[2] + T.p[r];
+      }
     }
-    double in[width];
-    for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
-    out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
-    if (Format == PoseFormat::Matrix && out.input_ok[i] != 0.0) project_rotation(targets[i]);
-    JointValue q[S][6];
-    bool ok[S] = {}, refine[S] = {};
-    if (out.input_ok[i] != 0.0) solver.solve(targets[i], q, ok, refine);
-    for (int k = 0; k < S; ++k) {
-      refine_slot[k][i] = refine[k];
-      out.exists[k][i] = ok[k] ? 1.0 : 0.0;
-      for (int j = 0; j < 6; ++j) c[k][j][i] = ok[k] ? q[k][j].c : 1.0, s[k][j][i] = ok[k] ? q[k][j].s : 0.0;
+    solver.parallel().solve_lanes(R, t, out.input_ok, c, s, exists, fallback);
+    for (int i = 0; i < L; ++i)
+      for (int k = 0; k < S; ++k) out.exists[k][i] = exists[k][i];
+    for (int i = 0; i < m; ++i) {
+      if (fallback[i] == 0.0 || out.input_ok[i] == 0.0) continue;
+      JointValue q[S][6];
+      bool ok[S] = {}, refine[S] = {};
+      solver.solve(targets[i], q, ok, refine);
+      for (int k = 0; k < S; ++k) {
+        refine_slot[k][i] = refine[k];
+        out.exists[k][i] = ok[k] ? 1.0 : 0.0;
+        for (int j = 0; j < 6; ++j) c[k][j][i] = ok[k] ? q[k][j].c : 1.0, s[k][j][i] = ok[k] ? q[k][j].s : 0.0;
+      }
+    }
+    for (int k = 0; k < S; ++k)  // no NaN into atan2 where nothing exists
+      for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < L; ++i) {
+          const bool keep = out.exists[k][i] != 0.0;
+          c[k][j][i] = keep ? c[k][j][i] : 1.0, s[k][j][i] = keep ? s[k][j][i] : 0.0;
+        }
+  } else {
+    for (int i = 0; i < L; ++i) {
+      if (i >= m) {  // unused lanes: any finite value
+        for (int k = 0; k < S; ++k)
+          for (int j = 0; j < 6; ++j) c[k][j][i] = 1.0, s[k][j][i] = 0.0;
+        continue;
+      }
+      double in[width];
+      for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
+      out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
+      if (Format == PoseFormat::Matrix && out.input_ok[i] != 0.0) project_rotation(targets[i]);
+      JointValue q[S][6];
+      bool ok[S] = {}, refine[S] = {};
+      if (out.input_ok[i] != 0.0) solver.solve(targets[i], q, ok, refine);
+      for (int k = 0; k < S; ++k) {
+        refine_slot[k][i] = refine[k];
+        out.exists[k][i] = ok[k] ? 1.0 : 0.0;
+        for (int j = 0; j < 6; ++j) c[k][j][i] = ok[k] ? q[k][j].c : 1.0, s[k][j][i] = ok[k] ? q[k][j].s : 0.0;
+      }
     }
   }
   for (int k = 0; k < S; ++k)

@@ -103,6 +103,9 @@ class Sp6 {
   bool rank1() const noexcept { return rank1_; }
   double rank_ratio() const noexcept { return rank_ratio_; }
   double mirror() const noexcept { return mirror_; }
+  const Eigen::Vector2d& null_vector() const noexcept { return n_; }
+  const Eigen::Vector2d& range_vector() const noexcept { return m_; }
+  const Eigen::RowVector2d& range_row() const noexcept { return ma_; }
 
   SPOTKIN_INLINE void pairs(const Eigen::Matrix2d& A1, const Eigen::Vector2d& e, JointValue pair[4][2],
                             bool found[4], bool near[4]) const noexcept {
@@ -243,6 +246,148 @@ class Parallel234 {
   bool rank1() const noexcept { return sp6_.rank1(); }
   double rank_ratio() const noexcept { return sp6_.rank_ratio(); }
   const Rigid<double>& M_inv() const noexcept { return M_inv_; }
+
+  // ---- the same solve across L lanes (rank-1 form, exact chains): plain arrays and selects ----
+  static constexpr int kLanes = 16;
+
+  // Lane i of (R, t) (G = T M^-1, rows r, columns c: R[r][c][i]) -> c, s of every slot and
+  // joint, exists[slot][i] (0/1) and fallback[i] (1: a near double root, an ill-conditioned or
+  // free angle: the caller solves that lane again by solve() and refines it). Lanes whose
+  // input_ok is 0 give no slot.
+  SPOTKIN_INLINE void solve_lanes(const double (&R)[3][3][kLanes], const double (&t)[3][kLanes],
+                                  const double (&input_ok)[kLanes], double (&c)[kSlots][6][kLanes],
+                                  double (&s)[kSlots][6][kLanes], double (&exists)[kSlots][kLanes],
+                                  double (&fallback)[kLanes]) const noexcept {
+    constexpr int L = kLanes;
+    // local copies of the constants: the stores below cannot alias them
+    double h[6][3], d[5][3], p01[3], p6T[3], h2p[3], h1x2[3], v2[3];
+    for (int r = 0; r < 3; ++r) {
+      for (int j = 0; j < 6; ++j) h[j][r] = h_[j][r];
+      for (int j = 0; j < 5; ++j) d[j][r] = d_[j][r];
+      p01[r] = p01_[r], p6T[r] = p6T_[r], h2p[r] = h2_perp_[r], h1x2[r] = h1_x_h2_[r], v2[r] = v2_[r];
+    }
+    const double h12 = h12_, e0c = e_const_[0], e1c = e_const_[1], s3 = s3_, s4 = s4_;
+    const double n0 = sp6_.null_vector()[0], n1 = sp6_.null_vector()[1];
+    const double m0 = sp6_.range_vector()[0], m1 = sp6_.range_vector()[1];
+    const double ma0 = sp6_.range_row()[0], ma1 = sp6_.range_row()[1];
+    const double ma_r2 = ma0 * ma0 + ma1 * ma1, ma_inv = ma_r2 > 0.0 ? 1.0 / std::sqrt(ma_r2) : 0.0;
+    const double a3 = a3_, b3 = b3_, c3 = c3_, base3 = base3_;
+    const double r3 = a3 * a3 + b3 * b3, inv3 = r3 > 0.0 ? 1.0 / std::sqrt(r3) : 0.0;
+    constexpr double tangent = detail6::kTangent;
+    auto dot = [](const double* a, const double* b) SPOTKIN_INLINE_LAMBDA { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    // Rot(k, q) x for (cos q, sin q) = (cq, sq) (Rodrigues)
+    auto rotate = [&](const double* k, double cq, double sq, const double* x, double* out) SPOTKIN_INLINE_LAMBDA {
+      const double along = dot(k, x);
+      const double cross[3] = {k[1] * x[2] - k[2] * x[1], k[2] * x[0] - k[0] * x[2], k[0] * x[1] - k[1] * x[0]};
+      for (int r = 0; r < 3; ++r) out[r] = along * k[r] + cq * (x[r] - along * k[r]) + sq * cross[r];
+    };
+    // (cos, sin) turning p to q about unit k; ill: the angle loses digits (or is free)
+    auto sp1 = [&](const double* p, const double* q, const double* k, double& cq, double& sq, double& ill) SPOTKIN_INLINE_LAMBDA {
+      const double cross[3] = {p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]};
+      const double cc = dot(p, q) - dot(k, p) * dot(k, q), ss = dot(k, cross), r2 = cc * cc + ss * ss;
+      const bool bad = !(r2 > 1e-16 * dot(p, p) * dot(q, q)) || !(r2 > 1e-30);
+      const double inv = bad ? 0.0 : 1.0 / std::sqrt(r2);
+      cq = bad ? 1.0 : cc * inv, sq = bad ? 0.0 : ss * inv;
+      ill = bad ? 1.0 : ill;
+    };
+    // a cos x + b sin x = rhs with hypot(a, b) = 1 / inv: the root of sign "sign"; ok and near flags
+    auto root = [&](double ca, double sa, double ratio, double sign, double& cq, double& sq, double& ok,
+                    double& near) SPOTKIN_INLINE_LAMBDA {
+      const bool root_exists = std::fabs(ratio) <= 1.0 + tangent;
+      ok = root_exists ? ok : 0.0;
+      near = root_exists && std::fabs(ratio) > 1.0 - 1e-8 ? 1.0 : near;  // a double root (acos loses digits)
+      const double cl = std::min(1.0, std::max(-1.0, ratio)), k = sign * std::sqrt((1.0 - cl) * (1.0 + cl));
+      cq = ca * cl - sa * k, sq = sa * cl + ca * k;
+    };
+    // lane-inner loops (one pass per root choice), so that each loop body vectorises
+    double Rl[3][3][L], tt[3][L], A00[L], A01[L], A10[L], A11[L], e0[L], e1[L], na0[L], na1[L], inv1[L], ratio1[L];
+    for (int i = 0; i < L; ++i) {
+      fallback[i] = 0.0;
+      double Rh6[3], t3[3];
+      for (int r = 0; r < 3; ++r) {
+        for (int cc = 0; cc < 3; ++cc) Rl[r][cc][i] = R[r][cc][i];
+        Rh6[r] = R[r][0][i] * h[5][0] + R[r][1][i] * h[5][1] + R[r][2][i] * h[5][2];
+        t3[r] = t[r][i] - (R[r][0][i] * p6T[0] + R[r][1][i] * p6T[1] + R[r][2][i] * p6T[2]) - p01[r];
+        tt[r][i] = t3[r];
+      }
+      A00[i] = dot(Rh6, h2p), A01[i] = dot(Rh6, h1x2), A10[i] = dot(t3, h2p), A11[i] = dot(t3, h1x2);
+      e0[i] = e0c - dot(Rh6, h[0]) * h12, e1[i] = e1c - dot(t3, h[0]) * h12;
+      na0[i] = n0 * A00[i] + n1 * A10[i], na1[i] = n0 * A01[i] + n1 * A11[i];
+      const double r1 = na0[i] * na0[i] + na1[i] * na1[i];
+      inv1[i] = r1 > 0.0 ? 1.0 / std::sqrt(r1) : 0.0;
+      ratio1[i] = r1 > 0.0 ? (n0 * e0[i] + n1 * e1[i]) * inv1[i] : 2.0;
+      fallback[i] = r1 > 0.0 || input_ok[i] == 0.0 ? 0.0 : 1.0;
+    }
+    for (int i1 = 0; i1 < 2; ++i1) {
+      double c1[L], s1[L], ok1[L], near1[L], ratio5[L], a[3][L], A[3][L];
+      for (int i = 0; i < L; ++i) {
+        double ok = input_ok[i], nr = 0.0, cq, sq;
+        root(na0[i] * inv1[i], na1[i] * inv1[i], ratio1[i], i1 == 0 ? 1.0 : -1.0, cq, sq, ok, nr);
+        c1[i] = cq, s1[i] = sq, ok1[i] = ok, near1[i] = nr;
+        const double f0 = e0[i] - (A00[i] * cq + A01[i] * sq), f1 = e1[i] - (A10[i] * cq + A11[i] * sq);
+        ratio5[i] = (m0 * f0 + m1 * f1) * ma_inv;
+        double h2_1[3], tl[3], Al[3];  // R_1 h2, R^T R_1 h2, R_1^T tt - p12
+        rotate(h[0], cq, sq, h[1], h2_1);
+        for (int r = 0; r < 3; ++r) a[r][i] = Rl[0][r][i] * h2_1[0] + Rl[1][r][i] * h2_1[1] + Rl[2][r][i] * h2_1[2];
+        for (int r = 0; r < 3; ++r) tl[r] = tt[r][i];
+        rotate(h[0], cq, -sq, tl, Al);
+        for (int r = 0; r < 3; ++r) A[r][i] = Al[r] - d[0][r];
+      }
+      for (int i5 = 0; i5 < 2; ++i5) {
+        double c5[L], s5[L], ok5[L], near5[L], ill6[L], c6[L], s6[L], ct[L], st[L], w[3][L], ratio3[L];
+        for (int i = 0; i < L; ++i) {
+          double ok = ok1[i], nr = near1[i], cq, sq;
+          root(ma0 * ma_inv, ma1 * ma_inv, ratio5[i], i5 == 0 ? 1.0 : -1.0, cq, sq, ok, nr);
+          c5[i] = cq, s5[i] = sq, ok5[i] = ok, near5[i] = nr;
+          double b[3], al[3], ill = 0.0, cq6, sq6;
+          rotate(h[4], cq, -sq, h[1], b);
+          for (int r = 0; r < 3; ++r) al[r] = a[r][i];
+          sp1(al, b, h[5], cq6, sq6, ill);
+          c6[i] = cq6, s6[i] = sq6, ill6[i] = ill;
+          // theta: Rot(h2, theta) v2 = R_1^T R R_6^T R_5^T v2
+          double u5[3], u6[3], Ru[3], y[3];
+          rotate(h[4], cq, -sq, v2, u5);
+          rotate(h[5], cq6, -sq6, u5, u6);
+          for (int r = 0; r < 3; ++r) Ru[r] = Rl[r][0][i] * u6[0] + Rl[r][1][i] * u6[1] + Rl[r][2][i] * u6[2];
+          rotate(h[0], c1[i], -s1[i], Ru, y);
+          double ctl, stl, ill_theta = 0.0;
+          sp1(v2, y, h[1], ctl, stl, ill_theta);
+          ct[i] = ctl, st[i] = stl;
+          double B[3], RB[3], wl[3];
+          rotate(h[4], cq, sq, d[4], B);
+          for (int r = 0; r < 3; ++r) B[r] += d[3][r];
+          rotate(h[1], ctl, stl, B, RB);
+          for (int r = 0; r < 3; ++r) wl[r] = A[r][i] - RB[r], w[r][i] = wl[r];
+          ratio3[i] = (0.5 * (base3 - dot(wl, wl)) - c3) * inv3;
+        }
+        for (int b3i = 0; b3i < 2; ++b3i) {
+          const int slot = 4 * i1 + 2 * i5 + b3i;
+          for (int i = 0; i < L; ++i) {
+            double ok3 = ok5[i], near3 = near5[i], cq3, sq3;
+            root(a3 * inv3, b3 * inv3, ratio3[i], b3i == 0 ? 1.0 : -1.0, cq3, sq3, ok3, near3);
+            double rd2[3], u[3], wl[3], c2, s2, ill2 = ill6[i];
+            rotate(h[2], cq3, sq3, d[2], rd2);
+            for (int r = 0; r < 3; ++r) u[r] = d[1][r] + rd2[r], wl[r] = w[r][i];
+            sp1(u, wl, h[1], c2, s2, ill2);
+            const double c23 = c2 * cq3 - s3 * s2 * sq3, s23 = s2 * cq3 + s3 * c2 * sq3;
+            const double c4 = ct[i] * c23 + st[i] * s23, s4v = st[i] * c23 - ct[i] * s23;
+            c[slot][0][i] = c1[i], s[slot][0][i] = s1[i];
+            c[slot][1][i] = c2, s[slot][1][i] = s2;
+            c[slot][2][i] = cq3, s[slot][2][i] = sq3;
+            c[slot][3][i] = c4, s[slot][3][i] = s4 * s4v;
+            c[slot][4][i] = c5[i], s[slot][4][i] = s5[i];
+            c[slot][5][i] = c6[i], s[slot][5][i] = s6[i];
+            exists[slot][i] = ok3;
+            // redo the lane: a (q1, q5) pair whose q6 is free or ill-conditioned (the wrist
+            // singularity, where solve() picks theta for the elbow), or a slot that exists but is
+            // near a double root or ill-conditioned
+            const bool edgy = (ok5[i] != 0.0 && ill6[i] != 0.0) || (ok3 != 0.0 && (near3 != 0.0 || ill2 != 0.0));
+            fallback[i] = edgy && input_ok[i] != 0.0 ? 1.0 : fallback[i];
+          }
+        }
+      }
+    }
+  }
 
   // Every solution for G = T M^-1 (R, t): q[slot] = (cos, sin) of the 6 angles.
   // refine[slot]: a root of q1, q5 or q3 is within 1e-8 of a double root (|ratio| near 1), where
