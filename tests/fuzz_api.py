@@ -1837,7 +1837,19 @@ def _chain_entries(tool_extra):
             name=f"Chain.ik{tag}",
             covers="spotkin.Chain.ik",
             call=lambda c, get=get, **k: get(c).ik(**k),
-            slots=[Batch("T", (4, 4), pose="T")],
+            slots=[
+                Batch("T", (4, 4), pose="T"),
+                # a free joint is for 7-joint chains: refused here, and free_value alone too
+                Custom(
+                    "free_joint",
+                    {
+                        "two": lambda c, r, b: Arg(2, REJECT, "value"),
+                        "bool": lambda c, r, b: Arg(True, REJECT),
+                    },
+                    default="omit",
+                ),
+                Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
+            ],
             baseline=chain_q,
             outputs=outs(("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("flag", (8,)), ("status", ())),
             expect=ACCEPT if dof == 6 else REJECT,
@@ -1863,6 +1875,50 @@ def _chain_entries(tool_extra):
             ],
             probe=tolerance_probe,
             overflow_ok=True,
+        )
+        # the free-joint methods need a 7-joint chain (tests/test_chain_ik7.py covers them on
+        # Panda- and Kinova-like arms): on these chains every call is refused
+        def needs_seven(result, kw, c):
+            return f"a 7-joint chain was needed, got {result!r}"
+
+        register(
+            name=f"Chain.ik_free_kind{tag}",
+            covers="spotkin.Chain.ik_free_kind",
+            call=lambda c, get=get, **k: get(c).ik_free_kind(**k),
+            slots=[Int("free_joint", 1, 0, 7)],
+            expect=REJECT,
+            why="",
+            probe=needs_seven,
+        )
+        register(
+            name=f"Chain.ik_self_motion{tag}",
+            covers="spotkin.Chain.ik_self_motion",
+            call=lambda c, get=get, **k: get(c).ik_self_motion(**k),
+            slots=[
+                Batch("T", (4, 4), pose="T"),
+                Int("free_joint", 1, 0, 7),
+                Custom("values", {"count": lambda c, r, b: Arg(4), "array": lambda c, r, b: Arg(np.zeros(3))},
+                       default="omit"),
+            ],
+            baseline=chain_q,
+            expect=REJECT,
+            why="",
+            probe=needs_seven,
+        )
+        register(
+            name=f"Chain.ik_nearest_free{tag}",
+            covers="spotkin.Chain.ik_nearest_free",
+            call=lambda c, get=get, **k: get(c).ik_nearest_free(**k),
+            slots=[
+                Batch("T", (4, 4), pose="T"),
+                angle_slot("seed", dof),
+                Int("free_joint", 1, 0, 7),
+                Custom("values", {"count": lambda c, r, b: Arg(4)}, default="omit"),
+            ],
+            baseline=chain_q,
+            expect=REJECT,
+            why="",
+            probe=needs_seven,
         )
         target = (
             Batch("target", (3,), aliases=("p",))

@@ -259,4 +259,6 @@ def register_entries(api) -> None:
             model,
             {"target": {"mdh3": "p", "dh6": "T"}.get(key, target)},
             extra=() if key == "arm" else (no_seed(),),
+            # Chain.ik's free joint (7-joint chains) has no Dask form
+            change=lambda slots: [slot for slot in slots if slot.name not in ("free_joint", "free_value")],
         )

@@ -383,3 +383,15 @@ def test_against_eaik(name, rng):
     print(f"EAIK {name}: {least_squares} of {len(q)} targets answered with least squares")
     if name != "shoulder":  # EAIK answers the spherical shoulder with least squares only
         assert least_squares < len(q)
+
+
+def test_calibrated_chains_pickle_with_their_tolerance(rng):
+    import pickle
+
+    chain = sk_chain(perturbed(CHAINS["UR5"](), rng, 1e-4)).with_ik_tolerance(angle=1e-3, distance=1e-3)
+    copy = pickle.loads(pickle.dumps(chain))
+    assert copy.ik_idealised and copy.ik_kind == chain.ik_kind
+    T = chain.fk(rng.uniform(-PI, PI, (50, 6)))
+    a, b = chain.ik(T), copy.ik(T)
+    np.testing.assert_array_equal(a.q, b.q)
+    np.testing.assert_array_equal(a.exact, b.exact)

@@ -2,6 +2,7 @@
 // IK and 6R IK by family (spherical wrist, parallel 2-3-4, spherical shoulder).
 #include "spotkin/chain_ik.hpp"
 #include "spotkin/chain_ik/arm6.hpp"
+#include "spotkin/chain_ik/free_joint.hpp"
 
 #include <memory>
 #include <optional>
@@ -225,9 +226,65 @@ py::object ik_pose(const ChainIK& ik, py::handle T_obj) {
   });
 }
 
+// A 7R chain with one joint held (FreeJoint7) and the 7 joints' limits.
+struct FreeJointIK {
+  chain_ik::FreeJoint7 solver;
+  double lower[7], upper[7];
+};
+
+FreeJointIK make_free_joint_ik(const ChainPair& pair, py::handle lower_obj, py::handle upper_obj, int free_joint,
+                               double angle_tolerance, double distance_tolerance) {
+  const Chain<double>& chain = pair.f64;
+  if (!(angle_tolerance >= 0.0 && angle_tolerance < 0.1) || !(distance_tolerance < 0.1 * chain.length_scale()))
+    throw std::invalid_argument("the ik tolerances must be finite, angle in [0, 0.1) and distance below 0.1 times "
+                                "the chain's length scale");
+  auto lower = contiguous<double>(as_real_array(lower_obj, "lower"));
+  auto upper = contiguous<double>(as_real_array(upper_obj, "upper"));
+  if (lower.size() != 7 || upper.size() != 7) throw py::value_error("lower and upper must have shape (7,)");
+  FreeJointIK out{chain_ik::FreeJoint7::make(chain, free_joint, {angle_tolerance, distance_tolerance}), {}, {}};
+  for (int j = 0; j < 7; ++j) out.lower[j] = lower.data()[j], out.upper[j] = upper.data()[j];
+  return out;
+}
+
+// Each distinct free value costs its own 6R solver (tens of us), then the 6R solve per pose.
+py::object ik_free(const FreeJointIK& ik, py::handle T_obj, py::handle value_obj) {
+  return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
+    using T = decltype(tag);
+    const auto [format, leading] = pose_shape(arr, "T");
+    auto poses = contiguous<T>(arr);
+    py::array value_arr = as_real_array(value_obj, "free_value");
+    const Shape value_leading = leading_shape(value_arr, "free_value", {});
+    if (value_leading != leading)
+      throw py::value_error("free_value must have shape " + format_shape(leading) + ", the leading shape of T, got " +
+                            format_shape(value_leading));
+    auto values = contiguous<T>(value_arr);
+    const PoseFormat fmt = format;
+    const std::ptrdiff_t width = fmt == PoseFormat::Matrix ? 16 : 7;
+    const T* base = poses.data();
+    const T* value_data = values.data();
+    return solutions<T>(leading, chain_ik::FreeJoint7::kSlots, 7, width, base, true,
+                        [&](const T* in, T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t* exact,
+                            std::int8_t* status, std::ptrdiff_t n) {
+                          const T* v = value_data + (in - base) / width;
+                          if (fmt == PoseFormat::Matrix)
+                            chain_ik::ik_free_joint<PoseFormat::Matrix>(ik.solver, ik.lower, ik.upper, in, v, q, valid,
+                                                                        exists, exact, status, n);
+                          else
+                            chain_ik::ik_free_joint<PoseFormat::PositionQuaternion>(
+                                ik.solver, ik.lower, ik.upper, in, v, q, valid, exists, exact, status, n);
+                        });
+  });
+}
+
 }  // namespace
 
 void bind_chain_ik(py::module_& m) {
+  py::class_<FreeJointIK>(m, "FreeJointIK")
+      .def(py::init(&make_free_joint_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),
+           py::arg("free_joint"), py::arg("angle_tolerance") = chain_ik::Tolerance::angle,
+           py::arg("distance_tolerance") = -1.0)
+      .def_property_readonly("kind", [](const FreeJointIK& ik) { return ik.solver.kind(); })
+      .def("ik", &ik_free, py::arg("T"), py::arg("free_value"));
   py::class_<ChainIK>(m, "ChainIK")
       .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),
            py::arg("angle_tolerance") = chain_ik::Tolerance::angle, py::arg("distance_tolerance") = -1.0)

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'dls', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'dls', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -119,6 +119,14 @@ class Body:
         ...
     @property
     def n_legs(self) -> int:
+        ...
+class FreeJointIK:
+    def __init__(self, chain: Chain, lower: typing.Any, upper: typing.Any, free_joint: typing.SupportsInt | typing.SupportsIndex, angle_tolerance: typing.SupportsFloat | typing.SupportsIndex = 1e-09, distance_tolerance: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> None:
+        ...
+    def ik(self, T: typing.Any, free_value: typing.Any) -> typing.Any:
+        ...
+    @property
+    def kind(self) -> str:
         ...
 class ChainIK:
     def __init__(self, chain: Chain, lower: typing.Any, upper: typing.Any, angle_tolerance: typing.SupportsFloat | typing.SupportsIndex = 1e-09, distance_tolerance: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> None:

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._boundary import as_finite, as_index, as_real, broadcast_lead
+from ._status import Status
 from .arm import _broadcast_seed
 from .leg import _broadcast_pair
 
@@ -378,9 +379,23 @@ class Chain:
         """
         return ChainSolutions(*self._ik_core().ik_position(p))
 
-    def ik(self, T: ArrayLike) -> ChainSolutions:
-        """Every joint solution for a tool pose, for a 6R chain of a closed-form family (:attr:`ik_kind`).
+    def ik(
+        self, T: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
+    ) -> ChainSolutions:
+        """Every joint solution for a tool pose, for a 6R chain of a closed-form family (:attr:`ik_kind`),
+        or a 7R chain with one joint held (``free_joint``, ``free_value``).
 
+        **7 joints** (redundant arms: Franka-Panda- and Kinova-Gen3-like): ``free_joint`` (0-based)
+        is held at ``free_value``, which broadcasts against T's leading dimensions (so one pose with
+        (n,) values samples its self-motion in one call, see :meth:`ik_self_motion`). The other six
+        are solved in closed form by their family, found when the free joint is first used (on probe
+        values; a ``ValueError`` names the checks when none fits, or when the family changes with the
+        value). q is (..., 8, 7) with ``free_value`` in column ``free_joint``; valid also needs
+        ``free_value`` within that joint's limits. A non-finite ``free_value`` gives INVALID_INPUT.
+        Each distinct value builds its own 6R solver (tens of microseconds), shared by the poses that
+        follow it with the same value.
+
+        **6 joints:**
         T (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw] in the base frame ->
         :class:`ChainSolutions` with q (..., 8, 6): at most 8 solutions, slot ``2 k + b``.
 
@@ -405,7 +420,102 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT. The
         derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
-        return ChainSolutions(*self._ik_core().ik(T))
+        if free_joint is None:
+            if free_value is not None:
+                raise ValueError("free_value needs free_joint (the index of the joint it holds)")
+            if self.dof == 7:
+                raise ValueError(
+                    "a 7-joint chain is redundant: pass free_joint (0..6) and free_value to hold one "
+                    "joint, or use ik_self_motion to sample it"
+                )
+            return ChainSolutions(*self._ik_core().ik(T))
+        core = self._free_core(free_joint)
+        if free_value is None:
+            raise ValueError("free_joint needs free_value (the value the joint is held at)")
+        return ChainSolutions(*core.ik(*_broadcast_free(T, free_value)))
+
+    def _free_core(self, free_joint) -> _core.FreeJointIK:
+        k = as_index(free_joint, "free_joint")
+        if self.dof != 7:
+            raise ValueError(f"free_joint is for 7-joint chains; this chain has {self.dof} joints")
+        if not 0 <= k < 7:
+            raise ValueError(f"free_joint must be in [0, 6], got {k}")
+        if self._ik is None:
+            self._ik = {}
+        if k not in self._ik:
+            angle, distance = self._ik_tolerance or (1e-9, -1.0)
+            self._ik[k] = _core.FreeJointIK(self._core, *self._limits, k, angle, distance)
+        return self._ik[k]
+
+    def ik_free_kind(self, free_joint: int) -> str:
+        """The 6R family (:attr:`ik_kind`) of the six joints left when ``free_joint`` is held
+        (7-joint chains); ``ValueError`` when they have none."""
+        return self._free_core(free_joint).kind
+
+    def ik_self_motion(self, T: ArrayLike, free_joint: int, values: ArrayLike | int = 36):
+        """Samples the self-motion of a 7-joint chain: every solution with ``free_joint`` held at each
+        of ``values`` ((n,) values, or a count n spread evenly over the joint's limits, or over
+        [-pi, pi) when unlimited). Returns (values (n,), :class:`ChainSolutions` with q (..., n, 8, 7)),
+        computed in one batched call (redundancy resolution by a free joint)."""
+        k = as_index(free_joint, "free_joint")
+        self._free_core(k)
+        grid = self._free_grid(k, values)
+        T = as_real(T, "T")
+        trailing = 2 if T.shape[-2:] == (4, 4) else 1
+        poses = np.expand_dims(T, axis=T.ndim - trailing)  # (..., 1, 4, 4): against (n,) values
+        return grid, self.ik(poses, free_joint=k, free_value=grid.astype(T.dtype, copy=False))
+
+    def _free_grid(self, k: int, values) -> np.ndarray:
+        if isinstance(values, (int, np.integer)) and not isinstance(values, (bool, np.bool_)):
+            count = int(values)
+            if count < 1:
+                raise ValueError(f"values must be a positive count or an array of values, got {count}")
+            lower, upper = self._limits[0][k], self._limits[1][k]
+            if np.isfinite(lower) and np.isfinite(upper):
+                return np.linspace(lower, upper, count)
+            return -np.pi + 2 * np.pi * np.arange(count) / count
+        grid = as_real(values, "values")
+        if grid.ndim != 1:
+            raise ValueError(f"values must have shape (n,), got {grid.shape}")
+        return grid
+
+    def ik_nearest_free(self, T: ArrayLike, seed: ArrayLike, free_joint: int, values: ArrayLike | int = 36):
+        """One solution per pose for a 7-joint chain: of every solution over the sampled values of
+        ``free_joint`` (:meth:`ik_self_motion`) plus the seed's own value, the valid one nearest the
+        seed (the largest single-joint move on the circle). Returns (q (..., 7), status (...,)): OK,
+        or JOINT_LIMIT / UNREACHABLE / INVALID_INPUT as in :class:`ChainSolutions` when none is valid
+        (q NaN). ``seed`` (..., 7) broadcasts against T's leading dimensions."""
+        k = as_index(free_joint, "free_joint")
+        self._free_core(k)
+        T, seed = _broadcast_seed(T, seed)
+        if seed.shape[-1] != 7:
+            raise ValueError(f"seed must have shape (..., 7), got {seed.shape}")
+        grid = self._free_grid(k, values)
+        trailing = 2 if T.shape[-2:] == (4, 4) else 1
+        lead = T.shape[:-trailing]
+        own = seed[..., k]
+        candidates = np.concatenate([np.broadcast_to(grid, (*lead, grid.size)), own[..., None]], axis=-1)
+        shape = (*lead, grid.size + 1, *T.shape[-trailing:])
+        poses = np.broadcast_to(np.expand_dims(T, axis=T.ndim - trailing), shape)
+        sol = self.ik(poses, free_joint=k, free_value=candidates.astype(T.dtype, copy=False))
+        gap = sol.q - seed[..., None, None, :].astype(np.float64)
+        move = np.abs(np.angle(np.exp(1j * gap))).max(axis=-1)
+        move = np.where(sol.valid, move, np.inf).reshape(*lead, -1)
+        best = np.argmin(move, axis=-1)
+        q_all = sol.q.reshape(*lead, -1, 7)
+        q = np.take_along_axis(q_all, best[..., None, None], axis=-2)[..., 0, :]
+        seed_ok = np.isfinite(seed).all(axis=-1)
+        found = np.isfinite(np.take_along_axis(move, best[..., None], axis=-1)[..., 0]) & seed_ok
+        exists = sol.exists.reshape(*lead, -1).any(axis=-1)
+        fallback = np.where(exists, np.int8(Status.JOINT_LIMIT), np.int8(Status.UNREACHABLE))
+        invalid = (sol.status == Status.INVALID_INPUT).any(axis=-1) | ~seed_ok
+        status = np.where(invalid, np.int8(Status.INVALID_INPUT), fallback)
+        status = np.where(found, np.int8(Status.OK), status)
+        status = status.astype(np.int8)
+        q = np.where(found[..., None], q, np.nan).astype(T.dtype, copy=False)
+        if not lead:
+            return q, Status(int(status))
+        return q, status
 
     def ik_nearest(self, target: ArrayLike, seed: ArrayLike | None = None):
         """One closed-form solution per target: (q (..., dof), status (...,)).
@@ -519,8 +629,12 @@ class Chain:
     def __reduce__(self):
         limits = None if np.isinf(self._limits).all() else np.stack(self._limits, axis=1)
         if self._rows is None:
-            return (_rebuild_joints, (*self._joints, self._base, self._tool, limits, self._names))
-        return (_rebuild, (self._rows, self._convention, self._base, self._tool, limits))
+            plain = (_rebuild_joints, (*self._joints, self._base, self._tool, limits, self._names))
+        else:
+            plain = (_rebuild, (self._rows, self._convention, self._base, self._tool, limits))
+        if self._ik_tolerance is None:
+            return plain
+        return (_rebuild_with_ik_tolerance, (*plain, self._ik_tolerance))
 
     def __repr__(self) -> str:
         kinds = "".join("RP"[int(s)] for s in self.sigma)
@@ -533,6 +647,21 @@ def _rebuild(rows, convention, base, tool, limits) -> Chain:
 
 def _rebuild_joints(placements, axes, types, base, tool, limits, names) -> Chain:
     return Chain.from_joints(placements, axes, types, base, tool, limits, names)
+
+
+def _broadcast_free(T: ArrayLike, free_value: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Pose targets (..., 4, 4) or (..., 7) and free values (...) broadcast over their leading
+    dimensions (the core checks the trailing ones)."""
+    T, value = as_real(T, "T"), as_real(free_value, "free_value")
+    trailing = 2 if T.shape[-2:] == (4, 4) else 1
+    if T.shape[:-trailing] == value.shape:
+        return T, value
+    lead = broadcast_lead(T=(T.shape[:-trailing], T.shape), free_value=(value.shape, value.shape))
+    return np.broadcast_to(T, (*lead, *T.shape[-trailing:])), np.broadcast_to(value, lead)
+
+
+def _rebuild_with_ik_tolerance(rebuild, args, tolerance) -> Chain:
+    return rebuild(*args).with_ik_tolerance(*tolerance)
 
 
 def _scalar(array: np.ndarray):

@@ -1,0 +1,185 @@
+"""7-joint arms with one joint held (redundancy resolution by a free joint): Franka-Panda-like and
+Kinova-Gen3-like tables. Every solution against FK round trips and the pure-Python reference
+(``ik6r.solve_free``), broadcasting of the free value, self-motion sampling, the nearest solution
+to a seed, and the errors and statuses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import spotkin as sk
+from spotkin.reference import ik6r
+
+PI = math.pi
+
+# Franka Emika Panda, its published modified-DH table as (sigma, a_{i-1}, alpha_{i-1}, d_i, theta_i),
+# the flange 0.107 m along the last axis; its joint limits (rad).
+PANDA_ROWS = [
+    (0, 0.0, 0.0, 0.333, 0.0),
+    (0, 0.0, -PI / 2, 0.0, 0.0),
+    (0, 0.0, PI / 2, 0.316, 0.0),
+    (0, 0.0825, PI / 2, 0.0, 0.0),
+    (0, -0.0825, -PI / 2, 0.384, 0.0),
+    (0, 0.0, PI / 2, 0.0, 0.0),
+    (0, 0.088, PI / 2, 0.0, 0.0),
+]
+PANDA_LIMITS = [
+    (-2.8973, 2.8973),
+    (-1.7628, 1.7628),
+    (-2.8973, 2.8973),
+    (-3.0718, -0.0698),
+    (-2.8973, 2.8973),
+    (-0.0175, 3.7525),
+    (-2.8973, 2.8973),
+]
+
+
+def panda() -> sk.Chain:
+    return sk.Chain.from_mdh(PANDA_ROWS, tool=sk.translation([0.0, 0.0, 0.107]), limits=PANDA_LIMITS)
+
+
+def kinova_like() -> sk.Chain:
+    """A Kinova-Gen3-like S-R-S arm: shoulder axes z, y, z meeting at 0.28 m, an elbow y with a
+    small lateral offset, wrist axes z, y, z meeting (continuous joints 1, 3, 5, 7)."""
+    _, Y, Z = np.eye(3)
+    axes = np.array([Z, Y, Z, Y, Z, Y, Z])
+    points = np.array(
+        [[0, 0, 0.28], [0, 0, 0.28], [0, 0, 0.28], [0, 0.01, 0.69], [0, 0, 1.0], [0, 0, 1.0], [0, 0, 1.0]]
+    )
+    placements = np.tile(np.eye(4), (7, 1, 1))
+    placements[:, :3, 3] = np.diff(np.vstack([np.zeros(3), points]), axis=0)
+    tool = sk.translation([0.0, 0.0, 0.16])
+    free = (-np.inf, np.inf)
+    limits = [free, (-2.41, 2.41), free, (-2.66, 2.66), free, (-2.23, 2.23), free]
+    return sk.Chain.from_joints(placements, axes, tool=tool, limits=limits)
+
+
+ARMS = {"panda": (panda, 6, "6R-spherical-shoulder"), "kinova": (kinova_like, 2, "6R-spherical-wrist")}
+
+
+def angle_gap(a, b):
+    return np.abs(np.angle(np.exp(1j * (np.asarray(a) - np.asarray(b)))))
+
+
+def configurations(chain: sk.Chain, rng, n: int) -> np.ndarray:
+    lower, upper = chain.lower, chain.upper
+    lo, hi = np.where(np.isfinite(lower), lower, -PI), np.where(np.isfinite(upper), upper, PI)
+    return rng.uniform(lo + 0.05, hi - 0.05, (n, 7))
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
+def test_every_solution_and_the_generating_configuration(name, rng):
+    make, k, kind = ARMS[name]
+    chain = make()
+    assert chain.ik_free_kind(k) == kind
+    q = configurations(chain, rng, 2000)
+    T = chain.fk(q)
+    sol = chain.ik(T, free_joint=k, free_value=q[:, k])
+    assert sol.q.shape == (2000, 8, 7)
+    assert (sol.status == sk.Status.OK).all()
+    assert (sol.exact == sol.exists).all()
+    # the held joint is the value given, every solution reaches the pose
+    np.testing.assert_array_equal(sol.q[..., k][sol.exists], np.repeat(q[:, k], sol.exists.sum(axis=1)))
+    found = sol.q[sol.exists]
+    assert np.abs(chain.fk(found) - np.repeat(T, sol.exists.sum(axis=1), axis=0)).max() < 1e-9
+    gap = angle_gap(sol.q, q[:, None, :]).max(axis=2)
+    assert (np.where(sol.exists, gap, np.inf).min(axis=1) < 1e-7).all()
+    # valid = exists and every joint within its limits
+    lower, upper = chain.lower, chain.upper
+    inside = ((sol.q >= lower - 1e-9) & (sol.q <= upper + 1e-9)).all(axis=2)
+    np.testing.assert_array_equal(sol.valid, sol.exists & inside)
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
+def test_matches_the_reference(name, rng):
+    make, k, _ = ARMS[name]
+    chain = make()
+    poe = ik6r.from_sk_chain(chain)
+    q = configurations(chain, rng, 10)
+    T = chain.fk(q)
+    sol = chain.ik(T, free_joint=k, free_value=q[:, k])
+    for i in range(len(q)):
+        ref = ik6r.solve_free(poe, T[i], free_joint=k, free_value=float(q[i, k]))
+        ours = sol.q[i][sol.exists[i]]
+        theirs = ref.q[ref.exists]
+        # the reference's searched (scan) families may miss a branch: ours, FK-checked above,
+        # contain every one of its solutions
+        assert len(ours) >= len(theirs) > 0
+        for row in theirs:
+            assert angle_gap(ours, row).max(axis=1).min() < 1e-7
+
+
+def test_free_values_broadcast_and_sample_the_self_motion(rng):
+    chain = panda()
+    q = configurations(chain, rng, 1)[0]
+    T = chain.fk(q)
+    values = np.linspace(-2.5, 2.5, 11)
+    sol = chain.ik(T, free_joint=6, free_value=values)
+    assert sol.q.shape == (11, 8, 7) and sol.status.shape == (11,)
+    grid, motion = chain.ik_self_motion(T, 6, 24)
+    np.testing.assert_allclose(grid, np.linspace(-2.8973, 2.8973, 24))
+    assert motion.q.shape == (24, 8, 7)
+    for sample in (sol, motion):
+        found = sample.q[sample.exists]
+        assert len(found) > 0
+        assert np.abs(chain.fk(found) - T).max() < 1e-9
+    # a batch of poses against a grid of values: (..., n, 8, 7)
+    Ts = chain.fk(configurations(chain, rng, 3))
+    grid, many = chain.ik_self_motion(Ts, 6, np.array([0.1, 0.5]))
+    assert many.q.shape == (3, 2, 8, 7)
+    # float32 stays float32
+    assert chain.ik(T.astype(np.float32), free_joint=6, free_value=np.float32(0.3)).q.dtype == np.float32
+
+
+def test_nearest_to_a_seed(rng):
+    chain = kinova_like()
+    q = configurations(chain, rng, 200)
+    T = chain.fk(q)
+    seed = q + rng.normal(0, 0.01, q.shape)
+    best, status = chain.ik_nearest_free(T, seed, 2, values=16)
+    assert best.shape == (200, 7) and (status == sk.Status.OK).all()
+    assert np.abs(chain.fk(best) - T).max() < 1e-9
+    # never farther from the seed than the best valid solution at the seed's own value (a candidate)
+    best_move = angle_gap(best, seed).max(axis=1)
+    own = chain.ik(T, free_joint=2, free_value=seed[:, 2])
+    own_move = np.where(own.valid, angle_gap(own.q, seed[:, None, :]).max(axis=2), np.inf).min(axis=1)
+    assert (best_move <= own_move + 1e-12).all()
+    assert np.median(best_move) < 0.05
+    one, one_status = chain.ik_nearest_free(T[0], seed[0], 2)
+    assert one.shape == (7,) and isinstance(one_status, sk.Status)
+    bad_seed = seed[0].copy()
+    bad_seed[3] = np.nan
+    q_bad, st_bad = chain.ik_nearest_free(T[0], bad_seed, 2)
+    assert st_bad == sk.Status.INVALID_INPUT and np.isnan(q_bad).all()
+
+
+def test_errors_and_statuses(rng):
+    chain = panda()
+    T = chain.fk(configurations(chain, rng, 4))
+    with pytest.raises(ValueError, match="redundant"):
+        chain.ik(T)
+    with pytest.raises(ValueError, match=r"free_joint must be in \[0, 6\]"):
+        chain.ik(T, free_joint=7, free_value=0.0)
+    with pytest.raises(TypeError, match="free_joint"):
+        chain.ik(T, free_joint=True, free_value=0.0)
+    with pytest.raises(ValueError, match="needs free_value"):
+        chain.ik(T, free_joint=6)
+    with pytest.raises(ValueError, match="free_value needs free_joint"):
+        chain.ik(T, free_value=0.3)
+    with pytest.raises(ValueError, match="do not broadcast"):
+        chain.ik(T, free_joint=6, free_value=np.zeros(3))
+    six = sk.Chain.from_mdh(PANDA_ROWS[:6])
+    with pytest.raises(ValueError, match="7-joint chains"):
+        six.ik(np.eye(4), free_joint=2, free_value=0.0)
+    # holding joint 1 leaves no closed-form family: the checks are named
+    with pytest.raises(ValueError, match="no closed-form 6R family"):
+        chain.ik(T, free_joint=0, free_value=-1.0)
+    # NaN value: INVALID_INPUT for that sample only; a value outside its limits: no valid slot
+    values = np.array([np.nan, 0.2, 5.0, 0.2])
+    sol = chain.ik(T, free_joint=6, free_value=values)
+    assert sol.status[0] == sk.Status.INVALID_INPUT and np.isnan(sol.q[0]).all()
+    assert not sol.valid[2].any()
+    assert sol.status[2] in (sk.Status.JOINT_LIMIT, sk.Status.UNREACHABLE)
