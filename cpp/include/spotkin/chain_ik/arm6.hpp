@@ -121,6 +121,9 @@ class Arm6 {
   // Three parallel axes 2-3-4 of rank-1 form on the chain itself: solved across lanes
   // (Parallel234::solve_lanes), with solve() for the lanes it hands back.
   bool lane_parallel() const noexcept { return parallel_ && !idealised_ && parallel_->rank1(); }
+  // The spherical shoulder on the chain itself: the wrist lane kernel on the reversed chain.
+  bool lane_shoulder() const noexcept { return reversed_ && !idealised_; }
+  const Rigid<double>& M() const noexcept { return M_; }
   const Parallel234& parallel() const noexcept { return *parallel_; }
   const SphericalWrist6& wrist() const noexcept { return *wrist_; }
   const Geometry6& geometry() const noexcept { return geometry_; }
@@ -243,6 +246,45 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
     return;
   }
   constexpr int width = Format == PoseFormat::Matrix ? 16 : 7;
+  if (solver.lane_shoulder()) {
+    // G^-1 = M T^-1 for the reversed chain (its joint i is joint 5 - i, negated), whose limits are
+    // the negated, reversed ones; then the angles mapped back
+    Limits reversed_limits;
+    reversed_limits.dof = 6;
+    for (int j = 0; j < 6; ++j) {
+      reversed_limits.lower[j] = -limits.upper[5 - j], reversed_limits.upper[j] = -limits.lower[5 - j];
+      reversed_limits.sigma[j] = 0;
+    }
+    const Rigid<double>& Mr = solver.M();
+    double inner[16][L];
+    for (int i = 0; i < L; ++i) {
+      double in[width];
+      for (int e = 0; e < width; ++e) in[e] = pose_in[e][std::min(i, m - 1)];
+      Arm::Pose T;
+      const bool ok = Arm::read_pose<Format>(in, T) != 0.0;
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      double Rin[3][3], pin[3];
+      for (int r = 0; r < 3; ++r) {
+        for (int col = 0; col < 3; ++col)  // M.R R^T
+          Rin[r][col] = Mr.R(r, 0) * T.R[col][0] + Mr.R(r, 1) * T.R[col][1] + Mr.R(r, 2) * T.R[col][2];
+      }
+      for (int r = 0; r < 3; ++r) pin[r] = Mr.p[r] - (Rin[r][0] * T.p[0] + Rin[r][1] * T.p[1] + Rin[r][2] * T.p[2]);
+      for (int r = 0; r < 3; ++r) {
+        for (int col = 0; col < 3; ++col) inner[4 * r + col][i] = ok ? Rin[r][col] : nan;
+        inner[4 * r + 3][i] = ok ? pin[r] : nan;
+      }
+      inner[12][i] = 0.0, inner[13][i] = 0.0, inner[14][i] = 0.0, inner[15][i] = 1.0;
+    }
+    wrist_block<PoseFormat::Matrix>(solver.wrist(), reversed_limits, inner, m, out);
+    for (int k = 0; k < S; ++k)
+      for (int i = 0; i < L; ++i) {
+        double a[6];
+        for (int j = 0; j < 6; ++j) a[j] = out.angle[k][j][i];
+        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = -a[5 - j];
+        out.exact[k][i] = out.exists[k][i];
+      }
+    return;
+  }
   double c[S][6][L], s[S][6][L];
   bool refine_slot[S][L] = {};
   Arm::Pose targets[L];

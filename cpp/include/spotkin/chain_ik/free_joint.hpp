@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 #include "spotkin/chain_ik/arm6.hpp"
 
@@ -80,57 +81,66 @@ void ik_free_joint(const FreeJoint7& solver, const double* lower, const double* 
     limits6.lower[o] = lower[j], limits6.upper[o] = upper[j], limits6.sigma[o] = 0;
     ++o;
   }
-  std::optional<Arm6> arm;
-  double arm_value = std::numeric_limits<double>::quiet_NaN();
-  bool arm_ok = false;
-  double q6[S * 6];
-  std::uint8_t valid6[S], exists6[S], exact6[S];
-  std::int8_t status6 = 0;
-  double pose[width];
   const T nan = std::numeric_limits<T>::quiet_NaN();
-  for (std::ptrdiff_t i = 0; i < count; ++i) {
-    const double value = double(values[i]);
+  std::vector<double> pose_run, q6;
+  std::vector<std::uint8_t> valid6, exists6, exact6;
+  std::vector<std::int8_t> status6;
+  auto fail = [&](std::ptrdiff_t i, Status st) {
     T* qi = q + i * S * 7;
-    auto fail = [&](Status st) {
-      for (int e = 0; e < S * 7; ++e) qi[e] = nan;
-      for (int s = 0; s < S; ++s) valid[i * S + s] = exists[i * S + s] = exact[i * S + s] = 0;
-      status[i] = static_cast<std::int8_t>(st);
-    };
+    for (int e = 0; e < S * 7; ++e) qi[e] = nan;
+    for (int s = 0; s < S; ++s) valid[i * S + s] = exists[i * S + s] = exact[i * S + s] = 0;
+    status[i] = static_cast<std::int8_t>(st);
+  };
+  // runs of samples sharing one value share one 6R solver and go through its block kernel together
+  for (std::ptrdiff_t i = 0; i < count;) {
+    const double value = double(values[i]);
     if (!std::isfinite(value)) {
-      fail(Status::InvalidInput);
+      fail(i++, Status::InvalidInput);
       continue;
     }
-    if (!(value == arm_value)) {  // a new value: its own 6R solver
-      arm_value = value;
-      try {
-        arm.emplace(solver.arm_for(value));
-        arm_ok = true;
-      } catch (const std::exception&) {
-        arm_ok = false;
+    std::ptrdiff_t end = i + 1;
+    while (end < count && double(values[end]) == value) ++end;
+    const std::ptrdiff_t n = end - i;
+    std::optional<Arm6> arm;
+    try {
+      arm.emplace(solver.arm_for(value));
+    } catch (const std::exception&) {
+      for (std::ptrdiff_t r = i; r < end; ++r) {
+        double pose[width];
+        for (int e = 0; e < width; ++e) pose[e] = double(poses[r * width + e]);
+        Arm::Pose read;
+        fail(r, Arm::read_pose<Format>(pose, read) != 0.0 ? Status::Unreachable : Status::InvalidInput);
       }
-    }
-    for (int e = 0; e < width; ++e) pose[e] = double(poses[i * width + e]);
-    if (!arm_ok) {
-      Arm::Pose read;
-      fail(Arm::read_pose<Format>(pose, read) != 0.0 ? Status::Unreachable : Status::InvalidInput);
+      i = end;
       continue;
     }
-    ik_arm6<Format>(*arm, limits6, pose, q6, valid6, exists6, exact6, &status6, 1);
+    pose_run.resize(std::size_t(n * width));
+    for (std::ptrdiff_t e = 0; e < n * width; ++e) pose_run[std::size_t(e)] = double(poses[i * width + e]);
+    q6.resize(std::size_t(n * S * 6)), valid6.resize(std::size_t(n * S)), exists6.resize(std::size_t(n * S));
+    exact6.resize(std::size_t(n * S)), status6.resize(std::size_t(n));
+    ik_arm6<Format>(*arm, limits6, pose_run.data(), q6.data(), valid6.data(), exists6.data(), exact6.data(),
+                    status6.data(), n);
     const bool value_fits = lower[k] <= value && value <= upper[k];
-    bool any_valid = false, any_exists = false;
-    for (int s = 0; s < S; ++s) {
-      const bool here = exists6[s] != 0;
-      for (int j = 0, o = 0; j < 7; ++j)
-        qi[s * 7 + j] = !here ? nan : j == k ? T(value) : T(q6[s * 6 + o++]);
-      const bool ok = valid6[s] != 0 && value_fits;
-      valid[i * S + s] = ok, exists[i * S + s] = here, exact[i * S + s] = exact6[s];
-      any_valid |= ok, any_exists |= here;
+    for (std::ptrdiff_t r = 0; r < n; ++r) {
+      const std::ptrdiff_t at = i + r;
+      T* qi = q + at * S * 7;
+      bool any_valid = false, any_exists = false;
+      for (int s = 0; s < S; ++s) {
+        const std::size_t slot = std::size_t(r * S + s);
+        const bool here = exists6[slot] != 0;
+        for (int j = 0, o = 0; j < 7; ++j)
+          qi[s * 7 + j] = !here ? nan : j == k ? T(value) : T(q6[slot * 6 + std::size_t(o++)]);
+        const bool ok = valid6[slot] != 0 && value_fits;
+        valid[at * S + s] = ok, exists[at * S + s] = here, exact[at * S + s] = exact6[slot];
+        any_valid |= ok, any_exists |= here;
+      }
+      status[at] = status6[std::size_t(r)] == static_cast<std::int8_t>(Status::InvalidInput)
+                       ? status6[std::size_t(r)]
+                       : static_cast<std::int8_t>(any_valid    ? Status::Ok
+                                                  : any_exists ? Status::JointLimit
+                                                               : Status::Unreachable);
     }
-    status[i] = status6 == static_cast<std::int8_t>(Status::InvalidInput)
-                    ? status6
-                    : static_cast<std::int8_t>(any_valid    ? Status::Ok
-                                               : any_exists ? Status::JointLimit
-                                                            : Status::Unreachable);
+    i = end;
   }
 }
 
