@@ -183,3 +183,15 @@ def test_errors_and_statuses(rng):
     assert sol.status[0] == sk.Status.INVALID_INPUT and np.isnan(sol.q[0]).all()
     assert not sol.valid[2].any()
     assert sol.status[2] in (sk.Status.JOINT_LIMIT, sk.Status.UNREACHABLE)
+
+
+def test_empty_and_unreachable_batches(rng):
+    chain = panda()
+    q, status = chain.ik_nearest_free(np.zeros((0, 4, 4)), np.zeros((0, 7)), 6, values=4)
+    assert q.shape == (0, 7) and status.shape == (0,)
+    far = chain.fk(configurations(chain, rng, 3))
+    far[:, :3, 3] *= 10  # 10 m away: no solution for any value
+    sol = chain.ik(far, free_joint=6, free_value=0.2)
+    assert (sol.status == sk.Status.UNREACHABLE).all() and np.isnan(sol.q).all()
+    q, status = chain.ik_nearest_free(far, np.zeros((3, 7)), 6, values=4)
+    assert (status == sk.Status.UNREACHABLE).all() and np.isnan(q).all()

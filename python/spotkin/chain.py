@@ -500,13 +500,14 @@ class Chain:
         sol = self.ik(poses, free_joint=k, free_value=candidates.astype(T.dtype, copy=False))
         gap = sol.q - seed[..., None, None, :].astype(np.float64)
         move = np.abs(np.angle(np.exp(1j * gap))).max(axis=-1)
-        move = np.where(sol.valid, move, np.inf).reshape(*lead, -1)
+        width = (grid.size + 1) * 8  # every (value, slot) candidate of a pose; explicit for empty batches
+        move = np.where(sol.valid, move, np.inf).reshape(*lead, width)
         best = np.argmin(move, axis=-1)
-        q_all = sol.q.reshape(*lead, -1, 7)
+        q_all = sol.q.reshape(*lead, width, 7)
         q = np.take_along_axis(q_all, best[..., None, None], axis=-2)[..., 0, :]
         seed_ok = np.isfinite(seed).all(axis=-1)
         found = np.isfinite(np.take_along_axis(move, best[..., None], axis=-1)[..., 0]) & seed_ok
-        exists = sol.exists.reshape(*lead, -1).any(axis=-1)
+        exists = sol.exists.reshape(*lead, width).any(axis=-1)
         fallback = np.where(exists, np.int8(Status.JOINT_LIMIT), np.int8(Status.UNREACHABLE))
         invalid = (sol.status == Status.INVALID_INPUT).any(axis=-1) | ~seed_ok
         status = np.where(invalid, np.int8(Status.INVALID_INPUT), fallback)
