@@ -93,6 +93,7 @@ class Arm6 {
     const Poe ideal = arm.idealised_ ? idealise(poe, arm.family_, geometry, tolerance.distance) : poe;
     const double mirror = arm.idealised_ ? kMirror : 0.0;
     arm.M_ = poe.M;
+    arm.M_inv_ = inverse_rigid(poe.M);
     switch (arm.family_) {
       case Family6::SphericalWrist:
         arm.wrist_.emplace(SphericalWrist6::make(arm.idealised_ ? chain_of(ideal) : chain, scale));
@@ -140,26 +141,13 @@ class Arm6 {
   SPOTKIN_SCALAR_PATH void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots],
                                  bool refine[kSlots]) const noexcept {
     for (int k = 0; k < kSlots; ++k) refine[k] = false;
-    if (parallel_) {
-      M3 R;
-      V3 t;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R(r, c) = target.R[r][c];
-        t[r] = target.p[r];
-      }
-      const Rigid<double>& M_inv = parallel_->M_inv();  // G = T M^-1
-      parallel_->solve(R * M_inv.R, R * M_inv.p + t, q, exists, refine);
-      return;
-    }
-    if (parallel123_) {
-      M3 R;
-      V3 t;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) R(r, c) = target.R[r][c];
-        t[r] = target.p[r];
-      }
-      const Rigid<double>& M_inv = parallel123_->M_inv();
-      parallel123_->solve(R * M_inv.R, R * M_inv.p + t, q, exists, refine);
+    const Rigid<double> T = rigid_of(target);
+    if (parallel_ || parallel123_) {
+      const Rigid<double> G = T * M_inv_;  // G = T M^-1 (M is the idealised chain's too)
+      if (parallel_)
+        parallel_->solve(G.R, G.p, q, exists, refine);
+      else
+        parallel123_->solve(G.R, G.p, q, exists, refine);
       return;
     }
     if (!reversed_) {
@@ -167,11 +155,6 @@ class Arm6 {
       return;
     }
     // G^-1 = M T^-1: the reversed chain's target; its joint i is joint 5 - i, negated
-    Rigid<double> T;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) T.R(r, c) = target.R[r][c];
-      T.p[r] = target.p[r];
-    }
     const Rigid<double> inner = M_ * inverse_rigid(T);
     Arm::Pose pose;
     for (int r = 0; r < 3; ++r) {
@@ -186,12 +169,16 @@ class Arm6 {
 
   // Newton steps on the true chain from q (6 angles) towards target; the residual.
   double polish(const Arm::Pose& target, double* q) const noexcept {
+    return newton_polish(chain_, q, rigid_of(target));
+  }
+
+  static Rigid<double> rigid_of(const Arm::Pose& pose) noexcept {
     Rigid<double> T;
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) T.R(r, c) = target.R[r][c];
-      T.p[r] = target.p[r];
+      for (int c = 0; c < 3; ++c) T.R(r, c) = pose.R[r][c];
+      T.p[r] = pose.p[r];
     }
-    return newton_polish(chain_, q, T);
+    return T;
   }
 
  private:
@@ -201,7 +188,7 @@ class Arm6 {
   Geometry6 geometry_;
   Family6 family_ = Family6::SphericalWrist;
   bool idealised_ = false, reversed_ = false;
-  Rigid<double> M_;
+  Rigid<double> M_, M_inv_;
   std::optional<SphericalWrist6> wrist_;
   std::optional<Parallel234> parallel_;
   std::optional<Parallel123> parallel123_;

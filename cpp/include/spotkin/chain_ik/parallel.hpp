@@ -204,7 +204,24 @@ class Sp6 {
   Eigen::RowVector2d ma_ = Eigen::RowVector2d::Zero();
 };
 
-class Parallel234 {
+// The offsets of (K2) shared by the parallel families: axes h_i, p01 = p_1,
+// p_{i,i+1} = d_[i] = p_{i+1} - p_i, p6T = -p_6, and M^-1 (G = T M^-1).
+class PoeOffsets {
+ public:
+  explicit PoeOffsets(const Poe& poe) : M_inv_(inverse_rigid(poe.M)) {
+    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
+    p01_ = poe.p[0];
+    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
+    p6T_ = -poe.p[5];
+  }
+  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
+
+ protected:
+  V3 h_[6], d_[5], p01_, p6T_;
+  Rigid<double> M_inv_;
+};
+
+class Parallel234 : public PoeOffsets {
  public:
   static constexpr int kSlots = 8;
 
@@ -213,12 +230,7 @@ class Parallel234 {
   // mirror: for an idealised chain, a root missing by up to this much (|ratio| up to
   // 1 + mirror) starts from the mirrored ratio 2 sign(ratio) - ratio and is flagged for
   // Newton steps on the true chain, where the pair of roots may exist (0: exact chains).
-  explicit Parallel234(const Poe& poe, double rank_tolerance, double mirror = 0.0) {
-    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
-    p01_ = poe.p[0];
-    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
-    p6T_ = -poe.p[5];
-    M_inv_ = inverse_rigid(poe.M);
+  explicit Parallel234(const Poe& poe, double rank_tolerance, double mirror = 0.0) : PoeOffsets(poe) {
     const V3 &h1 = h_[0], &h2 = h_[1];
     s3_ = h_[2].dot(h2) >= 0.0 ? 1.0 : -1.0;
     s4_ = h_[3].dot(h2) >= 0.0 ? 1.0 : -1.0;
@@ -245,7 +257,6 @@ class Parallel234 {
 
   bool rank1() const noexcept { return sp6_.rank1(); }
   double rank_ratio() const noexcept { return sp6_.rank_ratio(); }
-  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
 
   // ---- the same solve across L lanes (rank-1 form, exact chains): plain arrays and selects ----
   static constexpr int kLanes = 16;
@@ -450,11 +461,10 @@ class Parallel234 {
   }
 
  private:
-  V3 h_[6], d_[5], p01_, p6T_, h2_perp_, h1_x_h2_, v2_;
+  V3 h2_perp_, h1_x_h2_, v2_;
   double h12_ = 0.0, s3_ = 1.0, s4_ = 1.0, a3_ = 0.0, b3_ = 0.0, c3_ = 0.0, base3_ = 0.0;
   Eigen::Vector2d e_const_;
   Sp6 sp6_;
-  Rigid<double> M_inv_;
 };
 
 // 6R chains whose axes 1, 2 and 3 are parallel. R_1 R_2 R_3 = Rot(h1, theta), theta =
@@ -468,16 +478,11 @@ class Parallel234 {
 // R_1 (p12 + R_2 p23): q2 by SP3, q1 by SP1, q3 = s3 (theta - q1 - s2 q2).
 // Slots 2 k + b: k the (q6, -q4) pair of Sp6, b the root of q2. At the wrist singularity
 // (u along h5, q5 free) q5 is set to 0 and the slot flagged for Newton steps.
-class Parallel123 {
+class Parallel123 : public PoeOffsets {
  public:
   static constexpr int kSlots = 8;
 
-  explicit Parallel123(const Poe& poe, double rank_tolerance, double mirror = 0.0) {
-    for (int j = 0; j < 6; ++j) h_[j] = poe.h[j];
-    p01_ = poe.p[0];
-    for (int j = 0; j < 5; ++j) d_[j] = poe.p[j + 1] - poe.p[j];
-    p6T_ = -poe.p[5];
-    M_inv_ = inverse_rigid(poe.M);
+  explicit Parallel123(const Poe& poe, double rank_tolerance, double mirror = 0.0) : PoeOffsets(poe) {
     const V3& h1 = h_[0];
     s2_ = h_[1].dot(h1) >= 0.0 ? 1.0 : -1.0;
     s3_ = h_[2].dot(h1) >= 0.0 ? 1.0 : -1.0;
@@ -499,7 +504,6 @@ class Parallel123 {
 
   bool rank1() const noexcept { return sp6_.rank1(); }
   double rank_ratio() const noexcept { return sp6_.rank_ratio(); }
-  const Rigid<double>& M_inv() const noexcept { return M_inv_; }
 
   SPOTKIN_INLINE void solve(const M3& R, const V3& t, JointValue q[kSlots][6], bool exists[kSlots],
                             bool refine[kSlots]) const noexcept {
@@ -546,10 +550,9 @@ class Parallel123 {
   }
 
  private:
-  V3 h_[6], d_[5], p01_, p6T_, v1_;
+  V3 v1_;
   double s2_ = 1.0, s3_ = 1.0, c4a_ = 0.0, c4b_ = 0.0, offset_ = 0.0, a2_ = 0.0, b2_ = 0.0, c2_ = 0.0, base2_ = 0.0;
   Sp6 sp6_;
-  Rigid<double> M_inv_;
 };
 
 }  // namespace spotkin::chain_ik
