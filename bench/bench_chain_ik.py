@@ -154,3 +154,55 @@ def test_6r_parallel_vs_wrist_path(measure, impl, n):
     T = T[0] if n == 1 else T
     func = ARM.ik_all if chain is None else chain.ik
     measure("6R parallel families vs the wrist path, all 8", n, impl, func, T)
+
+
+def poe_chain(axes, points, tool_position, limits=None) -> sk.Chain:
+    """A revolute chain from its axes and a point on each (base frame, q = 0)."""
+    points = np.asarray(points, dtype=float)
+    placements = np.tile(np.eye(4), (len(points), 1, 1))
+    placements[:, :3, 3] = np.diff(np.vstack([np.zeros(3), points]), axis=0)
+    tool = sk.translation(np.asarray(tool_position, dtype=float) - points[-1])
+    return sk.Chain.from_joints(placements, np.asarray(axes, dtype=float), tool=tool, limits=limits)
+
+
+X_, Y_, Z_ = np.eye(3)
+# A spherical shoulder (z, y, x meet) and an offset forearm and wrist: the reversed wrist path
+SHOULDER = poe_chain(
+    [Z_, Y_, X_, Y_, X_, Z_],
+    [[0, 0, 0.1], [0, 0, 0.1], [0, 0, 0.1], [0.3, 0, 0.12], [0.55, 0.05, 0.1], [0.65, 0, 0.12]],
+    [0.75, 0.02, 0.12],
+)
+# Franka Emika Panda's published modified-DH table; holding joint 7 leaves a spherical shoulder
+PANDA = sk.Chain.from_mdh(
+    [
+        (0, 0.0, 0.0, 0.333, 0.0),
+        (0, 0.0, -np.pi / 2, 0.0, 0.0),
+        (0, 0.0, np.pi / 2, 0.316, 0.0),
+        (0, 0.0825, np.pi / 2, 0.0, 0.0),
+        (0, -0.0825, -np.pi / 2, 0.384, 0.0),
+        (0, 0.0, np.pi / 2, 0.0, 0.0),
+        (0, 0.088, np.pi / 2, 0.0, 0.0),
+    ],
+    tool=sk.translation([0.0, 0.0, 0.107]),
+)
+
+
+@pytest.mark.parametrize("n", [100_000])
+@pytest.mark.parametrize(
+    "impl",
+    ["shoulder Chain.ik-1thread", "Panda free joint, one value-1thread", "ref:SpotArm.ik_all-1thread"],
+)
+def test_6r_shoulder_and_7r_free_joint_vs_wrist_path(measure, impl, n):
+    rng = np.random.default_rng(5)
+    if impl.startswith("shoulder"):
+        T = SHOULDER.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
+        measure("6R shoulder, 7R free joint vs the wrist path, all 8", n, impl, SHOULDER.ik, T)
+    elif impl.startswith("Panda"):
+        q = rng.uniform(-1.0, 1.0, (n, 7))
+        q[:, 3] = -1.5
+        T = PANDA.fk(q)
+        func = lambda T: PANDA.ik(T, free_joint=6, free_value=0.3)  # noqa: E731
+        measure("6R shoulder, 7R free joint vs the wrist path, all 8", n, impl, func, T)
+    else:
+        T = ARM.fk(rng.uniform(-np.pi, np.pi, (n, 6)))
+        measure("6R shoulder, 7R free joint vs the wrist path, all 8", n, impl, ARM.ik_all, T)
