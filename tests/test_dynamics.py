@@ -401,3 +401,40 @@ def _integrate(model, fl, q, v, t):
     """q (ours) moved for time t along v (ours) with Pinocchio's integrate, back in our order."""
     qp = pin.integrate(model, fl.to_pin(q, fl.iq), fl.to_pin(v, fl.iv) * t)
     return qp[fl.iq]
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_large_batches_equal_their_rows(threads, rng):
+    """Blocks of 8 (16 in float32) lanes, short blocks, narrow models for short batches, threads
+    and streamed outputs give every sample the same value as its own single call."""
+    fx, fl = _fixed("spot_arm"), Floating("go2")
+    kw = {"inertials": fx.inertials}
+    previous = sk.get_num_threads()
+    sk.set_num_threads(threads)
+    try:
+        for count in (3, 8, 13, 5003):
+            q, qd, qdd = fx.random(rng, (count,))
+            pick = rng.choice(count, size=min(count, 12), replace=False)
+            tau = dyn.inverse_dynamics(fx.chain, q, qd, qdd, **kw)
+            A = dyn.mass_matrix(fx.chain, q, **kw)
+            C = dyn.coriolis_matrix(fx.chain, q, qd, **kw)
+            for i in pick:
+                close(tau[i], dyn.inverse_dynamics(fx.chain, q[i], qd[i], qdd[i], **kw), 0)
+                close(A[i], dyn.mass_matrix(fx.chain, q[i], **kw), 0)
+                close(C[i], dyn.coriolis_matrix(fx.chain, q[i], qd[i], **kw), 0)
+                close(tau[i], pin.rnea(fx.model, fx.data, fx.to_pin(q[i]), fx.to_pin(qd[i]),
+                                       fx.to_pin(qdd[i]))[fx.idx])
+            states = [fl.random(rng) for _ in range(min(count, 400))]
+            qf, vf, af = (np.array(x) for x in zip(*states))
+            Af = fl.fb.mass_matrix(qf)
+            af_out = fl.fb.forward_dynamics(qf, vf, af)
+            for i in pick[pick < len(states)]:
+                close(Af[i], fl.fb.mass_matrix(qf[i]), 0)
+                close(af_out[i], fl.fb.forward_dynamics(qf[i], vf[i], af[i]), 0)
+        # an output big enough to be streamed (non-temporal stores)
+        q, qd, qdd = fx.random(rng, (20_000,))
+        A = dyn.mass_matrix(fx.chain, q, **kw)
+        for i in rng.choice(20_000, size=10, replace=False):
+            close(A[i], dyn.mass_matrix(fx.chain, q[i], **kw), 0)
+    finally:
+        sk.set_num_threads(previous)

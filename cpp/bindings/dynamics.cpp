@@ -17,7 +17,9 @@ namespace {
 ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::handle com, py::handle inertia) {
   const auto links = inertials_from(mass, com, inertia, chain.f64.dof());
   try {
-    return ChainDynamics{ChainModel<double, kLanes64>(chain.f64, links), ChainModel<float, kLanes32>(chain.f64, links)};
+    return ChainDynamics{ChainModel<double, kLanes64>(chain.f64, links), ChainModel<float, kLanes32>(chain.f64, links),
+                         ChainModel<double, kSmallLanes64>(chain.f64, links),
+                         ChainModel<float, kSmallLanes32>(chain.f64, links)};
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }
@@ -42,12 +44,10 @@ ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::h
   }
 SPOTKIN_DYN_KERNELS(double, kLanes64)
 SPOTKIN_DYN_KERNELS(float, kLanes32)
+SPOTKIN_DYN_KERNELS(double, kSmallLanes64)
+SPOTKIN_DYN_KERNELS(float, kSmallLanes32)
 #undef SPOTKIN_DYN_KERNELS
 
-template <typename T>
-const ChainModel<T, lanes_of<T>()>& model_of(const ChainDynamics& d) {
-  return d.get(T{});
-}
 
 // Rough single-thread cost per sample of a 6-joint chain (for the thread split).
 constexpr double kNsPerSample = 150.0;
@@ -57,7 +57,7 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
   return run_batch({{q, "q", n}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     rnea_k(model_of<T>(d), rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
                    });
 }
 
@@ -66,7 +66,7 @@ py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
   return run_batch({{q, "q", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     rnea_k(model_of<T>(d), rows[0], nullptr, nullptr, rows[1], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
                    });
 }
 
@@ -75,7 +75,7 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
   return run_batch({{q, "q", n}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     rnea_k(model_of<T>(d), rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
                    });
 }
 
@@ -84,7 +84,7 @@ py::object chain_crba(const ChainDynamics& d, py::handle q) {
   return run_batch({{q, "q", n}}, {n, n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     crba_k(model_of<T>(d), rows[0], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { crba_k(model, rows[0], out, b, e); });
                    });
 }
 
@@ -93,7 +93,7 @@ py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
   return run_batch({{q, "q", n}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     coriolis_k(model_of<T>(d), rows[0], rows[1], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { coriolis_k(model, rows[0], rows[1], out, b, e); });
                    });
 }
 
@@ -102,7 +102,7 @@ py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::ha
   return run_batch({{q, "q", n}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     aba_k(model_of<T>(d), rows[0], rows[1], rows[2], rows[3], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
                    });
 }
 

@@ -26,10 +26,18 @@ using dynamics::Rows;
 
 constexpr int kLanes64 = 8;   // one AVX-512 register of doubles
 constexpr int kLanes32 = 16;  // ... of floats
+// Batches shorter than a block run on models of 16-byte packs: a single sample
+// then pays for 2 (4) lanes, not 8 (16).
+constexpr int kSmallLanes64 = 2;
+constexpr int kSmallLanes32 = 4;
 
-template <typename T>
-constexpr int lanes_of() {
-  return std::is_same_v<T, float> ? kLanes32 : kLanes64;
+// Calls f(model) with the wide or the narrow model of `d` in precision T.
+template <typename T, typename D, typename F>
+SPOTKIN_INLINE void with_model(const D& d, std::ptrdiff_t samples, F&& f) {
+  if (samples < (std::is_same_v<T, float> ? kLanes32 : kLanes64))
+    f(d.small(T{}));
+  else
+    f(d.get(T{}));
 }
 
 // ---------------------------------------------------------------- inertials
@@ -169,8 +177,12 @@ py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, d
 struct ChainDynamics {
   ChainModel<double, kLanes64> f64;
   ChainModel<float, kLanes32> f32;
+  ChainModel<double, kSmallLanes64> f64_small;
+  ChainModel<float, kSmallLanes32> f32_small;
   const ChainModel<double, kLanes64>& get(double) const { return f64; }
   const ChainModel<float, kLanes32>& get(float) const { return f32; }
+  const ChainModel<double, kSmallLanes64>& small(double) const { return f64_small; }
+  const ChainModel<float, kSmallLanes32>& small(float) const { return f32_small; }
   int dof() const { return f64.dof(); }
 };
 

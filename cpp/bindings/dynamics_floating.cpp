@@ -19,8 +19,12 @@ using dynamics::FloatingModel;
 struct FloatingDynamics {
   FloatingModel<double, kLanes64> f64;
   FloatingModel<float, kLanes32> f32;
+  FloatingModel<double, kSmallLanes64> f64_small;
+  FloatingModel<float, kSmallLanes32> f32_small;
   const FloatingModel<double, kLanes64>& get(double) const { return f64; }
   const FloatingModel<float, kLanes32>& get(float) const { return f32; }
+  const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
+  const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
 };
 
 FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inertia, const py::sequence& chain_list) {
@@ -40,10 +44,14 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
                                     inertia_arr.reshape(Shape{1, 3, 3}), 1, "body_");
   std::vector<ChainModel<double, kLanes64>> c64;
   std::vector<ChainModel<float, kLanes32>> c32;
-  for (const auto& c : chains) c64.push_back(c.f64), c32.push_back(c.f32);
+  std::vector<ChainModel<double, kSmallLanes64>> s64;
+  std::vector<ChainModel<float, kSmallLanes32>> s32;
+  for (const auto& c : chains) c64.push_back(c.f64), c32.push_back(c.f32), s64.push_back(c.f64_small), s32.push_back(c.f32_small);
   try {
     return FloatingDynamics{FloatingModel<double, kLanes64>(links[0], std::move(c64)),
-                            FloatingModel<float, kLanes32>(links[0], std::move(c32))};
+                            FloatingModel<float, kLanes32>(links[0], std::move(c32)),
+                            FloatingModel<double, kSmallLanes64>(links[0], std::move(s64)),
+                            FloatingModel<float, kSmallLanes32>(links[0], std::move(s32))};
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }
@@ -68,12 +76,10 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
   }
 SPOTKIN_FLOAT_KERNELS(double, kLanes64)
 SPOTKIN_FLOAT_KERNELS(float, kLanes32)
+SPOTKIN_FLOAT_KERNELS(double, kSmallLanes64)
+SPOTKIN_FLOAT_KERNELS(float, kSmallLanes32)
 #undef SPOTKIN_FLOAT_KERNELS
 
-template <typename T>
-const FloatingModel<T, lanes_of<T>()>& model_of(const FloatingDynamics& d) {
-  return d.get(T{});
-}
 
 constexpr double kNsFloating = 400.0;
 
@@ -82,7 +88,7 @@ py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, 
   return run_batch({{q, "q", nq}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     f_rnea_k(model_of<T>(d), rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { f_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
                    });
 }
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
@@ -90,7 +96,7 @@ py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle 
   return run_batch({{q, "q", nq}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     f_rnea_k(model_of<T>(d), rows[0], nullptr, nullptr, rows[1], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { f_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
                    });
 }
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
@@ -98,7 +104,7 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
   return run_batch({{q, "q", nq}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     f_rnea_k(model_of<T>(d), rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { f_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
                    });
 }
 py::object floating_crba(const FloatingDynamics& d, py::handle q) {
@@ -106,7 +112,7 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q) {
   return run_batch({{q, "q", nq}}, {nv, nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     f_crba_k(model_of<T>(d), rows[0], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { f_crba_k(model, rows[0], out, b, e); });
                    });
 }
 py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
@@ -114,7 +120,7 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
   return run_batch({{q, "q", nq}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     f_aba_k(model_of<T>(d), rows[0], rows[1], rows[2], rows[3], out, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { f_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
                    });
 }
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
@@ -122,7 +128,7 @@ py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) 
   return run_batch({{q, "q", nq}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     f_com_k(model_of<T>(d), rows[0], out, jacobian, b, e);
+                     with_model<T>(d, e - b, [&](const auto& model) { f_com_k(model, rows[0], out, jacobian, b, e); });
                    });
 }
 

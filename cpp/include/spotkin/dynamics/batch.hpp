@@ -48,14 +48,16 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
   std::vector<Force<P>> f(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, qd, qdd, &g, b0, m);
     rnea_chain(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(), blk.root_acceleration(),
                blk.out.data(), f.data());
-    store(blk.out.data(), n, b0, m, blk.ok, tau);
+    store(blk.out.data(), n, b0, m, blk.ok, tau, stream);
   }
+  if (stream) stream_fence();
 }
 
 // A(q), row-major n x n per sample.
@@ -65,13 +67,15 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n * n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
   std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
     crba_chain(model, blk.X.data(), blk.out.data(), Ic.data());
-    store(blk.out.data(), n * n, b0, m, blk.ok, A);
+    store(blk.out.data(), n * n, b0, m, blk.ok, A, stream);
   }
+  if (stream) stream_fence();
 }
 
 // C(q, qd), row-major n x n per sample.
@@ -81,13 +85,15 @@ SPOTKIN_INLINE void coriolis_batch(const ChainModel<M, L>& model, Rows<M> q, Row
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n * n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
   std::vector<CoriolisWork<P>> w(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, &qd, nullptr, nullptr, b0, m);
     coriolis_chain(model, blk.X.data(), blk.qd.data(), blk.out.data(), w.data());
-    store(blk.out.data(), n * n, b0, m, blk.ok, C);
+    store(blk.out.data(), n * n, b0, m, blk.ok, C, stream);
   }
+  if (stream) stream_fence();
 }
 
 // qdd = ABA(q, qd, tau, g).
@@ -97,6 +103,7 @@ SPOTKIN_INLINE void aba_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> 
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
   std::vector<AbaWork<P>> w(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -104,8 +111,9 @@ SPOTKIN_INLINE void aba_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> 
     aba_down_up(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(), w.data(), false,
                 static_cast<Inertia6<P>*>(nullptr), static_cast<Force<P>*>(nullptr));
     aba_down(model, blk.X.data(), w.data(), blk.root_acceleration(), blk.out.data());
-    store(blk.out.data(), n, b0, m, blk.ok, qdd);
+    store(blk.out.data(), n, b0, m, blk.ok, qdd, stream);
   }
+  if (stream) stream_fence();
 }
 
 }  // namespace spotkin::dynamics

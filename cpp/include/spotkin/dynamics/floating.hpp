@@ -107,6 +107,7 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
                                         std::ptrdiff_t end) {
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
+  const bool stream = std::size_t(end - begin) * std::size_t(model.nv()) * sizeof(M) >= kStreamBytes;
   std::vector<Force<P>> f(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -122,8 +123,9 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
       fb.n += fk.n, fb.f += fk.f;
     }
     for (int r = 0; r < 3; ++r) blk.out[r] = fb.f[r], blk.out[3 + r] = fb.n[r];
-    store(blk.out.data(), model.nv(), b0, m, blk.ok, tau);
+    store(blk.out.data(), model.nv(), b0, m, blk.ok, tau, stream);
   }
+  if (stream) stream_fence();
 }
 
 // A(q), (6 + n) x (6 + n): the chains' blocks by CRBA (RBDA Table 6.2), their
@@ -134,6 +136,7 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
   using P = Pack<M, L>;
   const int nv = model.nv();
   FloatingBlock<M, L> blk(model, nv * nv);
+  const bool stream = std::size_t(end - begin) * std::size_t(nv * nv) * sizeof(M) >= kStreamBytes;
   std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
   std::vector<Force<P>> F(static_cast<std::size_t>(model.joints()));
   std::vector<P> H(static_cast<std::size_t>(model.joints() * model.joints()));
@@ -170,8 +173,9 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
         out[(3 + r) * nv + c] = hx[r][c];
         out[r * nv + 3 + c] = -hx[r][c];
       }
-    store(out, nv * nv, b0, m, blk.ok, A);
+    store(out, nv * nv, b0, m, blk.ok, A, stream);
   }
+  if (stream) stream_fence();
 }
 
 // Solves the symmetric positive definite 6x6 system K x = b in place (LDL^T, no pivoting).
@@ -203,6 +207,7 @@ SPOTKIN_INLINE void floating_aba_batch(const FloatingModel<M, L>& model, Rows<M>
                                        Rows<M> g, M* a, std::ptrdiff_t begin, std::ptrdiff_t end) {
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
+  const bool stream = std::size_t(end - begin) * std::size_t(model.nv()) * sizeof(M) >= kStreamBytes;
   std::vector<AbaWork<P>> w(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -234,8 +239,9 @@ SPOTKIN_INLINE void floating_aba_batch(const FloatingModel<M, L>& model, Rows<M>
       aba_down(model.chains()[k], blk.X.data() + o, w.data() + o, ab, blk.out.data() + 6 + o);
     }
     for (int r = 0; r < 3; ++r) blk.out[r] = ab.v[r] + blk.g_body[r], blk.out[3 + r] = ab.w[r];
-    store(blk.out.data(), model.nv(), b0, m, blk.ok, a);
+    store(blk.out.data(), model.nv(), b0, m, blk.ok, a, stream);
   }
+  if (stream) stream_fence();
 }
 
 // Centre of mass in the world (3) and its Jacobian (3 x (6 + n)), d com / dt = J v:
@@ -248,6 +254,7 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
   using P = Pack<M, L>;
   const int nv = model.nv(), width = jacobian ? 3 * nv : 3;
   FloatingBlock<M, L> blk(model, width);
+  const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   std::vector<Motion<P>> S(static_cast<std::size_t>(model.joints()));
   std::vector<P> ms(static_cast<std::size_t>(model.joints()));
   std::vector<V3<P>> hs(static_cast<std::size_t>(model.joints()));
@@ -288,8 +295,9 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
         for (int r = 0; r < 3; ++r) out[r * nv + 6 + j] = col[r];
       }
     }
-    store(out, width, b0, m, blk.ok, out_rows);
+    store(out, width, b0, m, blk.ok, out_rows, stream);
   }
+  if (stream) stream_fence();
 }
 
 }  // namespace spotkin::dynamics

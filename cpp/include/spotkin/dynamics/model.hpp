@@ -14,10 +14,16 @@
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
+#include <cstring>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 #include "spotkin/chain.hpp"
 #include "spotkin/dynamics/pack.hpp"
@@ -175,14 +181,93 @@ SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width,
   }
 }
 
+// Transposes 8 packs of 8 doubles in registers (3 stages of 2-input shuffles):
+// r[j] holds column j of 8 samples, on return r[i] holds sample i's 8 columns.
+SPOTKIN_INLINE void transpose8(Pack<double, 8>::Vector r[8]) noexcept {
+  using V = Pack<double, 8>::Vector;
+  typedef long long I __attribute__((vector_size(64)));
+  V t[8], u[8];
+  for (int k = 0; k < 8; k += 2) {
+    t[k] = __builtin_shuffle(r[k], r[k + 1], I{0, 8, 2, 10, 4, 12, 6, 14});
+    t[k + 1] = __builtin_shuffle(r[k], r[k + 1], I{1, 9, 3, 11, 5, 13, 7, 15});
+  }
+  for (int k = 0; k < 8; k += 4)
+    for (int h = 0; h < 2; ++h) {
+      u[k + h] = __builtin_shuffle(t[k + h], t[k + h + 2], I{0, 1, 8, 9, 4, 5, 12, 13});
+      u[k + h + 2] = __builtin_shuffle(t[k + h], t[k + h + 2], I{2, 3, 10, 11, 6, 7, 14, 15});
+    }
+  for (int k = 0; k < 4; ++k) {
+    r[k] = __builtin_shuffle(u[k], u[k + 4], I{0, 1, 2, 3, 8, 9, 10, 11});
+    r[k + 4] = __builtin_shuffle(u[k], u[k + 4], I{4, 5, 6, 7, 12, 13, 14, 15});
+  }
+}
+
+// Outputs of at least this many bytes per call are written with non-temporal
+// stores (no read for ownership, no eviction of the inputs): a batch's output
+// (2.6 kB per sample for an 18 x 18 mass matrix) is memory-bandwidth bound.
+constexpr std::size_t kStreamBytes = std::size_t(2) << 20;
+
+template <typename M>
+SPOTKIN_INLINE void stream_row(const M* from, M* to, int width) noexcept {
+#if defined(__x86_64__)
+  for (int j = 0; j < width; ++j) {
+    if constexpr (sizeof(M) == 8) {
+      long long bits;
+      std::memcpy(&bits, from + j, 8);
+      _mm_stream_si64(reinterpret_cast<long long*>(to + j), bits);
+    } else {
+      int bits;
+      std::memcpy(&bits, from + j, 4);
+      _mm_stream_si32(reinterpret_cast<int*>(to + j), bits);
+    }
+  }
+#else
+  std::memcpy(to, from, sizeof(M) * std::size_t(width));
+#endif
+}
+
+// Orders the non-temporal stores before what follows (the caller's use of the output).
+SPOTKIN_INLINE void stream_fence() noexcept {
+#if defined(__x86_64__)
+  _mm_sfence();
+#endif
+}
+
 // Stores `width` lanes-values of samples b0 .. b0 + m - 1, row-major; a lane
-// whose inputs were not all finite gets NaN in its whole row.
+// whose inputs were not all finite gets NaN in its whole row. Groups of 8
+// columns of 8 doubles are transposed in registers; with `stream`, rows go
+// through a small buffer and out with non-temporal stores (stream_fence after).
 template <typename M, int L>
-SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok,
-                          M* out) noexcept {
+SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
+                          bool stream = false) noexcept {
+  if (stream) {
+    M row[256];
+    for (int c0 = 0; c0 < width; c0 += 256) {
+      const int w = std::min(256, width - c0);
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < w; ++j) row[j] = ok[i] ? in[c0 + j].v[i] : quiet_nan<M>();
+        stream_row(row, out + (b0 + i) * width + c0, w);
+      }
+    }
+    return;
+  }
+  int j0 = 0;
+  if constexpr (std::is_same_v<M, double> && L == 8) {
+    for (; j0 + 8 <= width; j0 += 8) {
+      typename Pack<double, 8>::Vector r[8];
+      for (int k = 0; k < 8; ++k) r[k] = in[j0 + k].v;
+      transpose8(r);
+      for (int i = 0; i < m; ++i)
+        if (ok[i]) std::memcpy(out + (b0 + i) * width + j0, &r[i], sizeof r[i]);
+    }
+  }
   for (int i = 0; i < m; ++i) {
     M* row = out + (b0 + i) * width;
-    for (int j = 0; j < width; ++j) row[j] = ok[i] ? in[j].v[i] : quiet_nan<M>();
+    if (!ok[i]) {
+      for (int j = 0; j < width; ++j) row[j] = quiet_nan<M>();
+      continue;
+    }
+    for (int j = j0; j < width; ++j) row[j] = in[j].v[i];
   }
 }
 
