@@ -34,7 +34,10 @@ CHAINS = {
     "go2_leg": (GO2, "RR_foot"),
 }
 FLOATING = {
-    "spot": (SPOT, ["arm_link_fngr", "front_left_foot", "front_right_foot", "rear_left_foot", "rear_right_foot"]),
+    "spot": (
+        SPOT,
+        ["arm_link_fngr", "front_left_foot", "front_right_foot", "rear_left_foot", "rear_right_foot"],
+    ),
     "go2": (GO2, ["FL_foot", "FR_foot", "RL_foot", "RR_foot"]),
 }
 TOL64 = 1e-10
@@ -90,8 +93,11 @@ class Fixed:
 
     def random(self, rng, shape=()):
         n = self.n
-        return (rng.uniform(-np.pi, np.pi, (*shape, n)), rng.normal(size=(*shape, n)) * 2,
-                rng.normal(size=(*shape, n)) * 5)
+        return (
+            rng.uniform(-np.pi, np.pi, (*shape, n)),
+            rng.normal(size=(*shape, n)) * 2,
+            rng.normal(size=(*shape, n)) * 5,
+        )
 
 
 @pytest.fixture(scope="module", params=sorted(CHAINS))
@@ -106,6 +112,7 @@ def rng():
 
 # ------------------------------------------------------------------ fixed base vs Pinocchio
 
+
 def test_fixed_base_matches_pinocchio(fixed, rng):
     m, d, kw = fixed.model, fixed.data, {"inertials": fixed.inertials}
     worst = {}
@@ -113,13 +120,27 @@ def test_fixed_base_matches_pinocchio(fixed, rng):
         q, qd, qdd = fixed.random(rng)
         qp, vp, ap = fixed.to_pin(q), fixed.to_pin(qd), fixed.to_pin(qdd)
         checks = {
-            "rnea": (dyn.inverse_dynamics(fixed.chain, q, qd, qdd, **kw), pin.rnea(m, d, qp, vp, ap)[fixed.idx]),
+            "rnea": (
+                dyn.inverse_dynamics(fixed.chain, q, qd, qdd, **kw),
+                pin.rnea(m, d, qp, vp, ap)[fixed.idx],
+            ),
             "crba": (dyn.mass_matrix(fixed.chain, q, **kw), fixed.mat(sym(pin.crba(m, d, qp)))),
-            "gravity": (dyn.gravity(fixed.chain, q, **kw), pin.computeGeneralizedGravity(m, d, qp)[fixed.idx]),
-            "nle": (dyn.nonlinear_effects(fixed.chain, q, qd, **kw), pin.nonLinearEffects(m, d, qp, vp)[fixed.idx]),
-            "coriolis": (dyn.coriolis_matrix(fixed.chain, q, qd, **kw),
-                         fixed.mat(pin.computeCoriolisMatrix(m, d, qp, vp))),
-            "aba": (dyn.forward_dynamics(fixed.chain, q, qd, qdd, **kw), pin.aba(m, d, qp, vp, ap)[fixed.idx]),
+            "gravity": (
+                dyn.gravity(fixed.chain, q, **kw),
+                pin.computeGeneralizedGravity(m, d, qp)[fixed.idx],
+            ),
+            "nle": (
+                dyn.nonlinear_effects(fixed.chain, q, qd, **kw),
+                pin.nonLinearEffects(m, d, qp, vp)[fixed.idx],
+            ),
+            "coriolis": (
+                dyn.coriolis_matrix(fixed.chain, q, qd, **kw),
+                fixed.mat(pin.computeCoriolisMatrix(m, d, qp, vp)),
+            ),
+            "aba": (
+                dyn.forward_dynamics(fixed.chain, q, qd, qdd, **kw),
+                pin.aba(m, d, qp, vp, ap)[fixed.idx],
+            ),
         }
         for name, (ours, ref) in checks.items():
             worst[name] = max(worst.get(name, 0.0), close(ours, ref))
@@ -133,8 +154,10 @@ def test_custom_gravity(fixed, rng):
         q, qd, qdd = fixed.random(rng)
         tau = pin.rnea(fixed.model, fixed.data, fixed.to_pin(q), fixed.to_pin(qd), fixed.to_pin(qdd))
         close(dyn.inverse_dynamics(fixed.chain, q, qd, qdd, g, inertials=fixed.inertials), tau[fixed.idx])
-        close(dyn.gravity(fixed.chain, q, gravity=g, inertials=fixed.inertials),
-              pin.computeGeneralizedGravity(fixed.model, fixed.data, fixed.to_pin(q))[fixed.idx])
+        close(
+            dyn.gravity(fixed.chain, q, gravity=g, inertials=fixed.inertials),
+            pin.computeGeneralizedGravity(fixed.model, fixed.data, fixed.to_pin(q))[fixed.idx],
+        )
     finally:
         fixed.model.gravity.linear = np.array([0.0, 0.0, -9.81])
 
@@ -161,25 +184,30 @@ def test_prismatic_and_dh_chain(rng):
         mass = 1.0 + j
         com = rng.normal(size=3) * 0.1
         A = rng.normal(size=(3, 3))
-        I = A @ A.T * 0.01 + 0.01 * np.eye(3)
+        inertia_c = A @ A.T * 0.01 + 0.01 * np.eye(3)
         # spotkin's body frame is the frame after post; Pinocchio's joint frame is before post:
         # express the inertia in the joint frame for Pinocchio
-        pin_inertia = post.act(pin.Inertia(mass, com, I))
+        pin_inertia = post.act(pin.Inertia(mass, com, inertia_c))
         model.appendBodyToJoint(jid, pin_inertia, pin.SE3.Identity())
-        inert.append((mass, com, I))
+        inert.append((mass, com, inertia_c))
         parent, placement = jid, post
     data = model.createData()
-    inertials = dyn.LinkInertials(np.array([x[0] for x in inert]), np.array([x[1] for x in inert]),
-                                  np.array([x[2] for x in inert]))
+    inertials = dyn.LinkInertials(
+        np.array([x[0] for x in inert]), np.array([x[1] for x in inert]), np.array([x[2] for x in inert])
+    )
     for _ in range(10):
         q, qd, qdd = rng.uniform(-1, 1, n), rng.normal(size=n), rng.normal(size=n)
         close(dyn.inverse_dynamics(chain, q, qd, qdd, inertials=inertials), pin.rnea(model, data, q, qd, qdd))
         close(dyn.mass_matrix(chain, q, inertials=inertials), sym(pin.crba(model, data, q)))
-        close(dyn.coriolis_matrix(chain, q, qd, inertials=inertials), pin.computeCoriolisMatrix(model, data, q, qd))
+        close(
+            dyn.coriolis_matrix(chain, q, qd, inertials=inertials),
+            pin.computeCoriolisMatrix(model, data, q, qd),
+        )
         close(dyn.forward_dynamics(chain, q, qd, qdd, inertials=inertials), pin.aba(model, data, q, qd, qdd))
 
 
 # ------------------------------------------------------------------ identities
+
 
 def test_identities(fixed, rng):
     kw = {"inertials": fixed.inertials}
@@ -195,12 +223,15 @@ def test_identities(fixed, rng):
     close(dyn.forward_dynamics(fixed.chain, q, qd, tau, **kw), qdd, 1e-9)
     # dA/dt - 2 C is skew-symmetric (dA/dt by central differences along qd)
     h = 1e-6
-    dA = (dyn.mass_matrix(fixed.chain, q + h * qd, **kw) - dyn.mass_matrix(fixed.chain, q - h * qd, **kw)) / (2 * h)
+    dA = (dyn.mass_matrix(fixed.chain, q + h * qd, **kw) - dyn.mass_matrix(fixed.chain, q - h * qd, **kw)) / (
+        2 * h
+    )
     N = dA - 2 * C
     close(N + np.swapaxes(N, -1, -2), np.zeros_like(N), 1e-6 * max(1.0, np.abs(dA).max()))
 
 
 # ------------------------------------------------------------------ batches and the boundary
+
 
 @given(shape=st.sampled_from([(), (1,), (3, 1, 2), (2, 3)]), seed=st.integers(0, 2**32 - 1))
 def test_batch_shapes_broadcast(shape, seed):
@@ -213,7 +244,11 @@ def test_batch_shapes_broadcast(shape, seed):
     assert tau.shape == (*shape, fx.n) and A.shape == (*shape, fx.n, fx.n)
     flat_q, flat_qd, flat_qdd = (x.reshape(-1, fx.n) for x in (q, qd, qdd))
     for i in range(flat_q.shape[0]):  # each row as a single call, and against Pinocchio
-        close(tau.reshape(-1, fx.n)[i], dyn.inverse_dynamics(fx.chain, flat_q[i], flat_qd[i], flat_qdd[i], **kw), 0)
+        close(
+            tau.reshape(-1, fx.n)[i],
+            dyn.inverse_dynamics(fx.chain, flat_q[i], flat_qd[i], flat_qdd[i], **kw),
+            0,
+        )
         ref = pin.rnea(fx.model, fx.data, fx.to_pin(flat_q[i]), fx.to_pin(flat_qd[i]), fx.to_pin(flat_qdd[i]))
         close(tau.reshape(-1, fx.n)[i], ref[fx.idx])
     # one qd for every sample, gravity per sample
@@ -221,7 +256,10 @@ def test_batch_shapes_broadcast(shape, seed):
         g = rng.normal(size=(*shape, 3))
         out = dyn.inverse_dynamics(fx.chain, q, qd.reshape(-1, fx.n)[0], qdd, g, **kw)
         for idx in np.ndindex(*shape):
-            close(out[idx], dyn.inverse_dynamics(fx.chain, q[idx], qd.reshape(-1, fx.n)[0], qdd[idx], g[idx], **kw))
+            close(
+                out[idx],
+                dyn.inverse_dynamics(fx.chain, q[idx], qd.reshape(-1, fx.n)[0], qdd[idx], g[idx], **kw),
+            )
 
 
 _FIXED = {}
@@ -241,16 +279,23 @@ def test_leading_shapes_broadcast_like_numpy(rng):
     assert out.shape == (4, 5, 3)
     close(out[2, 3], dyn.nonlinear_effects(fx.chain, q[2, 0], qd[0, 3], inertials=fx.inertials), 0)
     with pytest.raises(ValueError, match="qd"):
-        dyn.nonlinear_effects(fx.chain, rng.normal(size=(4, 3)), rng.normal(size=(5, 3)), inertials=fx.inertials)
+        dyn.nonlinear_effects(
+            fx.chain, rng.normal(size=(4, 3)), rng.normal(size=(5, 3)), inertials=fx.inertials
+        )
 
 
 def test_float32(fixed, rng):
     kw = {"inertials": fixed.inertials}
     q, qd, qdd = fixed.random(rng, (40,))
     q32, qd32, qdd32 = (x.astype(np.float32) for x in (q, qd, qdd))
-    for f, args in [(dyn.inverse_dynamics, (q32, qd32, qdd32)), (dyn.mass_matrix, (q32,)),
-                    (dyn.coriolis_matrix, (q32, qd32)), (dyn.forward_dynamics, (q32, qd32, qdd32)),
-                    (dyn.gravity, (q32,)), (dyn.nonlinear_effects, (q32, qd32))]:
+    for f, args in [
+        (dyn.inverse_dynamics, (q32, qd32, qdd32)),
+        (dyn.mass_matrix, (q32,)),
+        (dyn.coriolis_matrix, (q32, qd32)),
+        (dyn.forward_dynamics, (q32, qd32, qdd32)),
+        (dyn.gravity, (q32,)),
+        (dyn.nonlinear_effects, (q32, qd32)),
+    ]:
         out = f(fixed.chain, *args, **kw)
         assert out.dtype == np.float32
         ref = f(fixed.chain, *(a.astype(np.float64) for a in args), **kw)
@@ -276,8 +321,12 @@ def test_noncontiguous_empty_and_nan_rows(rng):
     qd[3, 5] = np.nan
     q[7, 0] = np.inf
     qdd[19, 1] = np.nan
-    for f, args in [(dyn.inverse_dynamics, (q, qd, qdd)), (dyn.forward_dynamics, (q, qd, qdd)),
-                    (dyn.coriolis_matrix, (q, qd)), (dyn.nonlinear_effects, (q, qd))]:
+    for f, args in [
+        (dyn.inverse_dynamics, (q, qd, qdd)),
+        (dyn.forward_dynamics, (q, qd, qdd)),
+        (dyn.coriolis_matrix, (q, qd)),
+        (dyn.nonlinear_effects, (q, qd)),
+    ]:
         out = f(fx.chain, *args, **kw)
         bad = [3, 7, 19] if len(args) == 3 else [3, 7]
         for i in range(20):
@@ -303,12 +352,15 @@ def test_errors(rng):
     with pytest.raises(ValueError, match="mass"):
         dyn.mass_matrix(fx.chain, np.zeros(6), inertials=(np.ones(5), np.zeros((6, 3)), np.zeros((6, 3, 3))))
     with pytest.raises(ValueError, match="positive semidefinite"):
-        dyn.mass_matrix(fx.chain, np.zeros(6), inertials=(np.ones(6), np.zeros((6, 3)), -np.eye(3)[None].repeat(6, 0)))
+        dyn.mass_matrix(
+            fx.chain, np.zeros(6), inertials=(np.ones(6), np.zeros((6, 3)), -np.eye(3)[None].repeat(6, 0))
+        )
     with pytest.raises(ValueError, match="chain carries no inertial"):
         dyn.mass_matrix(fx.chain, np.zeros(6))
 
 
 # ------------------------------------------------------------------ floating base vs Pinocchio
+
 
 class Floating:
     def __init__(self, key):
@@ -323,8 +375,11 @@ class Floating:
         self.iv = np.r_[np.arange(6), [self.model.idx_vs[i] for i in jid]]
         self.iq = np.r_[np.arange(7), [self.model.idx_qs[i] for i in jid]]
         body = self.model.inertias[1]
-        self.fb = dyn.FloatingBase((body.mass, body.lever, body.inertia), self.chains,
-                                   [inertials_from_pin(self.model, c.joint_names) for c in self.chains])
+        self.fb = dyn.FloatingBase(
+            (body.mass, body.lever, body.inertia),
+            self.chains,
+            [inertials_from_pin(self.model, c.joint_names) for c in self.chains],
+        )
         self.n = len(names)
 
     def random(self, rng):
@@ -383,7 +438,9 @@ def test_floating_identities(floating, rng):
     q0, v0 = q[0], v[0]
     J = fl.fb.center_of_mass_jacobian(q0)
     m = fl.model
-    dq = (fl.fb.center_of_mass(_integrate(m, fl, q0, v0, eps)) - fl.fb.center_of_mass(_integrate(m, fl, q0, v0, -eps)))
+    dq = fl.fb.center_of_mass(_integrate(m, fl, q0, v0, eps)) - fl.fb.center_of_mass(
+        _integrate(m, fl, q0, v0, -eps)
+    )
     close(J @ v0, dq / (2 * eps), 1e-6)
     # float32 and batch shapes
     out32 = fl.fb.inverse_dynamics(q.astype(np.float32), v.astype(np.float32), a.astype(np.float32))
@@ -422,8 +479,10 @@ def test_large_batches_equal_their_rows(threads, rng):
                 close(tau[i], dyn.inverse_dynamics(fx.chain, q[i], qd[i], qdd[i], **kw), 0)
                 close(A[i], dyn.mass_matrix(fx.chain, q[i], **kw), 0)
                 close(C[i], dyn.coriolis_matrix(fx.chain, q[i], qd[i], **kw), 0)
-                close(tau[i], pin.rnea(fx.model, fx.data, fx.to_pin(q[i]), fx.to_pin(qd[i]),
-                                       fx.to_pin(qdd[i]))[fx.idx])
+                close(
+                    tau[i],
+                    pin.rnea(fx.model, fx.data, fx.to_pin(q[i]), fx.to_pin(qd[i]), fx.to_pin(qdd[i]))[fx.idx],
+                )
             states = [fl.random(rng) for _ in range(min(count, 400))]
             qf, vf, af = (np.array(x) for x in zip(*states))
             Af = fl.fb.mass_matrix(qf)

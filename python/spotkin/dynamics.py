@@ -88,8 +88,9 @@ def _core_of(chain, inertials) -> _core.ChainDynamics:
     return core
 
 
-def inverse_dynamics(chain, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = GRAVITY, *,
-                     inertials=None) -> np.ndarray:
+def inverse_dynamics(
+    chain, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
+) -> np.ndarray:
     """Joint torques tau = A(q) qdd + C(q, qd) qd + G(q), (..., n): recursive Newton-Euler."""
     return _core_of(chain, inertials).rnea(q, qd, qdd, gravity)
 
@@ -104,8 +105,9 @@ def gravity(chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
     return _core_of(chain, inertials).gravity(q, gravity)
 
 
-def nonlinear_effects(chain, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = GRAVITY, *,
-                      inertials=None) -> np.ndarray:
+def nonlinear_effects(
+    chain, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
+) -> np.ndarray:
     """h = C(q, qd) qd + G(q), (..., n)."""
     return _core_of(chain, inertials).nonlinear_effects(q, qd, gravity)
 
@@ -115,8 +117,9 @@ def coriolis_matrix(chain, q: ArrayLike, qd: ArrayLike, *, inertials=None) -> np
     return _core_of(chain, inertials).coriolis_matrix(q, qd)
 
 
-def forward_dynamics(chain, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = GRAVITY, *,
-                     inertials=None) -> np.ndarray:
+def forward_dynamics(
+    chain, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
+) -> np.ndarray:
     """Joint accelerations qdd = A^-1 (tau - C qd - G), (..., n): articulated-body algorithm."""
     return _core_of(chain, inertials).aba(q, qd, tau, gravity)
 

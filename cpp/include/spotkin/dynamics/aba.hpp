@@ -29,10 +29,9 @@ SPOTKIN_INLINE void aba_down_up(const ChainModel<M, L>& model, const Pose<Pack<M
   const int n = model.dof();
   Motion<P> v = v0;
   for (int j = 0; j < n; ++j) {  // pass 1: v_i, c_i, IA_i = I_i, pA_i = v_i x* I_i v_i
-    const Motion<P> vJ = model.subspace_times(j, qd[j]);
     Motion<P> vj = to_child(X[j], v);
-    vj.w += vJ.w, vj.v += vJ.v;
-    w[j].c = crm(vj, vJ);
+    model.add_subspace(j, qd[j], vj);
+    w[j].c = model.cross_subspace(j, vj, qd[j]);
     const RigidInertia<P> I = model.inertia(j);
     w[j].IA = general(I);
     w[j].pA = crf(vj, apply(I, vj));
@@ -40,10 +39,9 @@ SPOTKIN_INLINE void aba_down_up(const ChainModel<M, L>& model, const Pose<Pack<M
   }
   for (int j = n - 1; j >= 0; --j) {  // pass 2
     AbaWork<P>& a = w[j];
-    const Motion<P> S = model.subspace(j);
-    a.U = apply(a.IA, S);                      // U_i = IA_i S_i
-    a.Dinv = P(M(1)) / dot(S, a.U);            // D_i = S_i^T U_i
-    a.u = tau[j] - dot(S, a.pA);               // u_i = tau_i - S_i^T pA_i
+    a.U = model.inertia_subspace(j, a.IA);     // U_i = IA_i S_i
+    a.Dinv = P(M(1)) / model.project(j, a.U);  // D_i = S_i^T U_i
+    a.u = tau[j] - model.project(j, a.pA);     // u_i = tau_i - S_i^T pA_i
     if (j == 0 && !root) break;
     Inertia6<P> Ia = a.IA;                     // Ia = IA_i - U_i D_i^-1 U_i^T
     for (int r = 0; r < 3; ++r)
@@ -77,8 +75,8 @@ SPOTKIN_INLINE void aba_down(const ChainModel<M, L>& model, const Pose<Pack<M, L
     Motion<P> ap = to_child(X[j], a);
     ap.w += w[j].c.w, ap.v += w[j].c.v;
     qdd[j] = w[j].Dinv * (w[j].u - dot(ap, w[j].U));
-    const Motion<P> sa = model.subspace_times(j, qdd[j]);
-    a = {ap.w + sa.w, ap.v + sa.v};
+    model.add_subspace(j, qdd[j], ap);
+    a = ap;
   }
 }
 

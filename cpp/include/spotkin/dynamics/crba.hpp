@@ -18,11 +18,11 @@ SPOTKIN_INLINE void crba_chain(const ChainModel<M, L>& model, const Pose<Pack<M,
   const int n = model.dof();
   for (int j = 0; j < n; ++j) Ic[j] = model.inertia(j);
   for (int j = n - 1; j >= 0; --j) {
-    Force<P> F = apply(Ic[j], model.subspace(j));  // F = Ic_i S_i, H_ii = S_i^T F
-    H[j * n + j] = dot(model.subspace(j), F);
+    Force<P> F = model.inertia_subspace(j, Ic[j]);  // F = Ic_i S_i, H_ii = S_i^T F
+    H[j * n + j] = model.project(j, F);
     for (int k = j; k > 0; --k) {  // F = X^T F up the chain, H_ij = H_ji = S_j^T F
       F = to_parent(X[k], F);
-      H[(k - 1) * n + j] = H[j * n + k - 1] = dot(model.subspace(k - 1), F);
+      H[(k - 1) * n + j] = H[j * n + k - 1] = model.project(k - 1, F);
     }
     if (root_force) root_force[j] = to_parent(X[0], F);
     if (j > 0) add_to(Ic[j - 1], to_parent(X[j], Ic[j]));  // Ic_parent += X^T Ic_i X

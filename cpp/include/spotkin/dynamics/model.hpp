@@ -66,6 +66,8 @@ struct LinkInertial {
 template <typename M>
 struct BodyConstants {
   bool revolute = true;
+  int axis = -1;  // S = (sign e_axis, 0) exactly (a URDF revolute joint about +-x, y or z): sparse products
+  M sign = 1;
   M sw[3] = {0, 0, 0}, sv[3] = {0, 0, 0};  // motion subspace S (RBDA eq. 3.33) in the body frame
   M m = 0, h[3] = {0, 0, 0}, J[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
 };
@@ -107,6 +109,9 @@ class ChainModel {
         b.sw[r] = M(w[r]), b.sv[r] = M(v[r]), b.h[r] = M(h[r]);
         for (int c = 0; c < 3; ++c) b.J[r][c] = M(J[r][c]);
       }
+      if (v.isZero(0.0))
+        for (int k = 0; k < 3; ++k)
+          if (std::fabs(w[k]) == 1.0 && w[(k + 1) % 3] == 0.0 && w[(k + 2) % 3] == 0.0) b.axis = k, b.sign = M(w[k]);
       bodies_.push_back(b);
       joints_.push_back(joint.template cast<M>().template cast<P>());
     }
@@ -124,6 +129,55 @@ class ChainModel {
     const BodyConstants<M>& b = body(j);
     return {{{P(b.sw[0]) * x, P(b.sw[1]) * x, P(b.sw[2]) * x}}, {{P(b.sv[0]) * x, P(b.sv[1]) * x, P(b.sv[2]) * x}}};
   }
+  // S^T f.
+  SPOTKIN_INLINE P project(int j, const Force<P>& f) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    if (b.axis >= 0) return b.sign > 0 ? f.n[b.axis] : -f.n[b.axis];
+    return dot(subspace(j), f);
+  }
+  // m += S x.
+  SPOTKIN_INLINE void add_subspace(int j, const P& x, Motion<P>& m) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    if (b.axis >= 0) {
+      m.w[b.axis] += b.sign > 0 ? x : -x;
+      return;
+    }
+    const Motion<P> s = subspace_times(j, x);
+    m.w += s.w, m.v += s.v;
+  }
+  // m x (S x) (RBDA eq. 2.31), sparse for an axis joint: (w x e_k, v x e_k) sign x.
+  SPOTKIN_INLINE Motion<P> cross_subspace(int j, const Motion<P>& m, const P& x) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    if (b.axis < 0) return crm(m, subspace_times(j, x));
+    const P s = b.sign > 0 ? x : -x;
+    const int k = b.axis, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    Motion<P> o;  // a x e_k = a_k2 e_k1 - a_k1 e_k2
+    o.w[k] = P(M(0)), o.w[k1] = m.w[k2] * s, o.w[k2] = -(m.w[k1] * s);
+    o.v[k] = P(M(0)), o.v[k1] = m.v[k2] * s, o.v[k2] = -(m.v[k1] * s);
+    return o;
+  }
+  // I S for a rigid inertia: (J e_k, -h x e_k) sign for an axis joint.
+  SPOTKIN_INLINE Force<P> inertia_subspace(int j, const RigidInertia<P>& I) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    if (b.axis < 0) return apply(I, subspace(j));
+    const int k = b.axis, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    Force<P> o;
+    for (int r = 0; r < 3; ++r) o.n[r] = I.J(r, k);
+    o.f[k] = P(M(0)), o.f[k1] = -I.h[k2], o.f[k2] = I.h[k1];  // -h x e_k
+    if (b.sign < 0) o.n = scale(o.n, P(M(-1))), o.f = scale(o.f, P(M(-1)));
+    return o;
+  }
+  // IA S for an articulated inertia: (A e_k, B^T e_k) sign for an axis joint.
+  SPOTKIN_INLINE Force<P> inertia_subspace(int j, const Inertia6<P>& I) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    if (b.axis < 0) return apply(I, subspace(j));
+    const int k = b.axis;
+    Force<P> o;
+    for (int r = 0; r < 3; ++r) o.n[r] = I.A(r, k), o.f[r] = I.B(k, r);
+    if (b.sign < 0) o.n = scale(o.n, P(M(-1))), o.f = scale(o.f, P(M(-1)));
+    return o;
+  }
+
   SPOTKIN_INLINE RigidInertia<P> inertia(int j) const noexcept {
     const BodyConstants<M>& b = body(j);
     RigidInertia<P> I;

@@ -19,20 +19,19 @@ SPOTKIN_INLINE Force<Pack<M, L>> rnea_chain(const ChainModel<M, L>& model, const
   const int n = model.dof();
   Motion<P> v = v0, a = a0;
   for (int j = 0; j < n; ++j) {
-    const Motion<P> vJ = model.subspace_times(j, qd[j]);
     Motion<P> vj = to_child(X[j], v);  // v_i = X v_parent + S qd
-    vj.w += vJ.w, vj.v += vJ.v;
-    const Motion<P> sa = model.subspace_times(j, qdd[j]);
-    const Motion<P> c = crm(vj, vJ);
+    model.add_subspace(j, qd[j], vj);
+    const Motion<P> c = model.cross_subspace(j, vj, qd[j]);
     Motion<P> aj = to_child(X[j], a);  // a_i = X a_parent + S qdd + v_i x S qd
-    aj.w += sa.w + c.w, aj.v += sa.v + c.v;
+    model.add_subspace(j, qdd[j], aj);
+    aj.w += c.w, aj.v += c.v;
     const RigidInertia<P> I = model.inertia(j);
     const Force<P> fa = apply(I, aj), fv = crf(vj, apply(I, vj));  // f_i = I a_i + v_i x* I v_i
     f[j] = {fa.n + fv.n, fa.f + fv.f};
     v = vj, a = aj;
   }
   for (int j = n - 1; j >= 0; --j) {  // tau_i = S^T f_i, f_parent += X^T f_i
-    tau[j] = dot(model.subspace(j), f[j]);
+    tau[j] = model.project(j, f[j]);
     if (j > 0) {
       const Force<P> up = to_parent(X[j], f[j]);
       f[j - 1].n += up.n, f[j - 1].f += up.f;
