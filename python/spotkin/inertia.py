@@ -103,13 +103,14 @@ def link_inertials(
     inertia_arr = _shaped(inertia, "inertia", (n, 3, 3))
     for j in range(n):
         matrix = inertia_arr[j]
-        scale = max(float(np.abs(matrix).max()), 1e-300)
-        if np.abs(matrix - matrix.T).max() > 1e-9 * scale:
-            raise ValueError(f"inertia[{j}] must be symmetric, got {matrix.tolist()}")
-        matrix = (matrix + matrix.T) / 2
-        trace = float(np.trace(matrix))
-        if float(np.linalg.eigvalsh(matrix).min()) < -1e-9 * max(abs(trace), 1e-300):
-            raise ValueError(f"inertia[{j}] must be positive semidefinite, got {matrix.tolist()}")
+        with np.errstate(over="ignore", invalid="ignore"):  # near the largest float: Inf fails the checks
+            scale = max(float(np.abs(matrix).max()), 1e-300)
+            if not np.abs(matrix - matrix.T).max() <= 1e-9 * scale:
+                raise ValueError(f"inertia[{j}] must be symmetric, got {matrix.tolist()}")
+            matrix = matrix / 2 + matrix.T / 2
+            trace = float(np.trace(matrix))
+            if not float(np.linalg.eigvalsh(matrix).min()) >= -1e-9 * max(abs(trace), 1e-300):
+                raise ValueError(f"inertia[{j}] must be positive semidefinite, got {matrix.tolist()}")
         inertia_arr[j] = matrix
     for array in (mass_arr, com_arr, inertia_arr):
         array.setflags(write=False)
