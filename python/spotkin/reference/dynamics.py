@@ -281,7 +281,7 @@ def crba(tree, q, body_pose=None) -> np.ndarray:
         if state.floating:
             A[:6, k + j] = A[k + j, :6] = F
     if state.floating:
-        A[:6, :6] = Ic_root
+        A[:6, :6] = (Ic_root + Ic_root.T) / 2  # symmetric in exact arithmetic; the sums round apart
     return A
 
 
