@@ -4,6 +4,8 @@ forms on the course's arms, and against the identities of Lagrangian mechanics (
 
 from __future__ import annotations
 
+import math
+import re
 from functools import cache
 
 import numpy as np
@@ -13,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
+from test_robot import HEXAPOD, ZOO
 from urdf_helpers import joint
 
 import spotkin as sk
@@ -120,6 +123,17 @@ def critter_text() -> str:
 
 
 CRITTER = critter_text()
+
+
+def with_inertials(text: str, seed: int) -> str:
+    """A test URDF of tests/test_robot.py (empty links) with a random inertial on every link."""
+    rng = np.random.default_rng(seed)
+    return re.sub(r'<link name="([^"]+)"/>', lambda m: f'<link name="{m[1]}">{_inertial(rng)}</link>', text)
+
+
+# ZOO: rotated joint frames, negative and unnormalised axes, continuous leg joints, fixed and continuous
+# rotors and a z-y-y limb that is not a leg (locked into the body); HEXAPOD: six legs, joints interleaved
+TEXTS = {"critter": CRITTER, "zoo": with_inertials(ZOO, 3), "hexapod": with_inertials(HEXAPOD, 4)}
 CRITTER_ARM = (
     "arm_sh0_joint",
     "arm_sh1_joint",
@@ -132,16 +146,16 @@ CRITTER_ARM = (
 
 @cache
 def robot(name: str) -> sk.Robot:
-    if name == "critter":
-        return sk.Robot.from_urdf_string(CRITTER)
+    if name in TEXTS:
+        return sk.Robot.from_urdf_string(TEXTS[name])
     return sk.Robot.from_urdf(sk.robots.path({"spot": "spot_with_arm", "go2": "go2"}[name]))
 
 
 @cache
 def pin_full(name: str, floating: bool):
     root = (pin.JointModelFreeFlyer(),) if floating else ()
-    if name == "critter":
-        return pin.buildModelFromXML(CRITTER, *root)
+    if name in TEXTS:
+        return pin.buildModelFromXML(TEXTS[name], *root)
     return pin.buildModelFromUrdf(str(sk.robots.path({"spot": "spot_with_arm", "go2": "go2"}[name])), *root)
 
 
@@ -155,6 +169,10 @@ CASES = {
     "critter_leg": ("critter", "RF_foot", None),
     "critter_arm": ("critter", "arm_hand", None),  # a prismatic joint; the finger locked into the wrist
     "critter_floating": ("critter", None, "arm"),  # legs, then the arm given by name; the fan locked
+    "zoo_leg": ("zoo", "TW_toe", None),  # the continuous hip rotor hangs off the body: not in the chain
+    "zoo_continuous_leg": ("zoo", "CT_foot", None),  # continuous joints (cos, sin in Pinocchio's q)
+    "zoo_floating": ("zoo", None, None),
+    "hexapod_floating": ("hexapod", None, None),
 }
 
 
@@ -181,7 +199,7 @@ def twin(case: str):
     locked = [full.getJointId(name) for name in full.names[first:] if name not in keep]
     reduced = pin.buildReducedModel(full, locked, pin.neutral(full)) if locked else full
     jm = [reduced.joints[reduced.getJointId(name)] for name in tree.joint_names]
-    iq = [j.idx_q for j in jm]
+    iq = [(j.idx_q, j.nq) for j in jm]  # nq = 2: a continuous joint, (cos q, sin q)
     iv = ([0, 1, 2, 3, 4, 5] if floating else []) + [j.idx_v for j in jm]
     assert reduced.nv == len(iv)
     return reduced, iq, iv
@@ -202,7 +220,8 @@ def random_state(tree, rng):
 def pin_vectors(case, q, pose, *vs):
     reduced, iq, iv = twin(case)
     qp = pin.neutral(reduced)
-    qp[iq] = q
+    for (index, nq), value in zip(iq, q):
+        qp[index : index + nq] = value if nq == 1 else (math.cos(value), math.sin(value))
     if pose is not None:
         qp[:3] = pose[:3, 3]
         qp[3:7] = Rotation.from_matrix(pose[:3, :3]).as_quat()  # (x, y, z, w), Pinocchio's order
