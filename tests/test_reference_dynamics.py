@@ -352,13 +352,43 @@ def test_course_rrr_closed_form_values():
     np.testing.assert_allclose(G, [0, G0 * (1.05 + 1.2 * 1.05), 0], atol=1e-14)
 
 
+def arm_002_chain():
+    """The course's three-joint arm (illustrative lengths a = 0.10, 0.12, 0.09 m) as uniform thin rods
+    of 0.5, 0.4 and 0.3 kg: rod 1 up the vertical axis to frame 1 (along y1), rods 2 and 3 along -x of
+    frames 2 and 3 (each DH row ends with TransX(a))."""
+    rows, base, tool = course.arm_002_dh()
+    return sk.Chain.from_dh(rows, base=base, tool=tool).with_inertials(
+        [0.5, 0.4, 0.3],
+        [[0, -0.05, 0], [-0.06, 0, 0], [-0.045, 0, 0]],
+        [
+            np.diag([0.5 * 0.10**2 / 12, 0, 0.5 * 0.10**2 / 12]),
+            np.diag([0, 0.4 * 0.12**2 / 12, 0.4 * 0.12**2 / 12]),
+            np.diag([0, 0.3 * 0.09**2 / 12, 0.3 * 0.09**2 / 12]),
+        ],
+    )
+
+
+@given(st.lists(st.floats(-np.pi, np.pi), min_size=3, max_size=3))
+def test_course_three_joint_arm_planar_block_is_the_2r_arm(q):
+    """Joints 2 and 3 turn in the arm's vertical plane: their block of A is the planar 2R arm's, with
+    link 3 at q3 - 90° from link 2 (T12 = RotZ(q2) TransY(a2), T23 = RotZ(q3) TransX(a3)); the
+    turntable q1 does not enter it. Gravity (along -z0, in that plane) gives G1 = 0."""
+    tree = inertia.tree_of(arm_002_chain())
+    A = rd.crba(tree, q)
+    planar = rd.planar_2r_mass_matrix([0.0, q[2] - np.pi / 2], (0.4, 0.3), (0.12, 0.09))
+    close(A[1:, 1:], planar, 1e-15)
+    close(A[0, 1:], np.zeros(2), 1e-15)
+    assert abs(rd.gravity_torques(tree, q)[0]) < 1e-15
+
+
 # --------------------------------------------------------------------------- identities
 
-IDENTITY_CASES = ["rrr", "spot_arm", "go2_leg", "critter_arm", "go2_floating", "critter_floating"]
+IDENTITY_CASES = ["rrr", "arm_002", "spot_arm", "go2_leg", "critter_arm", "go2_floating", "critter_floating"]
+COURSE_CHAINS = {"rrr": rrr_chain, "arm_002": arm_002_chain}
 
 
 def identity_model(case):
-    return inertia.tree_of(rrr_chain()) if case == "rrr" else model(case)
+    return inertia.tree_of(COURSE_CHAINS[case]()) if case in COURSE_CHAINS else model(case)
 
 
 def twist_step(pose, twist, h):
@@ -391,13 +421,13 @@ def test_mass_matrix_is_symmetric_positive_definite_and_gives_the_kinetic_energy
     close(0.5 * qd @ A @ qd, rd.kinetic_energy(tree, q, qd, body_pose=pose), 1e-11)
 
 
-@pytest.mark.parametrize("case", ["rrr", "spot_arm", "critter_arm"])
+@pytest.mark.parametrize("case", ["rrr", "arm_002", "spot_arm", "critter_arm"])
 @settings(max_examples=12)
 @given(seed=seeds)
 def test_kinetic_energy_equals_the_links_from_the_compiled_frames(case, seed):
     """Each body's velocity by central differences of Chain.frames (the compiled FK), then
     m |v_com|² / 2 + w^T R I R^T w / 2, summed: the mass matrix's quadratic form."""
-    chain = rrr_chain() if case == "rrr" else robot(CASES[case][0]).chain(CASES[case][1])
+    chain = COURSE_CHAINS[case]() if case in COURSE_CHAINS else robot(CASES[case][0]).chain(CASES[case][1])
     rng = np.random.default_rng(seed)
     q, qd = rng.uniform(-1.2, 1.2, chain.dof), rng.normal(0, 1.5, chain.dof)
     h = 1e-6
