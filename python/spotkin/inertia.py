@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from ._boundary import as_real
 
-__all__ = ["LinkInertials", "Tree", "link_inertials", "merge_inertials", "tree_of"]
+__all__ = ["LinkInertials", "Tree", "link_inertials", "merge_inertials", "model_tree", "tree_of"]
 
 
 class LinkInertials(NamedTuple):
@@ -277,8 +277,9 @@ def _chain_tree(chain) -> Tree:
     placements = np.empty((n, 4, 4))
     mass, com, inertia = (np.array(x) for x in inertials)
     if chain.convention == "joints":
-        placements[:], raw_axes, _ = chain._joints
-        axes = raw_axes / np.linalg.norm(raw_axes, axis=1, keepdims=True)
+        joint_placements, joint_axes, _ = chain._joints  # as given to Chain.from_joints
+        placements[:] = joint_placements
+        axes = joint_axes / np.linalg.norm(joint_axes, axis=1, keepdims=True)
     elif chain.convention == "mdh":
         for j, (_, d, alpha, r, theta) in enumerate(chain.rows):
             placements[j] = _rot_x(alpha) @ _trans(d, 0, 0) @ _rot_z(theta) @ _trans(0, 0, r)
