@@ -448,6 +448,8 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT. The
         derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
+        if free_joint is None and free_value is None and self._ik is not None:  # the single-call fast path
+            return ChainSolutions._make(self._ik.ik(T))
         if free_joint is None:
             if free_value is not None:
                 raise ValueError("free_value needs free_joint (the index of the joint it holds)")
