@@ -95,6 +95,9 @@ class Arm6 {
     const Poe ideal = arm.idealised_ ? idealise(poe, arm.family_, geometry, tolerance.distance) : poe;
     const double mirror = arm.idealised_ ? kMirror : 0.0;
     arm.M_ = poe.M;
+    // three times the idealisation's error bound, relative to the chain's size
+    arm.nudge_ = std::min(0.05, 3.0 * std::max(tolerance.distance, tolerance.angle * scale) / scale);
+    arm.centre_ = poe.p[0];
     arm.M_inv_ = inverse_rigid(poe.M);
     switch (arm.family_) {
       case Family6::SphericalWrist:
@@ -127,6 +130,9 @@ class Arm6 {
   // The spherical shoulder on the chain itself: the wrist lane kernel on the reversed chain.
   bool lane_shoulder() const noexcept { return reversed_ && !idealised_; }
   const Rigid<double>& M() const noexcept { return M_; }
+  // idealised chains: the relative radial move of a target for extra starts, and its centre (axis 1)
+  double nudge() const noexcept { return nudge_; }
+  const V3& centre() const noexcept { return centre_; }
   const Parallel234& parallel() const noexcept { return *parallel_; }
   const SphericalWrist6& wrist() const noexcept { return *wrist_; }
   const Geometry6& geometry() const noexcept { return geometry_; }
@@ -191,6 +197,8 @@ class Arm6 {
   Family6 family_ = Family6::SphericalWrist;
   bool idealised_ = false, reversed_ = false;
   Rigid<double> M_, M_inv_;
+  double nudge_ = 0.0;
+  V3 centre_ = V3::Zero();
   std::optional<SphericalWrist6> wrist_;
   std::optional<Parallel234> parallel_;
   std::optional<Parallel123> parallel123_;
@@ -376,12 +384,7 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
       }
     }
   } else {
-    for (int i = 0; i < L; ++i) {
-      if (i >= m) {  // unused lanes: any finite value
-        for (int k = 0; k < S; ++k)
-          for (int j = 0; j < 6; ++j) c[k][j][i] = 1.0, s[k][j][i] = 0.0;
-        continue;
-      }
+    for (int i = 0; i < m; ++i) {  // lanes from m on are never read
       double in[width];
       for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
       out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
@@ -403,7 +406,7 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
         out.angle[k][j][i] = out.exists[k][i] != 0.0 ? angle : 0.0;
       }
   for (int k = 0; k < S; ++k)
-    for (int i = 0; i < L; ++i) out.exact[k][i] = 1.0;
+    for (int i = 0; i < m; ++i) out.exact[k][i] = 1.0;
   // Newton on the true chain for an idealised chain (a branch that does not converge there is
   // dropped) and for slots near a double root
   const bool idealised = solver.idealised();
@@ -429,6 +432,41 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
         if (gap < Arm6::kSame) out.exists[k][i] = 0.0;
       }
     }
+  // idealised chains: a target within the geometry error of the idealised workspace's boundary
+  // has fewer idealised solutions than the true chain; missing branches start from the target moved
+  // radially (from axis 1) by -+ the nudge, each polished on the true target, and kept in its own
+  // slot when that slot is free and it is a new solution
+  for (int i = 0; i < m && idealised; ++i) {
+    int count = 0;
+    for (int k = 0; k < S; ++k) count += out.exists[k][i] != 0.0;
+    if (out.input_ok[i] == 0.0 || count == S) continue;
+    for (const double scale : {1.0 - solver.nudge(), 1.0 + solver.nudge()}) {
+      Arm::Pose moved = targets[i];
+      for (int r = 0; r < 3; ++r) moved.p[r] = solver.centre()[r] + scale * (targets[i].p[r] - solver.centre()[r]);
+      JointValue q[S][6];
+      bool ok[S] = {}, refine[S] = {};
+      solver.solve(moved, q, ok, refine);
+      for (int k = 0; k < S; ++k) {
+        if (!ok[k] || out.exists[k][i] != 0.0) continue;
+        double x[6];
+        for (int j = 0; j < 6; ++j) x[j] = std::atan2(q[k][j].s, q[k][j].c);
+        const double residual = solver.polish(targets[i], x);
+        if (!(residual <= Arm6::kAccept)) continue;
+        bool known = false;
+        for (int o = 0; o < S && !known; ++o) {
+          if (out.exists[o][i] == 0.0) continue;
+          double gap = 0.0;
+          for (int j = 0; j < 6; ++j)
+            gap = std::max(gap, std::fabs(std::remainder(x[j] - out.angle[o][j][i], 2.0 * kPi<double>)));
+          known = gap < Arm6::kSame;
+        }
+        if (known) continue;
+        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = std::remainder(x[j], 2.0 * kPi<double>);
+        out.exists[k][i] = 1.0;
+        out.exact[k][i] = residual < Arm6::kExact ? 1.0 : 0.0;
+      }
+    }
+  }
   finish_lanes<false>(limits, m, out.input_ok, out.angle, out.exists, out.valid);
   for (int k = 0; k < S; ++k)
     for (int i = 0; i < m; ++i) out.exact[k][i] *= out.exists[k][i];
