@@ -3,6 +3,10 @@
 
 #include "bindings.hpp"
 
+namespace spotkin::bindings {
+void bind_dynamics(pybind11::module_& m);  // dynamics.cpp
+}
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "spotkin's C++ core. Use the public façade in `spotkin` instead.";
   spotkin::bindings::bind_runtime(m);
@@ -15,4 +19,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_trajectory(m);
   spotkin::bindings::bind_differential(m);
   spotkin::bindings::bind_diagnostics(m);
+  spotkin::bindings::bind_dynamics(m);
 }

@@ -1,0 +1,124 @@
+// Bindings for the rigid-body dynamics of a fixed-base chain (spotkin/dynamics/):
+// RNEA, CRBA, G, h, the Coriolis matrix and ABA, batched. Every batch input
+// broadcasts over its leading dimensions like NumPy; float32 inputs (all of the
+// state arguments) compute in float32, anything else in float64.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "dispatch.hpp"
+#include "dynamics_boundary.hpp"
+#include "chain_model.hpp"
+#include "spotkin/dynamics/batch.hpp"
+
+namespace spotkin::bindings {
+
+namespace {
+
+ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::handle com, py::handle inertia) {
+  const auto links = inertials_from(mass, com, inertia, chain.f64.dof());
+  try {
+    return ChainDynamics{ChainModel<double, kLanes64>(chain.f64, links), ChainModel<float, kLanes32>(chain.f64, links),
+                         ChainModel<double, kSmallLanes64>(chain.f64, links),
+                         ChainModel<float, kSmallLanes32>(chain.f64, links)};
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+}
+
+// The kernels, one clone per CPU level and precision.
+#define SPOTKIN_DYN_KERNELS(T, L)                                                                                  \
+  SPOTKIN_MULTIVERSION void rnea_k(const ChainModel<T, L>& m, Rows<T> q, const Rows<T>* qd, const Rows<T>* qdd,    \
+                                   Rows<T> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                        \
+    dynamics::rnea_batch(m, q, qd, qdd, g, out, b, e);                                                             \
+  }                                                                                                                \
+  SPOTKIN_MULTIVERSION void crba_k(const ChainModel<T, L>& m, Rows<T> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e) { \
+    dynamics::crba_batch(m, q, out, b, e);                                                                         \
+  }                                                                                                                \
+  SPOTKIN_MULTIVERSION void coriolis_k(const ChainModel<T, L>& m, Rows<T> q, Rows<T> qd, T* out, std::ptrdiff_t b, \
+                                       std::ptrdiff_t e) {                                                         \
+    dynamics::coriolis_batch(m, q, qd, out, b, e);                                                                 \
+  }                                                                                                                \
+  SPOTKIN_MULTIVERSION void aba_k(const ChainModel<T, L>& m, Rows<T> q, Rows<T> qd, Rows<T> tau, Rows<T> g,       \
+                                  T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                                    \
+    dynamics::aba_batch(m, q, qd, tau, g, out, b, e);                                                              \
+  }
+SPOTKIN_DYN_KERNELS(double, kLanes64)
+SPOTKIN_DYN_KERNELS(float, kLanes32)
+SPOTKIN_DYN_KERNELS(double, kSmallLanes64)
+SPOTKIN_DYN_KERNELS(float, kSmallLanes32)
+#undef SPOTKIN_DYN_KERNELS
+
+
+// Rough single-thread cost per sample of a 6-joint chain (for the thread split).
+constexpr double kNsPerSample = 150.0;
+
+py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g) {
+  const py::ssize_t n = d.dof();
+  return run_batch({{q, "q", n}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
+                   });
+}
+
+py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
+  const py::ssize_t n = d.dof();
+  return run_batch({{q, "q", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
+                   });
+}
+
+py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g) {
+  const py::ssize_t n = d.dof();
+  return run_batch({{q, "q", n}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
+                   });
+}
+
+py::object chain_crba(const ChainDynamics& d, py::handle q) {
+  const py::ssize_t n = d.dof();
+  return run_batch({{q, "q", n}}, {n, n}, kNsPerSample,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { crba_k(model, rows[0], out, b, e); });
+                   });
+}
+
+py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
+  const py::ssize_t n = d.dof();
+  return run_batch({{q, "q", n}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { coriolis_k(model, rows[0], rows[1], out, b, e); });
+                   });
+}
+
+py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g) {
+  const py::ssize_t n = d.dof();
+  return run_batch({{q, "q", n}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
+                   });
+}
+
+}  // namespace
+
+void bind_dynamics(py::module_& m) {
+  py::class_<ChainDynamics>(m, "ChainDynamics")
+      .def(py::init(&make_chain_dynamics), py::arg("chain"), py::arg("mass"), py::arg("com"), py::arg("inertia"))
+      .def_property_readonly("dof", &ChainDynamics::dof)
+      .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"))
+      .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"))
+      .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"))
+      .def("crba", &chain_crba, py::arg("q"))
+      .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"))
+      .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"));
+  bind_floating_dynamics(m);
+}
+
+}  // namespace spotkin::bindings

@@ -1,0 +1,153 @@
+// Bindings for the floating-base dynamics (spotkin/dynamics/floating.hpp): a
+// free-flyer body carrying ChainDynamics chains; RNEA, CRBA, G, h, ABA, the
+// centre of mass and its Jacobian, batched.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "dispatch.hpp"
+#include "dynamics_boundary.hpp"
+#include "spotkin/dynamics/floating.hpp"
+
+namespace spotkin::bindings {
+
+namespace {
+
+using dynamics::FloatingModel;
+
+// ---------------------------------------------------------------- floating base
+
+struct FloatingDynamics {
+  FloatingModel<double, kLanes64> f64;
+  FloatingModel<float, kLanes32> f32;
+  FloatingModel<double, kSmallLanes64> f64_small;
+  FloatingModel<float, kSmallLanes32> f32_small;
+  const FloatingModel<double, kLanes64>& get(double) const { return f64; }
+  const FloatingModel<float, kLanes32>& get(float) const { return f32; }
+  const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
+  const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
+};
+
+FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inertia, const py::sequence& chain_list) {
+  std::vector<ChainDynamics> chains;
+  for (py::handle c : chain_list) {
+    if (!py::isinstance<ChainDynamics>(c)) throw py::type_error("chains must hold ChainDynamics objects");
+    chains.push_back(c.cast<const ChainDynamics&>());
+  }
+  auto mass_arr = as_real_array(mass, "body_mass");
+  if (mass_arr.ndim() != 0) throw py::value_error("body_mass must be a scalar");
+  auto com_arr = as_real_array(com, "body_com"), inertia_arr = as_real_array(inertia, "body_inertia");
+  if (Shape(com_arr.shape(), com_arr.shape() + com_arr.ndim()) != Shape{3})
+    throw py::value_error("body_com must have shape (3,)");
+  if (Shape(inertia_arr.shape(), inertia_arr.shape() + inertia_arr.ndim()) != Shape{3, 3})
+    throw py::value_error("body_inertia must have shape (3, 3)");
+  const auto links = inertials_from(mass_arr.reshape(Shape{1}), com_arr.reshape(Shape{1, 3}),
+                                    inertia_arr.reshape(Shape{1, 3, 3}), 1, "body_");
+  std::vector<ChainModel<double, kLanes64>> c64;
+  std::vector<ChainModel<float, kLanes32>> c32;
+  std::vector<ChainModel<double, kSmallLanes64>> s64;
+  std::vector<ChainModel<float, kSmallLanes32>> s32;
+  for (const auto& c : chains) c64.push_back(c.f64), c32.push_back(c.f32), s64.push_back(c.f64_small), s32.push_back(c.f32_small);
+  try {
+    return FloatingDynamics{FloatingModel<double, kLanes64>(links[0], std::move(c64)),
+                            FloatingModel<float, kLanes32>(links[0], std::move(c32)),
+                            FloatingModel<double, kSmallLanes64>(links[0], std::move(s64)),
+                            FloatingModel<float, kSmallLanes32>(links[0], std::move(s32))};
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+}
+
+#define SPOTKIN_FLOAT_KERNELS(T, L)                                                                                 \
+  SPOTKIN_MULTIVERSION void f_rnea_k(const FloatingModel<T, L>& m, Rows<T> q, const Rows<T>* v, const Rows<T>* a,  \
+                                     Rows<T> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                      \
+    dynamics::floating_rnea_batch(m, q, v, a, g, out, b, e);                                                       \
+  }                                                                                                                 \
+  SPOTKIN_MULTIVERSION void f_crba_k(const FloatingModel<T, L>& m, Rows<T> q, T* out, std::ptrdiff_t b,            \
+                                     std::ptrdiff_t e) {                                                           \
+    dynamics::floating_crba_batch(m, q, out, b, e);                                                                \
+  }                                                                                                                 \
+  SPOTKIN_MULTIVERSION void f_aba_k(const FloatingModel<T, L>& m, Rows<T> q, Rows<T> v, Rows<T> tau, Rows<T> g,    \
+                                    T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                                  \
+    dynamics::floating_aba_batch(m, q, v, tau, g, out, b, e);                                                      \
+  }                                                                                                                 \
+  SPOTKIN_MULTIVERSION void f_com_k(const FloatingModel<T, L>& m, Rows<T> q, T* out, bool jacobian,                \
+                                    std::ptrdiff_t b, std::ptrdiff_t e) {                                          \
+    dynamics::floating_com_batch(m, q, out, jacobian, b, e);                                                       \
+  }
+SPOTKIN_FLOAT_KERNELS(double, kLanes64)
+SPOTKIN_FLOAT_KERNELS(float, kLanes32)
+SPOTKIN_FLOAT_KERNELS(double, kSmallLanes64)
+SPOTKIN_FLOAT_KERNELS(float, kSmallLanes32)
+#undef SPOTKIN_FLOAT_KERNELS
+
+
+constexpr double kNsFloating = 400.0;
+
+py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { f_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
+                   });
+}
+py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { f_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
+                   });
+}
+py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { f_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
+                   });
+}
+py::object floating_crba(const FloatingDynamics& d, py::handle q) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}}, {nv, nv}, kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { f_crba_k(model, rows[0], out, b, e); });
+                   });
+}
+py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { f_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
+                   });
+}
+py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, e - b, [&](const auto& model) { f_com_k(model, rows[0], out, jacobian, b, e); });
+                   });
+}
+
+}  // namespace
+
+void bind_floating_dynamics(py::module_& m) {
+  py::class_<FloatingDynamics>(m, "FloatingDynamics")
+      .def(py::init(&make_floating), py::arg("body_mass"), py::arg("body_com"), py::arg("body_inertia"),
+           py::arg("chains"))
+      .def_property_readonly("nq", [](const FloatingDynamics& d) { return d.f64.nq(); })
+      .def_property_readonly("nv", [](const FloatingDynamics& d) { return d.f64.nv(); })
+      .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"))
+      .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"))
+      .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"))
+      .def("crba", &floating_crba, py::arg("q"))
+      .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"))
+      .def("com", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, false); }, py::arg("q"))
+      .def("com_jacobian", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, true); },
+           py::arg("q"));
+}
+
+}  // namespace spotkin::bindings

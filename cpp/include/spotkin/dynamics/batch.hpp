@@ -1,0 +1,119 @@
+// Fixed-base chain dynamics over a range of samples, L lanes at a time: load a
+// block of rows into lanes, compute the block's poses once, run the algorithm,
+// store. A sample with a NaN or an Inf in any of its inputs gets NaN in its
+// whole output row. Inputs are Rows (stride 0 broadcasts one row to every sample);
+// a null qd / qdd is zero (G = RNEA(q, 0, 0), h = RNEA(q, qd, 0)).
+#pragma once
+
+#include <vector>
+
+#include "spotkin/dynamics/aba.hpp"
+#include "spotkin/dynamics/coriolis.hpp"
+#include "spotkin/dynamics/crba.hpp"
+#include "spotkin/dynamics/rnea.hpp"
+
+namespace spotkin::dynamics {
+
+template <typename M, int L>
+struct ChainBlock {
+  using P = Pack<M, L>;
+  int n;
+  std::vector<P> q, qd, qdd, in, out;
+  std::vector<Pose<P>> X;
+  P g[3];
+  bool ok[L];
+
+  explicit ChainBlock(int dof, int out_width)
+      : n(dof), q(dof), qd(dof, P(M(0))), qdd(dof, P(M(0))), in(dof), out(out_width), X(dof) {}
+
+  // Loads q (poses computed), optional qd, qdd (or tau) and gravity.
+  SPOTKIN_INLINE void begin(const ChainModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* qd_rows,
+                            const Rows<M>* qdd_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m) noexcept {
+    for (int i = 0; i < L; ++i) ok[i] = true;
+    load(q_rows, b0, m, n, q.data(), ok);
+    if (qd_rows) load(*qd_rows, b0, m, n, qd.data(), ok);
+    if (qdd_rows) load(*qdd_rows, b0, m, n, qdd.data(), ok);
+    if (g_rows) load(*g_rows, b0, m, 3, g, ok);
+    model.poses(q.data(), X.data());
+  }
+  SPOTKIN_INLINE Motion<P> root_acceleration() const noexcept {  // a_0 = -g (RBDA section 5.3)
+    return {zero3<P>(), {{-g[0], -g[1], -g[2]}}};
+  }
+};
+
+// tau = RNEA(q, qd, qdd, g); qd_rows / qdd_rows null for zeros.
+template <typename M, int L>
+SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const Rows<M>* qd, const Rows<M>* qdd,
+                               Rows<M> g, M* tau, std::ptrdiff_t begin, std::ptrdiff_t end) {
+  using P = Pack<M, L>;
+  const int n = model.dof();
+  ChainBlock<M, L> blk(n, n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
+  std::vector<Force<P>> f(static_cast<std::size_t>(n));
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, qd, qdd, &g, b0, m);
+    rnea_chain(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(), blk.root_acceleration(),
+               blk.out.data(), f.data());
+    store(blk.out.data(), n, b0, m, blk.ok, tau, stream);
+  }
+  if (stream) stream_fence();
+}
+
+// A(q), row-major n x n per sample.
+template <typename M, int L>
+SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
+                               std::ptrdiff_t end) {
+  using P = Pack<M, L>;
+  const int n = model.dof();
+  ChainBlock<M, L> blk(n, n * n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
+  std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(n));
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
+    crba_chain(model, blk.X.data(), blk.out.data(), Ic.data());
+    store(blk.out.data(), n * n, b0, m, blk.ok, A, stream);
+  }
+  if (stream) stream_fence();
+}
+
+// C(q, qd), row-major n x n per sample.
+template <typename M, int L>
+SPOTKIN_INLINE void coriolis_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> qd, M* C,
+                                   std::ptrdiff_t begin, std::ptrdiff_t end) {
+  using P = Pack<M, L>;
+  const int n = model.dof();
+  ChainBlock<M, L> blk(n, n * n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
+  std::vector<CoriolisWork<P>> w(static_cast<std::size_t>(n));
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, &qd, nullptr, nullptr, b0, m);
+    coriolis_chain(model, blk.X.data(), blk.qd.data(), blk.out.data(), w.data());
+    store(blk.out.data(), n * n, b0, m, blk.ok, C, stream);
+  }
+  if (stream) stream_fence();
+}
+
+// qdd = ABA(q, qd, tau, g).
+template <typename M, int L>
+SPOTKIN_INLINE void aba_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> qd, Rows<M> tau, Rows<M> g,
+                              M* qdd, std::ptrdiff_t begin, std::ptrdiff_t end) {
+  using P = Pack<M, L>;
+  const int n = model.dof();
+  ChainBlock<M, L> blk(n, n);
+  const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
+  std::vector<AbaWork<P>> w(static_cast<std::size_t>(n));
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, &qd, &tau, &g, b0, m);  // tau in the qdd slot
+    aba_down_up(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(), w.data(), false,
+                static_cast<Inertia6<P>*>(nullptr), static_cast<Force<P>*>(nullptr));
+    aba_down(model, blk.X.data(), w.data(), blk.root_acceleration(), blk.out.data());
+    store(blk.out.data(), n, b0, m, blk.ok, qdd, stream);
+  }
+  if (stream) stream_fence();
+}
+
+}  // namespace spotkin::dynamics

@@ -1,0 +1,274 @@
+// The dynamic model of a serial chain: spotkin::Chain's joints plus one rigid
+// body per joint, and the per-block pieces every algorithm shares (poses from
+// the chain's own per-joint transform code, broadcast model constants, I/O of
+// row-major batches into lanes).
+//
+// Body j (0-based) is the link moved by joint j; its frame is frame j + 1 of
+// Chain::frames (after joint j's pre . Motion . post). Inertial contract:
+// mass[j], com[j] (3, in that frame) and inertia[j] (3x3 about the centre of
+// mass, in that frame's axes). Joint 0's pose in the root frame includes the
+// chain's base (a fixed base, or the mount on a floating body).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <cstring>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#include "spotkin/chain.hpp"
+#include "spotkin/dynamics/pack.hpp"
+#include "spotkin/dynamics/spatial.hpp"
+
+namespace spotkin::dynamics {
+
+// One link's inertial parameters, in double, about the link frame's origin.
+struct LinkInertial {
+  double mass = 0;
+  Vec3<double> com = Vec3<double>::Zero();
+  Mat3<double> inertia = Mat3<double>::Zero();  // about the centre of mass
+
+  // Throws std::invalid_argument unless finite, mass >= 0, inertia symmetric
+  // (to 1e-9 relative) and positive semidefinite (eigenvalues >= -1e-12 scale).
+  void check(const std::string& what) const {
+    if (!std::isfinite(mass) || !com.allFinite() || !inertia.allFinite())
+      throw std::invalid_argument(what + ": mass, com and inertia must be finite");
+    if (mass < 0) throw std::invalid_argument(what + ": mass must be >= 0");
+    const double scale = std::max(1.0, inertia.cwiseAbs().maxCoeff());
+    if ((inertia - inertia.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
+      throw std::invalid_argument(what + ": inertia must be symmetric");
+    Eigen::SelfAdjointEigenSolver<Mat3<double>> eig(0.5 * (inertia + inertia.transpose()), Eigen::EigenvaluesOnly);
+    if (eig.eigenvalues().minCoeff() < -1e-12 * scale)
+      throw std::invalid_argument(what + ": inertia must be positive semidefinite");
+  }
+
+  // m, h = m c, J = I_c + m (|c|^2 1 - c c^T) (parallel axes, RBDA eq. 2.63).
+  void about_origin(double& m, double h[3], double J[3][3]) const {
+    m = mass;
+    const Mat3<double> Jo = 0.5 * (inertia + inertia.transpose()) +
+                            mass * (com.squaredNorm() * Mat3<double>::Identity() - com * com.transpose());
+    for (int r = 0; r < 3; ++r) {
+      h[r] = mass * com[r];
+      for (int c = 0; c < 3; ++c) J[r][c] = Jo(r, c);
+    }
+  }
+};
+
+template <typename M>
+struct BodyConstants {
+  bool revolute = true;
+  M sw[3] = {0, 0, 0}, sv[3] = {0, 0, 0};  // motion subspace S (RBDA eq. 3.33) in the body frame
+  M m = 0, h[3] = {0, 0, 0}, J[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+};
+
+// A chain's dynamic model computed L samples at a time in precision M.
+template <typename M, int L>
+class ChainModel {
+ public:
+  using P = Pack<M, L>;
+  static constexpr int kLanes = L;
+
+  ChainModel() = default;
+  ChainModel(const Chain<double>& chain, const std::vector<LinkInertial>& links) {
+    const int n = chain.dof();
+    if (static_cast<int>(links.size()) != n)
+      throw std::invalid_argument("one inertial per joint: expected " + std::to_string(n) + ", got " +
+                                  std::to_string(links.size()));
+    for (int j = 0; j < n; ++j) {
+      links[static_cast<std::size_t>(j)].check("link " + std::to_string(j));
+      Joint<double> joint = chain.joints()[static_cast<std::size_t>(j)];
+      if (j == 0) {  // the base folded into joint 0's placement: poses are in the root frame
+        const Rigid<double> base = chain.base().template cast<double>();
+        joint.pre = Placement<double>::rigid(base * joint.pre.matrix());
+      }
+      BodyConstants<M> b;
+      b.revolute = joint.type == JointType::Revolute;
+      // The motion about (along) u at the origin of the frame after pre . Motion,
+      // seen from the body frame after post = (Rp, pp): w = Rp^T u, v = Rp^T (u x pp)
+      // (revolute); w = 0, v = Rp^T u (prismatic).
+      const Rigid<double> post = joint.post.matrix();
+      const Vec3<double> u = joint.axis.template cast<double>();
+      const Vec3<double> w = b.revolute ? Vec3<double>(post.R.transpose() * u) : Vec3<double>::Zero();
+      const Vec3<double> v = b.revolute ? Vec3<double>(post.R.transpose() * u.cross(post.p))
+                                        : Vec3<double>(post.R.transpose() * u);
+      double m, h[3], J[3][3];
+      links[static_cast<std::size_t>(j)].about_origin(m, h, J);
+      b.m = M(m);
+      for (int r = 0; r < 3; ++r) {
+        b.sw[r] = M(w[r]), b.sv[r] = M(v[r]), b.h[r] = M(h[r]);
+        for (int c = 0; c < 3; ++c) b.J[r][c] = M(J[r][c]);
+      }
+      bodies_.push_back(b);
+      joints_.push_back(joint.template cast<M>().template cast<P>());
+    }
+  }
+
+  int dof() const noexcept { return static_cast<int>(joints_.size()); }
+  const BodyConstants<M>& body(int j) const noexcept { return bodies_[static_cast<std::size_t>(j)]; }
+
+  SPOTKIN_INLINE Motion<P> subspace(int j) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    return {broadcast<P>(b.sw), broadcast<P>(b.sv)};
+  }
+  // S qd for a scalar joint rate qd.
+  SPOTKIN_INLINE Motion<P> subspace_times(int j, const P& x) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    return {{{P(b.sw[0]) * x, P(b.sw[1]) * x, P(b.sw[2]) * x}}, {{P(b.sv[0]) * x, P(b.sv[1]) * x, P(b.sv[2]) * x}}};
+  }
+  SPOTKIN_INLINE RigidInertia<P> inertia(int j) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    RigidInertia<P> I;
+    I.m = P(b.m);
+    for (int r = 0; r < 3; ++r) {
+      I.h[r] = P(b.h[r]);
+      for (int c = 0; c < 3; ++c) I.J(r, c) = P(b.J[r][c]);
+    }
+    return I;
+  }
+
+  // X[j]: body j's pose in body j-1's frame (the root frame for j = 0), by the
+  // chain's per-joint code: pre . Motion(axis, theta + q | r + q) . post.
+  SPOTKIN_INLINE void poses(const P* q, Pose<P>* X) const noexcept {
+    for (int j = 0; j < dof(); ++j) {
+      const Joint<P>& joint = joints_[static_cast<std::size_t>(j)];
+      const bool revolute = body(j).revolute;
+      P s, c;
+      sincos(revolute ? P(joint.theta + q[j]) : joint.theta, s, c);
+      Rigid<P> T = joint.pre.X;
+      joint.apply_motion(T, c, s, revolute ? joint.r : P(joint.r + q[j]));
+      joint.post.apply(T);
+      for (int r = 0; r < 3; ++r) {
+        X[j].p[r] = T.p[r];
+        for (int k = 0; k < 3; ++k) X[j].R(r, k) = T.R(r, k);
+      }
+    }
+  }
+
+ private:
+  std::vector<Joint<P>> joints_;
+  std::vector<BodyConstants<M>> bodies_;
+};
+
+// A batch input: sample i's row starts at data + i * stride (stride 0: one row for every sample).
+template <typename M>
+struct Rows {
+  const M* data;
+  std::ptrdiff_t stride;
+};
+
+// Loads `width` columns of samples b0 .. b0 + m - 1 into lanes (a short block
+// repeats its last sample); clears ok[i] for a lane holding a NaN or an Inf.
+template <typename M, int L>
+SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width, Pack<M, L>* out,
+                         bool* ok) noexcept {
+  for (int i = 0; i < L; ++i) {
+    const M* row = in.data + (b0 + std::min(i, m - 1)) * in.stride;
+    bool finite = true;
+    for (int j = 0; j < width; ++j) {
+      out[j].v[i] = row[j];
+      finite &= std::isfinite(row[j]);
+    }
+    ok[i] = ok[i] && finite;
+  }
+}
+
+// Transposes 8 packs of 8 doubles in registers (3 stages of 2-input shuffles):
+// r[j] holds column j of 8 samples, on return r[i] holds sample i's 8 columns.
+SPOTKIN_INLINE void transpose8(Pack<double, 8>::Vector r[8]) noexcept {
+  using V = Pack<double, 8>::Vector;
+  typedef long long I __attribute__((vector_size(64)));
+  V t[8], u[8];
+  for (int k = 0; k < 8; k += 2) {
+    t[k] = __builtin_shuffle(r[k], r[k + 1], I{0, 8, 2, 10, 4, 12, 6, 14});
+    t[k + 1] = __builtin_shuffle(r[k], r[k + 1], I{1, 9, 3, 11, 5, 13, 7, 15});
+  }
+  for (int k = 0; k < 8; k += 4)
+    for (int h = 0; h < 2; ++h) {
+      u[k + h] = __builtin_shuffle(t[k + h], t[k + h + 2], I{0, 1, 8, 9, 4, 5, 12, 13});
+      u[k + h + 2] = __builtin_shuffle(t[k + h], t[k + h + 2], I{2, 3, 10, 11, 6, 7, 14, 15});
+    }
+  for (int k = 0; k < 4; ++k) {
+    r[k] = __builtin_shuffle(u[k], u[k + 4], I{0, 1, 2, 3, 8, 9, 10, 11});
+    r[k + 4] = __builtin_shuffle(u[k], u[k + 4], I{4, 5, 6, 7, 12, 13, 14, 15});
+  }
+}
+
+// Outputs of at least this many bytes per call are written with non-temporal
+// stores (no read for ownership, no eviction of the inputs): a batch's output
+// (2.6 kB per sample for an 18 x 18 mass matrix) is memory-bandwidth bound.
+constexpr std::size_t kStreamBytes = std::size_t(2) << 20;
+
+template <typename M>
+SPOTKIN_INLINE void stream_row(const M* from, M* to, int width) noexcept {
+#if defined(__x86_64__)
+  for (int j = 0; j < width; ++j) {
+    if constexpr (sizeof(M) == 8) {
+      long long bits;
+      std::memcpy(&bits, from + j, 8);
+      _mm_stream_si64(reinterpret_cast<long long*>(to + j), bits);
+    } else {
+      int bits;
+      std::memcpy(&bits, from + j, 4);
+      _mm_stream_si32(reinterpret_cast<int*>(to + j), bits);
+    }
+  }
+#else
+  std::memcpy(to, from, sizeof(M) * std::size_t(width));
+#endif
+}
+
+// Orders the non-temporal stores before what follows (the caller's use of the output).
+SPOTKIN_INLINE void stream_fence() noexcept {
+#if defined(__x86_64__)
+  _mm_sfence();
+#endif
+}
+
+// Stores `width` lanes-values of samples b0 .. b0 + m - 1, row-major; a lane
+// whose inputs were not all finite gets NaN in its whole row. Groups of 8
+// columns of 8 doubles are transposed in registers; with `stream`, rows go
+// through a small buffer and out with non-temporal stores (stream_fence after).
+template <typename M, int L>
+SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
+                          bool stream = false) noexcept {
+  if (stream) {
+    M row[256];
+    for (int c0 = 0; c0 < width; c0 += 256) {
+      const int w = std::min(256, width - c0);
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < w; ++j) row[j] = ok[i] ? in[c0 + j].v[i] : quiet_nan<M>();
+        stream_row(row, out + (b0 + i) * width + c0, w);
+      }
+    }
+    return;
+  }
+  int j0 = 0;
+  if constexpr (std::is_same_v<M, double> && L == 8) {
+    for (; j0 + 8 <= width; j0 += 8) {
+      typename Pack<double, 8>::Vector r[8];
+      for (int k = 0; k < 8; ++k) r[k] = in[j0 + k].v;
+      transpose8(r);
+      for (int i = 0; i < m; ++i)
+        if (ok[i]) std::memcpy(out + (b0 + i) * width + j0, &r[i], sizeof r[i]);
+    }
+  }
+  for (int i = 0; i < m; ++i) {
+    M* row = out + (b0 + i) * width;
+    if (!ok[i]) {
+      for (int j = 0; j < width; ++j) row[j] = quiet_nan<M>();
+      continue;
+    }
+    for (int j = j0; j < width; ++j) row[j] = in[j].v[i];
+  }
+}
+
+}  // namespace spotkin::dynamics

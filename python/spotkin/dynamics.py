@@ -1,0 +1,180 @@
+"""Rigid-body dynamics of serial chains and of a floating body carrying chains, batched in C++.
+
+Model
+    A chain's link ``j`` is the body moved by joint ``j``; its inertial parameters are
+    ``LinkInertials(mass, com, inertia)``: ``mass`` (n,) in kg, ``com`` (n, 3) the centre of
+    mass in frame ``j + 1`` of :meth:`spotkin.Chain.frames` (the frame after joint ``j``'s
+    motion), ``inertia`` (n, 3, 3) about the centre of mass in that frame's axes (kg m^2). A
+    link carries everything rigidly attached to it; a moving branch that hangs off the chain
+    (a gripper finger on an arm chain) is counted as rigid at the pose its inertials were
+    taken in. :func:`inertials_of` reads ``chain.inertials`` when the chain carries them.
+
+Conventions
+    ``q``, ``qd``, ``qdd``, ``tau`` are (..., n) in the chain's joint order (rad, rad/s,
+    rad/s^2, N m; m, m/s, m/s^2 and N for prismatic joints). ``gravity`` is a (3,) (or
+    (..., 3)) vector in the chain's root frame (the frame before its ``base``), default
+    (0, 0, -9.81) m/s^2. The dynamic model is ``A(q) qdd + C(q, qd) qd + G(q) = tau`` with
+    ``C`` the matrix for which ``dA/dt - 2 C`` is skew-symmetric (as Pinocchio's
+    ``computeCoriolisMatrix``).
+
+Batches
+    Every argument broadcasts over its leading dimensions like NumPy; float32 inputs (all
+    of them) give float32 results, anything else float64. A sample with a NaN or an Inf in
+    any input gives NaN in its whole result row, and only it.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _core
+
+__all__ = [
+    "FloatingBase",
+    "LinkInertials",
+    "coriolis_matrix",
+    "forward_dynamics",
+    "gravity",
+    "inertials_of",
+    "inverse_dynamics",
+    "mass_matrix",
+    "nonlinear_effects",
+]
+
+GRAVITY = (0.0, 0.0, -9.81)
+
+
+class LinkInertials(NamedTuple):
+    """Per-link inertial parameters of a chain (see the module's docstring)."""
+
+    mass: np.ndarray  # (n,)
+    com: np.ndarray  # (n, 3)
+    inertia: np.ndarray  # (n, 3, 3)
+
+
+def inertials_of(chain, inertials=None) -> LinkInertials:
+    """The chain's ``LinkInertials``: ``inertials`` when given, else ``chain.inertials``."""
+    if inertials is None:
+        inertials = getattr(chain, "inertials", None)
+    if inertials is None:
+        raise ValueError(
+            "this chain carries no inertial parameters: pass inertials=LinkInertials(mass, com, inertia)"
+        )
+    mass, com, inertia = inertials
+    return LinkInertials(np.asarray(mass, float), np.asarray(com, float), np.asarray(inertia, float))
+
+
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 16
+
+
+def _core_of(chain, inertials) -> _core.ChainDynamics:
+    """The C++ model of (chain, inertials), kept for the last few pairs (keyed on identity)."""
+    raw = inertials if inertials is not None else getattr(chain, "inertials", None)
+    key = (id(chain), id(raw))
+    hit = _CACHE.get(key)
+    if hit is not None and hit[0] is chain and hit[1] is raw:
+        _CACHE.move_to_end(key)
+        return hit[2]
+    mass, com, inertia = inertials_of(chain, inertials)
+    core = _core.ChainDynamics(chain._core, mass, com, inertia)
+    _CACHE[key] = (chain, raw, core)
+    if len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return core
+
+
+def inverse_dynamics(chain, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = GRAVITY, *,
+                     inertials=None) -> np.ndarray:
+    """Joint torques tau = A(q) qdd + C(q, qd) qd + G(q), (..., n): recursive Newton-Euler."""
+    return _core_of(chain, inertials).rnea(q, qd, qdd, gravity)
+
+
+def mass_matrix(chain, q: ArrayLike, *, inertials=None) -> np.ndarray:
+    """The joint-space inertia matrix A(q), (..., n, n): composite-rigid-body algorithm."""
+    return _core_of(chain, inertials).crba(q)
+
+
+def gravity(chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None) -> np.ndarray:
+    """The gravity torques G(q), (..., n)."""
+    return _core_of(chain, inertials).gravity(q, gravity)
+
+
+def nonlinear_effects(chain, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = GRAVITY, *,
+                      inertials=None) -> np.ndarray:
+    """h = C(q, qd) qd + G(q), (..., n)."""
+    return _core_of(chain, inertials).nonlinear_effects(q, qd, gravity)
+
+
+def coriolis_matrix(chain, q: ArrayLike, qd: ArrayLike, *, inertials=None) -> np.ndarray:
+    """C(q, qd), (..., n, n), with dA/dt - 2 C skew-symmetric."""
+    return _core_of(chain, inertials).coriolis_matrix(q, qd)
+
+
+def forward_dynamics(chain, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = GRAVITY, *,
+                     inertials=None) -> np.ndarray:
+    """Joint accelerations qdd = A^-1 (tau - C qd - G), (..., n): articulated-body algorithm."""
+    return _core_of(chain, inertials).aba(q, qd, tau, gravity)
+
+
+class FloatingBase:
+    """A floating body (free-flyer) carrying chains, each mounted at its ``base`` on the body.
+
+    Coordinates follow Pinocchio's free-flyer: ``q`` (..., 7 + n) is the body's position and
+    unit quaternion ``[x, y, z, qx, qy, qz, qw]`` in the world, then the chains' joints in the
+    order the chains were given; ``v`` (..., 6 + n) is the body's linear then angular velocity
+    in the body frame, then the joint rates; ``a`` = dv/dt; ``tau`` (..., 6 + n) the force then
+    moment on the body (body frame), then the joint torques. ``gravity`` is a world vector.
+    """
+
+    __slots__ = ("_chains", "_core")
+
+    def __init__(self, body: tuple, chains, inertials=None) -> None:
+        """``body`` = (mass, com (3,), inertia (3, 3) about the com), in the body frame;
+        ``chains`` a sequence of chains (their ``base`` is their mount on the body);
+        ``inertials`` their ``LinkInertials`` (default: each chain's ``inertials``)."""
+        chains = tuple(chains)
+        if inertials is None:
+            inertials = [None] * len(chains)
+        cores = [_core_of(c, i) for c, i in zip(chains, inertials)]
+        mass, com, inertia = body
+        self._core = _core.FloatingDynamics(np.asarray(mass, float), com, inertia, cores)
+        self._chains = chains
+
+    @property
+    def nq(self) -> int:
+        return self._core.nq
+
+    @property
+    def nv(self) -> int:
+        return self._core.nv
+
+    def inverse_dynamics(self, q, v, a, gravity=GRAVITY) -> np.ndarray:
+        """Generalised forces tau = A(q) a + h(q, v), (..., 6 + n)."""
+        return self._core.rnea(q, v, a, gravity)
+
+    def mass_matrix(self, q) -> np.ndarray:
+        """A(q), (..., 6 + n, 6 + n); invariant to the body's pose."""
+        return self._core.crba(q)
+
+    def gravity(self, q, gravity=GRAVITY) -> np.ndarray:
+        return self._core.gravity(q, gravity)
+
+    def nonlinear_effects(self, q, v, gravity=GRAVITY) -> np.ndarray:
+        return self._core.nonlinear_effects(q, v, gravity)
+
+    def forward_dynamics(self, q, v, tau, gravity=GRAVITY) -> np.ndarray:
+        """a = A^-1 (tau - h), (..., 6 + n): articulated-body algorithm."""
+        return self._core.aba(q, v, tau, gravity)
+
+    def center_of_mass(self, q) -> np.ndarray:
+        """The whole system's centre of mass in the world, (..., 3)."""
+        return self._core.com(q)
+
+    def center_of_mass_jacobian(self, q) -> np.ndarray:
+        """(..., 3, 6 + n): d com / dt = J v."""
+        return self._core.com_jacobian(q)

@@ -1,0 +1,440 @@
+"""Rigid-body dynamics (spotkin.dynamics, C++ kernels) against Pinocchio on Spot's and Go2's URDFs.
+
+Fixed base: a chain of the URDF (the arm, a leg) against Pinocchio's model reduced to that
+chain's joints (every other joint locked at 0, so a moving branch such as the gripper finger is
+merged rigidly into its parent, as the inertials taken from the reduced model describe). The
+chains' inertials are read from Pinocchio's model (mass, lever, inertia about the centre of mass,
+in the joint frame: the contract of spotkin.dynamics.LinkInertials), the rest is spotkin's own.
+Floating base: the whole robot as a free-flyer, the body carrying every leg and the arm.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import spotkin as sk
+from spotkin import dynamics as dyn
+
+pin = pytest.importorskip("pinocchio")
+
+ROBOTS = Path(sk.__file__).parent / "robots"
+SPOT = str(ROBOTS / "spot_with_arm.urdf")
+GO2 = str(ROBOTS / "go2.urdf")
+
+# (urdf, tip link) of the fixed-base chains
+CHAINS = {
+    "spot_arm": (SPOT, "arm_hand"),
+    "spot_arm_finger": (SPOT, "arm_link_fngr"),
+    "spot_leg": (SPOT, "front_left_foot"),
+    "go2_leg": (GO2, "RR_foot"),
+}
+FLOATING = {
+    "spot": (SPOT, ["arm_link_fngr", "front_left_foot", "front_right_foot", "rear_left_foot", "rear_right_foot"]),
+    "go2": (GO2, ["FL_foot", "FR_foot", "RL_foot", "RR_foot"]),
+}
+TOL64 = 1e-10
+
+
+def close(a, b, tol=TOL64):
+    """max |a - b| <= tol * max(1, max |b|)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    assert a.shape == b.shape, (a.shape, b.shape)
+    scale = max(1.0, float(np.max(np.abs(b)))) if b.size else 1.0
+    err = float(np.max(np.abs(a - b))) if a.size else 0.0
+    assert err <= tol * scale, f"max error {err:.3g} > {tol:.1g} * {scale:.3g}"
+    return err / scale
+
+
+def inertials_from_pin(model, joint_names):
+    ids = [model.getJointId(n) for n in joint_names]
+    return dyn.LinkInertials(
+        np.array([model.inertias[i].mass for i in ids]),
+        np.array([model.inertias[i].lever for i in ids]),
+        np.array([model.inertias[i].inertia for i in ids]),
+    )
+
+
+def sym(M):
+    """Pinocchio's crba fills the upper triangle."""
+    return np.triu(M) + np.triu(M, 1).T
+
+
+class Fixed:
+    """A spotkin chain with its inertials and the matching reduced Pinocchio model."""
+
+    def __init__(self, key):
+        urdf, tip = CHAINS[key]
+        self.chain = sk.Robot.from_urdf(urdf).chain(tip)
+        names = self.chain.joint_names
+        full = pin.buildModelFromUrdf(urdf)
+        lock = [full.getJointId(n) for n in full.names[1:] if n not in names]
+        self.model = pin.buildReducedModel(full, lock, pin.neutral(full))
+        self.data = self.model.createData()
+        self.idx = np.array([self.model.idx_vs[self.model.getJointId(n)] for n in names])
+        assert self.model.nv == len(names) == self.chain.dof
+        self.inertials = inertials_from_pin(self.model, names)
+        self.n = self.chain.dof
+
+    def to_pin(self, x):
+        out = np.zeros(self.model.nv)
+        out[self.idx] = x
+        return out
+
+    def mat(self, M):
+        return M[np.ix_(self.idx, self.idx)]
+
+    def random(self, rng, shape=()):
+        n = self.n
+        return (rng.uniform(-np.pi, np.pi, (*shape, n)), rng.normal(size=(*shape, n)) * 2,
+                rng.normal(size=(*shape, n)) * 5)
+
+
+@pytest.fixture(scope="module", params=sorted(CHAINS))
+def fixed(request):
+    return Fixed(request.param)
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(17)
+
+
+# ------------------------------------------------------------------ fixed base vs Pinocchio
+
+def test_fixed_base_matches_pinocchio(fixed, rng):
+    m, d, kw = fixed.model, fixed.data, {"inertials": fixed.inertials}
+    worst = {}
+    for _ in range(20):
+        q, qd, qdd = fixed.random(rng)
+        qp, vp, ap = fixed.to_pin(q), fixed.to_pin(qd), fixed.to_pin(qdd)
+        checks = {
+            "rnea": (dyn.inverse_dynamics(fixed.chain, q, qd, qdd, **kw), pin.rnea(m, d, qp, vp, ap)[fixed.idx]),
+            "crba": (dyn.mass_matrix(fixed.chain, q, **kw), fixed.mat(sym(pin.crba(m, d, qp)))),
+            "gravity": (dyn.gravity(fixed.chain, q, **kw), pin.computeGeneralizedGravity(m, d, qp)[fixed.idx]),
+            "nle": (dyn.nonlinear_effects(fixed.chain, q, qd, **kw), pin.nonLinearEffects(m, d, qp, vp)[fixed.idx]),
+            "coriolis": (dyn.coriolis_matrix(fixed.chain, q, qd, **kw),
+                         fixed.mat(pin.computeCoriolisMatrix(m, d, qp, vp))),
+            "aba": (dyn.forward_dynamics(fixed.chain, q, qd, qdd, **kw), pin.aba(m, d, qp, vp, ap)[fixed.idx]),
+        }
+        for name, (ours, ref) in checks.items():
+            worst[name] = max(worst.get(name, 0.0), close(ours, ref))
+    print(worst)
+
+
+def test_custom_gravity(fixed, rng):
+    g = np.array([1.5, -2.0, -7.0])
+    fixed.model.gravity.linear = g
+    try:
+        q, qd, qdd = fixed.random(rng)
+        tau = pin.rnea(fixed.model, fixed.data, fixed.to_pin(q), fixed.to_pin(qd), fixed.to_pin(qdd))
+        close(dyn.inverse_dynamics(fixed.chain, q, qd, qdd, g, inertials=fixed.inertials), tau[fixed.idx])
+        close(dyn.gravity(fixed.chain, q, gravity=g, inertials=fixed.inertials),
+              pin.computeGeneralizedGravity(fixed.model, fixed.data, fixed.to_pin(q))[fixed.idx])
+    finally:
+        fixed.model.gravity.linear = np.array([0.0, 0.0, -9.81])
+
+
+def test_prismatic_and_dh_chain(rng):
+    """A DH chain with a prismatic joint against the same chain built from joints for Pinocchio."""
+    rows = [[0, 0.0, 0.0, 0.3, 0.0], [1, 0.2, -np.pi / 2, 0.1, 0.4], [0, 0.25, np.pi / 2, 0.0, -0.3]]
+    chain = sk.Chain.from_dh(rows)
+    n = chain.dof
+    # the same chain as a Pinocchio model, joint by joint from spotkin's own frames at q = 0 is not
+    # independent; build it from the DH definition instead: T = RotZ(theta) TransZ(d) TransX(a) RotX(alpha)
+    model = pin.Model()
+    parent, placement = 0, pin.SE3.Identity()
+    inert = []
+    for j, (sigma, a, alpha, d, theta) in enumerate(rows):
+        pre = placement * pin.SE3(pin.rpy.rpyToMatrix(0, 0, theta), np.array([0, 0, d if sigma == 0 else 0]))
+        joint = pin.JointModelRZ() if sigma == 0 else pin.JointModelPZ()
+        if sigma == 1:  # d is the offset along z at q = 0: put it after the motion
+            pre = placement * pin.SE3(pin.rpy.rpyToMatrix(0, 0, theta), np.zeros(3))
+        jid = model.addJoint(parent, joint, pre, f"j{j}")
+        post = pin.SE3(pin.rpy.rpyToMatrix(alpha, 0, 0), np.array([a, 0, 0]))
+        if sigma == 1:
+            post = pin.SE3(np.eye(3), np.array([0, 0, d])) * post
+        mass = 1.0 + j
+        com = rng.normal(size=3) * 0.1
+        A = rng.normal(size=(3, 3))
+        I = A @ A.T * 0.01 + 0.01 * np.eye(3)
+        # spotkin's body frame is the frame after post; Pinocchio's joint frame is before post:
+        # express the inertia in the joint frame for Pinocchio
+        pin_inertia = post.act(pin.Inertia(mass, com, I))
+        model.appendBodyToJoint(jid, pin_inertia, pin.SE3.Identity())
+        inert.append((mass, com, I))
+        parent, placement = jid, post
+    data = model.createData()
+    inertials = dyn.LinkInertials(np.array([x[0] for x in inert]), np.array([x[1] for x in inert]),
+                                  np.array([x[2] for x in inert]))
+    for _ in range(10):
+        q, qd, qdd = rng.uniform(-1, 1, n), rng.normal(size=n), rng.normal(size=n)
+        close(dyn.inverse_dynamics(chain, q, qd, qdd, inertials=inertials), pin.rnea(model, data, q, qd, qdd))
+        close(dyn.mass_matrix(chain, q, inertials=inertials), sym(pin.crba(model, data, q)))
+        close(dyn.coriolis_matrix(chain, q, qd, inertials=inertials), pin.computeCoriolisMatrix(model, data, q, qd))
+        close(dyn.forward_dynamics(chain, q, qd, qdd, inertials=inertials), pin.aba(model, data, q, qd, qdd))
+
+
+# ------------------------------------------------------------------ identities
+
+def test_identities(fixed, rng):
+    kw = {"inertials": fixed.inertials}
+    q, qd, qdd = fixed.random(rng, (50,))
+    A = dyn.mass_matrix(fixed.chain, q, **kw)
+    np.testing.assert_array_equal(A, np.swapaxes(A, -1, -2))
+    assert np.all(np.linalg.eigvalsh(A) > 0)
+    C = dyn.coriolis_matrix(fixed.chain, q, qd, **kw)
+    G = dyn.gravity(fixed.chain, q, **kw)
+    tau = dyn.inverse_dynamics(fixed.chain, q, qd, qdd, **kw)
+    close(np.einsum("...ij,...j->...i", A, qdd) + np.einsum("...ij,...j->...i", C, qd) + G, tau)
+    close(dyn.nonlinear_effects(fixed.chain, q, qd, **kw), np.einsum("...ij,...j->...i", C, qd) + G)
+    close(dyn.forward_dynamics(fixed.chain, q, qd, tau, **kw), qdd, 1e-9)
+    # dA/dt - 2 C is skew-symmetric (dA/dt by central differences along qd)
+    h = 1e-6
+    dA = (dyn.mass_matrix(fixed.chain, q + h * qd, **kw) - dyn.mass_matrix(fixed.chain, q - h * qd, **kw)) / (2 * h)
+    N = dA - 2 * C
+    close(N + np.swapaxes(N, -1, -2), np.zeros_like(N), 1e-6 * max(1.0, np.abs(dA).max()))
+
+
+# ------------------------------------------------------------------ batches and the boundary
+
+@given(shape=st.sampled_from([(), (1,), (3, 1, 2), (2, 3)]), seed=st.integers(0, 2**32 - 1))
+def test_batch_shapes_broadcast(shape, seed):
+    fx = _fixed("spot_arm")
+    rng = np.random.default_rng(seed)
+    q, qd, qdd = fx.random(rng, shape)
+    kw = {"inertials": fx.inertials}
+    tau = dyn.inverse_dynamics(fx.chain, q, qd, qdd, **kw)
+    A = dyn.mass_matrix(fx.chain, q, **kw)
+    assert tau.shape == (*shape, fx.n) and A.shape == (*shape, fx.n, fx.n)
+    flat_q, flat_qd, flat_qdd = (x.reshape(-1, fx.n) for x in (q, qd, qdd))
+    for i in range(flat_q.shape[0]):  # each row as a single call, and against Pinocchio
+        close(tau.reshape(-1, fx.n)[i], dyn.inverse_dynamics(fx.chain, flat_q[i], flat_qd[i], flat_qdd[i], **kw), 0)
+        ref = pin.rnea(fx.model, fx.data, fx.to_pin(flat_q[i]), fx.to_pin(flat_qd[i]), fx.to_pin(flat_qdd[i]))
+        close(tau.reshape(-1, fx.n)[i], ref[fx.idx])
+    # one qd for every sample, gravity per sample
+    if shape:
+        g = rng.normal(size=(*shape, 3))
+        out = dyn.inverse_dynamics(fx.chain, q, qd.reshape(-1, fx.n)[0], qdd, g, **kw)
+        for idx in np.ndindex(*shape):
+            close(out[idx], dyn.inverse_dynamics(fx.chain, q[idx], qd.reshape(-1, fx.n)[0], qdd[idx], g[idx], **kw))
+
+
+_FIXED = {}
+
+
+def _fixed(key):
+    if key not in _FIXED:
+        _FIXED[key] = Fixed(key)
+    return _FIXED[key]
+
+
+def test_leading_shapes_broadcast_like_numpy(rng):
+    fx = _fixed("spot_leg")
+    q = rng.uniform(-1, 1, (4, 1, 3))
+    qd = rng.normal(size=(1, 5, 3))
+    out = dyn.nonlinear_effects(fx.chain, q, qd, inertials=fx.inertials)
+    assert out.shape == (4, 5, 3)
+    close(out[2, 3], dyn.nonlinear_effects(fx.chain, q[2, 0], qd[0, 3], inertials=fx.inertials), 0)
+    with pytest.raises(ValueError, match="qd"):
+        dyn.nonlinear_effects(fx.chain, rng.normal(size=(4, 3)), rng.normal(size=(5, 3)), inertials=fx.inertials)
+
+
+def test_float32(fixed, rng):
+    kw = {"inertials": fixed.inertials}
+    q, qd, qdd = fixed.random(rng, (40,))
+    q32, qd32, qdd32 = (x.astype(np.float32) for x in (q, qd, qdd))
+    for f, args in [(dyn.inverse_dynamics, (q32, qd32, qdd32)), (dyn.mass_matrix, (q32,)),
+                    (dyn.coriolis_matrix, (q32, qd32)), (dyn.forward_dynamics, (q32, qd32, qdd32)),
+                    (dyn.gravity, (q32,)), (dyn.nonlinear_effects, (q32, qd32))]:
+        out = f(fixed.chain, *args, **kw)
+        assert out.dtype == np.float32
+        ref = f(fixed.chain, *(a.astype(np.float64) for a in args), **kw)
+        tol = 1e-3 if f is dyn.forward_dynamics else 2e-4
+        close(out, ref, tol)
+    # a float64 argument among float32 ones computes in float64
+    assert dyn.inverse_dynamics(fixed.chain, q32, qd32, qdd, **kw).dtype == np.float64
+
+
+def test_noncontiguous_empty_and_nan_rows(rng):
+    fx = _fixed("spot_arm")
+    kw = {"inertials": fx.inertials}
+    big = rng.uniform(-1, 1, (10, 2 * fx.n))
+    q = big[:, ::2]
+    assert not q.flags.c_contiguous
+    close(dyn.mass_matrix(fx.chain, q, **kw), dyn.mass_matrix(fx.chain, np.ascontiguousarray(q), **kw), 0)
+    close(dyn.gravity(fx.chain, q.T.copy().T, **kw), dyn.gravity(fx.chain, np.ascontiguousarray(q), **kw), 0)
+    empty = np.zeros((0, fx.n))
+    assert dyn.inverse_dynamics(fx.chain, empty, empty, empty, **kw).shape == (0, fx.n)
+    assert dyn.mass_matrix(fx.chain, np.zeros((2, 0, fx.n)), **kw).shape == (2, 0, fx.n, fx.n)
+    assert dyn.forward_dynamics(fx.chain, empty, empty, empty, **kw).shape == (0, fx.n)
+    q, qd, qdd = fx.random(rng, (20,))
+    qd[3, 5] = np.nan
+    q[7, 0] = np.inf
+    qdd[19, 1] = np.nan
+    for f, args in [(dyn.inverse_dynamics, (q, qd, qdd)), (dyn.forward_dynamics, (q, qd, qdd)),
+                    (dyn.coriolis_matrix, (q, qd)), (dyn.nonlinear_effects, (q, qd))]:
+        out = f(fx.chain, *args, **kw)
+        bad = [3, 7, 19] if len(args) == 3 else [3, 7]
+        for i in range(20):
+            row = out[i]
+            if i in bad:
+                assert np.all(np.isnan(row))
+            else:
+                assert np.all(np.isfinite(row))
+                close(row, f(fx.chain, *(a[i] for a in args), **kw), 0)
+    A = dyn.mass_matrix(fx.chain, q, **kw)
+    assert np.all(np.isnan(A[7])) and np.all(np.isfinite(np.delete(A, 7, axis=0)))
+
+
+def test_errors(rng):
+    fx = _fixed("spot_arm")
+    kw = {"inertials": fx.inertials}
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 6\)"):
+        dyn.mass_matrix(fx.chain, np.zeros(5), **kw)
+    with pytest.raises(ValueError, match="gravity"):
+        dyn.gravity(fx.chain, np.zeros(6), np.zeros(2), **kw)
+    with pytest.raises(TypeError, match="qd"):
+        dyn.nonlinear_effects(fx.chain, np.zeros(6), "fast", **kw)
+    with pytest.raises(ValueError, match="mass"):
+        dyn.mass_matrix(fx.chain, np.zeros(6), inertials=(np.ones(5), np.zeros((6, 3)), np.zeros((6, 3, 3))))
+    with pytest.raises(ValueError, match="positive semidefinite"):
+        dyn.mass_matrix(fx.chain, np.zeros(6), inertials=(np.ones(6), np.zeros((6, 3)), -np.eye(3)[None].repeat(6, 0)))
+    with pytest.raises(ValueError, match="chain carries no inertial"):
+        dyn.mass_matrix(fx.chain, np.zeros(6))
+
+
+# ------------------------------------------------------------------ floating base vs Pinocchio
+
+class Floating:
+    def __init__(self, key):
+        urdf, tips = FLOATING[key]
+        robot = sk.Robot.from_urdf(urdf)
+        self.chains = [robot.chain(t) for t in tips]
+        self.model = pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())
+        self.data = self.model.createData()
+        names = [n for c in self.chains for n in c.joint_names]
+        assert sorted(names) == sorted(self.model.names[2:])  # every joint of the robot, once
+        jid = [self.model.getJointId(n) for n in names]
+        self.iv = np.r_[np.arange(6), [self.model.idx_vs[i] for i in jid]]
+        self.iq = np.r_[np.arange(7), [self.model.idx_qs[i] for i in jid]]
+        body = self.model.inertias[1]
+        self.fb = dyn.FloatingBase((body.mass, body.lever, body.inertia), self.chains,
+                                   [inertials_from_pin(self.model, c.joint_names) for c in self.chains])
+        self.n = len(names)
+
+    def random(self, rng):
+        quat = rng.normal(size=4)
+        quat /= np.linalg.norm(quat)
+        q = np.r_[rng.normal(size=3), quat, rng.uniform(-np.pi, np.pi, self.n)]
+        return q, rng.normal(size=6 + self.n), rng.normal(size=6 + self.n) * 3
+
+    def to_pin(self, x, index):
+        out = np.zeros(len(x))
+        out[index] = x
+        return out
+
+
+@pytest.fixture(scope="module", params=sorted(FLOATING))
+def floating(request):
+    return Floating(request.param)
+
+
+def test_floating_base_matches_pinocchio(floating, rng):
+    fl, m, d = floating, floating.model, floating.data
+    assert fl.fb.nq == m.nq and fl.fb.nv == m.nv
+    worst = {}
+    for _ in range(20):
+        q, v, a = fl.random(rng)
+        qp, vp, ap = fl.to_pin(q, fl.iq), fl.to_pin(v, fl.iv), fl.to_pin(a, fl.iv)
+        checks = {
+            "rnea": (fl.fb.inverse_dynamics(q, v, a), pin.rnea(m, d, qp, vp, ap)[fl.iv]),
+            "crba": (fl.fb.mass_matrix(q), sym(pin.crba(m, d, qp))[np.ix_(fl.iv, fl.iv)]),
+            "gravity": (fl.fb.gravity(q), pin.computeGeneralizedGravity(m, d, qp)[fl.iv]),
+            "nle": (fl.fb.nonlinear_effects(q, v), pin.nonLinearEffects(m, d, qp, vp)[fl.iv]),
+            "aba": (fl.fb.forward_dynamics(q, v, a), pin.aba(m, d, qp, vp, ap)[fl.iv]),
+            "com": (fl.fb.center_of_mass(q), pin.centerOfMass(m, d, qp)),
+            "com_jacobian": (fl.fb.center_of_mass_jacobian(q), pin.jacobianCenterOfMass(m, d, qp)[:, fl.iv]),
+        }
+        for name, (ours, ref) in checks.items():
+            worst[name] = max(worst.get(name, 0.0), close(ours, ref))
+    print(worst)
+
+
+def test_floating_identities(floating, rng):
+    fl = floating
+    qs, vs, as_ = zip(*(fl.random(rng) for _ in range(16)))
+    q, v, a = np.array(qs), np.array(vs), np.array(as_)
+    A = fl.fb.mass_matrix(q)
+    assert np.all(np.linalg.eigvalsh(A) > 0)
+    tau = fl.fb.inverse_dynamics(q, v, a)
+    close(np.einsum("...ij,...j->...i", A, a) + fl.fb.nonlinear_effects(q, v), tau)
+    close(fl.fb.forward_dynamics(q, v, tau), a, 1e-9)
+    # A depends on the joints only, not on the body's pose
+    q2 = q.copy()
+    q2[:, :7] = fl.random(rng)[0][:7]
+    close(fl.fb.mass_matrix(q2), A)
+    # the centre of mass Jacobian by central differences along the body-frame twist
+    eps = 1e-6
+    q0, v0 = q[0], v[0]
+    J = fl.fb.center_of_mass_jacobian(q0)
+    m = fl.model
+    dq = (fl.fb.center_of_mass(_integrate(m, fl, q0, v0, eps)) - fl.fb.center_of_mass(_integrate(m, fl, q0, v0, -eps)))
+    close(J @ v0, dq / (2 * eps), 1e-6)
+    # float32 and batch shapes
+    out32 = fl.fb.inverse_dynamics(q.astype(np.float32), v.astype(np.float32), a.astype(np.float32))
+    assert out32.dtype == np.float32
+    close(out32, tau, 1e-3)
+    assert fl.fb.mass_matrix(q.reshape(2, 8, -1)).shape == (2, 8, fl.n + 6, fl.n + 6)
+    assert fl.fb.center_of_mass(np.zeros((0, fl.n + 7))).shape == (0, 3)
+    qn = q.copy()
+    qn[5, 9] = np.nan
+    out = fl.fb.inverse_dynamics(qn, v, a)
+    assert np.all(np.isnan(out[5])) and np.all(np.isfinite(np.delete(out, 5, 0)))
+
+
+def _integrate(model, fl, q, v, t):
+    """q (ours) moved for time t along v (ours) with Pinocchio's integrate, back in our order."""
+    qp = pin.integrate(model, fl.to_pin(q, fl.iq), fl.to_pin(v, fl.iv) * t)
+    return qp[fl.iq]
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_large_batches_equal_their_rows(threads, rng):
+    """Blocks of 8 (16 in float32) lanes, short blocks, narrow models for short batches, threads
+    and streamed outputs give every sample the same value as its own single call."""
+    fx, fl = _fixed("spot_arm"), Floating("go2")
+    kw = {"inertials": fx.inertials}
+    previous = sk.get_num_threads()
+    sk.set_num_threads(threads)
+    try:
+        for count in (3, 8, 13, 5003):
+            q, qd, qdd = fx.random(rng, (count,))
+            pick = rng.choice(count, size=min(count, 12), replace=False)
+            tau = dyn.inverse_dynamics(fx.chain, q, qd, qdd, **kw)
+            A = dyn.mass_matrix(fx.chain, q, **kw)
+            C = dyn.coriolis_matrix(fx.chain, q, qd, **kw)
+            for i in pick:
+                close(tau[i], dyn.inverse_dynamics(fx.chain, q[i], qd[i], qdd[i], **kw), 0)
+                close(A[i], dyn.mass_matrix(fx.chain, q[i], **kw), 0)
+                close(C[i], dyn.coriolis_matrix(fx.chain, q[i], qd[i], **kw), 0)
+                close(tau[i], pin.rnea(fx.model, fx.data, fx.to_pin(q[i]), fx.to_pin(qd[i]),
+                                       fx.to_pin(qdd[i]))[fx.idx])
+            states = [fl.random(rng) for _ in range(min(count, 400))]
+            qf, vf, af = (np.array(x) for x in zip(*states))
+            Af = fl.fb.mass_matrix(qf)
+            af_out = fl.fb.forward_dynamics(qf, vf, af)
+            for i in pick[pick < len(states)]:
+                close(Af[i], fl.fb.mass_matrix(qf[i]), 0)
+                close(af_out[i], fl.fb.forward_dynamics(qf[i], vf[i], af[i]), 0)
+        # an output big enough to be streamed (non-temporal stores)
+        q, qd, qdd = fx.random(rng, (20_000,))
+        A = dyn.mass_matrix(fx.chain, q, **kw)
+        for i in rng.choice(20_000, size=10, replace=False):
+            close(A[i], dyn.mass_matrix(fx.chain, q[i], **kw), 0)
+    finally:
+        sk.set_num_threads(previous)
