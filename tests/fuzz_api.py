@@ -1876,6 +1876,35 @@ def _chain_entries(tool_extra):
             probe=tolerance_probe,
             overflow_ok=True,
         )
+
+        def inertials_probe(result, kw, c, get=get, dof=dof):
+            if not isinstance(result, sk.Chain) or result.dof != dof or result is get(c):
+                return f"with_inertials returned {result!r}, not a new Chain of the same joints"
+            given = [np.asarray(kw[name], dtype=np.float64) for name in ("mass", "com", "inertia")]
+            got = result.inertials
+            if got is None or not all(
+                a.shape == b.shape and np.allclose(a, b, rtol=1e-6, atol=1e-9) for a, b in zip(got, given)
+            ):
+                return f"with_inertials kept {got!r}, not the given arrays"
+            return None
+
+        def rods(c, dof=dof):  # uniform rods of 0.3 m along x, 1 kg each
+            return np.tile(np.diag([0.0, 0.0075, 0.0075]), (dof, 1, 1))
+
+        register(
+            light=True,
+            name=f"Chain.with_inertials{tag}",
+            covers="spotkin.Chain.with_inertials",
+            call=lambda c, get=get, **k: get(c).with_inertials(**k),
+            slots=[
+                Array("mass", lambda c, dof=dof: np.ones(dof)),
+                Array("com", lambda c, dof=dof: np.tile([-0.15, 0.0, 0.0], (dof, 1))),
+                Array("inertia", rods),
+            ],
+            probe=inertials_probe,
+            overflow_ok=True,
+        )
+
         # the free-joint methods need a 7-joint chain (tests/test_chain_ik7.py covers them on
         # Panda- and Kinova-like arms): on these chains every call is refused
         def needs_seven(result, kw, c):

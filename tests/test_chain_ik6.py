@@ -269,11 +269,12 @@ def test_perturbed_geometry_is_solved_and_polished(name, rng):
     if approx.any():
         assert fk_error(chain, sol.q[approx], np.repeat(T, approx.sum(axis=1), axis=0)).max() < 1e-5
     hits = [contains(sol.q[i][sol.exact[i]], q[i], 1e-6) for i in range(len(q))]
-    # the parallel families find the generating configuration >99% of the time (misses: within
-    # ~0.03 rad of a wrist singularity, where 1e-3 of geometry moves the solutions far). The
-    # idealised spherical wrist and shoulder lose more (about 2.5-3.5% measured): a branch of the
-    # idealised chain whose polish lands on another solution or fails; issue 16 follow-up.
-    floor = 0.99 if KINDS[name].startswith("6R-three-parallel") else 0.95
+    # the generating configuration is found >99% of the time by the parallel families and the
+    # wrist, ~98% by the shoulder (3000 targets each, measured; 96-97% for the last two before the
+    # radially moved starts). The misses sit near wrist singularities, where 1e-3 of geometry moves
+    # the solutions far and the true (general) 6R chain can have more than the family's 8 solutions,
+    # or where a polished start lands on another solution.
+    floor = 0.99 if KINDS[name].startswith("6R-three-parallel") else 0.97
     assert np.mean(hits) > floor, np.mean(hits)
 
 

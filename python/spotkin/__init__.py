@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import paul, trajectory, urdf
+from . import inertia, paul, trajectory, urdf
 from ._runtime import MAX_THREADS, get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
@@ -10,6 +10,7 @@ from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
 from .chain import Chain, ChainSolutions, IKDifferentialInfo
 from .differential import dls, manipulability, nullspace_projector, pinv, rank, singular_values
+from .inertia import LinkInertials
 from .leg import Leg, LegSolutions
 from .robot import BodyFrames, BodyIK, BodyRates, Robot
 from .spot import Spot
@@ -27,6 +28,7 @@ __all__ = [
     "IKDifferentialInfo",
     "Leg",
     "LegSolutions",
+    "LinkInertials",
     "Robot",
     "Spot",
     "SpotArm",
@@ -34,6 +36,7 @@ __all__ = [
     "body_transform",
     "dls",
     "get_num_threads",
+    "inertia",
     "manipulability",
     "nullspace_projector",
     "paul",

@@ -103,6 +103,7 @@ class Chain:
         "_core",
         "_ik",
         "_ik_tolerance",
+        "_inertials",
         "_joints",
         "_limits",
         "_names",
@@ -132,6 +133,7 @@ class Chain:
         self._limits = _limits(limits, table.shape[0])
         self._ik = None
         self._ik_tolerance = None
+        self._inertials = None
 
     @classmethod
     def from_joints(
@@ -178,6 +180,7 @@ class Chain:
         chain._limits = _limits(limits, n)
         chain._ik = None
         chain._ik_tolerance = None
+        chain._inertials = None
         return chain
 
     @classmethod
@@ -258,6 +261,31 @@ class Chain:
     def upper(self) -> np.ndarray:
         """Upper joint limits, (dof,); +inf where unlimited."""
         return self._limits[1].copy()
+
+    @property
+    def inertials(self):
+        """The bodies' mass properties (:class:`spotkin.inertia.LinkInertials`), or None. Row j is the
+        body moved by joint j, in frame j + 1 of :meth:`frames`; a chain from :meth:`spotkin.Robot.chain`
+        carries its URDF's (fixed children merged, see :mod:`spotkin.inertia`)."""
+        return self._inertials
+
+    def with_inertials(self, mass: ArrayLike, com: ArrayLike, inertia: ArrayLike) -> Chain:
+        """This chain carrying mass properties: a new Chain (the same model; the original is unchanged).
+
+        ``mass`` (dof,) kg >= 0; ``com`` (dof, 3) m, each body's centre of mass in frame j + 1 of
+        :meth:`frames` (the frame after joint j's motion); ``inertia`` (dof, 3, 3) kg m², the rotational
+        inertia about the centre of mass in that frame's axes, symmetric positive semidefinite.
+        ``TypeError`` for non-numeric input, ``ValueError`` naming the argument otherwise (see
+        :func:`spotkin.inertia.link_inertials`).
+        """
+        from .inertia import link_inertials
+
+        inertials = link_inertials(mass, com, inertia, self.dof)
+        chain = self.__class__.__new__(self.__class__)
+        for name in self.__slots__:
+            setattr(chain, name, getattr(self, name))
+        chain._inertials = inertials
+        return chain
 
     def fk(self, q: ArrayLike) -> np.ndarray:
         """Base-to-tool transform: q (..., dof) -> (..., 4, 4)."""
@@ -420,6 +448,8 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT. The
         derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
+        if free_joint is None and free_value is None and self._ik is not None:  # the single-call fast path
+            return ChainSolutions._make(self._ik.ik(T))
         if free_joint is None:
             if free_value is not None:
                 raise ValueError("free_value needs free_joint (the index of the joint it holds)")
@@ -633,6 +663,8 @@ class Chain:
             plain = (_rebuild_joints, (*self._joints, self._base, self._tool, limits, self._names))
         else:
             plain = (_rebuild, (self._rows, self._convention, self._base, self._tool, limits))
+        if self._inertials is not None:
+            plain = (_rebuild_with_inertials, (*plain, tuple(self._inertials)))
         if self._ik_tolerance is None:
             return plain
         return (_rebuild_with_ik_tolerance, (*plain, self._ik_tolerance))
@@ -663,6 +695,10 @@ def _broadcast_free(T: ArrayLike, free_value: ArrayLike) -> tuple[np.ndarray, np
 
 def _rebuild_with_ik_tolerance(rebuild, args, tolerance) -> Chain:
     return rebuild(*args).with_ik_tolerance(*tolerance)
+
+
+def _rebuild_with_inertials(rebuild, args, inertials) -> Chain:
+    return rebuild(*args).with_inertials(*inertials)
 
 
 def _scalar(array: np.ndarray):

@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core, urdf
+from . import _core, inertia, urdf
 from ._boundary import (
     as_finite,
     as_real,
@@ -346,13 +346,21 @@ class Robot:
         """The serial chain from ``base`` (default: the body, the URDF's root) to ``link``, as a
         :class:`Chain` with the URDF's joint names and limits: FK, frames, Jacobians, differential
         IK, and the closed-form IK where the structure has one. Fixed joints are merged into the
-        placements; ``link`` may be any link, fixed ones (feet, hands, sensors) included."""
+        placements; ``link`` may be any link, fixed ones (feet, hands, sensors) included.
+
+        When the URDF gives any ``<inertial>``, the chain carries its bodies' mass properties
+        (:attr:`Chain.inertials`, a link without one has none): body j is everything that moves with
+        joint j. Links rigidly attached to it (fixed joints, on the path or off it, the tool link's
+        subtree included) merge into it, and the joints off the path are locked at 0, so the subtree
+        they carry merges too (a gripper finger joins the wrist). ``base`` and everything attached
+        to it without passing through one of the chain's joints (the body and the other legs, for a
+        leg chain) is not part of the chain's dynamics. See :mod:`spotkin.inertia`."""
         if self._model is None:
             raise ValueError("this robot has no URDF description")
         data = self._model.chain_data(link, base)
         if len(data.joint_names) == 0:
             raise ValueError(f"no actuated joint between {data.base!r} and {link!r}")
-        return Chain.from_joints(
+        chain = Chain.from_joints(
             data.placements,
             data.axes,
             data.types,
@@ -360,6 +368,34 @@ class Robot:
             limits=data.limits,
             joint_names=data.joint_names,
         )
+        if not any(item.inertial is not None for item in self._model.links.values()):
+            return chain
+        tree = inertia.model_tree(self._model, data.base, data.joint_names, floating=False)
+        return chain.with_inertials(*tree.inertials)
+
+    @property
+    def body_inertial(self) -> inertia.LinkInertials:
+        """The floating body's mass properties in the body frame (the URDF's root link frame): mass (),
+        com (3,) and inertia (3, 3) about the centre of mass. The root link, the links fixed to it, and
+        the subtrees of the joints that are neither a leg's nor the arm's (locked at 0) merge into it;
+        the legs and the arm are the tree's moving bodies (:func:`spotkin.inertia.tree_of`)."""
+        return self._tree(None).root
+
+    def _tree(self, joints) -> inertia.Tree:
+        if self._model is None or not self._specs[0]:
+            raise ValueError("dynamics need a URDF description; a robot from a model dict has none")
+        to_urdf = {}
+        aliases = self._joint_aliases()
+        for joint in self._model.actuated_joints:
+            to_urdf.setdefault(aliases.get(joint.name, joint.name), joint.name)
+        if joints is None:
+            joints = [to_urdf[name] for name in (*self.leg_joint_names, *self.arm_joint_names)]
+        else:
+            joints = [to_urdf.get(aliases.get(name, name), name) for name in _names(joints, "joints")]
+        feet = [(spec.name, spec.foot, spec.contact_offset) for spec in self._specs[0]]
+        names = dict(zip((spec.name for spec in self._specs[0]), self._leg_names))
+        feet = [(names[name], link, offset) for name, link, offset in feet]
+        return inertia.model_tree(self._model, self._model.root, joints, floating=True, feet=feet)
 
     # -- joint names ---------------------------------------------------------------------------------
     @property

@@ -558,7 +558,7 @@ def _solve_shoulder(chain: Chain6, G: np.ndarray) -> list[tuple[int, np.ndarray]
     )
     u = R.T @ (t - c) - p6T
 
-    if np.linalg.norm(np.cross(h[3], h[4])) > 1e-6:  # scan q5; residual h4ᵀ(m − p34)
+    if np.linalg.norm(np.cross(h[3], h[4])) > 1e-2:  # scan q5; residual h4ᵀ(m − p34)
 
         def wrist(q5):
             R5 = rot(h[4], q5)
@@ -649,7 +649,9 @@ def solve(
 ) -> Solutions:
     """Every IK solution of a 6R chain for the target pose ``T`` (4, 4), in the slots of the module
     docstring. ``limits`` (6, 2) or None. ``polish=True`` refines each solution of the idealised
-    family on the true chain. ``family`` skips :func:`classify`."""
+    family on the true chain (branches that do not converge there are dropped); without it, a chain
+    that fits its family only within the tolerances gets the idealised answers, not exact. ``family``
+    skips :func:`classify`."""
     chain = as_chain(description)
     family = family or classify(chain, tol_angle, tol_dist)
     T = np.asarray(T, dtype=float)
@@ -660,14 +662,19 @@ def solve(
     if not np.all(np.isfinite(T)):
         return Solutions(q, exists, valid, exact, res, family)
     ideal = idealise(chain, family)
+    try:
+        idealised = classify(chain) != family  # the family fits only within the given tolerances
+    except ValueError:
+        idealised = True
     G = T @ np.linalg.inv(chain.tool)
     for slot, solution in _solve_family(ideal, G, family):
         r = residual(chain, solution, T)
-        if polish or r > 1e-12:  # near a double root acos loses half the digits: Newton steps
+        if polish or (not idealised and r > 1e-12):  # near a double root acos loses digits: Newton
             solution = newton_polish(chain, solution, T)
             r = residual(chain, solution, T)
-        if not r < 1e-6:  # an idealised branch that does not exist on the true chain
-            continue
+            if not r < 1e-6:  # an idealised branch that does not exist on the true chain
+                continue
+        # unpolished answers of an idealised chain are kept as they are (exact only below EXACT)
         q[slot], valid[slot] = wrap_into(solution, lower, upper)
         exists[slot], res[slot], exact[slot] = True, r, r < EXACT
     return Solutions(q, exists, valid, exact, res, family)

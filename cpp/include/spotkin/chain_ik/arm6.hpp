@@ -30,6 +30,8 @@ class Arm6 {
   static constexpr double kAccept = 1e-6;   // residual beyond which a polished branch is dropped
   static constexpr double kMirror = 0.05;   // Sp6's mirror for idealised chains
   static constexpr double kSame = 1e-8;     // polished slots this close (rad) are one solution
+  // a block of at most this many poses is solved pose by pose (cheaper than a padded lane block)
+  static constexpr int kShortBlock = 3;
 
   static Arm6 make(const Chain<double>& chain, double scale, FamilyTolerance tolerance) {
     if (chain.dof() != 6)
@@ -93,6 +95,9 @@ class Arm6 {
     const Poe ideal = arm.idealised_ ? idealise(poe, arm.family_, geometry, tolerance.distance) : poe;
     const double mirror = arm.idealised_ ? kMirror : 0.0;
     arm.M_ = poe.M;
+    // three times the idealisation's error bound, relative to the chain's size
+    arm.nudge_ = std::min(0.05, 3.0 * std::max(tolerance.distance, tolerance.angle * scale) / scale);
+    arm.centre_ = poe.p[0];
     arm.M_inv_ = inverse_rigid(poe.M);
     switch (arm.family_) {
       case Family6::SphericalWrist:
@@ -125,6 +130,9 @@ class Arm6 {
   // The spherical shoulder on the chain itself: the wrist lane kernel on the reversed chain.
   bool lane_shoulder() const noexcept { return reversed_ && !idealised_; }
   const Rigid<double>& M() const noexcept { return M_; }
+  // idealised chains: the relative radial move of a target for extra starts, and its centre (axis 1)
+  double nudge() const noexcept { return nudge_; }
+  const V3& centre() const noexcept { return centre_; }
   const Parallel234& parallel() const noexcept { return *parallel_; }
   const SphericalWrist6& wrist() const noexcept { return *wrist_; }
   const Geometry6& geometry() const noexcept { return geometry_; }
@@ -189,6 +197,8 @@ class Arm6 {
   Family6 family_ = Family6::SphericalWrist;
   bool idealised_ = false, reversed_ = false;
   Rigid<double> M_, M_inv_;
+  double nudge_ = 0.0;
+  V3 centre_ = V3::Zero();
   std::optional<SphericalWrist6> wrist_;
   std::optional<Parallel234> parallel_;
   std::optional<Parallel123> parallel123_;
@@ -219,6 +229,69 @@ inline void project_rotation(Arm::Pose& pose) noexcept {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) pose.R[r][c] = next[r][c];
   }
+}
+
+// Arm::read_pose and project_rotation across the lanes of a block (lanes i >= m repeat pose m - 1):
+// R[r][c][i], p[r][i] and ok[i] (1.0 / 0.0), the same arithmetic in lane-inner loops.
+template <PoseFormat Format>
+SPOTKIN_INLINE void read_pose_lanes(const double (*pose_in)[SphericalWrist6::kLanes], int m,
+                                    double (&R)[3][3][SphericalWrist6::kLanes], double (&p)[3][SphericalWrist6::kLanes],
+                                    double (&ok)[SphericalWrist6::kLanes]) noexcept {
+  constexpr int L = SphericalWrist6::kLanes, width = Format == PoseFormat::Matrix ? 16 : 7;
+  double in[width][L];
+  for (int e = 0; e < width; ++e)
+    for (int i = 0; i < L; ++i) in[e][i] = pose_in[e][i < m ? i : m - 1];
+  for (int i = 0; i < L; ++i) {
+    double okl = 1.0;
+    if constexpr (Format == PoseFormat::Matrix) {
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) R[r][c][i] = in[4 * r + c][i];
+        p[r][i] = in[4 * r + 3][i];
+      }
+      const double row_error = std::max(std::max(std::fabs(in[12][i]), std::fabs(in[13][i])),
+                                        std::max(std::fabs(in[14][i]), std::fabs(in[15][i] - 1.0)));
+      okl = row_error <= 1e-9 ? okl : 0.0;
+      double orth = 0.0;  // max |R^T R - I|
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          const double dot = R[0][a][i] * R[0][b][i] + R[1][a][i] * R[1][b][i] + R[2][a][i] * R[2][b][i];
+          orth = std::max(orth, std::fabs(dot - (a == b ? 1.0 : 0.0)));
+        }
+      const double det = R[0][0][i] * (R[1][1][i] * R[2][2][i] - R[1][2][i] * R[2][1][i]) -
+                         R[0][1][i] * (R[1][0][i] * R[2][2][i] - R[1][2][i] * R[2][0][i]) +
+                         R[0][2][i] * (R[1][0][i] * R[2][1][i] - R[1][1][i] * R[2][0][i]);
+      okl = (orth <= Arm::kRotationTolerance) & (det > 0.0) ? okl : 0.0;
+    } else {
+      const double x = in[3][i], y = in[4][i], z = in[5][i], w = in[6][i];
+      const double n2 = x * x + y * y + z * z + w * w;
+      okl = std::fabs(std::sqrt(n2) - 1.0) <= Arm::kRotationTolerance ? okl : 0.0;
+      const double s = 2.0 / n2;
+      R[0][0][i] = 1 - s * (y * y + z * z), R[0][1][i] = s * (x * y - z * w), R[0][2][i] = s * (x * z + y * w);
+      R[1][0][i] = s * (x * y + z * w), R[1][1][i] = 1 - s * (x * x + z * z), R[1][2][i] = s * (y * z - x * w);
+      R[2][0][i] = s * (x * z - y * w), R[2][1][i] = s * (y * z + x * w), R[2][2][i] = 1 - s * (x * x + y * y);
+      p[0][i] = in[0][i], p[1][i] = in[1][i], p[2][i] = in[2][i];
+    }
+    double sum = 0.0;  // NaN and Inf fail every comparison above or make this NaN
+    for (int r = 0; r < 3; ++r) sum += R[r][0][i] + R[r][1][i] + R[r][2][i] + p[r][i];
+    if constexpr (Format == PoseFormat::Matrix) sum += in[12][i] + in[13][i] + in[14][i] + in[15][i];
+    ok[i] = (sum - sum) == 0.0 ? okl : 0.0;
+  }
+  if constexpr (Format == PoseFormat::Matrix)  // project_rotation, lane by lane
+    for (int step = 0; step < 2; ++step)
+      for (int i = 0; i < L; ++i) {
+        double gram[3][3], next[3][3];
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b)
+            gram[a][b] = R[0][a][i] * R[0][b][i] + R[1][a][i] * R[1][b][i] + R[2][a][i] * R[2][b][i];
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) {
+            double sum = 0.0;
+            for (int a = 0; a < 3; ++a) sum += R[r][a][i] * ((a == c ? 3.0 : 0.0) - gram[a][c]);
+            next[r][c] = 0.5 * sum;
+          }
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) R[r][c][i] = ok[i] != 0.0 ? next[r][c] : R[r][c][i];
+      }
 }
 
 template <PoseFormat Format>
@@ -275,28 +348,32 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
   double c[S][6][L], s[S][6][L];
   bool refine_slot[S][L] = {};
   Arm::Pose targets[L];
-  if (solver.lane_parallel()) {
+  if (solver.lane_parallel() && m > Arm6::kShortBlock) {
     // every lane, a short block's padded with its last pose, so that a pose's answer does not
     // depend on its neighbours or on how a batch is split
-    double R[3][3][L], t[3][L], fallback[L], exists[S][L];
+    double R[3][3][L], t[3][L], fallback[L], exists[S][L], TR[3][3][L], Tp[3][L];
+    read_pose_lanes<Format>(pose_in, m, TR, Tp, out.input_ok);
     const Rigid<double>& M_inv = solver.parallel().M_inv();
-    for (int i = 0; i < L; ++i) {
-      double in[width];
-      for (int e = 0; e < width; ++e) in[e] = pose_in[e][std::min(i, m - 1)];
-      out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
-      if (Format == PoseFormat::Matrix && out.input_ok[i] != 0.0) project_rotation(targets[i]);
-      const Arm::Pose& T = targets[i];
+    double Mi[3][3], mp[3];
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col) Mi[r][col] = M_inv.R(r, col);
+      mp[r] = M_inv.p[r];
+    }
+    for (int i = 0; i < L; ++i)
       for (int r = 0; r < 3; ++r) {  // G = T M^-1
         for (int col = 0; col < 3; ++col)
-          R[r][col][i] = T.R[r][0] * M_inv.R(0, col) + T.R[r][1] * M_inv.R(1, col) + T.R[r][2] * M_inv.R(2, col);
-        t[r][i] = T.R[r][0] * M_inv.p[0] + T.R[r][1] * M_inv.p[1] + T.R[r][2] * M_inv.p[2] + T.p[r];
+          R[r][col][i] = TR[r][0][i] * Mi[0][col] + TR[r][1][i] * Mi[1][col] + TR[r][2][i] * Mi[2][col];
+        t[r][i] = TR[r][0][i] * mp[0] + TR[r][1][i] * mp[1] + TR[r][2][i] * mp[2] + Tp[r][i];
       }
-    }
     solver.parallel().solve_lanes(R, t, out.input_ok, c, s, exists, fallback);
     for (int i = 0; i < L; ++i)
       for (int k = 0; k < S; ++k) out.exists[k][i] = exists[k][i];
     for (int i = 0; i < m; ++i) {
       if (fallback[i] == 0.0 || out.input_ok[i] == 0.0) continue;
+      for (int r = 0; r < 3; ++r) {
+        for (int col = 0; col < 3; ++col) targets[i].R[r][col] = TR[r][col][i];
+        targets[i].p[r] = Tp[r][i];
+      }
       JointValue q[S][6];
       bool ok[S] = {}, refine[S] = {};
       solver.solve(targets[i], q, ok, refine);
@@ -306,19 +383,8 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
         for (int j = 0; j < 6; ++j) c[k][j][i] = ok[k] ? q[k][j].c : 1.0, s[k][j][i] = ok[k] ? q[k][j].s : 0.0;
       }
     }
-    for (int k = 0; k < S; ++k)  // no NaN into atan2 where nothing exists
-      for (int j = 0; j < 6; ++j)
-        for (int i = 0; i < L; ++i) {
-          const bool keep = out.exists[k][i] != 0.0;
-          c[k][j][i] = keep ? c[k][j][i] : 1.0, s[k][j][i] = keep ? s[k][j][i] : 0.0;
-        }
   } else {
-    for (int i = 0; i < L; ++i) {
-      if (i >= m) {  // unused lanes: any finite value
-        for (int k = 0; k < S; ++k)
-          for (int j = 0; j < 6; ++j) c[k][j][i] = 1.0, s[k][j][i] = 0.0;
-        continue;
-      }
+    for (int i = 0; i < m; ++i) {  // lanes from m on are never read
       double in[width];
       for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
       out.input_ok[i] = Arm::read_pose<Format>(in, targets[i]);
@@ -333,11 +399,14 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
       }
     }
   }
-  for (int k = 0; k < S; ++k)
+  for (int k = 0; k < S; ++k)  // the m lanes in use (a short block pays for its poses only); 0 where no slot
     for (int j = 0; j < 6; ++j)
-      for (int i = 0; i < L; ++i) out.angle[k][j][i] = vector_math::atan2(s[k][j][i], c[k][j][i]);
+      for (int i = 0; i < m; ++i) {
+        const double angle = vector_math::atan2(s[k][j][i], c[k][j][i]);
+        out.angle[k][j][i] = out.exists[k][i] != 0.0 ? angle : 0.0;
+      }
   for (int k = 0; k < S; ++k)
-    for (int i = 0; i < L; ++i) out.exact[k][i] = 1.0;
+    for (int i = 0; i < m; ++i) out.exact[k][i] = 1.0;
   // Newton on the true chain for an idealised chain (a branch that does not converge there is
   // dropped) and for slots near a double root
   const bool idealised = solver.idealised();
@@ -363,6 +432,41 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
         if (gap < Arm6::kSame) out.exists[k][i] = 0.0;
       }
     }
+  // idealised chains: a target within the geometry error of the idealised workspace's boundary
+  // has fewer idealised solutions than the true chain; missing branches start from the target moved
+  // radially (from axis 1) by -+ the nudge, each polished on the true target, and kept in its own
+  // slot when that slot is free and it is a new solution
+  for (int i = 0; i < m && idealised; ++i) {
+    int count = 0;
+    for (int k = 0; k < S; ++k) count += out.exists[k][i] != 0.0;
+    if (out.input_ok[i] == 0.0 || count == S) continue;
+    for (const double scale : {1.0 - solver.nudge(), 1.0 + solver.nudge()}) {
+      Arm::Pose moved = targets[i];
+      for (int r = 0; r < 3; ++r) moved.p[r] = solver.centre()[r] + scale * (targets[i].p[r] - solver.centre()[r]);
+      JointValue q[S][6];
+      bool ok[S] = {}, refine[S] = {};
+      solver.solve(moved, q, ok, refine);
+      for (int k = 0; k < S; ++k) {
+        if (!ok[k] || out.exists[k][i] != 0.0) continue;
+        double x[6];
+        for (int j = 0; j < 6; ++j) x[j] = std::atan2(q[k][j].s, q[k][j].c);
+        const double residual = solver.polish(targets[i], x);
+        if (!(residual <= Arm6::kAccept)) continue;
+        bool known = false;
+        for (int o = 0; o < S && !known; ++o) {
+          if (out.exists[o][i] == 0.0) continue;
+          double gap = 0.0;
+          for (int j = 0; j < 6; ++j)
+            gap = std::max(gap, std::fabs(std::remainder(x[j] - out.angle[o][j][i], 2.0 * kPi<double>)));
+          known = gap < Arm6::kSame;
+        }
+        if (known) continue;
+        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = std::remainder(x[j], 2.0 * kPi<double>);
+        out.exists[k][i] = 1.0;
+        out.exact[k][i] = residual < Arm6::kExact ? 1.0 : 0.0;
+      }
+    }
+  }
   finish_lanes<false>(limits, m, out.input_ok, out.angle, out.exists, out.valid);
   for (int k = 0; k < S; ++k)
     for (int i = 0; i < m; ++i) out.exact[k][i] *= out.exists[k][i];

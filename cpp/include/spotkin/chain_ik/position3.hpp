@@ -93,6 +93,9 @@ class Position3 {
     int n[kLanes];
   };
 
+  // The all-revolute kinds, which solve_block runs across the lanes of a full block.
+  bool lane_form() const noexcept { return revolute_; }
+
   // solve() for m <= kLanes targets at once (coordinates in lanes, kLanes entries each), into out (same solutions, same
   // order). The all-revolute kinds run each step across the targets (lanes),
   // so that it vectorises; the roots of the quartic, the rare Newton steps and

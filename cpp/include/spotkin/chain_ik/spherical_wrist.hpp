@@ -134,7 +134,7 @@ class SphericalWrist6 {
                                   double (&angle)[kSlots][6][kLanes], double (&exists)[kSlots][kLanes],
                                   double (&valid)[kSlots][kLanes], double (&input_ok)[kLanes]) const noexcept {
     constexpr int width = Format == PoseFormat::Matrix ? 16 : 7;
-    if (m < kLanes) {  // one by one (a short block costs no more than its poses)
+    if (!position_.lane_form()) {  // pose by pose; otherwise a short block is padded (it costs less, measured)
       for (int i = 0; i < m; ++i) {
         double in[width];
         for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
@@ -162,7 +162,7 @@ class SphericalWrist6 {
     double R[3][3][L], p[3][L];
     for (int i = 0; i < L; ++i) {
       double in[width];
-      for (int e = 0; e < width; ++e) in[e] = pose_in[e][i];
+      for (int e = 0; e < width; ++e) in[e] = pose_in[e][i < m ? i : m - 1];  // a short block: padded
       Arm::Pose target;
       const double use = Arm::read_pose<Format>(in, target);
       input_ok[i] = use;
@@ -188,7 +188,7 @@ class SphericalWrist6 {
       for (int r = 0; r < 3; ++r) x0[r][i] = x[r], z0[r][i] = z[r];
     }
     Position3::BlockSolutions arm;
-    position_.solve_block(cx, cy, cz, m, arm);
+    position_.solve_block(cx, cy, cz, L, arm);
     // local copies: the stores to out cannot alias them (so the lane loops vectorise)
     const M3 B5 = B5_, B6 = B6_, A4 = A4_, M1R = S.M1.R, M2R = S.M2.R;
     const V3 a = B5.row(2).transpose(), b = B6.col(2);
