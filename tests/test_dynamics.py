@@ -356,7 +356,7 @@ def test_errors(rng):
             fx.chain, np.zeros(6), inertials=(np.ones(6), np.zeros((6, 3)), -np.eye(3)[None].repeat(6, 0))
         )
     with pytest.raises(ValueError, match="chain carries no inertial"):
-        dyn.mass_matrix(fx.chain, np.zeros(6))
+        dyn.mass_matrix(sk.Chain.from_dh([[0, 0.1, 0.0, 0.0, 0.0]]), np.zeros(1))
 
 
 # ------------------------------------------------------------------ floating base vs Pinocchio
@@ -497,3 +497,41 @@ def test_large_batches_equal_their_rows(threads, rng):
             close(A[i], dyn.mass_matrix(fx.chain, q[i], **kw), 0)
     finally:
         sk.set_num_threads(previous)
+
+
+# ---------------------------------------------------------- the URDF's own inertials (spotkin.inertia)
+
+
+def test_chain_methods_with_the_urdfs_inertials(fixed, rng):
+    """Chain.inertials (merged from the URDF by spotkin.inertia) give Pinocchio's values: the whole
+    path from the URDF's <inertial> elements to the kernels."""
+    chain, m, d = fixed.chain, fixed.model, fixed.data
+    assert chain.inertials is not None
+    for _ in range(5):
+        q, qd, qdd = fixed.random(rng)
+        qp, vp, ap = fixed.to_pin(q), fixed.to_pin(qd), fixed.to_pin(qdd)
+        close(dyn.inverse_dynamics(chain, q, qd, qdd), pin.rnea(m, d, qp, vp, ap)[fixed.idx])
+        close(dyn.mass_matrix(chain, q), fixed.mat(sym(pin.crba(m, d, qp))))
+        close(dyn.forward_dynamics(chain, q, qd, qdd), pin.aba(m, d, qp, vp, ap)[fixed.idx])
+
+
+def test_floating_base_with_the_urdfs_inertials(rng):
+    urdf, tips = FLOATING["spot"]
+    robot = sk.Robot.from_urdf(urdf)
+    fb = dyn.FloatingBase(robot.body_inertial, [robot.chain(t) for t in tips])
+    fl = _floating("spot")
+    for _ in range(5):
+        q, v, a = fl.random(rng)
+        qp, vp, ap = fl.to_pin(q, fl.iq), fl.to_pin(v, fl.iv), fl.to_pin(a, fl.iv)
+        close(fb.inverse_dynamics(q, v, a), pin.rnea(fl.model, fl.data, qp, vp, ap)[fl.iv])
+        close(fb.mass_matrix(q), sym(pin.crba(fl.model, fl.data, qp))[np.ix_(fl.iv, fl.iv)])
+        close(fb.center_of_mass(q), pin.centerOfMass(fl.model, fl.data, qp))
+
+
+_FLOATING = {}
+
+
+def _floating(key):
+    if key not in _FLOATING:
+        _FLOATING[key] = Floating(key)
+    return _FLOATING[key]

@@ -26,12 +26,12 @@ Batches
 from __future__ import annotations
 
 from collections import OrderedDict
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from .inertia import LinkInertials
 
 __all__ = [
     "FloatingBase",
@@ -46,14 +46,6 @@ __all__ = [
 ]
 
 GRAVITY = (0.0, 0.0, -9.81)
-
-
-class LinkInertials(NamedTuple):
-    """Per-link inertial parameters of a chain (see the module's docstring)."""
-
-    mass: np.ndarray  # (n,)
-    com: np.ndarray  # (n, 3)
-    inertia: np.ndarray  # (n, 3, 3)
 
 
 def inertials_of(chain, inertials=None) -> LinkInertials:
