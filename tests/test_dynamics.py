@@ -535,3 +535,60 @@ def _floating(key):
     if key not in _FLOATING:
         _FLOATING[key] = Floating(key)
     return _FLOATING[key]
+
+
+# ---------------------------------------------------------- the pure-Python reference (spotkin.reference)
+
+REFERENCE_CHAINS = ["critter_leg", "critter_arm", "zoo_leg", "zoo_continuous_leg"]
+
+
+@pytest.mark.parametrize("case", REFERENCE_CHAINS)
+def test_kernels_match_the_reference_on_the_test_robots(case, rng):
+    """The test robots of tests/test_reference_dynamics.py (a prismatic arm joint, inertials rotated by
+    rpy, a locked finger, negative and unnormalised axes, continuous joints) against the reference."""
+    import test_reference_dynamics as trd
+
+    from spotkin.reference import dynamics as rd
+
+    name, link, _ = trd.CASES[case]
+    chain = trd.robot(name).chain(link)
+    tree = sk.inertia.tree_of(chain)
+    n = chain.dof
+    q = rng.uniform(-1.2, 1.2, (6, n))
+    qd, qdd = rng.normal(0, 1.5, (6, n)), rng.normal(0, 2, (6, n))
+    tau, A = dyn.inverse_dynamics(chain, q, qd, qdd), dyn.mass_matrix(chain, q)
+    C, qdd_aba = dyn.coriolis_matrix(chain, q, qd), dyn.forward_dynamics(chain, q, qd, qdd)
+    for i in range(len(q)):
+        close(tau[i], rd.rnea(tree, q[i], qd[i], qdd[i]))
+        close(A[i], rd.crba(tree, q[i]))
+        close(C[i], rd.coriolis_matrix(tree, q[i], qd[i]))
+        close(qdd_aba[i], rd.aba(tree, q[i], qd[i], qdd[i]))
+
+
+@pytest.mark.parametrize("convention", ["dh", "mdh"])
+def test_dh_chains_with_prismatic_joints_match_the_reference(convention, rng):
+    rows = [
+        [0, 0.1, 0.3, 0.2, 0.1],
+        [1, 0.2, -np.pi / 2, 0.15, 0.4],
+        [0, 0.25, np.pi / 2, 0.05, -0.3],
+        [0, 0.0, 0.7, 0.1, 0.2],
+    ]
+    n = len(rows)
+    A = rng.normal(size=(n, 3, 3))
+    chain = getattr(sk.Chain, f"from_{convention}")(
+        rows, base=sk.translation([0.1, -0.2, 0.3])
+    ).with_inertials(
+        rng.uniform(0.5, 2, n),
+        rng.normal(0, 0.1, (n, 3)),
+        A @ np.swapaxes(A, 1, 2) * 0.01 + 0.001 * np.eye(3),
+    )
+    from spotkin.reference import dynamics as rd
+
+    tree = sk.inertia.tree_of(chain)
+    g = np.array([0.3, -1.0, -9.0])
+    for _ in range(5):
+        q, qd, qdd = rng.uniform(-1, 1, n), rng.normal(size=n), rng.normal(size=n)
+        close(dyn.inverse_dynamics(chain, q, qd, qdd, g), rd.rnea(tree, q, qd, qdd, g))
+        close(dyn.mass_matrix(chain, q), rd.crba(tree, q))
+        close(dyn.coriolis_matrix(chain, q, qd), rd.coriolis_matrix(tree, q, qd))
+        close(dyn.forward_dynamics(chain, q, qd, qdd, g), rd.aba(tree, q, qd, qdd, g))
