@@ -55,54 +55,60 @@ constexpr double kNsPerSample = 150.0;
 py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
+                       std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
                    });
 }
 
 py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
+                       std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) { rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
                    });
 }
 
 py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
+                       std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, e - b, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
                    });
 }
 
 py::object chain_crba(const ChainDynamics& d, py::handle q) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n}}, {n, n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
+                       std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, e - b, [&](const auto& model) { crba_k(model, rows[0], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) { crba_k(model, rows[0], out, b, e); });
                    });
 }
 
 py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
+                       std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, e - b, [&](const auto& model) { coriolis_k(model, rows[0], rows[1], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) { coriolis_k(model, rows[0], rows[1], out, b, e); });
                    });
 }
 
 py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
+                       std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, e - b, [&](const auto& model) { aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) { aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
                    });
 }
 

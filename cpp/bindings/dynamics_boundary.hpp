@@ -31,7 +31,8 @@ constexpr int kLanes32 = 16;  // ... of floats
 constexpr int kSmallLanes64 = 2;
 constexpr int kSmallLanes32 = 4;
 
-// Calls f(model) with the wide or the narrow model of `d` in precision T.
+// Calls f(model) with the wide or the narrow model of `d` in precision T, chosen on the
+// whole batch's size (never a thread's chunk: a sample's bits do not depend on the split).
 template <typename T, typename D, typename F>
 SPOTKIN_INLINE void with_model(const D& d, std::ptrdiff_t samples, F&& f) {
   if (samples < (std::is_same_v<T, float> ? kLanes32 : kLanes64))
@@ -153,7 +154,7 @@ py::object dispatch_args(const std::vector<BatchArg>& args, F&& f) {
   return f(double{}, arrs);
 }
 
-// Runs kernel(rows, out, begin, end) over the broadcast batch with the GIL released.
+// Runs kernel(rows, out, begin, end, total) over the broadcast batch with the GIL released.
 template <typename Kernel>
 py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, double ns_per_sample,
                      Kernel&& kernel) {
@@ -165,8 +166,9 @@ py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, d
     const std::vector<Rows<T>>& rows = p.rows;
     {
       ReleaseGilFor release(p.count);
+      const std::ptrdiff_t total = p.count;
       parallel_for(p.count, min_chunk(ns_per_sample),
-                   [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e); });
+                   [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e, total); });
     }
     return std::move(out);
   });

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
+#include <cstdint>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -62,6 +63,19 @@ struct LinkInertial {
     }
   }
 };
+
+// f(std::integral_constant<int, k>) for k = axis in {0, 1, 2}.
+template <typename F>
+SPOTKIN_INLINE decltype(auto) axis_switch(int axis, F&& f) {
+  switch (axis) {
+    case 0:
+      return f(std::integral_constant<int, 0>{});
+    case 1:
+      return f(std::integral_constant<int, 1>{});
+    default:
+      return f(std::integral_constant<int, 2>{});
+  }
+}
 
 template <typename M>
 struct BodyConstants {
@@ -129,41 +143,49 @@ class ChainModel {
     const BodyConstants<M>& b = body(j);
     return {{{P(b.sw[0]) * x, P(b.sw[1]) * x, P(b.sw[2]) * x}}, {{P(b.sv[0]) * x, P(b.sv[1]) * x, P(b.sv[2]) * x}}};
   }
+  // The sparse forms below index with compile-time axes (axis_switch): an index known
+  // only at run time would keep the spatial vectors in memory instead of registers.
+
   // S^T f.
   SPOTKIN_INLINE P project(int j, const Force<P>& f) const noexcept {
     const BodyConstants<M>& b = body(j);
-    if (b.axis >= 0) return b.sign > 0 ? f.n[b.axis] : -f.n[b.axis];
-    return dot(subspace(j), f);
+    if (b.axis < 0) return dot(subspace(j), f);
+    return axis_switch(b.axis, [&](auto K) { return b.sign > 0 ? f.n[K] : -f.n[K]; });
   }
   // m += S x.
   SPOTKIN_INLINE void add_subspace(int j, const P& x, Motion<P>& m) const noexcept {
     const BodyConstants<M>& b = body(j);
-    if (b.axis >= 0) {
-      m.w[b.axis] += b.sign > 0 ? x : -x;
+    if (b.axis < 0) {
+      const Motion<P> s = subspace_times(j, x);
+      m.w += s.w, m.v += s.v;
       return;
     }
-    const Motion<P> s = subspace_times(j, x);
-    m.w += s.w, m.v += s.v;
+    axis_switch(b.axis, [&](auto K) { m.w[K] += b.sign > 0 ? x : -x; });
   }
-  // m x (S x) (RBDA eq. 2.31), sparse for an axis joint: (w x e_k, v x e_k) sign x.
+  // m x (S x) (RBDA eq. 2.31); for an axis joint (w x e_k, v x e_k) sign x, a x e_k = a_k2 e_k1 - a_k1 e_k2.
   SPOTKIN_INLINE Motion<P> cross_subspace(int j, const Motion<P>& m, const P& x) const noexcept {
     const BodyConstants<M>& b = body(j);
     if (b.axis < 0) return crm(m, subspace_times(j, x));
     const P s = b.sign > 0 ? x : -x;
-    const int k = b.axis, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    Motion<P> o;  // a x e_k = a_k2 e_k1 - a_k1 e_k2
-    o.w[k] = P(M(0)), o.w[k1] = m.w[k2] * s, o.w[k2] = -(m.w[k1] * s);
-    o.v[k] = P(M(0)), o.v[k1] = m.v[k2] * s, o.v[k2] = -(m.v[k1] * s);
-    return o;
+    return axis_switch(b.axis, [&](auto K) {
+      constexpr int k = decltype(K)::value, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      Motion<P> o;
+      o.w[k] = P(M(0)), o.w[k1] = m.w[k2] * s, o.w[k2] = -(m.w[k1] * s);
+      o.v[k] = P(M(0)), o.v[k1] = m.v[k2] * s, o.v[k2] = -(m.v[k1] * s);
+      return o;
+    });
   }
   // I S for a rigid inertia: (J e_k, -h x e_k) sign for an axis joint.
   SPOTKIN_INLINE Force<P> inertia_subspace(int j, const RigidInertia<P>& I) const noexcept {
     const BodyConstants<M>& b = body(j);
     if (b.axis < 0) return apply(I, subspace(j));
-    const int k = b.axis, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    Force<P> o;
-    for (int r = 0; r < 3; ++r) o.n[r] = I.J(r, k);
-    o.f[k] = P(M(0)), o.f[k1] = -I.h[k2], o.f[k2] = I.h[k1];  // -h x e_k
+    Force<P> o = axis_switch(b.axis, [&](auto K) {
+      constexpr int k = decltype(K)::value, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      Force<P> r;
+      for (int i = 0; i < 3; ++i) r.n[i] = I.J(i, k);
+      r.f[k] = P(M(0)), r.f[k1] = -I.h[k2], r.f[k2] = I.h[k1];
+      return r;
+    });
     if (b.sign < 0) o.n = scale(o.n, P(M(-1))), o.f = scale(o.f, P(M(-1)));
     return o;
   }
@@ -171,9 +193,12 @@ class ChainModel {
   SPOTKIN_INLINE Force<P> inertia_subspace(int j, const Inertia6<P>& I) const noexcept {
     const BodyConstants<M>& b = body(j);
     if (b.axis < 0) return apply(I, subspace(j));
-    const int k = b.axis;
-    Force<P> o;
-    for (int r = 0; r < 3; ++r) o.n[r] = I.A(r, k), o.f[r] = I.B(k, r);
+    Force<P> o = axis_switch(b.axis, [&](auto K) {
+      constexpr int k = decltype(K)::value;
+      Force<P> r;
+      for (int i = 0; i < 3; ++i) r.n[i] = I.A(i, k), r.f[i] = I.B(k, i);
+      return r;
+    });
     if (b.sign < 0) o.n = scale(o.n, P(M(-1))), o.f = scale(o.f, P(M(-1)));
     return o;
   }
@@ -261,22 +286,33 @@ SPOTKIN_INLINE void transpose8(Pack<double, 8>::Vector r[8]) noexcept {
 // (2.6 kB per sample for an 18 x 18 mass matrix) is memory-bandwidth bound.
 constexpr std::size_t kStreamBytes = std::size_t(2) << 20;
 
+// to[0, count) = from[0, count) with non-temporal stores (16-byte ones once `to` is aligned).
 template <typename M>
-SPOTKIN_INLINE void stream_row(const M* from, M* to, int width) noexcept {
+SPOTKIN_INLINE void stream_copy(const M* from, M* to, std::size_t count) noexcept {
 #if defined(__x86_64__)
-  for (int j = 0; j < width; ++j) {
+  auto one = [&](std::size_t k) {
     if constexpr (sizeof(M) == 8) {
       long long bits;
-      std::memcpy(&bits, from + j, 8);
-      _mm_stream_si64(reinterpret_cast<long long*>(to + j), bits);
+      std::memcpy(&bits, from + k, 8);
+      _mm_stream_si64(reinterpret_cast<long long*>(to + k), bits);
     } else {
       int bits;
-      std::memcpy(&bits, from + j, 4);
-      _mm_stream_si32(reinterpret_cast<int*>(to + j), bits);
+      std::memcpy(&bits, from + k, 4);
+      _mm_stream_si32(reinterpret_cast<int*>(to + k), bits);
     }
+  };
+  std::size_t k = 0;
+  for (; k < count && (reinterpret_cast<std::uintptr_t>(to + k) & 15) != 0; ++k) one(k);
+  constexpr std::size_t kPer = 16 / sizeof(M);
+  for (; k + kPer <= count; k += kPer) {
+    if constexpr (sizeof(M) == 8)
+      _mm_stream_pd(reinterpret_cast<double*>(to + k), _mm_loadu_pd(reinterpret_cast<const double*>(from + k)));
+    else
+      _mm_stream_ps(reinterpret_cast<float*>(to + k), _mm_loadu_ps(reinterpret_cast<const float*>(from + k)));
   }
+  for (; k < count; ++k) one(k);
 #else
-  std::memcpy(to, from, sizeof(M) * std::size_t(width));
+  std::memcpy(to, from, sizeof(M) * count);
 #endif
 }
 
@@ -294,15 +330,12 @@ SPOTKIN_INLINE void stream_fence() noexcept {
 template <typename M, int L>
 SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
                           bool stream = false) noexcept {
-  if (stream) {
-    M row[256];
-    for (int c0 = 0; c0 < width; c0 += 256) {
-      const int w = std::min(256, width - c0);
-      for (int i = 0; i < m; ++i) {
-        for (int j = 0; j < w; ++j) row[j] = ok[i] ? in[c0 + j].v[i] : quiet_nan<M>();
-        stream_row(row, out + (b0 + i) * width + c0, w);
-      }
-    }
+  if (stream) {  // the block's rows are contiguous in out: assemble them, then stream them out
+    thread_local std::vector<M> rows;
+    const std::size_t count = std::size_t(m) * std::size_t(width);
+    if (rows.size() < count) rows.resize(count);
+    store(in, width, 0, m, ok, rows.data(), false);
+    stream_copy(rows.data(), out + b0 * width, count);
     return;
   }
   int j0 = 0;
