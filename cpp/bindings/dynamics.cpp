@@ -58,7 +58,9 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                     });
                    });
 }
 
@@ -68,7 +70,9 @@ py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
+                     });
                    });
 }
 
@@ -78,7 +82,9 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                     });
                    });
 }
 
@@ -88,7 +94,9 @@ py::object chain_crba(const ChainDynamics& d, py::handle q) {
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { crba_k(model, rows[0], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       crba_k(model, rows[0], out, b, e);
+                     });
                    });
 }
 
@@ -98,7 +106,9 @@ py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { coriolis_k(model, rows[0], rows[1], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       coriolis_k(model, rows[0], rows[1], out, b, e);
+                     });
                    });
 }
 
@@ -108,7 +118,9 @@ py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::ha
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
+                     });
                    });
 }
 

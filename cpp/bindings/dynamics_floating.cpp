@@ -89,7 +89,9 @@ py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       f_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                     });
                    });
 }
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
@@ -98,7 +100,9 @@ py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       f_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
+                     });
                    });
 }
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
@@ -107,7 +111,9 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       f_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                     });
                    });
 }
 py::object floating_crba(const FloatingDynamics& d, py::handle q) {
@@ -116,7 +122,9 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q) {
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_crba_k(model, rows[0], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       f_crba_k(model, rows[0], out, b, e);
+                     });
                    });
 }
 py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
@@ -125,7 +133,9 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       f_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
+                     });
                    });
 }
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
@@ -134,7 +144,9 @@ py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_com_k(model, rows[0], out, jacobian, b, e); });
+                     with_model<T>(d, total, [&](const auto& model) {
+                       f_com_k(model, rows[0], out, jacobian, b, e);
+                     });
                    });
 }
 

@@ -53,7 +53,7 @@ struct alignas(sizeof(T) * L) Pack {
 
   Pack() = default;
   SPOTKIN_INLINE Pack(T x) noexcept : v(Vector{} + x) {}  // NOLINT: implicit broadcast of constants
-  SPOTKIN_INLINE explicit Pack(Vector x) noexcept : v(x) {}
+  SPOTKIN_INLINE explicit Pack(const Vector& x) noexcept : v(x) {}
 
 #define SPOTKIN_PACK_OP(OP)                                                                                  \
   friend SPOTKIN_INLINE Pack operator OP(const Pack& a, const Pack& b) noexcept { return Pack(a.v OP b.v); }  \
