@@ -278,7 +278,7 @@ def test_leading_shapes_broadcast_like_numpy(rng):
     out = dyn.nonlinear_effects(fx.chain, q, qd, inertials=fx.inertials)
     assert out.shape == (4, 5, 3)
     close(out[2, 3], dyn.nonlinear_effects(fx.chain, q[2, 0], qd[0, 3], inertials=fx.inertials), 0)
-    with pytest.raises(ValueError, match="qd"):
+    with pytest.raises(ValueError, match=r"do not broadcast together: q \(4,\), qd \(5,\), gravity \(\)"):
         dyn.nonlinear_effects(
             fx.chain, rng.normal(size=(4, 3)), rng.normal(size=(5, 3)), inertials=fx.inertials
         )

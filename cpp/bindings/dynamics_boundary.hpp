@@ -97,9 +97,9 @@ inline Shape broadcast_leading(const std::vector<Shape>& shapes, const std::vect
       }
       std::string msg = "the leading (batch) dimensions of ";
       for (std::size_t b = 0; b < args.size(); ++b) msg += (b ? ", " : "") + std::string(args[b].name);
-      msg += " do not broadcast: ";
+      msg += " do not broadcast together: ";
       for (std::size_t b = 0; b < shapes.size(); ++b)
-        msg += (b ? ", " : "") + std::string(args[b].name) + " " + format_shape(shapes[b], true);
+        msg += (b ? ", " : "") + std::string(args[b].name) + " " + format_shape(shapes[b]);
       throw py::value_error(msg);
     }
   }
