@@ -376,7 +376,10 @@ class Chain:
         lead = broadcast_lead(q=(J.shape[:-2], J.shape), forces=(F.shape[:-1], F.shape))
         J = np.broadcast_to(J, (*lead, *J.shape[-2:]))
         F = np.broadcast_to(F.astype(J.dtype, copy=False), (*lead, F.shape[-1]))
-        return np.einsum("...ij,...i->...j", J, F)
+        with np.errstate(invalid="ignore", over="ignore"):
+            tau = np.einsum("...ij,...i->...j", J, F)
+        # a sample with NaN or Inf anywhere gets NaN, not a partly infinite row
+        return np.where(np.isfinite(F).all(axis=-1, keepdims=True), tau, np.nan).astype(J.dtype, copy=False)
 
     # -- closed-form IK ------------------------------------------------------------------------------
 

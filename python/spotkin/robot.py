@@ -435,11 +435,17 @@ class Robot:
         lead = broadcast_lead(body_pose=(T.shape[:-2], T.shape), q=(q.shape[:-1], q.shape))
         T = np.broadcast_to(T, (*lead, 4, 4))
         q = np.broadcast_to(q, (*lead, q.shape[-1]))
-        return np.concatenate([T[..., :3, 3], _quaternion(T[..., :3, :3]), q], axis=-1)
+        out = np.concatenate([T[..., :3, 3], _quaternion(T[..., :3, :3]), q], axis=-1)
+        # a sample with an invalid pose or a NaN or Inf joint: NaN throughout
+        return np.where(np.isfinite(out).all(axis=-1, keepdims=True), out, np.nan)
 
     def center_of_mass(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
-        """The whole robot's centre of mass in the world (..., 3); ``q`` as in :meth:`floating_q`."""
-        return self.floating_base.center_of_mass(self.floating_q(body_pose, q, seq))
+        """The whole robot's centre of mass in the world (..., 3); ``q`` as in :meth:`floating_q`. float32
+        when ``body_pose`` and ``q`` both are."""
+        com = self.floating_base.center_of_mass(self.floating_q(body_pose, q, seq))
+        if real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32:
+            return com.astype(np.float32)
+        return com
 
     def standing_torques(
         self,
@@ -473,20 +479,21 @@ class Robot:
         """
         floating = self.floating_base
         qf = self.floating_q(body_pose, q, seq)
+        qf[..., :3] = 0.0  # the statics do not depend on where the body is: a body far away loses no digits
         single = qf.ndim == 1
         lead = qf.shape[:-1]
         n_legs = len(self._legs)
         g = as_real(gravity, "gravity", np.float64)
         if g.shape != (3,):
             raise ValueError(f"gravity must have shape (3,), got {g.shape}")
+        with np.errstate(over="ignore"):
+            weight = self.mass * np.linalg.norm(g)
+        if not np.isfinite(g).all() or not np.isfinite(weight):
+            raise ValueError(f"gravity must be finite and the weight m |g| too, got {g}")
         if stance is None:
             stance_mask = np.ones((*lead, n_legs))
         else:
-            stance_arr = np.asarray(stance)
-            if stance_arr.dtype.kind not in "biuf":
-                raise TypeError(
-                    f"stance must be a bool array of shape (..., {n_legs}), got dtype {stance_arr.dtype}"
-                )
+            stance_arr = as_real(stance, "stance")
             if stance_arr.ndim == 0 or stance_arr.shape[-1] != n_legs:
                 raise ValueError(f"stance must have shape (..., {n_legs}), got {stance_arr.shape}")
             lead = broadcast_lead(q=(lead, qf.shape), stance=(stance_arr.shape[:-1], stance_arr.shape))
@@ -518,7 +525,7 @@ class Robot:
         if real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32:
             tau, forces, margin = (a.astype(np.float32) for a in (tau, forces, margin))
         if single:
-            return Standing(tau, forces, StanceStatus(int(status)), float(margin))
+            return Standing(tau, forces, StanceStatus(int(status)), margin[()])
         return Standing(tau, forces, status, margin)
 
     def _tree(self, joints) -> inertia.Tree:
@@ -927,11 +934,12 @@ class StanceStatus(IntEnum):
     OUTSIDE = 2
     """They balance only by pulling on a foot, and the centre of mass projects on or outside the support
     polygon: no pushing distribution exists on level ground."""
-    UNBALANCED = 3
+    INVALID_INPUT = 3
+    """NaN or Inf in the input, an invalid body pose or a stance value other than 0/1: everything NaN
+    (the code of :attr:`Status.INVALID_INPUT`)."""
+    UNBALANCED = 4
     """No forces at these feet balance the weight (fewer than three feet, or collinear ones, with the
     centre of mass off their line or point): tau and forces are NaN."""
-    INVALID_INPUT = 4
-    """NaN or Inf in the input, or an invalid body pose: everything NaN."""
 
 
 class Standing(NamedTuple):

@@ -19,7 +19,8 @@
 
 namespace spotkin::dynamics {
 
-enum class Stance : std::int8_t { Ok = 0, Pulling = 1, Outside = 2, Unbalanced = 3, InvalidInput = 4 };
+// InvalidInput is Status::InvalidInput's code, as everywhere in spotkin.
+enum class Stance : std::int8_t { Ok = 0, Pulling = 1, Outside = 2, InvalidInput = 3, Unbalanced = 4 };
 
 constexpr int kMaxFeet = 8;
 
