@@ -1858,6 +1858,7 @@ def _chain_entries(tool_extra):
                 fkp(c), lambda x: pose_matrix(x["T"]), lim(c)
             )(x, out, kw, c),
         )
+
         def tolerance_probe(result, kw, c, get=get):
             if not isinstance(result, sk.Chain) or result.dof != get(c).dof:
                 return f"with_ik_tolerance returned {result!r}, not a Chain of the same joints"
@@ -1927,8 +1928,11 @@ def _chain_entries(tool_extra):
             slots=[
                 Batch("T", (4, 4), pose="T"),
                 Int("free_joint", 1, 0, 7),
-                Custom("values", {"count": lambda c, r, b: Arg(4), "array": lambda c, r, b: Arg(np.zeros(3))},
-                       default="omit"),
+                Custom(
+                    "values",
+                    {"count": lambda c, r, b: Arg(4), "array": lambda c, r, b: Arg(np.zeros(3))},
+                    default="omit",
+                ),
             ],
             baseline=chain_q,
             expect=REJECT,
@@ -4698,8 +4702,10 @@ def _roundtrip_entries():
         register(name=f"pickle[{name}]", covers="", call=call, probe=probe)
 
 
-
 # -- dynamics: the chains' methods and the whole robot's statics, against the pure-Python reference --
+
+
+G0 = np.array([0.0, 0.0, -9.81])
 
 
 def _dynamics_entries():
@@ -4721,7 +4727,8 @@ def _dynamics_entries():
             if not np.isfinite(want).all():
                 return None  # the reference overflows (1e300 rates): nothing to compare
             (got,) = out
-            if not finite(got) and max(float(np.abs(np.asarray(v, np.float64)).max()) for v in x.values()) > 1e150:
+            biggest = max(float(np.abs(np.asarray(v, np.float64)).max()) for v in x.values())
+            if not finite(got) and biggest > 1e150:
                 return None  # squares of 1e308 rates overflow to Inf (never a plausible finite number)
             tol = tol_for(*x.values(), base=tol_base, f32=2e-3) * max(1.0, float(np.abs(want).max()))
             if not finite(got) or np.abs(np.asarray(got, dtype=np.float64) - want).max() > tol:
@@ -4752,10 +4759,9 @@ def _dynamics_entries():
 
         q_slot, qd, qdd = angle_slot("q", dof), Batch("qd", (dof,)), Batch("qdd", (dof,))
         tau_slot, gravity = Batch("tau", (dof,)), Batch("gravity", (3,), default="omit")
-        g0 = np.array([0.0, 0.0, -9.81])
 
         def g(x):
-            return x.get("gravity", g0)
+            return x.get("gravity", G0)
 
         methods = {
             "inverse_dynamics": (
@@ -4764,7 +4770,11 @@ def _dynamics_entries():
                 lambda c, x, kw, t=t: rd.rnea(t(c), x["q"], x["qd"], x["qdd"], g(x)),
             ),
             "mass_matrix": ([q_slot], (dof, dof), lambda c, x, kw, t=t: rd.crba(t(c), x["q"])),
-            "gravity": ([q_slot, gravity], (dof,), lambda c, x, kw, t=t: rd.gravity_torques(t(c), x["q"], g(x))),
+            "gravity": (
+                [q_slot, gravity],
+                (dof,),
+                lambda c, x, kw, t=t: rd.gravity_torques(t(c), x["q"], g(x)),
+            ),
             "nonlinear_effects": (
                 [q_slot, qd, gravity],
                 (dof,),
@@ -4806,7 +4816,7 @@ def _dynamics_entries():
             return c.robot(key)
 
         def body_base(c, rng, n, key=key, legs=legs):
-            robot, height = c.robot(key), STANCE_HEIGHT[key]
+            height = STANCE_HEIGHT[key]
             pose = body_poses(rng, n, height)
             q = c.nominal(key) + rng.uniform(-0.1, 0.1, (n, 3 * legs))
             stance = rng.uniform(size=(n, legs)) < 0.8
@@ -4825,7 +4835,7 @@ def _dynamics_entries():
         q_slot = angle_slot("q", 3 * legs)
         names = {rd.STANCE_OK: 0, rd.STANCE_PULLING: 1, rd.STANCE_OUTSIDE: 2, rd.STANCE_UNBALANCED: 4}
 
-        def standing_check(x, out, kw, c, whole_tree=whole_tree, full_q=full_q):
+        def standing_check(x, out, kw, c, whole_tree=whole_tree, full_q=full_q, names=names):
             tau, forces, status, margin = out
             ok = pose_validity(x["body_pose"])
             stance = np.asarray(x.get("stance", np.ones(len(tau) // 3)), dtype=np.float64)
@@ -4838,7 +4848,7 @@ def _dynamics_entries():
             T = pose_matrix(x["body_pose"], kw.get("seq", "XYZ"))
             T[:3, 3] = 0.0  # the statics do not depend on where the body is
             q = np.asarray(x["q"], dtype=np.float64)
-            gravity = np.asarray(kw.get("gravity", g0), dtype=np.float64)
+            gravity = np.asarray(kw.get("gravity", G0), dtype=np.float64)
             want = rd.standing_torques(whole_tree(c), T, full_q(c, q), np.flatnonzero(stance), gravity)
             if int(status) != names[want.status]:
                 return f"status {status}, the reference's {want.status}"
@@ -4848,7 +4858,10 @@ def _dynamics_entries():
             if want.status == rd.STANCE_UNBALANCED:
                 return None if all_nan(tau) else f"unbalanced but tau {describe(tau)}"
             scale = max(1.0, float(np.abs(want.tau).max()))
-            if not finite(tau) or np.abs(np.asarray(tau, np.float64) - want.tau[: tau.shape[-1]]).max() > tol * scale:
+            if (
+                not finite(tau)
+                or np.abs(np.asarray(tau, np.float64) - want.tau[: tau.shape[-1]]).max() > tol * scale
+            ):
                 return f"tau {describe(tau)}, the reference's {describe(want.tau)}"
             return None
 
@@ -4883,7 +4896,9 @@ def _dynamics_entries():
             tol = tol_for(*x.values(), base=1e-9, f32=1e-3)
             if not np.isfinite(want).all():
                 return None  # the reference overflows at a body 1e308 m away
-            if not finite(com) or np.abs(np.asarray(com, np.float64) - want).max() > tol * max(1.0, np.abs(want).max()):
+            if not finite(com) or np.abs(np.asarray(com, np.float64) - want).max() > tol * max(
+                1.0, np.abs(want).max()
+            ):
                 return f"centre of mass {describe(com)}, the reference's {describe(want)}"
             return None
 
@@ -4899,7 +4914,11 @@ def _dynamics_entries():
                 ]
             )
             # a rotation accepted within 1e-6 of orthonormal is read as its nearby rotation
-            if not finite(qf) or np.abs(R - T[:3, :3]).max() > 1e-5 or np.abs(qf[:3] - T[:3, 3]).max() > 1e-12:
+            if (
+                not finite(qf)
+                or np.abs(R - T[:3, :3]).max() > 1e-5
+                or np.abs(qf[:3] - T[:3, 3]).max() > 1e-12
+            ):
                 return f"the pose part {describe(qf[:7])} is not the body pose"
             return None
 
@@ -4925,6 +4944,7 @@ def _dynamics_entries():
             mixed="f64",
             light=key == "go2",
         )
+
 
 _leg_entries()
 _chain_entries(_arm_entries())
@@ -5320,7 +5340,8 @@ def check_leaves(entry, leaves, spec, lead, want):
             kind = sk.Status if out.kind == "status" else sk.StanceStatus
             if not isinstance(leaf, kind):
                 raise Failure(
-                    "status type", f"{where}: a single target should get an sk.{kind.__name__}, got {describe(leaf)}"
+                    "status type",
+                    f"{where}: a single target should get an sk.{kind.__name__}, got {describe(leaf)}",
                 )
             continue
         if not isinstance(leaf, (np.ndarray, np.generic)):
@@ -5343,7 +5364,9 @@ def check_leaves(entry, leaves, spec, lead, want):
         elif out.kind in ("status", "stance"):
             if dt != np.int8:
                 raise Failure("output dtype", f"{where}: status {dt}, expected int8")
-            codes = (OK, UNREACHABLE, JOINT_LIMIT, INVALID) if out.kind == "status" else tuple(sk.StanceStatus)
+            codes = (
+                (OK, UNREACHABLE, JOINT_LIMIT, INVALID) if out.kind == "status" else tuple(sk.StanceStatus)
+            )
             if not np.isin(leaf, codes).all():
                 raise Failure("status value", f"{where}: {describe(leaf)}")
         elif out.kind == "int" and dt.kind not in "iu":
