@@ -41,7 +41,7 @@ py::tuple standing_torques(py::handle com_obj, double mass, py::handle feet_obj,
   auto jacobians = checked(jacobians_obj, "foot_jacobians", {n, legs, 3, 3});
   auto leg_gravity = checked(leg_gravity_obj, "leg_gravity", {n, 3 * legs});
   auto stance = checked(stance_obj, "stance", {n, legs});
-  auto gravity = checked(gravity_obj, "gravity", {3});
+  auto gravity = checked(gravity_obj, "gravity", {n, 3});  // per sample (the body frame's)
   auto tau = new_array<double>({n}, {3 * legs});
   auto forces = new_array<double>({n}, {legs, 3});
   auto status = new_array<std::int8_t>({n}, {});
@@ -69,7 +69,7 @@ py::tuple standing_torques(py::handle com_obj, double mass, py::handle feet_obj,
           mg[i] = std::numeric_limits<double>::quiet_NaN();
           continue;
         }
-        dynamics::standing_sample(L, c + 3 * i, mass, p + 3 * L * i, J + 9 * L * i, G + 3 * L * i, on, g,
+        dynamics::standing_sample(L, c + 3 * i, mass, p + 3 * L * i, J + 9 * L * i, G + 3 * L * i, on, g + 3 * i,
                                   t + 3 * L * i, f + 3 * L * i, st + i, mg + i);
       }
     });

@@ -478,11 +478,7 @@ class Robot:
         and NaN in that sample.
         """
         floating = self.floating_base
-        qf = self.floating_q(body_pose, q, seq)
-        qf[..., :3] = 0.0  # the statics do not depend on where the body is: a body far away loses no digits
-        single = qf.ndim == 1
-        lead = qf.shape[:-1]
-        n_legs = len(self._legs)
+        n_legs, n_arm = len(self._legs), len(self.arm_joint_names)
         g = as_real(gravity, "gravity", np.float64)
         if g.shape != (3,):
             raise ValueError(f"gravity must have shape (3,), got {g.shape}")
@@ -490,39 +486,45 @@ class Robot:
             weight = self.mass * np.linalg.norm(g)
         if not np.isfinite(g).all() or not np.isfinite(weight):
             raise ValueError(f"gravity must be finite and the weight m |g| too, got {g}")
+        T = body_transform(body_pose, seq)
+        f32 = real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32
+        q = as_real(q, "q", np.float64)
+        if q.ndim == 0 or q.shape[-1] not in {3 * n_legs, 3 * n_legs + n_arm}:
+            widths = f"{3 * n_legs}" if not n_arm else f"{3 * n_legs} or {3 * n_legs + n_arm}"
+            raise ValueError(f"q must have shape (..., {widths}), got {q.shape}")
+        if q.shape[-1] == 3 * n_legs and n_arm:
+            q = np.concatenate([q, np.zeros((*q.shape[:-1], n_arm))], axis=-1)
+        leads = {"body_pose": (T.shape[:-2], T.shape), "q": (q.shape[:-1], q.shape)}
         if stance is None:
-            stance_mask = np.ones((*lead, n_legs))
+            stance_arr = np.ones(n_legs)
         else:
             stance_arr = as_real(stance, "stance")
             if stance_arr.ndim == 0 or stance_arr.shape[-1] != n_legs:
                 raise ValueError(f"stance must have shape (..., {n_legs}), got {stance_arr.shape}")
-            lead = broadcast_lead(q=(lead, qf.shape), stance=(stance_arr.shape[:-1], stance_arr.shape))
-            stance_mask = np.broadcast_to(stance_arr.astype(np.float64), (*lead, n_legs))
-            qf = np.broadcast_to(qf, (*lead, qf.shape[-1]))
-            single = len(lead) == 0
-        pose = np.concatenate([qf[..., :3], qf[..., 3:7]], axis=-1)  # (..., 7) position + quaternion
-        q_legs = qf[..., 7 : 7 + 3 * n_legs]
-        com = floating.center_of_mass(qf)
-        leg_gravity = floating.gravity(qf, g)[..., 6 : 6 + 3 * n_legs]
-        feet = self.body_fk(pose, q_legs)
-        J = self.body_jacobian(pose, q_legs)
-        blocks = J[..., :, 6:].reshape(*lead, n_legs, 3, n_legs, 3)
-        legs = np.arange(n_legs)
-        foot_jacobians = blocks[..., legs, :, legs, :]  # (n_legs, ..., 3, 3): advanced indices first
-        foot_jacobians = np.moveaxis(foot_jacobians, 0, -3)
+            leads["stance"] = (stance_arr.shape[:-1], stance_arr.shape)
+        lead = broadcast_lead(**leads)
+        single = len(lead) == 0
         N = int(np.prod(lead, dtype=np.int64))
+        R = np.broadcast_to(T[..., :3, :3], (*lead, 3, 3)).reshape(N, 3, 3)
+        q = np.broadcast_to(q, (*lead, q.shape[-1])).reshape(N, q.shape[-1])
+        stance_mask = np.broadcast_to(stance_arr, (*lead, n_legs)).reshape(N, n_legs)
+        # in the body frame, where nothing depends on the body's pose but gravity's direction
+        g_body = np.einsum("nji,j->ni", R, g)
+        at_origin = np.concatenate([np.zeros((N, 6)), np.ones((N, 1)), q], axis=1)
+        com = floating.center_of_mass(at_origin)
+        leg_gravity = floating.gravity(at_origin, g_body)[:, 6 : 6 + 3 * n_legs]
+        q_legs = q[:, : 3 * n_legs]
+        feet = self.body_fk(np.zeros(6), q_legs).reshape(N, n_legs, 3)
+        foot_jacobians = np.stack(
+            [leg.jacobian(q_legs[:, 3 * k : 3 * k + 3]) for k, leg in enumerate(self._legs)], axis=1
+        ).reshape(N, n_legs, 3, 3)
         tau, forces, status, margin = _core.standing_torques(
-            com.reshape(N, 3),
-            self.mass,
-            feet.reshape(N, n_legs, 3),
-            np.ascontiguousarray(foot_jacobians).reshape(N, n_legs, 3, 3),
-            leg_gravity.reshape(N, 3 * n_legs),
-            stance_mask.reshape(N, n_legs),
-            g,
+            com, self.mass, feet, foot_jacobians, leg_gravity, stance_mask, g_body
         )
+        forces = np.einsum("nij,nlj->nli", R, forces)  # into the world
         tau, forces = tau.reshape(*lead, 3 * n_legs), forces.reshape(*lead, n_legs, 3)
         status, margin = status.reshape(lead), margin.reshape(lead)
-        if real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32:
+        if f32:
             tau, forces, margin = (a.astype(np.float32) for a in (tau, forces, margin))
         if single:
             return Standing(tau, forces, StanceStatus(int(status)), margin[()])

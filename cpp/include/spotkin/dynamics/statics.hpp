@@ -114,7 +114,19 @@ inline void standing_sample(int legs, const double* com, double mass, const doub
   Eigen::Matrix<double, 6, 1> b;
   b << -mass * g, Eigen::Vector3d::Zero();
   Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3 * kMaxFeet, 1> f = Eigen::VectorXd::Zero(3 * k);
-  if (k > 0) f = Eigen::CompleteOrthogonalDecomposition<decltype(A)>(A).solve(b);
+  if (k > 0) {
+    // f = A^T (A A^T)^-1 b when A has full row rank (three or more feet off one line); a
+    // rank-deficient or inaccurate case goes through the complete orthogonal decomposition
+    const Eigen::Matrix<double, 6, 6> AAt = A * A.transpose();
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(AAt);
+    const auto& D = ldlt.vectorD();
+    bool solved = false;
+    if (ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff()) {
+      f = A.transpose() * ldlt.solve(b);
+      solved = (A * f - b).norm() <= 1e-12 * weight;
+    }
+    if (!solved) f = Eigen::CompleteOrthogonalDecomposition<decltype(A)>(A).solve(b);
+  }
 
   // the support margin in the plane normal to gravity
   double m = nan;
