@@ -5,6 +5,7 @@
 
 namespace spotkin::bindings {
 void bind_dynamics(pybind11::module_& m);  // dynamics.cpp
+void bind_statics(pybind11::module_& m);   // statics.cpp
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -20,4 +21,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_differential(m);
   spotkin::bindings::bind_diagnostics(m);
   spotkin::bindings::bind_dynamics(m);
+  spotkin::bindings::bind_statics(m);
 }

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import inertia, paul, trajectory, urdf
+from . import dynamics, inertia, paul, trajectory, urdf
 from ._runtime import MAX_THREADS, get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
@@ -12,7 +12,7 @@ from .chain import Chain, ChainSolutions, IKDifferentialInfo
 from .differential import dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .inertia import LinkInertials
 from .leg import Leg, LegSolutions
-from .robot import BodyFrames, BodyIK, BodyRates, Robot
+from .robot import BodyFrames, BodyIK, BodyRates, Robot, StanceStatus, Standing
 from .spot import Spot
 
 __all__ = [
@@ -32,9 +32,12 @@ __all__ = [
     "Robot",
     "Spot",
     "SpotArm",
+    "StanceStatus",
+    "Standing",
     "Status",
     "body_transform",
     "dls",
+    "dynamics",
     "get_num_threads",
     "inertia",
     "manipulability",

@@ -53,6 +53,8 @@ def demo(samples: int = 1_000_000, plots: str | None = None, dpi: int = 100) -> 
     print()
     _demo_body(samples)
     print()
+    _demo_standing()
+    print()
     _demo_urdf_robot(samples)
     print()
     _demo_path()
@@ -114,6 +116,26 @@ def _demo_body(samples: int) -> None:
         f"{len(reached):,} of those poses: {int(reached.sum()):,} solved within limits, "
         f"worst hand pose error {hand_error:.1e}"
     )
+
+
+def _demo_standing() -> None:
+    """Spot's standing torques (the URDF's inertials): nominal stance and a crouch, four feet down."""
+    spot = Spot()
+    feet = spot.stance_feet(height=0.5)
+    print(
+        f"Standing statics: Spot ({spot.mass:.1f} kg with its arm, from the URDF's inertials) on four feet, "
+        "minimum-norm contact forces"
+    )
+    for label, height in (("nominal stance", 0.5), ("crouch", 0.38)):
+        pose = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0])
+        q = spot.body_ik(pose, feet).q
+        standing = spot.standing_torques(pose, q)
+        knees = ", ".join(f"{name} {tau:+.1f}" for name, tau in zip(spot.leg_names, standing.tau[2::3]))
+        print(
+            f"  {label:<14} (body at {height:.2f} m): knee torques {knees} N m; "
+            f"foot loads {np.round(standing.forces[:, 2], 1)} N; {standing.status.name}, "
+            f"support margin {standing.margin:.3f} m"
+        )
 
 
 def _demo_urdf_robot(samples: int) -> None:

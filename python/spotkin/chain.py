@@ -313,6 +313,74 @@ class Chain:
         """Top three rows of :meth:`jacobian`, d p_tool / d q: (..., 3, dof)."""
         return self._core.jacobian(q, 3, _tool_frame(frame))
 
+    # -- dynamics (spotkin.dynamics; the chain's inertials) --------------------------------------------
+
+    def inverse_dynamics(
+        self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+    ) -> np.ndarray:
+        """Joint torques tau = A(q) qdd + C(q, qd) qd + G(q), (..., dof): recursive Newton–Euler.
+
+        q, qd, qdd (..., dof) broadcast; ``gravity`` (3,) or (..., 3) in the frame before
+        :attr:`base` (m/s²). Needs :attr:`inertials`; conventions in :mod:`spotkin.dynamics`."""
+        from . import dynamics
+
+        return dynamics.inverse_dynamics(self, q, qd, qdd, gravity)
+
+    def mass_matrix(self, q: ArrayLike) -> np.ndarray:
+        """The joint-space inertia matrix A(q), (..., dof, dof): composite-rigid-body algorithm."""
+        from . import dynamics
+
+        return dynamics.mass_matrix(self, q)
+
+    def gravity(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
+        """The gravity torques G(q) = dU/dq, (..., dof)."""
+        from . import dynamics
+
+        return dynamics.gravity(self, q, gravity)
+
+    def nonlinear_effects(
+        self, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+    ) -> np.ndarray:
+        """h = C(q, qd) qd + G(q), (..., dof)."""
+        from . import dynamics
+
+        return dynamics.nonlinear_effects(self, q, qd, gravity)
+
+    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
+        """C(q, qd), (..., dof, dof), the form for which dA/dt - 2 C is skew-symmetric."""
+        from . import dynamics
+
+        return dynamics.coriolis_matrix(self, q, qd)
+
+    def forward_dynamics(
+        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+    ) -> np.ndarray:
+        """Joint accelerations qdd = A(q)^-1 (tau - C qd - G), (..., dof): articulated-body algorithm."""
+        from . import dynamics
+
+        return dynamics.forward_dynamics(self, q, qd, tau, gravity)
+
+    def joint_torques_from_forces(self, q: ArrayLike, forces: ArrayLike) -> np.ndarray:
+        """tau = J(q)^T F, (..., dof): the joint torques that balance, statically, a wrench F the tool
+        exerts on its surroundings (gravity aside; add :meth:`gravity`).
+
+        ``forces`` (..., 6) is [force; moment about the tool point], base axes, N and N m (J is
+        :meth:`jacobian` with ``frame="base"``); (..., 3), a pure force at the tool point. Leading
+        dimensions broadcast with q's."""
+        F = as_real(forces, "forces")
+        if F.ndim == 0 or F.shape[-1] not in (3, 6):
+            raise ValueError(f"forces must have shape (..., 6) or (..., 3), got {F.shape}")
+        J = self._core.jacobian(q, F.shape[-1], False)
+        if J.dtype == np.float32 and F.dtype != np.float32:
+            J = J.astype(np.float64)
+        lead = broadcast_lead(q=(J.shape[:-2], J.shape), forces=(F.shape[:-1], F.shape))
+        J = np.broadcast_to(J, (*lead, *J.shape[-2:]))
+        F = np.broadcast_to(F.astype(J.dtype, copy=False), (*lead, F.shape[-1]))
+        with np.errstate(invalid="ignore", over="ignore"):
+            tau = np.einsum("...ij,...i->...j", J, F)
+        # a sample with NaN or Inf anywhere gets NaN, not a partly infinite row
+        return np.where(np.isfinite(F).all(axis=-1, keepdims=True), tau, np.nan).astype(J.dtype, copy=False)
+
     # -- closed-form IK ------------------------------------------------------------------------------
 
     def _ik_core(self):

@@ -12,6 +12,7 @@ import contextlib
 import math
 import os
 from collections.abc import Mapping
+from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
@@ -69,8 +70,6 @@ class BodyFrames(NamedTuple):
     """(..., n, 3) foot points."""
     hand: np.ndarray | None
     """(..., 4, 4) the arm's tool frame, or None without ``q_arm``."""
-
-
 
 
 def _broadcast_to_lead(array: np.ndarray, trailing: int, lead: tuple[int, ...]) -> np.ndarray:
@@ -159,6 +158,7 @@ class Robot:
         "_arms",
         "_body_core",
         "_columns",
+        "_floating",
         "_hips",
         "_leg_joint_names",
         "_leg_names",
@@ -380,6 +380,155 @@ class Robot:
         the subtrees of the joints that are neither a leg's nor the arm's (locked at 0) merge into it;
         the legs and the arm are the tree's moving bodies (:func:`spotkin.inertia.tree_of`)."""
         return self._tree(None).root
+
+    # -- floating-base dynamics and standing statics -------------------------------------------------
+    @property
+    def floating_base(self):
+        """The whole robot as a floating body carrying its legs and arm
+        (:class:`spotkin.dynamics.FloatingBase`, built from the URDF's inertials on first use): A(q)
+        (6 + n) x (6 + n), RNEA, ABA, G, the centre of mass and its Jacobian. Its coordinates are
+        Pinocchio's free-flyer ones: ``[x, y, z, qx, qy, qz, qw]`` then the joints of
+        :attr:`leg_joint_names` and :attr:`arm_joint_names` (see :meth:`floating_q`); velocities
+        ``[v_body; w_body]`` in the body frame, then the joint rates."""
+        floating = getattr(self, "_floating", None)
+        if floating is None:
+            from .dynamics import FloatingBase
+
+            legs, arms = self._specs
+            if self._model is None or not legs:
+                raise ValueError("dynamics need a URDF description; a robot from a model dict has none")
+            chains = [self.chain(spec.foot) for spec in legs]
+            if self.arm_joint_names:
+                arm = self.chain(arms[0].tip)
+                if arm.dof != len(self.arm_joint_names):
+                    raise ValueError(
+                        f"the arm's chain from the body has {arm.dof} joints, not the arm's "
+                        f"{len(self.arm_joint_names)}: joints between the body and the arm's base are "
+                        "not supported"
+                    )
+                chains.append(arm)
+            body = self.body_inertial
+            mass = float(body.mass) + sum(float(np.sum(c.inertials.mass)) for c in chains)
+            floating = (FloatingBase((body.mass, body.com, body.inertia), chains), mass)
+            self._floating = floating
+        return floating[0]
+
+    @property
+    def mass(self) -> float:
+        """The robot's total mass (kg): the body's, the legs' and the arm's links."""
+        _ = self.floating_base
+        return self._floating[1]
+
+    def floating_q(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+        """The generalised coordinates (..., 7 + n) of :attr:`floating_base`: the body's position and unit
+        quaternion ``[x, y, z, qx, qy, qz, qw]`` (from ``body_pose``, any form :func:`spotkin.body_transform`
+        takes), then ``q``: the legs' joints (..., 3 n_legs), followed by the arm's when given (..., 3 n_legs
+        + n_arm; else the arm at zero). Leading dimensions broadcast; an invalid pose gives NaN there."""
+        T = body_transform(body_pose, seq)
+        q = as_real(q, "q", np.float64)
+        legs, arm = 3 * len(self._legs), len(self.arm_joint_names)
+        if q.ndim == 0 or q.shape[-1] not in {legs, legs + arm}:
+            widths = f"{legs}" if not arm else f"{legs} or {legs + arm}"
+            raise ValueError(f"q must have shape (..., {widths}), got {q.shape}")
+        if q.shape[-1] == legs and arm:
+            q = np.concatenate([q, np.zeros((*q.shape[:-1], arm))], axis=-1)
+        lead = broadcast_lead(body_pose=(T.shape[:-2], T.shape), q=(q.shape[:-1], q.shape))
+        T = np.broadcast_to(T, (*lead, 4, 4))
+        q = np.broadcast_to(q, (*lead, q.shape[-1]))
+        out = np.concatenate([T[..., :3, 3], _quaternion(T[..., :3, :3]), q], axis=-1)
+        # a sample with an invalid pose or a NaN or Inf joint: NaN throughout
+        return np.where(np.isfinite(out).all(axis=-1, keepdims=True), out, np.nan)
+
+    def center_of_mass(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+        """The whole robot's centre of mass in the world (..., 3); ``q`` as in :meth:`floating_q`. float32
+        when ``body_pose`` and ``q`` both are."""
+        com = self.floating_base.center_of_mass(self.floating_q(body_pose, q, seq))
+        if real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32:
+            return com.astype(np.float32)
+        return com
+
+    def standing_torques(
+        self,
+        body_pose: ArrayLike,
+        q: ArrayLike,
+        stance: ArrayLike | None = None,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        seq: str = "XYZ",
+    ) -> Standing:
+        """The leg torques that hold the robot still on its stance feet, and the contact forces.
+
+        Point contacts at the stance feet (the foot points of :meth:`body_fk`) carry world forces f_i,
+        the minimum-norm ones that balance the weight: sum f_i = -m g and sum (p_i - c) x f_i = 0 (c the
+        centre of mass). Each leg then holds tau_l = G_l - J_l^T f_l, with G_l its joint gravity torques
+        and J_l = d foot_l / d q_l (world axes); a swing leg holds G_l alone.
+
+        ``body_pose`` as :meth:`body_fk` takes it; ``q`` (..., 3 n_legs), or with the arm's joints after
+        the legs' (else the arm is at zero; it moves the centre of mass); ``stance`` (..., n_legs) bool,
+        default every foot; ``gravity`` (3,) world, m/s². Leading dimensions broadcast.
+
+        Returns :class:`Standing`: ``tau`` (..., 3 n_legs) N m in :attr:`leg_joint_names` order, ``forces``
+        (..., n_legs, 3) N (zero on swing feet), ``status`` (:class:`StanceStatus`; an int8 array for a
+        batch) and ``margin`` (m): the signed distance of the centre of mass's projection, along gravity,
+        to the support polygon (positive inside). The status, checked in this order: UNBALANCED (no forces
+        at these feet balance the weight, e.g. fewer than three feet with the centre of mass off their line
+        or point; tau and forces NaN), OK (every foot pushes), PULLING (the minimum-norm forces pull on a
+        foot though the centre of mass projects inside the polygon: a pushing distribution exists, this is
+        not it), OUTSIDE (a foot pulls and the centre of mass projects on or outside the polygon: no
+        pushing distribution exists on level ground). NaN or Inf input, or an invalid pose: INVALID_INPUT
+        and NaN in that sample.
+        """
+        floating = self.floating_base
+        n_legs, n_arm = len(self._legs), len(self.arm_joint_names)
+        g = as_real(gravity, "gravity", np.float64)
+        if g.shape != (3,):
+            raise ValueError(f"gravity must have shape (3,), got {g.shape}")
+        with np.errstate(over="ignore"):
+            weight = self.mass * np.linalg.norm(g)
+        if not np.isfinite(g).all() or not np.isfinite(weight):
+            raise ValueError(f"gravity must be finite and the weight m |g| too, got {g}")
+        T = body_transform(body_pose, seq)
+        f32 = real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32
+        q = as_real(q, "q", np.float64)
+        if q.ndim == 0 or q.shape[-1] not in {3 * n_legs, 3 * n_legs + n_arm}:
+            widths = f"{3 * n_legs}" if not n_arm else f"{3 * n_legs} or {3 * n_legs + n_arm}"
+            raise ValueError(f"q must have shape (..., {widths}), got {q.shape}")
+        if q.shape[-1] == 3 * n_legs and n_arm:
+            q = np.concatenate([q, np.zeros((*q.shape[:-1], n_arm))], axis=-1)
+        leads = {"body_pose": (T.shape[:-2], T.shape), "q": (q.shape[:-1], q.shape)}
+        if stance is None:
+            stance_arr = np.ones(n_legs)
+        else:
+            stance_arr = as_real(stance, "stance")
+            if stance_arr.ndim == 0 or stance_arr.shape[-1] != n_legs:
+                raise ValueError(f"stance must have shape (..., {n_legs}), got {stance_arr.shape}")
+            leads["stance"] = (stance_arr.shape[:-1], stance_arr.shape)
+        lead = broadcast_lead(**leads)
+        single = len(lead) == 0
+        N = int(np.prod(lead, dtype=np.int64))
+        R = np.broadcast_to(T[..., :3, :3], (*lead, 3, 3)).reshape(N, 3, 3)
+        q = np.broadcast_to(q, (*lead, q.shape[-1])).reshape(N, q.shape[-1])
+        stance_mask = np.broadcast_to(stance_arr, (*lead, n_legs)).reshape(N, n_legs)
+        # in the body frame, where nothing depends on the body's pose but gravity's direction
+        g_body = np.einsum("nji,j->ni", R, g)
+        at_origin = np.concatenate([np.zeros((N, 6)), np.ones((N, 1)), q], axis=1)
+        com = floating.center_of_mass(at_origin)
+        leg_gravity = floating.gravity(at_origin, g_body)[:, 6 : 6 + 3 * n_legs]
+        q_legs = q[:, : 3 * n_legs]
+        feet = self.body_fk(np.zeros(6), q_legs).reshape(N, n_legs, 3)
+        foot_jacobians = np.stack(
+            [leg.jacobian(q_legs[:, 3 * k : 3 * k + 3]) for k, leg in enumerate(self._legs)], axis=1
+        ).reshape(N, n_legs, 3, 3)
+        tau, forces, status, margin = _core.standing_torques(
+            com, self.mass, feet, foot_jacobians, leg_gravity, stance_mask, g_body
+        )
+        forces = np.einsum("nij,nlj->nli", R, forces)  # into the world
+        tau, forces = tau.reshape(*lead, 3 * n_legs), forces.reshape(*lead, n_legs, 3)
+        status, margin = status.reshape(lead), margin.reshape(lead)
+        if f32:
+            tau, forces, margin = (a.astype(np.float32) for a in (tau, forces, margin))
+        if single:
+            return Standing(tau, forces, StanceStatus(int(status)), margin[()])
+        return Standing(tau, forces, status, margin)
 
     def _tree(self, joints) -> inertia.Tree:
         if self._model is None or not self._specs[0]:
@@ -774,3 +923,74 @@ class Robot:
 def _rebuild_robot(source, feet, contact_offset, nominal) -> Robot:
     """From the URDF's text (str) or the file's bytes, as the robot was loaded."""
     return Robot._from_model(urdf.parse_urdf(source), feet, contact_offset, nominal, source)
+
+
+class StanceStatus(IntEnum):
+    """Outcome of :meth:`Robot.standing_torques` for one sample."""
+
+    OK = 0
+    """The minimum-norm contact forces balance the robot, and every one pushes on the ground."""
+    PULLING = 1
+    """They balance, but a foot pulls, though the centre of mass projects inside the support polygon: a
+    pushing distribution exists, the minimum-norm one is not it."""
+    OUTSIDE = 2
+    """They balance only by pulling on a foot, and the centre of mass projects on or outside the support
+    polygon: no pushing distribution exists on level ground."""
+    INVALID_INPUT = 3
+    """NaN or Inf in the input, an invalid body pose or a stance value other than 0/1: everything NaN
+    (the code of :attr:`Status.INVALID_INPUT`)."""
+    UNBALANCED = 4
+    """No forces at these feet balance the weight (fewer than three feet, or collinear ones, with the
+    centre of mass off their line or point): tau and forces are NaN."""
+
+
+class Standing(NamedTuple):
+    """The result of :meth:`Robot.standing_torques`."""
+
+    tau: np.ndarray
+    """(..., 3 n_legs) N m: the leg joint torques that hold the pose, in leg_joint_names order."""
+    forces: np.ndarray
+    """(..., n_legs, 3) N: the world contact forces on the feet (ground on foot), zero on swing feet."""
+    status: np.ndarray
+    """(...) :class:`StanceStatus` values (int8), or one member for a single sample."""
+    margin: np.ndarray
+    """(...) m: signed distance of the centre of mass's projection to the support polygon, in the plane
+    normal to gravity, positive inside (with fewer than three non-collinear feet: minus the distance to
+    their segment or point; NaN without gravity)."""
+
+
+def _quaternion(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions [x, y, z, w] (w >= 0) of rotation matrices (..., 3, 3), branch-free over the
+    batch (Shepperd: from the largest of w, x, y, z); NaN where R is NaN."""
+    t = np.stack(
+        [
+            1.0 + R[..., 0, 0] - R[..., 1, 1] - R[..., 2, 2],
+            1.0 - R[..., 0, 0] + R[..., 1, 1] - R[..., 2, 2],
+            1.0 - R[..., 0, 0] - R[..., 1, 1] + R[..., 2, 2],
+            1.0 + R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2],
+        ],
+        axis=-1,
+    )  # 4 x^2, 4 y^2, 4 z^2, 4 w^2
+    with np.errstate(invalid="ignore"):
+        pick = np.argmax(np.where(np.isnan(t), -np.inf, t), axis=-1)
+    d = {
+        "xy": R[..., 0, 1] + R[..., 1, 0],
+        "xz": R[..., 0, 2] + R[..., 2, 0],
+        "yz": R[..., 1, 2] + R[..., 2, 1],
+        "wx": R[..., 2, 1] - R[..., 1, 2],
+        "wy": R[..., 0, 2] - R[..., 2, 0],
+        "wz": R[..., 1, 0] - R[..., 0, 1],
+    }
+    rows = np.stack(
+        [
+            np.stack([t[..., 0], d["xy"], d["xz"], d["wx"]], axis=-1),
+            np.stack([d["xy"], t[..., 1], d["yz"], d["wy"]], axis=-1),
+            np.stack([d["xz"], d["yz"], t[..., 2], d["wz"]], axis=-1),
+            np.stack([d["wx"], d["wy"], d["wz"], t[..., 3]], axis=-1),
+        ],
+        axis=-2,
+    )  # row k: 4 q_k q
+    quat = np.take_along_axis(rows, pick[..., None, None], axis=-2)[..., 0, :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quat = quat / np.linalg.norm(quat, axis=-1, keepdims=True)
+    return np.where(quat[..., 3:4] < 0.0, -quat, quat)

@@ -1,0 +1,167 @@
+// Standing statics of a floating legged robot: the minimum-norm contact forces at the
+// stance feet that balance its weight, and the joint torques that hold the legs there.
+//
+// Point contacts at the stance feet p_i carry world forces f_i (ground on foot). Static
+// balance of the whole robot (total mass m, centre of mass c, gravity g):
+//   sum f_i = -m g,   sum (p_i - c) x f_i = 0,   i.e. A f = b (6 equations, 3k unknowns),
+// and f is its minimum-norm solution (complete orthogonal decomposition). A leg's joints
+// then hold tau_l = G_l - J_l^T f_l (the static model tau = J^T F of the course, with the
+// gravity torques G of the leg's own links; J_l = d p_l / d q_l in world axes; a swing leg
+// holds G_l alone). docs/dynamics.md gives the status rule and the support margin.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace spotkin::dynamics {
+
+// InvalidInput is Status::InvalidInput's code, as everywhere in spotkin.
+enum class Stance : std::int8_t { Ok = 0, Pulling = 1, Outside = 2, InvalidInput = 3, Unbalanced = 4 };
+
+constexpr int kMaxFeet = 8;
+
+namespace detail_statics {
+
+// Signed distance of c to the convex hull of pts (2-D): the smallest signed distance to
+// the hull's edge lines, positive inside, with three or more non-collinear points;
+// otherwise minus the distance to their segment or point.
+inline double support_margin(const double (*pts)[2], int k, const double c[2]) {
+  if (k == 0) return -std::numeric_limits<double>::infinity();
+  int order[kMaxFeet];
+  for (int i = 0; i < k; ++i) order[i] = i;
+  std::sort(order, order + k, [&](int a, int b) {
+    return pts[a][0] < pts[b][0] || (pts[a][0] == pts[b][0] && pts[a][1] < pts[b][1]);
+  });
+  auto cross = [&](int o, int a, int b) {
+    return (pts[a][0] - pts[o][0]) * (pts[b][1] - pts[o][1]) - (pts[a][1] - pts[o][1]) * (pts[b][0] - pts[o][0]);
+  };
+  // Andrew's monotone chain, counter-clockwise; duplicates drop out (cross <= 0)
+  int hull[2 * kMaxFeet], h = 0;
+  for (int s = 0; s < k; ++s) {
+    const int p = order[s];
+    while (h >= 2 && cross(hull[h - 2], hull[h - 1], p) <= 0) --h;
+    hull[h++] = p;
+  }
+  for (int s = k - 2, lower = h + 1; s >= 0; --s) {
+    const int p = order[s];
+    while (h >= lower && cross(hull[h - 2], hull[h - 1], p) <= 0) --h;
+    hull[h++] = p;
+  }
+  if (k > 1) --h;  // the last point repeats the first
+  double scale = 1.0, area = 0.0;
+  for (int i = 0; i < k; ++i) scale = std::max({scale, std::fabs(pts[i][0]), std::fabs(pts[i][1])});
+  for (int i = 0; i < h; ++i) {
+    const double* a = pts[hull[i]];
+    const double* b = pts[hull[(i + 1) % h]];
+    area += a[0] * b[1] - b[0] * a[1];
+  }
+  if (h >= 3 && area > 1e-12 * scale * scale) {
+    double margin = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < h; ++i) {
+      const double* a = pts[hull[i]];
+      const double* b = pts[hull[(i + 1) % h]];
+      const double ex = b[0] - a[0], ey = b[1] - a[1], len = std::hypot(ex, ey);
+      margin = std::min(margin, ((c[0] - a[0]) * -ey + (c[1] - a[1]) * ex) / len);  // left of a CCW edge
+    }
+    return margin;
+  }
+  // collinear (or one point): the extreme points of the sorted order
+  const double* a = pts[order[0]];
+  const double* b = pts[order[k - 1]];
+  const double dx = b[0] - a[0], dy = b[1] - a[1], d2 = dx * dx + dy * dy;
+  const double t = d2 > 0.0 ? std::clamp(((c[0] - a[0]) * dx + (c[1] - a[1]) * dy) / d2, 0.0, 1.0) : 0.0;
+  return -std::hypot(c[0] - (a[0] + t * dx), c[1] - (a[1] + t * dy));
+}
+
+}  // namespace detail_statics
+
+// One sample. legs <= kMaxFeet; feet (legs, 3) world foot points; foot_jacobians (legs, 3, 3)
+// row-major d p_l / d q_l (world axes); leg_gravity (3 legs) the legs' joint gravity torques;
+// stance (legs) 0/1; gravity (3) world. Writes tau (3 legs), forces (legs, 3) (zero on swing
+// feet), the status and the support margin (m; NaN without gravity).
+inline void standing_sample(int legs, const double* com, double mass, const double* feet,
+                            const double* foot_jacobians, const double* leg_gravity, const std::uint8_t* stance,
+                            const double* gravity, double* tau, double* forces, std::int8_t* status,
+                            double* margin) noexcept {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto fail = [&](Stance s, double m) {
+    for (int j = 0; j < 3 * legs; ++j) tau[j] = nan, forces[j] = nan;
+    *status = static_cast<std::int8_t>(s);
+    *margin = m;
+  };
+  double sum = mass + gravity[0] + gravity[1] + gravity[2];  // NaN or Inf anywhere makes it NaN
+  for (int r = 0; r < 3; ++r) sum += com[r];
+  for (int j = 0; j < 3 * legs; ++j) sum += feet[j] + leg_gravity[j];
+  for (int j = 0; j < 9 * legs; ++j) sum += foot_jacobians[j];
+  if (!(sum - sum == 0.0)) return fail(Stance::InvalidInput, nan);
+
+  const Eigen::Vector3d g(gravity[0], gravity[1], gravity[2]), c(com[0], com[1], com[2]);
+  const double weight = mass * g.norm();
+  int k = 0, foot_of[kMaxFeet];
+  for (int l = 0; l < legs; ++l)
+    if (stance[l]) foot_of[k++] = l;
+  Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 3 * kMaxFeet> A(6, 3 * k);
+  for (int i = 0; i < k; ++i) {
+    const double* p = feet + 3 * foot_of[i];
+    const Eigen::Vector3d r(p[0] - c[0], p[1] - c[1], p[2] - c[2]);
+    A.block<3, 3>(0, 3 * i).setIdentity();
+    A.block<3, 3>(3, 3 * i) << 0.0, -r[2], r[1], r[2], 0.0, -r[0], -r[1], r[0], 0.0;
+  }
+  Eigen::Matrix<double, 6, 1> b;
+  b << -mass * g, Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3 * kMaxFeet, 1> f = Eigen::VectorXd::Zero(3 * k);
+  if (k > 0) {
+    // f = A^T (A A^T)^-1 b when A has full row rank (three or more feet off one line); a
+    // rank-deficient or inaccurate case goes through the complete orthogonal decomposition
+    const Eigen::Matrix<double, 6, 6> AAt = A * A.transpose();
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(AAt);
+    const auto& D = ldlt.vectorD();
+    bool solved = false;
+    if (ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff()) {
+      f = A.transpose() * ldlt.solve(b);
+      solved = (A * f - b).norm() <= 1e-12 * weight;
+    }
+    if (!solved) f = Eigen::CompleteOrthogonalDecomposition<decltype(A)>(A).solve(b);
+  }
+
+  // the support margin in the plane normal to gravity
+  double m = nan;
+  if (g.norm() > 0.0) {
+    const Eigen::Vector3d up = -g.normalized();
+    Eigen::Vector3d u = up.cross(Eigen::Vector3d::UnitX());
+    if (u.norm() < 0.5) u = up.cross(Eigen::Vector3d::UnitY());
+    u.normalize();
+    const Eigen::Vector3d w = up.cross(u);
+    double flat[kMaxFeet][2];
+    for (int i = 0; i < k; ++i) {
+      const Eigen::Map<const Eigen::Vector3d> p(feet + 3 * foot_of[i]);
+      flat[i][0] = p.dot(u), flat[i][1] = p.dot(w);
+    }
+    const double cc[2] = {c.dot(u), c.dot(w)};
+    m = detail_statics::support_margin(flat, k, cc);
+  }
+  if ((A * f - b).norm() > 1e-9 * weight) return fail(Stance::Unbalanced, m);
+
+  Stance s = Stance::Ok;
+  if (g.norm() > 0.0) {
+    const Eigen::Vector3d up = -g.normalized();
+    for (int i = 0; i < k; ++i)
+      if (f.segment<3>(3 * i).dot(up) < -1e-9 * weight) s = m > 0.0 ? Stance::Pulling : Stance::Outside;
+  }
+  for (int j = 0; j < 3 * legs; ++j) tau[j] = leg_gravity[j], forces[j] = 0.0;
+  for (int i = 0; i < k; ++i) {
+    const int l = foot_of[i];
+    const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J(foot_jacobians + 9 * l);
+    const Eigen::Vector3d fi = f.segment<3>(3 * i);
+    const Eigen::Vector3d held = J.transpose() * fi;
+    for (int r = 0; r < 3; ++r) tau[3 * l + r] -= held[r], forces[3 * l + r] = fi[r];
+  }
+  *status = static_cast<std::int8_t>(s);
+  *margin = m;
+}
+
+}  // namespace spotkin::dynamics
