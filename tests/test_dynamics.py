@@ -412,6 +412,10 @@ def test_floating_base_matches_pinocchio(floating, rng):
             "gravity": (fl.fb.gravity(q), pin.computeGeneralizedGravity(m, d, qp)[fl.iv]),
             "nle": (fl.fb.nonlinear_effects(q, v), pin.nonLinearEffects(m, d, qp, vp)[fl.iv]),
             "aba": (fl.fb.forward_dynamics(q, v, a), pin.aba(m, d, qp, vp, ap)[fl.iv]),
+            "coriolis": (
+                fl.fb.coriolis_matrix(q, v),
+                pin.computeCoriolisMatrix(m, d, qp, vp)[np.ix_(fl.iv, fl.iv)],
+            ),
             "com": (fl.fb.center_of_mass(q), pin.centerOfMass(m, d, qp)),
             "com_jacobian": (fl.fb.center_of_mass_jacobian(q), pin.jacobianCenterOfMass(m, d, qp)[:, fl.iv]),
         }
@@ -429,6 +433,18 @@ def test_floating_identities(floating, rng):
     tau = fl.fb.inverse_dynamics(q, v, a)
     close(np.einsum("...ij,...j->...i", A, a) + fl.fb.nonlinear_effects(q, v), tau)
     close(fl.fb.forward_dynamics(q, v, tau), a, 1e-9)
+    # h = C v + G, and dA/dt - 2 C is skew-symmetric (dA/dt by central differences along v)
+    C = fl.fb.coriolis_matrix(q, v)
+    close(np.einsum("...ij,...j->...i", C, v) + fl.fb.gravity(q), fl.fb.nonlinear_effects(q, v))
+    h = 1e-6
+    m = fl.model
+    for i in range(3):
+        dA = (
+            fl.fb.mass_matrix(_integrate(m, fl, q[i], v[i], h))
+            - fl.fb.mass_matrix(_integrate(m, fl, q[i], v[i], -h))
+        ) / (2 * h)
+        N = dA - 2 * C[i]
+        close(N + N.T, np.zeros_like(N), 1e-6 * max(1.0, np.abs(dA).max()))
     # A depends on the joints only, not on the body's pose
     q2 = q.copy()
     q2[:, :7] = fl.random(rng)[0][:7]

@@ -70,6 +70,10 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
                                     T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                                  \
     dynamics::floating_aba_batch(m, q, v, tau, g, out, b, e);                                                      \
   }                                                                                                                 \
+  SPOTKIN_MULTIVERSION void f_coriolis_k(const FloatingModel<T, L>& m, Rows<T> q, Rows<T> v, T* out,                \
+                                         std::ptrdiff_t b, std::ptrdiff_t e) {                                      \
+    dynamics::floating_coriolis_batch(m, q, v, out, b, e);                                                         \
+  }                                                                                                                 \
   SPOTKIN_MULTIVERSION void f_com_k(const FloatingModel<T, L>& m, Rows<T> q, T* out, bool jacobian,                \
                                     std::ptrdiff_t b, std::ptrdiff_t e) {                                          \
     dynamics::floating_com_batch(m, q, out, jacobian, b, e);                                                       \
@@ -138,6 +142,14 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
                      });
                    });
 }
+py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v) {
+  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
+  return run_batch({{q, "q", nq}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, std::ptrdiff_t total) {
+                     using T = std::remove_pointer_t<decltype(out)>;
+                     with_model<T>(d, total, [&](const auto& model) { f_coriolis_k(model, rows[0], rows[1], out, b, e); });
+                   });
+}
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
@@ -162,6 +174,7 @@ void bind_floating_dynamics(py::module_& m) {
       .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"))
       .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"))
       .def("crba", &floating_crba, py::arg("q"))
+      .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"))
       .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"))
       .def("com", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, false); }, py::arg("q"))
       .def("com_jacobian", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, true); },

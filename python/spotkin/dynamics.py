@@ -162,6 +162,11 @@ class FloatingBase:
     def nonlinear_effects(self, q, v, gravity=GRAVITY) -> np.ndarray:
         return self._core.nonlinear_effects(q, v, gravity)
 
+    def coriolis_matrix(self, q, v) -> np.ndarray:
+        """C(q, v), (..., 6 + n, 6 + n), with dA/dt - 2 C skew-symmetric (as Pinocchio's
+        ``computeCoriolisMatrix`` for its free-flyer: the body's velocity in the body frame)."""
+        return self._core.coriolis_matrix(q, v)
+
     def forward_dynamics(self, q, v, tau, gravity=GRAVITY) -> np.ndarray:
         """a = A^-1 (tau - h), (..., 6 + n): articulated-body algorithm."""
         return self._core.aba(q, v, tau, gravity)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "spotkin/dynamics/aba.hpp"
+#include "spotkin/dynamics/coriolis.hpp"
 #include "spotkin/dynamics/crba.hpp"
 #include "spotkin/dynamics/rnea.hpp"
 
@@ -296,6 +297,62 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
       }
     }
     store(out, width, b0, m, blk.ok, out_rows, stream);
+  }
+  if (stream) stream_fence();
+}
+
+// C(q, v), (6 + n) x (6 + n), for which dA/dt - 2C is skew-symmetric (coriolis.hpp), in world
+// coordinates: the body's columns are its unit twists (linear, then angular, body frame) seen
+// from the world, their rates v_body x J; the root's subtree is the whole robot, and bodies of
+// different chains share no subtree (their block is 0).
+template <typename M, int L>
+SPOTKIN_INLINE void floating_coriolis_batch(const FloatingModel<M, L>& model, Rows<M> q, Rows<M> v, M* C,
+                                            std::ptrdiff_t begin, std::ptrdiff_t end) {
+  using P = Pack<M, L>;
+  const int nv = model.nv();
+  FloatingBlock<M, L> blk(model, nv * nv);
+  const bool stream = std::size_t(end - begin) * std::size_t(nv * nv) * sizeof(M) >= kStreamBytes;
+  std::vector<CoriolisWork<P>> w(static_cast<std::size_t>(model.joints()));
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, &v, nullptr, nullptr, b0, m);
+    P* out = blk.out.data();
+    for (int k = 0; k < nv * nv; ++k) out[k] = P(M(0));
+    const Pose<P> Tb{blk.R, {{blk.q[0], blk.q[1], blk.q[2]}}};
+    const Motion<P> vb = to_parent(Tb, blk.body_velocity());
+    Motion<P> Sb[6], dSb[6];
+    for (int i = 0; i < 3; ++i) {
+      const V3<P> col{{blk.R(0, i), blk.R(1, i), blk.R(2, i)}};
+      Sb[i] = {zero3<P>(), col};              // linear
+      Sb[3 + i] = {col, cross(Tb.p, col)};   // angular, about the body's origin
+    }
+    for (int i = 0; i < 6; ++i) dSb[i] = crm(vb, Sb[i]);
+    CoriolisWork<P> root;
+    root.Ic = to_parent(Tb, model.body_inertia());
+    coriolis_terms(root.Ic, vb, root.B11, root.f0);
+    for (std::size_t k = 0; k < model.chains().size(); ++k) {
+      const auto& chain = model.chains()[k];
+      const int o = model.offset(k), n = chain.dof();
+      coriolis_chain(chain, blk.X.data() + o, blk.v.data() + 6 + o, out + (6 + o) * nv + 6 + o, w.data() + o, nv,
+                     &Tb, &vb);
+      add_to(root.Ic, w[o].Ic);
+      add_to(root.B11, w[o].B11);
+      root.f0 += w[o].f0;
+      for (int a = 0; a < n; ++a) {
+        const CoriolisRow<P> row = coriolis_row(w[o + a]);
+        const Force<P> y = coriolis_column(w[o + a]);
+        for (int b = 0; b < 6; ++b) {
+          out[(6 + o + a) * nv + b] = row(Sb[b], dSb[b]);
+          out[b * nv + 6 + o + a] = dot(Sb[b], y);
+        }
+      }
+    }
+    for (int b = 0; b < 6; ++b) {
+      root.S = Sb[b], root.dS = dSb[b];
+      const Force<P> y = coriolis_column(root);
+      for (int a = 0; a < 6; ++a) out[a * nv + b] = dot(Sb[a], y);
+    }
+    store(out, nv * nv, b0, m, blk.ok, C, stream);
   }
   if (stream) stream_fence();
 }
