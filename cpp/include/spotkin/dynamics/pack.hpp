@@ -82,15 +82,6 @@ struct LanesOf<Pack<T, L>> {
   using Scalar = T;
 };
 
-template <typename T>
-SPOTKIN_INLINE T& lane(T& x, int) noexcept { return x; }
-template <typename T, int L>
-SPOTKIN_INLINE T& lane(Pack<T, L>& x, int i) noexcept { return x.v[i]; }
-template <typename T>
-SPOTKIN_INLINE T lane(const T& x, int) noexcept { return x; }
-template <typename T, int L>
-SPOTKIN_INLINE T lane(const Pack<T, L>& x, int i) noexcept { return x.v[i]; }
-
 // sin and cos of every lane (vector_math: about 1 ulp, huge arguments exact, NaN/Inf -> NaN).
 template <typename T, int L>
 SPOTKIN_INLINE void sincos(const Pack<T, L>& x, Pack<T, L>& s, Pack<T, L>& c) noexcept {
