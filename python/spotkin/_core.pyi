@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'dls', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainIK', 'Convention', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'compatible', 'dls', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -65,6 +65,8 @@ class Chain:
     def ik_differential(self, T_targets: typing.Any, q0: typing.Any, lower: typing.Any, upper: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, position_tolerance: typing.SupportsFloat | typing.SupportsIndex, orientation_tolerance: typing.SupportsFloat | typing.SupportsIndex, max_step: typing.SupportsFloat | typing.SupportsIndex, max_iterations: typing.SupportsInt | typing.SupportsIndex, rows: typing.SupportsInt | typing.SupportsIndex) -> tuple:
         ...
     def jacobian(self, q: typing.Any, rows: typing.SupportsInt | typing.SupportsIndex, in_tool_frame: bool) -> typing.Any:
+        ...
+    def point_jacobian(self, q: typing.Any, rows: typing.SupportsInt | typing.SupportsIndex, point: typing.SupportsInt | typing.SupportsIndex, frame: typing.SupportsInt | typing.SupportsIndex) -> typing.Any:
         ...
     @property
     def dof(self) -> int:
@@ -195,6 +197,8 @@ def _tsc_ghz() -> float:
     """
     The TSC rate in GHz, measured against steady_clock over 0.2 s (0 off x86-64).
     """
+def compatible(J: typing.Any, dx: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> tuple:
+    ...
 def dls(J: typing.Any, dx: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, nullspace: typing.Any = None) -> typing.Any:
     ...
 def get_num_threads() -> int:
