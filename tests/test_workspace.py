@@ -43,14 +43,18 @@ def test_arm_branch_counts_count_the_valid_ik_solutions():
 
 
 def test_chain_without_a_closed_form_gets_minus_one():
-    rows = [
+    four = [
         (0, 0.3, np.pi / 2, 0.1, 0.0),
         (0, 0.2, 0.3, 0.0, 0.0),
         (0, 0.2, 0.0, 0.1, 0.0),
         (0, 0.1, 0.0, 0.0, 0.0),
     ]
-    samples = sk.workspace(sk.Chain.from_dh(rows), n=10, seed=0)
-    assert (samples.branches == -1).all()
+    planar = [(0, 0.3, 0.0, 0.0, 0.0), (0, 0.2, 0.0, 0.0, 0.0), (0, 0.1, 0.0, 0.0, 0.0)]  # 3R, parallel axes
+    for rows in (four, planar):
+        samples = sk.workspace(sk.Chain.from_dh(rows), n=10, seed=0)
+        assert (samples.branches == -1).all()
+    with pytest.raises(ValueError, match="no closed form"):
+        sk.workspace_volume(sk.Chain.from_dh(planar), n=10)
 
 
 def test_leg_volume_is_the_spherical_shell():
@@ -105,7 +109,6 @@ def test_dexterity_of_an_unlimited_arm_is_the_shell_fraction():
 
 def test_dexterity_of_a_six_joint_chain_matches_the_arm():
     """The unlimited Spot arm rebuilt as a Chain from its joints: the same fractions."""
-    arm = sk.SpotArm(limits=None)
     mount, upper_arm, forearm, offset, hand = (0.292, 0.0, 0.188), 0.3385, 0.40330, 0.0750, 0.19557
     arm = sk.SpotArm(mount, upper_arm, forearm, offset, hand, limits=None)
     placements = np.stack(

@@ -102,13 +102,13 @@ def _branch_counts(obj, kind: str, points: np.ndarray, poses: np.ndarray | None)
         return obj.ik_all(points).valid.sum(-1).astype(np.int8)
     if kind == "arm":
         return obj.ik_all(poses).valid.sum(-1).astype(np.int8)
-    if obj.dof == 3:
-        return obj.ik_position(points).valid.sum(-1).astype(np.int8)
-    if obj.dof == 6:
-        try:
+    try:
+        if obj.dof == 3:
+            return obj.ik_position(points).valid.sum(-1).astype(np.int8)
+        if obj.dof == 6:
             return obj.ik(poses).valid.sum(-1).astype(np.int8)
-        except ValueError:  # no closed-form family
-            pass
+    except ValueError:  # no closed form for this chain
+        pass
     return np.full(len(points), -1, dtype=np.int8)
 
 
