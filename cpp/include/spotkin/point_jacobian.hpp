@@ -44,23 +44,27 @@ SPOTKIN_INLINE void point_jacobian_batch(const Chain<Scalar>& chain, const Scala
       const Scalar* qi = q + (b0 + i) * n;
       Vec3<Scalar> axis[Chain<Scalar>::kMaxJoints], origin[Chain<Scalar>::kMaxJoints];
       Rigid<Scalar> T = chain.base();
-      Vec3<Scalar> p = T.p;
-      Mat3<Scalar> R = frame == 0 ? T.R : Mat3<Scalar>::Identity();
-      for (int j = 0; j < walked; ++j) {
-        const Joint<Scalar>& joint = joints[static_cast<std::size_t>(j)];
-        joint.pre.apply(T);
-        axis[j] = joint.axis_in(T);
-        origin[j] = T.p;
-        const Scalar shift = joint.type == JointType::Prismatic ? joint.r + qi[j] : joint.r;
-        joint.apply_motion(T, Scalar(c[j][i]), Scalar(s[j][i]), shift);
-        joint.post.apply(T);
-        if (j + 1 == point) p = T.p;
-        if (j + 1 == frame) R = T.R;
-      }
-      if (point == tool_index || frame == tool_index) {
-        const Rigid<Scalar> tool = T * chain.tool();
-        if (point == tool_index) p = tool.p;
-        if (frame == tool_index) R = tool.R;
+      int next = 0;  // the next joint to apply
+      auto walk_to = [&](int stop) {
+        for (; next < stop; ++next) {
+          const Joint<Scalar>& joint = joints[static_cast<std::size_t>(next)];
+          joint.pre.apply(T);
+          axis[next] = joint.axis_in(T);
+          origin[next] = T.p;
+          const Scalar shift = joint.type == JointType::Prismatic ? joint.r + qi[next] : joint.r;
+          joint.apply_motion(T, Scalar(c[next][i]), Scalar(s[next][i]), shift);
+          joint.post.apply(T);
+        }
+      };
+      // walk to the nearer of the two frames, record it, then on to the other (no test per joint)
+      Vec3<Scalar> p;
+      Mat3<Scalar> R = Mat3<Scalar>::Identity();
+      const int first = std::min(point, std::max(frame, 0)), second = std::max(point, frame);
+      for (const int stop : {first, second}) {
+        walk_to(std::min(stop, n));
+        const Rigid<Scalar> F = stop == tool_index ? T * chain.tool() : T;
+        if (stop == point) p = F.p;
+        if (stop == frame) R = F.R;
       }
       Scalar* J = out + std::ptrdiff_t(rows) * n * (b0 + i);
       for (int j = 0; j < n; ++j) {
