@@ -1349,6 +1349,32 @@ def default_nan_rule(x, out, kw, ctx, spec):
     return None
 
 
+def frame_slot(dof: int, name: str) -> Custom:
+    """``point`` / ``frame`` of Chain.jacobian: a frame index in [0, dof + 1] or a word."""
+    words = ("tool",) if name == "point" else ("base", "tool")
+
+    def arg(value, expect=ACCEPT, why=""):
+        return lambda c, r, b: Arg(value, expect, why)
+
+    table = {
+        "valid": arg("tool" if name == "point" else "base"),
+        **{f"word:{w}": arg(w) for w in words},
+        "first": arg(0),
+        "middle": arg(dof // 2 + 1),
+        "last": arg(dof + 1),
+        "np_int": arg(np.int64(1)),
+        "above": arg(dof + 2, REJECT, "value"),
+        "negative": arg(-1, REJECT, "value"),
+        "huge": arg(2**70, REJECT, "value"),
+        "wrong_word": arg("world", REJECT, "value"),
+        "float": arg(1.0, REJECT, "type"),
+        "bool": arg(True, REJECT, "type"),
+        "none": arg(None, REJECT, "type"),
+        "list": arg([1], REJECT, "type"),
+    }
+    return Custom(name, table, default="omit")
+
+
 def finite_check(x, out, kw, ctx):
     for leaf in out:
         if leaf is not None and np.asarray(leaf).dtype.kind == "f" and not finite(leaf):
@@ -1769,7 +1795,8 @@ def _chain_entries(tool_extra):
                 return "the last frame is not fk(q)"
             return None
 
-        frame = Choice("frame", "base", ("base", "tool"), default="omit")
+        frame = frame_slot(dof, "frame")
+        point = frame_slot(dof, "point")
         q_slot = angle_slot("q", dof)
         tag = f"[{key}]"
         register(
@@ -1797,7 +1824,7 @@ def _chain_entries(tool_extra):
             name=f"Chain.jacobian{tag}",
             covers="spotkin.Chain.jacobian",
             call=lambda c, get=get, **k: get(c).jacobian(**k),
-            slots=[q_slot, frame],
+            slots=[q_slot, frame, point],
             baseline=chain_q,
             outputs=outs(("float", (6, dof))),
             check=finite_check,
@@ -1807,7 +1834,7 @@ def _chain_entries(tool_extra):
             name=f"Chain.position_jacobian{tag}",
             covers="spotkin.Chain.position_jacobian",
             call=lambda c, get=get, **k: get(c).position_jacobian(**k),
-            slots=[q_slot, frame],
+            slots=[q_slot, frame, point],
             baseline=chain_q,
             outputs=outs(("float", (3, dof))),
             check=finite_check,
@@ -1975,7 +2002,7 @@ def _chain_entries(tool_extra):
         )
 
         def ikd_check(x, out, kw, c, get=get):
-            q, converged, _, pos_err, ori_err = out
+            q, converged, _, pos_err, ori_err, residual = out
             T = pose_matrix(x["T_targets"])
             with np.errstate(all="ignore"):
                 actual = np.linalg.norm(get(c).fk(q.astype(np.float64))[:3, 3] - T[:3, 3])
@@ -1983,6 +2010,10 @@ def _chain_entries(tool_extra):
                 return f"non-finite result for a valid target: q {q}, errors {pos_err}, {ori_err}"
             if q.dtype == np.float64 and abs(actual - pos_err) > 1e-9:
                 return f"position_error {pos_err} but |p_target - fk(q)| = {actual}"
+            if finite([actual]) and not residual >= 0:
+                return f"residual {residual} for a valid target"
+            if finite([actual]) and residual > np.hypot(pos_err, ori_err) * (1 + 1e-9) + 1e-12:
+                return f"residual {residual} above the error it is part of ({pos_err}, {ori_err})"
             if converged and pos_err > kw.get("position_tolerance", 1e-6) * (1 + 1e-9):
                 return f"converged with position_error {pos_err}"
             if (
@@ -2017,7 +2048,7 @@ def _chain_entries(tool_extra):
             baseline=chain_q,
             mixed="f64",
             pair_rule=ikd_pairs,
-            outputs=outs(("float", (dof,)), ("flag", ()), ("int", ()), ("f64", ()), ("f64", ())),
+            outputs=outs(("float", (dof,)), ("flag", ()), ("int", ()), ("f64", ()), ("f64", ()), ("f64", ())),
             check=ikd_check,
         )
 
@@ -2032,7 +2063,7 @@ def _chain_entries(tool_extra):
             return {"T_targets": chain.fk(q), "q0": q[:, 0] + rng.normal(0, 0.05, (n, dof))}
 
         def path_check(x, out, kw, c, ikd_check=ikd_check):
-            q, converged, iterations, pos_err, ori_err = out
+            q, converged, iterations, pos_err, ori_err, residual = out
             for k, target in enumerate(x["T_targets"]):
                 ok = pose_validity(target)
                 if ok is None:
@@ -2044,7 +2075,10 @@ def _chain_entries(tool_extra):
                 if not finite(x["q0"]):
                     return None if all_nan(q) else f"a NaN/Inf q0 but q {describe(q)}"
                 message = ikd_check(
-                    {"T_targets": target}, [q[k], converged[k], iterations[k], pos_err[k], ori_err[k]], kw, c
+                    {"T_targets": target},
+                    [q[k], converged[k], iterations[k], pos_err[k], ori_err[k], residual[k]],
+                    kw,
+                    c,
                 )
                 if message:
                     return f"target {k}: {message}"
@@ -2079,7 +2113,9 @@ def _chain_entries(tool_extra):
             mixed="f64",
             nan_rule="check",
             check=path_check,
-            outputs=outs(("float", (3, dof)), ("flag", (3,)), ("int", (3,)), ("f64", (3,)), ("f64", (3,))),
+            outputs=outs(
+                ("float", (3, dof)), ("flag", (3,)), ("int", (3,)), *[("f64", (3,))] * 3
+            ),
         )
 
     # constructors
@@ -3833,11 +3869,46 @@ def _function_entries():
             Batch("dx", (3,)),
             Real("damping", 1e-3, "nonneg", default="omit"),
             Batch("nullspace", (4,), optional=True, default="omit"),
+            Flag("return_residual", default="omit"),
         ],
         baseline=diff_base,
-        outputs=lambda args, kw: [Out("float", (jshape(args)[1],))],
+        outputs=lambda args, kw: [Out("float", (jshape(args)[1],))]
+        + ([Out("float", ())] if kw.get("return_residual") in (True, np.True_) else []),
         mixed="f64",
         check=diff_check(dls_ref),
+    )
+
+    def compatible_check(x, out, kw, c):
+        ok, residual = bool(out[0]), float(out[1])
+        J = np.asarray(x["J"], dtype=np.float64)
+        dx = np.asarray(x["dx"], dtype=np.float64)
+        f32 = tol_for(*x.values()) > 1e-6
+        eps = np.finfo(np.float32 if f32 else np.float64).eps
+        with np.errstate(all="ignore"):
+            U, sigma, _ = np.linalg.svd(J)
+            cutoff = max(J.shape) * eps * sigma.max(initial=0)
+            if ((sigma > 1e-3 * cutoff) & (sigma < 1e6 * cutoff)).any():
+                return None  # a singular value near the rank cutoff: either rank is right
+            rank = int((sigma > cutoff).sum())
+            expected = float(np.linalg.norm(U[:, rank:].T @ dx))
+        if not math.isfinite(expected) or not math.isfinite(residual):
+            return None if not math.isfinite(expected) else f"non-finite residual {residual} for finite input"
+        scale = max(1.0, float(np.abs(dx).max()))
+        if abs(residual - expected) > (2e-3 if f32 else 1e-8) * scale:
+            return f"residual {residual}, expected {expected}"
+        if "tol" in kw and kw["tol"] is not None and ok != (residual <= float(kw["tol"])):
+            return f"compatible {ok} but residual {residual} against tol {kw['tol']}"
+        return None
+
+    register(
+        name="compatible",
+        covers="spotkin.compatible",
+        call=lambda c, **k: sk.compatible(**k),
+        slots=[J_slot(), Batch("dx", (3,)), Real("tol", 1e-3, "nonneg", optional=True, default="omit")],
+        baseline=diff_base,
+        outputs=outs(("flag", ()), ("float", ())),
+        mixed="f64",
+        check=compatible_check,
     )
     register(
         name="pinv",
@@ -3944,6 +4015,115 @@ def _function_entries():
 
 
 # -- Paul's equations --
+
+
+
+def _workspace_entries():
+    def obj_slot(kind: str) -> Custom:
+        """The object a workspace function samples: legs, arms and chains it takes, others it refuses."""
+
+        def arg(make, expect=ACCEPT, why=""):
+            return lambda c, r, b: Arg(make(c), expect, why)
+
+        table = {
+            "valid": arg(lambda c: c.leg if kind != "dexterity" else c.arm),
+            "str": arg(lambda c: "spot", REJECT, "type"),
+            "none": arg(lambda c: None, REJECT, "type"),
+            "spot": arg(lambda c: c.spot, REJECT, "type"),
+        }
+        if kind == "workspace":
+            table["arm"] = arg(lambda c: c.arm)
+            table["chain6"] = arg(lambda c: c.chain("spot_arm"))
+            table["chain3"] = arg(lambda c: c.chain("mdh3"))
+        elif kind == "volume":
+            table["chain3"] = arg(lambda c: c.chain("mdh3"))
+            table["arm"] = arg(lambda c: c.arm, REJECT, "value")
+        else:
+            table["chain6"] = arg(lambda c: c.chain("spot_arm"))
+            table["leg"] = arg(lambda c: c.leg, REJECT, "value")
+        return Custom("obj", table)
+
+    def samples_probe(result, kw, c):
+        n = int(kw.get("n", 100_000))
+        if not isinstance(result, sk.WorkspaceSamples):
+            return f"not WorkspaceSamples: {describe(result)}"
+        q, points, branches = result
+        if points.shape != (n, 3) or branches.shape != (n,) or q.shape[0] != n:
+            return f"shapes {q.shape}, {points.shape}, {branches.shape} for n = {n}"
+        if not finite(points) or not finite(q):
+            return "non-finite samples"
+        if n and not ((branches >= 1).mean() > 0.9 or (branches == -1).all()):
+            return f"branch counts {np.bincount(branches + 1)} for reached samples"
+        return None
+
+    sample_skip = ("huge", "big")
+    register(
+        name="workspace",
+        covers="spotkin.workspace",
+        call=lambda c, **k: sk.workspace(**k),
+        slots=[
+            obj_slot("workspace"),
+            Int("n", 200, 0, skip=sample_skip),
+            Int("seed", 0, 0, optional=True, default="omit"),
+        ],
+        probe=samples_probe,
+    )
+
+    def volume_probe(result, kw, c):
+        if not (isinstance(result, tuple) and len(result) == 2):
+            return f"not (volume, error): {describe(result)}"
+        volume, error = result
+        if not (math.isfinite(volume) and math.isfinite(error)) and float(kw.get("pad", 0.05)) < 1e100:
+            return f"non-finite volume {volume} or error {error}"
+        if volume < 0 or error < 0:
+            return f"negative volume {volume} or error {error}"
+        return None
+
+    register(
+        name="workspace_volume",
+        covers="spotkin.workspace_volume",
+        call=lambda c, **k: sk.workspace_volume(**k),
+        slots=[
+            obj_slot("volume"),
+            Int("n", 2000, 1, skip=sample_skip),
+            Int("seed", 0, 0, optional=True, default="omit"),
+            Real("pad", 0.05, "nonneg", default="omit"),
+        ],
+        probe=volume_probe,
+    )
+
+    def dexterity_probe(result, kw, c):
+        if not isinstance(result, sk.Dexterity):
+            return f"not a Dexterity: {describe(result)}"
+        fraction = result.fraction
+        if result.positions.shape != (len(fraction), 3) or not ((fraction >= 0) & (fraction <= 1)).all():
+            return f"positions {result.positions.shape}, fractions out of [0, 1] or mismatched"
+        return None
+
+    register(
+        name="dexterity",
+        covers="spotkin.dexterity",
+        call=lambda c, **k: sk.dexterity(**k),
+        slots=[
+            obj_slot("dexterity"),
+            Real("spacing", 0.4, skip=("subnormal",)),
+            Int("orientations", 4, 1, skip=sample_skip),
+            Int("seed", 0, 0, optional=True, default="omit"),
+            Int("samples", 500, 1, skip=sample_skip),
+        ],
+        probe=dexterity_probe,
+    )
+
+    def volume_of(c):
+        return c._get("dexterity", lambda: sk.dexterity(c.arm, spacing=0.4, orientations=4, samples=500))
+
+    register(
+        name="Dexterity.volume",
+        covers="spotkin.Dexterity.volume",
+        call=lambda c, **k: volume_of(c).volume(**k),
+        slots=[Real("at_least", 0.5, "finite", default="omit")],
+        probe=lambda v, kw, c: None if isinstance(v, float) and v >= 0 else f"volume {describe(v)}",
+    )
 
 
 def _paul_entries():
@@ -4954,6 +5134,7 @@ _dynamics_entries()
 _function_entries()
 _paul_entries()
 _trajectory_entries()
+_workspace_entries()
 _roundtrip_entries()
 _joint_name_entries()
 fuzz_sdk.register_entries(sys.modules[__name__])  # spotkin.sdk, when its optional SDK is installed

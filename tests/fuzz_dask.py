@@ -109,7 +109,7 @@ def register_entries(api) -> None:
             return {
                 key: value
                 for key, value in values.items()
-                if key in own and not (value is None and key in ("frame", "fallback"))
+                if key in own and not (value is None and key in ("frame", "point", "fallback"))
             }
 
         def call(c, **kw):
@@ -189,14 +189,21 @@ def register_entries(api) -> None:
     def frame_none(name):
         """A Leg's or an arm's Jacobian has no frame argument: only None is taken."""
         return Custom(
-            "frame",
+            name,
             {
                 "none": lambda c, r, b: Arg(None),
                 "base": lambda c, r, b: Arg("base", REJECT, "value"),
                 "tool": lambda c, r, b: Arg("tool", REJECT, "value"),
+                "index": lambda c, r, b: Arg(1, REJECT, "value"),
             },
             default="omit",
         )
+
+    def none_omits(slot):
+        """The Dask function's default is None for this Custom slot: None is accepted (omitted)."""
+        slot = copy.copy(slot)
+        slot.table = {**slot.table, "none": lambda c, r, b: Arg(None)}
+        return slot
 
     def fallback_nan():
         """Arms and chains answer NaN for a target without a solution: None or "nan" only."""
@@ -236,8 +243,10 @@ def register_entries(api) -> None:
             skd.jacobian,
             pattern.format("jacobian"),
             model,
-            extra=() if chain else (frame_none("frame"),),
-            change=with_optional("frame") if chain else None,
+            extra=() if chain else (frame_none("frame"), frame_none("point")),
+            change=(lambda slots: [none_omits(s) if s.name in ("frame", "point") else s for s in slots])
+            if chain
+            else None,
         )
         target = {"leg": "p", "arm": "T"}.get(key, "target")
         twin(

@@ -4,7 +4,9 @@
 
 #include <type_traits>
 
+#include "spotkin/compatibility.hpp"
 #include "spotkin/differential.hpp"
+#include "spotkin/point_jacobian.hpp"
 
 #include "bindings.hpp"
 #include "dispatch.hpp"
@@ -38,6 +40,15 @@ SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<double>& c, const double* 
 SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
                                           int rows, bool in_tool_frame) {
   c.jacobian_batch(q, out, n, rows, in_tool_frame);
+}
+
+SPOTKIN_MULTIVERSION void point_jacobian_kernel(const Chain<double>& c, const double* q, double* out,
+                                                std::ptrdiff_t n, int rows, int point, int frame) {
+  point_jacobian_batch(c, q, out, n, rows, point, frame);
+}
+SPOTKIN_MULTIVERSION void point_jacobian_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
+                                                int rows, int point, int frame) {
+  point_jacobian_batch(c, q, out, n, rows, point, frame);
 }
 
 // The chain in the precision of the batch's working dtype.
@@ -76,6 +87,38 @@ py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_
                    revolute_columns(chain));
 }
 
+// J_point(frame): point in [0, dof + 1], frame in [-1, dof + 1] (-1: the reference frame's axes).
+py::object point_jacobian(const ChainPair& chain, py::handle q_obj, int rows, int point, int frame) {
+  const int n = chain.f64.dof();
+  if (rows != 3 && rows != 6) throw py::value_error("rows must be 3 or 6");
+  if (point < 0 || point > n + 1)
+    throw py::value_error("point must be a frame index in [0, " + std::to_string(n + 1) + "], got " +
+                          std::to_string(point));
+  if (frame < -1 || frame > n + 1)
+    throw py::value_error("frame must be a frame index in [0, " + std::to_string(n + 1) + "], got " +
+                          std::to_string(frame));
+  return map_batch(q_obj, "q", n, {rows, n}, kMinPerThread,
+                   [&](const auto* q, auto* J, std::ptrdiff_t count) {
+                     point_jacobian_kernel(in_precision(chain, q), q, J, count, rows, point, frame);
+                   },
+                   revolute_columns(chain));
+}
+
+// The compatibility residual ||(I - J J^+) e|| of the final error e against the Jacobian at the
+// returned joints (rows of the task), NaN where the target was invalid.
+double final_residual(const Chain<double>& chain, const double* T_target, const double* q, int rows) {
+  if (!differential::all_finite(q, chain.dof())) return quiet_nan<double>();
+  Rigid<double> target;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) target.R(i, j) = T_target[4 * i + j];
+    target.p[i] = T_target[4 * i + 3];
+  }
+  double e[6], J[6 * Chain<double>::kMaxJoints];
+  differential::pose_error(target, chain.forward(q), e);
+  chain.jacobian(q, J, rows, false);
+  return differential::compatibility<double>(J, e, rows, chain.dof(), -1.0).residual;
+}
+
 // Closed-loop differential IK (spotkin::differential::ik_differential), always
 // in float64: targets (..., K, 4, 4) and q0 (..., dof) with equal leading shapes.
 py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::handle q0_obj, py::handle lower_obj,
@@ -105,7 +148,7 @@ py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::ha
   auto q_path = new_array<double>(t_lead, {n});
   py::array_t<bool> converged(t_lead);
   py::array_t<std::int32_t> iterations(t_lead);
-  py::array_t<double> position_error(t_lead), orientation_error(t_lead);
+  py::array_t<double> position_error(t_lead), orientation_error(t_lead), residual(t_lead);
   std::vector<differential::IkResult> results(static_cast<std::size_t>(N * K));
   differential::IkOptions options;
   options.damping = damping;
@@ -120,12 +163,17 @@ py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::ha
   const double* up = upper.data();
   double* out = q_path.mutable_data();
   differential::IkResult* res = results.data();
+  double* rd = residual.mutable_data();
   {
     ReleaseGilFor release(N * 64);
     parallel_for(N, 4, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
       for (std::ptrdiff_t i = b; i < e; ++i)
+      {
         differential::ik_differential(chain.f64, lo, up, td + 16 * K * i, K, qd + n * i, options,
                                       out + K * n * i, res + K * i);
+        for (std::ptrdiff_t k = 0; k < K; ++k)
+          rd[K * i + k] = final_residual(chain.f64, td + 16 * (K * i + k), out + n * (K * i + k), rows);
+      }
     });
   }
   bool* cd = converged.mutable_data();
@@ -139,7 +187,7 @@ py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::ha
     od[i] = results[i].orientation_error;
   }
   return py::make_tuple(std::move(q_path), std::move(converged), std::move(iterations), std::move(position_error),
-                        std::move(orientation_error));
+                        std::move(orientation_error), std::move(residual));
 }
 
 }  // namespace
@@ -158,6 +206,7 @@ void bind_chain(py::module_& m) {
       .def("fk", &fk, py::arg("q"))
       .def("frames", &frames, py::arg("q"))
       .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"))
+      .def("point_jacobian", &point_jacobian, py::arg("q"), py::arg("rows"), py::arg("point"), py::arg("frame"))
       .def("ik_differential", &ik_differential, py::arg("T_targets"), py::arg("q0"), py::arg("lower"),
            py::arg("upper"), py::arg("damping"), py::arg("position_tolerance"), py::arg("orientation_tolerance"),
            py::arg("max_step"), py::arg("max_iterations"), py::arg("rows"));

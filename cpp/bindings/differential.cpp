@@ -3,6 +3,8 @@
 // vectors broadcast (NumPy rules) without copying the broadcast operands.
 #include "spotkin/differential.hpp"
 
+#include "spotkin/compatibility.hpp"
+
 #include <cmath>
 #include <string>
 
@@ -161,6 +163,41 @@ py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z
   return f32 ? run(float{}) : run(double{});
 }
 
+// Compatibility of dx with J, per broadcast sample: (compatible (...) bool, residual (...)).
+py::tuple compatible(py::handle J_obj, py::handle dx_obj, double tol) {
+  if (std::isnan(tol) || std::isinf(tol)) throw py::value_error("tol must be finite");
+  const JacobianArg J = jacobian_arg(J_obj);
+  py::array dx = as_real_array(dx_obj, "dx");
+  const Shape dx_lead = leading_shape(dx, "dx", {J.m});
+  const Shape batch = broadcast(J.leading, "J", dx_lead, "dx");
+  const bool f32 = is_float32(J.arr) && is_float32(dx);
+  auto run = [&](auto tag) -> py::tuple {
+    using T = decltype(tag);
+    auto Jc = contiguous<T>(J.arr);
+    auto dxc = contiguous<T>(dx);
+    auto residual = new_array<T>(batch, {});
+    py::array_t<bool> ok(batch);
+    const SampleIndex j_index(J.leading, batch), dx_index(dx_lead, batch);
+    const T* jd = Jc.data();
+    const T* dd = dxc.data();
+    T* rd = residual.mutable_data();
+    bool* od = ok.mutable_data();
+    const int m = J.m, n = J.n;
+    {
+      ReleaseGilFor release(count(batch));
+      parallel_for(count(batch), min_per_thread(m, n, true), [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+        for (std::ptrdiff_t i = b; i < e; ++i) {
+          const auto c = diff::compatibility<T>(jd + j_index(i) * m * n, dd + dx_index(i) * m, m, n, T(tol));
+          rd[i] = c.residual;
+          od[i] = c.compatible;
+        }
+      });
+    }
+    return py::make_tuple(std::move(ok), std::move(residual));
+  };
+  return f32 ? run(float{}) : run(double{});
+}
+
 // A per-matrix operation J (..., m, n) -> (..., *trailing) of dtype Out (T when void).
 template <typename Out, typename Kernel>
 py::object map_matrices(py::handle J_obj, bool svd, Kernel&& kernel_for_shape) {
@@ -219,6 +256,7 @@ struct RankOp {
 
 void bind_differential(py::module_& m) {
   m.def("dls", &dls, py::arg("J"), py::arg("dx"), py::arg("damping"), py::arg("nullspace") = py::none());
+  m.def("compatible", &compatible, py::arg("J"), py::arg("dx"), py::arg("tol") = -1.0);
   m.def("pinv", [](py::handle J) { return map_matrices<void>(J, false, PinvOp{}); }, py::arg("J"));
   m.def("nullspace_projector", [](py::handle J) { return map_matrices<void>(J, false, ProjectorOp{}); },
         py::arg("J"));

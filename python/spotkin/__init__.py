@@ -6,10 +6,11 @@ from . import dynamics, inertia, paul, trajectory, urdf
 from ._runtime import MAX_THREADS, get_num_threads, set_num_threads
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
+from ._workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
 from .chain import Chain, ChainSolutions, IKDifferentialInfo
-from .differential import dls, manipulability, nullspace_projector, pinv, rank, singular_values
+from .differential import compatible, dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .inertia import LinkInertials
 from .leg import Leg, LegSolutions
 from .robot import BodyFrames, BodyIK, BodyRates, Robot, StanceStatus, Standing
@@ -25,6 +26,7 @@ __all__ = [
     "BodyRates",
     "Chain",
     "ChainSolutions",
+    "Dexterity",
     "IKDifferentialInfo",
     "Leg",
     "LegSolutions",
@@ -35,7 +37,10 @@ __all__ = [
     "StanceStatus",
     "Standing",
     "Status",
+    "WorkspaceSamples",
     "body_transform",
+    "compatible",
+    "dexterity",
     "dls",
     "dynamics",
     "get_num_threads",
@@ -55,6 +60,8 @@ __all__ = [
     "transform",
     "translation",
     "urdf",
+    "workspace",
+    "workspace_volume",
 ]
 
 __version__ = "0.1.0"

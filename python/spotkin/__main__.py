@@ -1,7 +1,8 @@
 """The ``spotkin`` command line: ``spotkin demo`` runs the showcase on built-in data (``--plots DIR``
 also writes its pictures); ``spotkin inspect ROBOT.urdf`` shows what a description holds and what
 spotkin recognises; ``spotkin plot ROBOT.urdf`` draws a robot in its nominal or zero stance;
-``spotkin batch OPERATION`` runs a batch kernel over datasets on disk (``spotkin[dask]``)."""
+``spotkin batch OPERATION`` runs a batch kernel over datasets on disk (``spotkin[dask]``);
+``spotkin workspace --robot spot`` estimates a leg's workspace volume and an arm's dexterous region."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from . import __version__, _batch, robots
 from ._runtime import get_num_threads
 from ._status import Status
 from ._transforms import translation
+from .arm import SpotArm
 from .body import body_transform
 from .chain import Chain
 from .leg import SLOT_NAMES
@@ -487,6 +489,67 @@ def plot_stance(
     return 0
 
 
+def workspace_report(
+    source: str = "spot",
+    samples: int = 2_000_000,
+    spacing: float = 0.05,
+    orientations: int = 128,
+    seed: int = 0,
+) -> int:
+    """Print the workspace volume of the robot's first leg (:func:`spotkin.workspace_volume`, ``samples``
+    Monte Carlo points) and, with an arm, its dexterity (:func:`spotkin.dexterity` on a grid of
+    ``spacing`` with ``orientations`` orientations per position). Deterministic for a given ``seed``."""
+    from ._workspace import dexterity, workspace_volume
+
+    robot = _load_robot(source)
+    name = robot.name or source
+    print(f"spotkin {__version__} workspace: {name} (seed {seed})")
+    if robot.legs:
+        leg = robot.legs[0]
+        start = time.perf_counter()
+        volume, error = workspace_volume(leg, n=samples, seed=seed)
+        elapsed = time.perf_counter() - start
+        print(
+            f"leg {robot.leg_names[0]}: workspace volume within the joint limits {1e3 * volume:.1f} L "
+            f"(± {1e3 * error:.1f} L, one standard error; {samples:,} points tested by the closed-form IK, "
+            f"{elapsed:.1f} s)"
+        )
+    arm = robot.arm
+    if arm is not None:
+        start = time.perf_counter()
+        dex = dexterity(arm, spacing=spacing, orientations=orientations, seed=seed)
+        elapsed = time.perf_counter() - start
+        print(
+            f"arm: {len(dex.positions):,} grid positions ({1e3 * spacing:.0f} mm spacing) x {orientations} "
+            f"orientations uniform on SO(3), IK within the limits ({elapsed:.1f} s)"
+        )
+        print(f"  reached with some sampled orientation: {1e3 * dex.volume(1e-12):.0f} L")
+        for level in (0.5, 0.9, 1.0):
+            print(
+                f"  reached with >= {100 * level:.0f} % of the orientations: {1e3 * dex.volume(level):.1f} L"
+            )
+        print(
+            f"  best position: {100 * dex.fraction.max():.1f} % of the orientations, at "
+            f"{np.array2string(dex.positions[np.argmax(dex.fraction)], precision=3)} m (body frame)"
+        )
+        best = dex.fraction >= 0.5
+        if best.any():
+            low, high = dex.positions[best].min(0), dex.positions[best].max(0)
+            print(
+                f"  the >= 50 % region spans x {low[0]:.2f}..{high[0]:.2f}, y {low[1]:.2f}..{high[1]:.2f}, "
+                f"z {low[2]:.2f}..{high[2]:.2f} m"
+            )
+        if isinstance(arm, SpotArm):  # the same arm with its joint limits removed, for comparison
+            free = dexterity(
+                SpotArm(*arm._params[:6], limits=None), spacing=spacing, orientations=orientations, seed=seed
+            )
+            print(
+                f"  without joint limits: every sampled orientation at {1e3 * free.volume(1.0):.1f} L of "
+                f"positions, >= 50 % at {1e3 * free.volume(0.5):.1f} L"
+            )
+    return 0
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         width, height = (int(part) for part in text.lower().split("x"))
@@ -541,6 +604,28 @@ def main(argv: list[str] | None = None) -> int:
         "--size", type=_size, default=(800, 600), help="WIDTHxHEIGHT in pixels (800x600)"
     )
     plot_parser.add_argument("--dpi", type=_positive_int, default=100, help=dpi_help)
+    workspace_parser = commands.add_parser(
+        "workspace", help="estimate a leg's workspace volume and an arm's dexterous region by sampling"
+    )
+    workspace_parser.add_argument(
+        "--robot", default="spot", help="spot (built-in), a packaged name or a URDF path"
+    )
+    workspace_parser.add_argument(
+        "--samples",
+        type=_positive_int,
+        default=2_000_000,
+        help="Monte Carlo points for the leg volume (default 2,000,000)",
+    )
+    workspace_parser.add_argument(
+        "--spacing", type=float, default=0.05, help="arm grid spacing, m (default 0.05)"
+    )
+    workspace_parser.add_argument(
+        "--orientations",
+        type=_positive_int,
+        default=128,
+        help="orientations sampled per arm grid position (default 128)",
+    )
+    workspace_parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     _batch.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/_batch.py)
     args = parser.parse_args(argv)
     if args.command == "batch":
@@ -556,6 +641,12 @@ def main(argv: list[str] | None = None) -> int:
             return plot_stance(args.urdf, args.out, args.stance, args.size, args.dpi)
         except (ImportError, OSError, ValueError) as error:
             print(f"spotkin plot: {error}", file=sys.stderr)
+            return 1
+    if args.command == "workspace":
+        try:
+            return workspace_report(args.robot, args.samples, args.spacing, args.orientations, args.seed)
+        except (OSError, ValueError) as error:
+            print(f"spotkin workspace: {error}", file=sys.stderr)
             return 1
     if args.command == "inspect":
         try:

@@ -83,6 +83,12 @@ class IKDifferentialInfo(NamedTuple):
     """float64: final |p_target - p| (m); NaN for non-finite input."""
     orientation_error: np.ndarray
     """float64: final |log(R_target R^T)| (rad), reported for both tasks."""
+    residual: np.ndarray
+    """float64: the compatibility residual ``|(I - J J^+) e|`` of the final error e (the task's rows)
+    against the base-frame Jacobian J at the returned joints, as :func:`spotkin.compatible`
+    computes it. Near 0: the error lies in the range of J and a further step reduces it to first
+    order; larger: part of it is out of J's range (a singular configuration, or fewer joints than
+    task rows), and the steps were least-squares ones. NaN for invalid input."""
 
 
 class Chain:
@@ -299,19 +305,44 @@ class Chain:
         """
         return self._core.frames(q)
 
-    def jacobian(self, q: ArrayLike, frame: Literal["base", "tool"] = "base") -> np.ndarray:
-        """Geometric Jacobian [v; w] of the tool point: q (..., dof) -> (..., 6, dof).
+    def jacobian(self, q: ArrayLike, frame: str | int = "base", *, point: str | int = "tool") -> np.ndarray:
+        """Geometric Jacobian [v; w]: q (..., dof) -> (..., 6, dof).
 
-        Column j is [z_j x (p_tool - o_j); z_j] for a revolute joint and [z_j; 0]
-        for a prismatic one, where z_j is joint j's axis and o_j a point on it.
-        ``frame="base"`` expresses both blocks in the base frame; ``frame="tool"``
-        rotates them into the tool frame (same point, v and w in tool axes).
+        By default of the tool point in the base frame: column j is [z_j x (p_tool - o_j); z_j] for a
+        revolute joint and [z_j; 0] for a prismatic one, where z_j is joint j's axis and o_j a point
+        on it. ``frame="tool"`` rotates both blocks into the tool frame (same point, tool axes).
+
+        **Preferential Jacobian** J_k(j): ``point=k`` takes the origin of frame k instead of the tool
+        point, ``frame=j`` expresses both blocks in frame j's axes. Frames are numbered as
+        :meth:`frames`: 0 is the base transform's frame (frame 0 of a DH table), i = 1..dof the frame
+        after joint i, dof + 1 the tool (also ``"tool"``); ``frame="base"`` is the reference frame
+        the poses are given in (the same axes as frame 0 when ``base`` is the identity). Columns of
+        the joints after frame k are zero (they do not move its origin), and
+
+            J_k(j) = [[R_j^T, 0], [0, R_j^T]] J_k(base),
+
+        R_j frame j's rotation: the velocity of O_k and the angular velocity of frame k, both
+        relative to the base, written in frame j's axes. ``point`` and ``frame`` must be integers in
+        [0, dof + 1] or the strings above (``ValueError`` out of range, ``TypeError`` for another type).
         """
-        return self._core.jacobian(q, 6, _tool_frame(frame))
+        return self._point_jacobian(q, 6, frame, point)
 
-    def position_jacobian(self, q: ArrayLike, frame: Literal["base", "tool"] = "base") -> np.ndarray:
-        """Top three rows of :meth:`jacobian`, d p_tool / d q: (..., 3, dof)."""
-        return self._core.jacobian(q, 3, _tool_frame(frame))
+    def position_jacobian(
+        self, q: ArrayLike, frame: str | int = "base", *, point: str | int = "tool"
+    ) -> np.ndarray:
+        """Top three rows of :meth:`jacobian`, d p / d q of the point (..., 3, dof), in ``frame``'s axes."""
+        return self._point_jacobian(q, 3, frame, point)
+
+    def _point_jacobian(self, q, rows: int, frame, point) -> np.ndarray:
+        if isinstance(point, str) and point == "tool" and isinstance(frame, str):
+            return self._core.jacobian(q, rows, _tool_frame(frame))  # the tool point: the fast kernel
+        last = self.dof + 1
+        return self._core.point_jacobian(
+            q,
+            rows,
+            _frame_index(point, "point", last, ("tool",)),
+            _frame_index(frame, "frame", last, ("base", "tool")),
+        )
 
     # -- dynamics (spotkin.dynamics; the chain's inertials) --------------------------------------------
 
@@ -705,21 +736,23 @@ class Chain:
         max_iter = as_index(max_iter, "max_iter")
         if not 0 <= max_iter <= 2**31 - 1:
             raise ValueError(f"max_iter must be an int in [0, 2**31 - 1], got {max_iter!r}")
-        q_path, converged, iterations, position_error, orientation_error = self._core.ik_differential(
-            path,
-            start,
-            self._limits[0],
-            self._limits[1],
-            float(damping),
-            float(position_tolerance),
-            float(orientation_tolerance),
-            float(max_step),
-            int(max_iter),
-            6 if task == "pose" else 3,
+        q_path, converged, iterations, position_error, orientation_error, residual = (
+            self._core.ik_differential(
+                path,
+                start,
+                self._limits[0],
+                self._limits[1],
+                float(damping),
+                float(position_tolerance),
+                float(orientation_tolerance),
+                float(max_step),
+                int(max_iter),
+                6 if task == "pose" else 3,
+            )
         )
         if targets.dtype == np.float32 and q0_arr.dtype == np.float32:
             q_path = q_path.astype(np.float32)
-        info = IKDifferentialInfo(converged, iterations, position_error, orientation_error)
+        info = IKDifferentialInfo(converged, iterations, position_error, orientation_error, residual)
         if single:
             q_path = q_path[..., 0, :]
             info = IKDifferentialInfo(*(_scalar(field[..., 0]) for field in info))
@@ -773,7 +806,20 @@ def _scalar(array: np.ndarray):
     return array[()] if array.ndim == 0 else array
 
 
+def _frame_index(value, name: str, last: int, words: tuple[str, ...]) -> int:
+    """A frame of :meth:`Chain.frames` as its index (``"tool"``: last, ``"base"``: -1, the reference
+    frame's axes)."""
+    if isinstance(value, str):
+        if value not in words:
+            raise ValueError(f"{name} must be an integer in [0, {last}] or one of {words}, got {value!r}")
+        return last if value == "tool" else -1
+    index = as_index(value, name)
+    if not 0 <= index <= last:
+        raise ValueError(f"{name} must be a frame index in [0, {last}] (as Chain.frames), got {index}")
+    return index
+
+
 def _tool_frame(frame: str) -> bool:
     if frame not in ("base", "tool"):
-        raise ValueError(f"frame must be 'base' or 'tool', got {frame!r}")
+        raise ValueError(f"frame must be 'base', 'tool' or a frame index, got {frame!r}")
     return frame == "tool"

@@ -498,23 +498,26 @@ def fk(model, q):
     return _lazy(_plan_fk(model, q))
 
 
-def _plan_jacobian(model, q, frame=None) -> _Plan:
+def _plan_jacobian(model, q, frame=None, point=None) -> _Plan:
     model = _model(model)
     options = {}
-    if frame is not None:
+    for name, value in (("frame", frame), ("point", point)):
+        if value is None:
+            continue
         if not isinstance(model, Chain):
             raise ValueError(
-                f"frame is for a Chain's Jacobian; a {type(model).__name__}'s has none, got {frame!r}"
+                f"{name} is for a Chain's Jacobian; a {type(model).__name__}'s has none, got {value!r}"
             )
-        options["frame"] = frame
+        options[name] = value
     return _plan(model, "jacobian", [("q", q, (_dof(model),))], options, (), "J")
 
 
-def jacobian(model, q, frame: str | None = None):
+def jacobian(model, q, frame: str | int | None = None, point: str | int | None = None):
     """Lazy Jacobians of an :class:`~spotkin.Leg` ((..., 3, 3), d foot / d q), an
     :class:`~spotkin.SpotArm` ((..., 6, 6)) or a :class:`~spotkin.Chain` ((..., 6, dof)); ``frame``
-    (``"base"`` or ``"tool"``, default ``"base"``) only for a chain, as :meth:`Chain.jacobian`."""
-    return _lazy(_plan_jacobian(model, q, frame))
+    (default ``"base"``) and ``point`` (default ``"tool"``) only for a chain, as
+    :meth:`Chain.jacobian` (the preferential Jacobian J_point(frame))."""
+    return _lazy(_plan_jacobian(model, q, frame, point))
 
 
 def _plan_ik(model, target, seed=None, fallback=None) -> _Plan:

@@ -88,3 +88,33 @@ def jacobian(rows, convention: str, q, base=None, tool=None, frame: str = "base"
         J[:3] = R.T @ J[:3]
         J[3:] = R.T @ J[3:]
     return J
+
+
+def point_jacobian(rows, convention: str, q, point: int, frame="base", base=None, tool=None) -> np.ndarray:
+    """Preferential Jacobian J_k(j) [v; w] (6, n): the velocity of the origin O_k of frame k and the
+    angular velocity of frame k, relative to the base, in frame j's axes.
+
+    Frames as :func:`frames`: 0 the base transform, i = 1..n after joint i, n + 1 the tool;
+    ``frame="base"``: the reference axes. Column i, for a joint before frame k (i + 1 <= k):
+    revolute [z_i x (O_k - o_i); z_i], prismatic [z_i; 0]; zero for the joints after frame k.
+    Then both blocks are rotated by R_j^T (the course's change of frame of a Jacobian).
+    """
+    F = frames(rows, convention, q, base, tool)
+    O_k = F[point][:3, 3]
+    n = len(rows)
+    J = np.zeros((6, n))
+    for i in range(n):
+        if i + 1 > point:
+            continue  # joint i moves frames i + 1 onwards, not O_k
+        axis_frame = F[i + 1] if convention == "mdh" else F[i]
+        z, o = axis_frame[:3, 2], axis_frame[:3, 3]
+        if float(rows[i][0]) == 0:
+            J[:3, i] = np.cross(z, O_k - o)
+            J[3:, i] = z
+        else:
+            J[:3, i] = z
+    if frame != "base":
+        R = F[frame][:3, :3]
+        J[:3] = R.T @ J[:3]
+        J[3:] = R.T @ J[3:]
+    return J

@@ -1,4 +1,4 @@
-"""The course's small arms and leg (RRR arm, three-joint arm, classic-DH leg), rebuilt and checked,
+"""The course's small arms and leg (RRR arm, three-joint arm, classic-DH leg, PRPRR arm), rebuilt and checked,
 one sample at a time.
 
 Every IK is Paul's method with :mod:`spotkin.reference.paul` and returns EVERY solution:
@@ -57,6 +57,35 @@ Three-joint chain: the fixed rows merge into 2T1 = RotZ(q2) TransZ(h2) TransY(-l
 3T2 = RotZ(q3) TransZ(h3) TransY(-l3) RotX(90), i.e. DH rows (q2 - 90deg, d h2, a l2, 0),
 (q3, d h3, a l3, 0) and tool RotZ(90deg) RotX(90deg). The text gives no lengths;
 LEG_003_LENGTHS are illustrative.
+The course's PRPRR arm (the summary sheet's preferential-Jacobian exercise)
+---------------------------------------------------------------------
+The printed DHm table is garbled: its sigma row reads 0 0 0 0 0 (the name says 1 0 1 0 0), its
+"r" row holds an angle (pi/2), its theta row puts q1 where a prismatic joint has a constant, and
+the printed T_{i-1,i} (all with alpha = 0, T45 with both q5 and c5) match neither. Rebuilt here,
+DHm rows (sigma, d, alpha, r, theta), T = RotX(alpha) TransX(d) RotZ(theta) TransZ(r):
+    1  P  d1 = 1 (the table's a row)   alpha1 = 0                 r1 = q1, theta1 = 0
+    2  R  d2 = 0                       alpha2 = 0                 theta2 = q2
+    3  P  d3 = 0                       alpha3 = pi/2 (the "1")    r3 = q3, theta3 = -pi/2
+    4  R  d4 = 0                       alpha4 = 0                 theta4 = q4
+    5  R  d5 = 0                       alpha5 = pi/2              theta5 = q5 - pi/2
+    tool  O6 = O5 + 0.1 x5 (the table has no row 6; illustrative)
+alpha3 != 0 is forced (with alpha2 = alpha3 = 0 the two prismatic axes are parallel), as is
+alpha5 != 0 (with d5 = 0, alpha5 = 0 puts joints 4 and 5 on one axis): a cylindrical arm (lift,
+turn, reach) with a roll-pitch wrist. Only joints 1-3 enter J_3(2).
+Hand derivation of J_3(2), for any alpha2, theta2, alpha3, d3, r3 (so the tests can vary them):
+    column 1 (P): z1 in R2 = (R_12)^T e_z = RotZ(q2 + theta2)^T RotX(alpha2)^T e_z
+                = ( sin(q2 + theta2) sin(alpha2), cos(q2 + theta2) sin(alpha2), cos(alpha2) ),  w = 0
+    column 2 (R): z2 x O2O3 in R2, O2O3 = RotX(alpha3) (d3, 0, r3 + q3) = (d3, -sin(alpha3) r, cos(alpha3) r)
+                with r = r3 + q3: v = (sin(alpha3) r, d3, 0),  w = (0, 0, 1)
+    column 3 (P): z3 in R2 = RotX(alpha3) RotZ(theta3) e_z = (0, -sin(alpha3), cos(alpha3)),  w = 0
+    columns 4, 5: 0 (joints after frame 3 do not move O3)
+    (P1)  J_3(2) = [[s2 sa2,  sa3 (r3 + q3),  0,   0, 0],
+                    [c2 sa2,  d3,            -sa3, 0, 0],
+                    [ca2,     0,              ca3, 0, 0],
+                    [0, 0, 0, 0, 0], [0, 0, 0, 0, 0],
+                    [0,       1,              0,   0, 0]]
+It depends on q2 and q3 only (on q3 only for the rebuilt arm, alpha2 = 0): the reason to express
+O3's velocity in R2. For the rebuilt arm: v = (q3 q2', -q3', q1'), w = (0, 0, q2').
 """
 
 from __future__ import annotations
@@ -70,6 +99,7 @@ from .paul import type2, type6
 __all__ = [
     "ARM_002_LENGTHS",
     "LEG_003_LENGTHS",
+    "PRPRR_004_PARAMS",
     "RRR_001_LENGTHS",
     "RRR_001_STATED_LENGTHS",
     "RRR_001_TARGET",
@@ -82,6 +112,9 @@ __all__ = [
     "leg_003_fk",
     "leg_003_ik",
     "leg_003_jacobian",
+    "prprr_004_frames",
+    "prprr_004_jacobian_3_in_2",
+    "prprr_004_mdh",
     "rrr_001_dh",
     "rrr_001_fk",
     "rrr_001_ik",
@@ -266,3 +299,72 @@ def leg_003_dh(lengths=LEG_003_LENGTHS) -> tuple[np.ndarray, np.ndarray, np.ndar
     h1, h2, h3, l2, l3 = lengths
     rows = np.array([(0, 0.0, -_HALF_PI, h1, 0.0), (0, l2, 0.0, h2, -_HALF_PI), (0, l3, 0.0, h3, 0.0)])
     return rows, np.eye(4), _rot_z(_HALF_PI) @ _rot_x(_HALF_PI)
+
+
+# --- The course's PRPRR arm ----------------------------------------------------------------------
+
+PRPRR_004_PARAMS = {
+    "d1": 1.0,
+    "alpha2": 0.0,
+    "theta2": 0.0,
+    "alpha3": _HALF_PI,
+    "d3": 0.0,
+    "r3": 0.0,
+    "theta3": -_HALF_PI,
+    "alpha4": 0.0,
+    "alpha5": _HALF_PI,
+    "theta5": -_HALF_PI,
+    "tool": 0.1,
+}
+
+
+def prprr_004_mdh(params=PRPRR_004_PARAMS) -> tuple[np.ndarray, np.ndarray]:
+    """(rows (5, 5) as (sigma, d, alpha, r, theta) for ``spotkin.Chain.from_mdh``, tool (4, 4))."""
+    P = params
+    rows = np.array(
+        [
+            (1, P["d1"], 0.0, 0.0, 0.0),
+            (0, 0.0, P["alpha2"], 0.0, P["theta2"]),
+            (1, P["d3"], P["alpha3"], P["r3"], P["theta3"]),
+            (0, 0.0, P["alpha4"], 0.0, 0.0),
+            (0, 0.0, P["alpha5"], 0.0, P["theta5"]),
+        ]
+    )
+    return rows, _trans(P["tool"], 0, 0)
+
+
+def _mdh(d: float, alpha: float, r: float, theta: float) -> np.ndarray:
+    return _rot_x(alpha) @ _trans(d, 0, 0) @ _rot_z(theta) @ _trans(0, 0, r)
+
+
+def prprr_004_frames(q, params=PRPRR_004_PARAMS) -> list[np.ndarray]:
+    """[T_00 = I, T_01, ..., T_05, T_06] of the rebuilt arm, multiplied out from its DHm rows."""
+    P = params
+    q1, q2, q3, q4, q5 = (float(v) for v in q)
+    links = [
+        _mdh(P["d1"], 0.0, q1, 0.0),
+        _mdh(0.0, P["alpha2"], 0.0, P["theta2"] + q2),
+        _mdh(P["d3"], P["alpha3"], P["r3"] + q3, P["theta3"]),
+        _mdh(0.0, P["alpha4"], 0.0, q4),
+        _mdh(0.0, P["alpha5"], 0.0, P["theta5"] + q5),
+        _trans(P["tool"], 0, 0),
+    ]
+    out = [np.eye(4)]
+    for link in links:
+        out.append(out[-1] @ link)
+    return out
+
+
+def prprr_004_jacobian_3_in_2(q, params=PRPRR_004_PARAMS) -> np.ndarray:
+    """J_3(2) (6, 5), the hand derivation (P1) of the module docstring."""
+    P = params
+    q2, q3 = float(q[1]), float(q[2])
+    sa2, ca2 = math.sin(P["alpha2"]), math.cos(P["alpha2"])
+    sa3, ca3 = math.sin(P["alpha3"]), math.cos(P["alpha3"])
+    s2, c2 = math.sin(q2 + P["theta2"]), math.cos(q2 + P["theta2"])
+    J = np.zeros((6, 5))
+    J[:3, 0] = (s2 * sa2, c2 * sa2, ca2)
+    J[:3, 1] = (sa3 * (P["r3"] + q3), P["d3"], 0.0)
+    J[3:, 1] = (0.0, 0.0, 1.0)
+    J[:3, 2] = (0.0, -sa3, ca3)
+    return J

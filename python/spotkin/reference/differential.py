@@ -88,3 +88,23 @@ def log_rotation(R: np.ndarray) -> np.ndarray:
     k = int(np.argmax(np.diag(R)))
     a = (R[:, k] + np.eye(3)[:, k]) / math.sqrt(2 * (1 + R[k, k]))
     return theta * a
+
+
+def compatibility_residual(J: np.ndarray, dx: np.ndarray) -> float:
+    """|(I - J J^+) dx|: the distance from dx to the range of J (J^+ with rank's cutoff)."""
+    J = np.asarray(J, dtype=np.float64)
+    dx = np.asarray(dx, dtype=np.float64)
+    return float(np.linalg.norm(dx - J @ (pinv(J) @ dx)))
+
+
+def compatible(
+    J: np.ndarray, dx: np.ndarray, tol: float | None = None, eps: float = np.finfo(np.float64).eps
+):
+    """(residual <= tol, residual); tol by default max(m, n) eps (|dx| + sigma_max |J^+ dx|)."""
+    J = np.asarray(J, dtype=np.float64)
+    dx = np.asarray(dx, dtype=np.float64)
+    residual = compatibility_residual(J, dx)
+    if tol is None:
+        sigma_max = singular_values(J)[0]
+        tol = max(J.shape) * eps * (np.linalg.norm(dx) + sigma_max * np.linalg.norm(pinv(J) @ dx))
+    return residual <= tol, residual

@@ -1,0 +1,236 @@
+"""Workspaces by sampling: the reachable set of a leg, an arm or a chain within its joint limits,
+the volume of a leg's workspace, and the dexterity of a 6-joint arm.
+
+- :func:`workspace` samples joint space uniformly within the limits, maps the samples through the
+  C++ forward kinematics, and counts for each reached point (or pose, for 6-joint arms) how many
+  closed-form IK branches within the limits reach it.
+- :func:`workspace_volume` estimates the volume of the set of positions a 3-joint leg or chain
+  reaches within its limits: Monte Carlo over a box that holds the sampled workspace, each point
+  tested exactly by the closed-form IK (``valid`` in some slot). Unbiased, with its standard error.
+- :func:`dexterity`: for a 6-joint arm or chain, on a grid of tool positions, the fraction of
+  uniformly sampled orientations for which the closed-form IK finds a solution within the limits.
+  The dexterous workspace (every orientation reachable) is where the fraction is 1; with M sampled
+  orientations, a position where all M are reached misses at most about 3/M of the orientations
+  (95 % confidence).
+
+Batches run through the batched C++ kernels (FK, IK), a bounded number of samples at a time.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ._boundary import as_finite, as_index
+from ._status import Status
+from .arm import SpotArm
+from .chain import Chain
+from .leg import Leg
+
+__all__ = ["Dexterity", "WorkspaceSamples", "dexterity", "workspace", "workspace_volume"]
+
+_BATCH = 65_536
+
+
+class WorkspaceSamples(NamedTuple):
+    """Samples of a workspace, from :func:`workspace`."""
+
+    q: np.ndarray
+    """(n, dof) joint values, uniform within the limits (revolute joints without limits: [-pi, pi))."""
+    points: np.ndarray
+    """(n, 3) the tool point (a leg's foot) for each sample, in the base (leg) frame."""
+    branches: np.ndarray
+    """(n,) int8: the number of closed-form IK solutions within the limits that reach the sample's
+    point (3-joint legs and chains, position IK) or pose (6-joint arms and chains, pose IK); at least
+    1 up to rounding at the boundary. -1 for a chain without a closed form."""
+
+
+class Dexterity(NamedTuple):
+    """The dexterity of a 6-joint arm on a grid of positions, from :func:`dexterity`."""
+
+    positions: np.ndarray
+    """(G, 3) grid positions of the tool point, in the base frame."""
+    fraction: np.ndarray
+    """(G,) the fraction of the sampled orientations reached within the limits."""
+    spacing: float
+    """The grid spacing (m): each position stands for a cube of ``spacing**3``."""
+    orientations: int
+    """The number of orientations sampled per position."""
+
+    def volume(self, at_least: float = 1.0) -> float:
+        """The volume (m³) of the grid cells whose fraction is at least ``at_least`` (1: the
+        dexterous workspace, every sampled orientation reached); ``at_least`` a finite number."""
+        at_least = as_finite(at_least, "at_least")
+        return float(np.count_nonzero(self.fraction >= at_least)) * self.spacing**3
+
+
+def _kind(obj) -> str:
+    if isinstance(obj, Leg):
+        return "leg"
+    if isinstance(obj, SpotArm):
+        return "arm"
+    if isinstance(obj, Chain):
+        return "chain"
+    raise TypeError(f"obj must be a spotkin Leg, SpotArm or Chain, got {type(obj).__name__}")
+
+
+def _limits(obj, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    if kind == "chain":
+        lower, upper = obj.lower, obj.upper
+        prismatic = obj.sigma == 1
+    else:
+        lower, upper = obj.limits[:, 0], obj.limits[:, 1]
+        prismatic = np.zeros(lower.shape, dtype=bool)
+    if (prismatic & ~(np.isfinite(lower) & np.isfinite(upper))).any():
+        raise ValueError("sampling a workspace needs finite limits on every prismatic joint")
+    lower = np.where(np.isfinite(lower), lower, -np.pi)
+    upper = np.where(np.isfinite(upper), upper, np.pi)
+    return lower, upper
+
+
+def _tool_points(obj, kind: str, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(points (n, 3), poses (n, 4, 4) or None for a leg)."""
+    if kind == "leg":
+        return obj.fk(q), None
+    T = obj.fk(q)
+    return T[..., :3, 3], T
+
+
+def _branch_counts(obj, kind: str, points: np.ndarray, poses: np.ndarray | None) -> np.ndarray:
+    if kind == "leg":
+        return obj.ik_all(points).valid.sum(-1).astype(np.int8)
+    if kind == "arm":
+        return obj.ik_all(poses).valid.sum(-1).astype(np.int8)
+    try:
+        if obj.dof == 3:
+            return obj.ik_position(points).valid.sum(-1).astype(np.int8)
+        if obj.dof == 6:
+            return obj.ik(poses).valid.sum(-1).astype(np.int8)
+    except ValueError:  # no closed form for this chain
+        pass
+    return np.full(len(points), -1, dtype=np.int8)
+
+
+def _rng(seed) -> np.random.Generator:
+    return np.random.default_rng(None if seed is None else as_index(seed, "seed"))
+
+
+def _count(n, name: str) -> int:
+    n = as_index(n, name)
+    if n < 0:
+        raise ValueError(f"{name} must be >= 0, got {n}")
+    return n
+
+
+def workspace(obj, n: int = 100_000, seed: int | None = 0) -> WorkspaceSamples:
+    """``n`` samples of the workspace of ``obj`` (a :class:`Leg`, :class:`SpotArm` or
+    :class:`Chain`), drawn uniformly in joint space within its limits (``seed`` for
+    :func:`numpy.random.default_rng`; None for fresh entropy), with their FK points and branch
+    counts (see :class:`WorkspaceSamples`). A prismatic joint without finite limits raises
+    ``ValueError``; another object ``TypeError``."""
+    kind = _kind(obj)
+    n = _count(n, "n")
+    lower, upper = _limits(obj, kind)
+    rng = _rng(seed)
+    q = lower + (upper - lower) * rng.random((n, lower.size))
+    points = np.empty((n, 3))
+    branches = np.empty(n, dtype=np.int8)
+    for start in range(0, n, _BATCH):
+        block = slice(start, min(n, start + _BATCH))
+        points[block], poses = _tool_points(obj, kind, q[block])
+        branches[block] = _branch_counts(obj, kind, points[block], poses)
+    return WorkspaceSamples(q, points, branches)
+
+
+def _position_reachable(obj, kind: str, points: np.ndarray) -> np.ndarray:
+    if kind == "leg":
+        return obj.ik_all(points).valid.any(-1)
+    if kind == "chain" and obj.dof == 3:
+        return obj.ik_position(points).valid.any(-1)
+    raise ValueError("workspace_volume needs a Leg or a 3-joint Chain (position IK in closed form)")
+
+
+def workspace_volume(obj, n: int = 1_000_000, seed: int | None = 0, pad: float = 0.05):
+    """Volume (m³) of the positions a :class:`Leg` or 3-joint :class:`Chain` reaches within its
+    limits, with its standard error: (volume, standard_error).
+
+    The box is the bounding box of 100,000 workspace samples (:func:`workspace`), widened by
+    ``pad`` (in [0, 1]) times its size on each side so it holds the whole workspace; ``n`` points uniform in
+    the box are tested by the closed-form IK (some slot valid). volume = box volume x hit fraction
+    p, standard error = box volume x sqrt(p (1 - p) / n)."""
+    kind = _kind(obj)
+    n = _count(n, "n")
+    if n < 1:
+        raise ValueError("n must be >= 1")
+    pad = as_finite(pad, "pad", 0.0)
+    if pad > 1.0:
+        raise ValueError(f"pad must be in [0, 1] (a fraction of the box size), got {pad}")
+    if kind != "leg" and not (kind == "chain" and obj.dof == 3):
+        raise ValueError("workspace_volume needs a Leg or a 3-joint Chain (position IK in closed form)")
+    rng = _rng(seed)
+    points = workspace(obj, 100_000, int(rng.integers(2**63))).points
+    low, high = points.min(0), points.max(0)
+    size = high - low
+    low, high = low - pad * size, high + pad * size
+    box = float(np.prod(high - low))
+    hits = 0
+    for start in range(0, n, _BATCH):
+        m = min(n, start + _BATCH) - start
+        hits += int(np.count_nonzero(_position_reachable(obj, kind, low + (high - low) * rng.random((m, 3)))))
+    p = hits / n
+    return box * p, box * float(np.sqrt(p * (1 - p) / n))
+
+
+def _random_rotations(rng: np.random.Generator, m: int) -> np.ndarray:
+    """(m, 3, 3) rotations uniform on SO(3) (normalised Gaussian quaternions)."""
+    quat = rng.standard_normal((m, 4))
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    x, y, z, w = quat.T
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
+
+
+def dexterity(
+    obj, spacing: float = 0.05, orientations: int = 64, seed: int | None = 0, samples: int = 100_000
+) -> Dexterity:
+    """The dexterity of a 6-joint arm (:class:`SpotArm`, or a 6-joint :class:`Chain` with a
+    closed-form :meth:`Chain.ik`): on a grid of tool positions with ``spacing`` (m) covering the
+    bounding box of ``samples`` workspace samples, the fraction of ``orientations`` rotations
+    (uniform on SO(3), the same set at every position) for which the IK finds a solution within the
+    limits. See :class:`Dexterity`; positions that no sampled orientation reaches are kept with
+    fraction 0."""
+    kind = _kind(obj)
+    if kind == "leg" or (kind == "chain" and obj.dof != 6):
+        raise ValueError("dexterity needs a 6-joint arm or chain")
+    spacing = as_finite(spacing, "spacing", 0.0, strict=True)
+    orientations = _count(orientations, "orientations")
+    if orientations < 1:
+        raise ValueError("orientations must be >= 1")
+    samples = _count(samples, "samples")
+    if samples < 1:
+        raise ValueError("samples must be >= 1")
+    rng = _rng(seed)
+    points = workspace(obj, samples, int(rng.integers(2**63))).points
+    low, high = points.min(0), points.max(0)
+    axes = [np.arange(lo + spacing / 2, hi + spacing / 2, spacing) for lo, hi in zip(low, high)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    rotations = _random_rotations(rng, orientations)
+    solve = obj.ik if kind == "arm" else obj.ik_nearest
+    reached = np.zeros(len(grid), dtype=np.int64)
+    per_block = max(1, _BATCH // orientations)
+    for start in range(0, len(grid), per_block):
+        block = grid[start : start + per_block]
+        T = np.zeros((len(block), orientations, 4, 4))
+        T[..., :3, :3] = rotations
+        T[..., :3, 3] = block[:, None, :]
+        T[..., 3, 3] = 1.0
+        status = solve(T.reshape(-1, 4, 4))[1].reshape(len(block), orientations)
+        reached[start : start + len(block)] = np.count_nonzero(status == Status.OK, axis=1)
+    return Dexterity(grid, reached / orientations, spacing, orientations)
