@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._boundary import as_real
+from ._transforms import rotation_x, rotation_z, translation
 
 __all__ = ["LinkInertials", "Tree", "link_inertials", "merge_inertials", "model_tree", "tree_of"]
 
@@ -243,22 +244,6 @@ def _frozen_tree(names, parents, placements, axes, types, inertials, root, feet,
 # --------------------------------------------------------------------------- trees from chains
 
 
-def _rot_x(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]], dtype=float)
-
-
-def _rot_z(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], dtype=float)
-
-
-def _trans(x: float, y: float, z: float) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, 3] = (x, y, z)
-    return T
-
-
 def _chain_tree(chain) -> Tree:
     """A chain as a fixed-base tree whose root frame is the world (the chain's base folded in).
 
@@ -282,12 +267,13 @@ def _chain_tree(chain) -> Tree:
         axes = joint_axes / np.linalg.norm(joint_axes, axis=1, keepdims=True)
     elif chain.convention == "mdh":
         for j, (_, d, alpha, r, theta) in enumerate(chain.rows):
-            placements[j] = _rot_x(alpha) @ _trans(d, 0, 0) @ _rot_z(theta) @ _trans(0, 0, r)
+            screw_x = rotation_x(alpha) @ translation([d, 0, 0])
+            placements[j] = screw_x @ rotation_z(theta) @ translation([0, 0, r])
     else:  # classic DH
         previous = np.eye(4)
         for j, (_, a, alpha, d, theta) in enumerate(chain.rows):
-            after = _trans(0, 0, d) @ _trans(a, 0, 0) @ _rot_x(alpha)
-            placements[j] = previous @ _rot_z(theta)
+            after = translation([0, 0, d]) @ translation([a, 0, 0]) @ rotation_x(alpha)
+            placements[j] = previous @ rotation_z(theta)
             R, t = after[:3, :3], after[:3, 3]
             com[j] = R @ com[j] + t
             inertia[j] = R @ inertia[j] @ R.T

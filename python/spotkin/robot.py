@@ -425,6 +425,16 @@ class Robot:
         takes), then ``q``: the legs' joints (..., 3 n_legs), followed by the arm's when given (..., 3 n_legs
         + n_arm; else the arm at zero). Leading dimensions broadcast; an invalid pose gives NaN there."""
         T = body_transform(body_pose, seq)
+        q = self._legs_and_arm(q)
+        lead = broadcast_lead(body_pose=(T.shape[:-2], T.shape), q=(q.shape[:-1], q.shape))
+        T = np.broadcast_to(T, (*lead, 4, 4))
+        q = np.broadcast_to(q, (*lead, q.shape[-1]))
+        out = np.concatenate([T[..., :3, 3], _quaternion(T[..., :3, :3]), q], axis=-1)
+        # a sample with an invalid pose or a NaN or Inf joint: NaN throughout
+        return np.where(np.isfinite(out).all(axis=-1, keepdims=True), out, np.nan)
+
+    def _legs_and_arm(self, q: ArrayLike) -> np.ndarray:
+        """q (..., 3 n_legs) or (..., 3 n_legs + n_arm) in float64, the arm at zero if not given."""
         q = as_real(q, "q", np.float64)
         legs, arm = 3 * len(self._legs), len(self.arm_joint_names)
         if q.ndim == 0 or q.shape[-1] not in {legs, legs + arm}:
@@ -432,12 +442,7 @@ class Robot:
             raise ValueError(f"q must have shape (..., {widths}), got {q.shape}")
         if q.shape[-1] == legs and arm:
             q = np.concatenate([q, np.zeros((*q.shape[:-1], arm))], axis=-1)
-        lead = broadcast_lead(body_pose=(T.shape[:-2], T.shape), q=(q.shape[:-1], q.shape))
-        T = np.broadcast_to(T, (*lead, 4, 4))
-        q = np.broadcast_to(q, (*lead, q.shape[-1]))
-        out = np.concatenate([T[..., :3, 3], _quaternion(T[..., :3, :3]), q], axis=-1)
-        # a sample with an invalid pose or a NaN or Inf joint: NaN throughout
-        return np.where(np.isfinite(out).all(axis=-1, keepdims=True), out, np.nan)
+        return q
 
     def center_of_mass(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """The whole robot's centre of mass in the world (..., 3); ``q`` as in :meth:`floating_q`. float32
@@ -478,7 +483,7 @@ class Robot:
         and NaN in that sample.
         """
         floating = self.floating_base
-        n_legs, n_arm = len(self._legs), len(self.arm_joint_names)
+        n_legs = len(self._legs)
         g = as_real(gravity, "gravity", np.float64)
         if g.shape != (3,):
             raise ValueError(f"gravity must have shape (3,), got {g.shape}")
@@ -488,12 +493,7 @@ class Robot:
             raise ValueError(f"gravity must be finite and the weight m |g| too, got {g}")
         T = body_transform(body_pose, seq)
         f32 = real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32
-        q = as_real(q, "q", np.float64)
-        if q.ndim == 0 or q.shape[-1] not in {3 * n_legs, 3 * n_legs + n_arm}:
-            widths = f"{3 * n_legs}" if not n_arm else f"{3 * n_legs} or {3 * n_legs + n_arm}"
-            raise ValueError(f"q must have shape (..., {widths}), got {q.shape}")
-        if q.shape[-1] == 3 * n_legs and n_arm:
-            q = np.concatenate([q, np.zeros((*q.shape[:-1], n_arm))], axis=-1)
+        q = self._legs_and_arm(q)
         leads = {"body_pose": (T.shape[:-2], T.shape), "q": (q.shape[:-1], q.shape)}
         if stance is None:
             stance_arr = np.ones(n_legs)
