@@ -45,20 +45,21 @@ def register_entries(api) -> None:
         rows = (value.shape[0] + 1) // 2
         return da.from_array(value, chunks=(rows, *value.shape[1:]), name=False)
 
-    def computed(result):
-        """The lazy result computed, with the in-memory call's structure."""
+    def computed(result, statuses=sk.Status):
+        """The lazy result computed, with the in-memory call's structure; a single sample's status
+        (a 0-d int8 array) read as a member of ``statuses``, as the in-memory twin returns it."""
         leaves = list(result) if isinstance(result, tuple) else [result]
         if not all(isinstance(leaf, da.Array) for leaf in leaves):
             raise AssertionError(f"not dask arrays: {[type(leaf).__name__ for leaf in leaves]}")
         values = [np.asarray(v) for v in dask.compute(*leaves, scheduler="synchronous")]
-        values = [sk.Status(int(v)) if v.ndim == 0 and v.dtype == np.int8 else v for v in values]
+        values = [statuses(int(v)) if v.ndim == 0 and v.dtype == np.int8 else v for v in values]
         if not isinstance(result, tuple):
             return values[0]
         return type(result)._make(values) if hasattr(type(result), "_fields") else tuple(values)
 
     def identical(a, b) -> bool:
         """Same dtype, shape and values (NaN where NaN); a status as its int8 value."""
-        a, b = (np.int8(v) if isinstance(v, sk.Status) else v for v in (a, b))
+        a, b = (np.int8(v) if isinstance(v, (sk.Status, sk.StanceStatus)) else v for v in (a, b))
         a, b = np.asarray(a), np.asarray(b)
         return (
             a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
@@ -89,7 +90,9 @@ def register_entries(api) -> None:
         slot.optional = True
         return slot
 
-    def twin(name, covers, function, twin_name, model, rename=None, extra=(), change=None):
+    def twin(
+        name, covers, function, twin_name, model, rename=None, extra=(), change=None, statuses=sk.Status
+    ):
         """An entry for ``function(model, ...)`` after the in-memory entry ``twin_name``; ``rename`` maps
         the Dask function's argument names to the twin's; ``change`` edits the twin's slots."""
         mem = memory[twin_name]
@@ -115,7 +118,7 @@ def register_entries(api) -> None:
         def call(c, **kw):
             """The Dask function's result, computed; it must be bit-identical to the in-memory call on
             the same (whole) arguments, or the case fails with that difference."""
-            result = computed(function(**{key: chunked(value) for key, value in kw.items()}))
+            result = computed(function(**{key: chunked(value) for key, value in kw.items()}), statuses)
             try:
                 reference = mem.call(c, **to_twin(kw))
             except Exception as error:
@@ -270,4 +273,43 @@ def register_entries(api) -> None:
             extra=() if key == "arm" else (no_seed(),),
             # Chain.ik's free joint (7-joint chains) has no Dask form
             change=lambda slots: [slot for slot in slots if slot.name not in ("free_joint", "free_value")],
+        )
+
+    # -- dynamics: chains from URDFs (their twins are the Chain methods), the robots' standing torques
+    # and centres of mass
+    for key in api.URDF_CHAINS:
+        for method in (
+            "inverse_dynamics",
+            "mass_matrix",
+            "gravity",
+            "nonlinear_effects",
+            "coriolis_matrix",
+            "forward_dynamics",
+            "joint_torques_from_forces",
+        ):
+            slot = "chain" if method == "joint_torques_from_forces" else "model"
+            model = model_slot(slot, lambda c, key=key: c.chain(key), lambda c: c.spot.leg("fl"))
+            twin(
+                f"dask.{method}[{key}]",
+                f"spotkin.dask.{method}",
+                getattr(skd, method),
+                f"Chain.{method}[{key}]",
+                model,
+            )
+    for key, cls in (("spot", "Spot"), ("go2", "Robot")):
+        robot = model_slot("robot", lambda c, key=key: c.robot(key), lambda c: c.leg)
+        twin(
+            f"dask.standing_torques[{key}]",
+            "spotkin.dask.standing_torques",
+            skd.standing_torques,
+            f"{cls}.standing_torques[{key}]",
+            robot,
+            statuses=sk.StanceStatus,
+        )
+        twin(
+            f"dask.center_of_mass[{key}]",
+            "spotkin.dask.center_of_mass",
+            skd.center_of_mass,
+            f"{cls}.center_of_mass[{key}]",
+            robot,
         )

@@ -108,6 +108,34 @@ def _cases(folder):
         "qc": save(folder, "qc", qc),
         "Tu": save(folder, "Tu", Tu),
     }
+    # dynamics: the Go2 leg's chain and the Spot-with-arm robot's floating base
+    qd, qdd = rng.normal(0, 1.0, (2, N, 3))
+    tau = chain.inverse_dynamics(qc, qd, qdd)
+    floating = SPOT_URDF.floating_base
+    q_legs = np.tile([0.0, 0.9, -1.6], 4) + rng.normal(0, 0.1, (N, 12))
+    qf = SPOT_URDF.floating_q(p, q_legs)
+    vf, af = rng.normal(0, 1.0, (2, N, floating.nv))
+    tauf = floating.inverse_dynamics(qf, vf, af)
+    stance = np.ones((N, 4), dtype=bool)
+    stance[::5, 2] = False
+    f.update(
+        {
+            name: save(folder, name, value)
+            for name, value in (
+                ("qd", qd),
+                ("qdd", qdd),
+                ("tau", tau),
+                ("qf", qf),
+                ("vf", vf),
+                ("af", af),
+                ("tauf", tauf),
+                ("q_legs", q_legs),
+                ("stance", stance),
+            )
+        }
+    )
+    chain_args = ["--robot", "go2", "--link", "FL_foot", "--q", f["qc"]]
+    floating_args = ["--robot", "spot_with_arm", "--q", f["qf"]]
 
     def fields(result, single=None):
         if not isinstance(result, tuple):
@@ -157,6 +185,29 @@ def _cases(folder):
             ["--robot", "spot_with_arm", "--targets", f["Tu"]],
             fields(urdf_arm.ik_nearest(Tu)),
         ),
+        "chain-inverse-dynamics": (
+            [*chain_args, "--qd", f["qd"], "--qdd", f["qdd"], "--gravity", "0", "0", "-9.8"],
+            fields(chain.inverse_dynamics(qc, qd, qdd, (0.0, 0.0, -9.8)), "tau"),
+        ),
+        "chain-forward-dynamics": (
+            [*chain_args, "--qd", f["qd"], "--tau", f["tau"]],
+            fields(chain.forward_dynamics(qc, qd, tau), "qdd"),
+        ),
+        "chain-mass-matrix": (chain_args, fields(chain.mass_matrix(qc), "A")),
+        "chain-gravity": (chain_args, fields(chain.gravity(qc), "G")),
+        "floating-inverse-dynamics": (
+            [*floating_args, "--qd", f["vf"], "--qdd", f["af"]],
+            fields(floating.inverse_dynamics(qf, vf, af), "tau"),
+        ),
+        "floating-forward-dynamics": (
+            [*floating_args, "--qd", f["vf"], "--tau", f["tauf"], "--gravity", "0", "0", "-3.7"],
+            fields(floating.forward_dynamics(qf, vf, tauf, (0.0, 0.0, -3.7)), "qdd"),
+        ),
+        "floating-mass-matrix": (floating_args, fields(floating.mass_matrix(qf), "A")),
+        "standing-torques": (
+            ["--robot", "spot_with_arm", "--poses", f["poses"], "--q", f["q_legs"], "--stance", f["stance"]],
+            fields(SPOT_URDF.standing_torques(p, q_legs, stance=stance)),
+        ),
     }
 
 
@@ -184,6 +235,14 @@ OPERATIONS = [
     "chain-ik",
     "chain-ik-all",
     "arm-ik[urdf]",
+    "chain-inverse-dynamics",
+    "chain-forward-dynamics",
+    "chain-mass-matrix",
+    "chain-gravity",
+    "floating-inverse-dynamics",
+    "floating-forward-dynamics",
+    "floating-mass-matrix",
+    "standing-torques",
 ]
 
 

@@ -433,6 +433,29 @@ def test_a_model_is_unpickled_once_per_process():
 # ---- schedulers ------------------------------------------------------------------------------------------
 
 
+class ThreadSpy:
+    """A model whose 'kernel' reports the thread count its call may use (picklable: module level)."""
+
+    def fk(self, q):
+        return np.full(q.shape[:-1], sk.get_num_threads(), dtype=np.float64)
+
+
+@pytest.mark.parametrize(("chunks", "expected"), [(8, 1), (2, 2), (1, 4)])
+def test_a_chunk_uses_its_share_of_the_threads(chunks, expected):
+    """The scheduler's threads run a chunk each: each call gets the thread count over the graph's chunks
+    (at least 1), so 2 chunks on 4 threads use 2 each, and a single chunk every thread."""
+    before = sk.get_num_threads()
+    sk.set_num_threads(4)
+    try:
+        q = da.from_array(np.zeros((64, 3)), chunks=(64 // chunks, 3))
+        lazy = skd._lazy(skd._plan(ThreadSpy(), "fk", [("q", q, (3,))], {}, (), "n"))
+        assert lazy.numblocks == (chunks,)
+        assert set(lazy.compute(scheduler="threads").tolist()) == {expected}
+        assert sk.get_num_threads() == 4  # the calling thread's own count is untouched
+    finally:
+        sk.set_num_threads(before)
+
+
 def _workload():
     p = with_nan_rows(poses(20_000, 7))
     x = da.from_array(p, chunks=2500)
@@ -440,6 +463,11 @@ def _workload():
     q = np.random.default_rng(8).uniform(leg.limits[:, 0], leg.limits[:, 1], (5000, 3))
     lazy = [skd.body_ik(SPOT, x, FEET), skd.ik(leg, da.from_array(leg.fk(q), chunks=1000), seed=q)]
     eager = [SPOT.body_ik(p, FEET), leg.ik(leg.fk(q), seed=q)]
+    # dynamics: the robot's floating base (its model built in the worker from the pickled robot)
+    qf = GO2.floating_q(p[:3003] * [1, 1, 0.56, 1, 1, 1], np.tile([0.0, 0.9, -1.6], 4))
+    v = np.random.default_rng(9).normal(0, 1, (3003, GO2.floating_base.nv))
+    lazy.append((skd.nonlinear_effects(GO2, da.from_array(qf, chunks=500), v),))
+    eager.append((GO2.floating_base.nonlinear_effects(qf, v),))
     return lazy, eager
 
 

@@ -79,6 +79,44 @@ def test_many_threads_do_not_abort(restore_threads):
     np.testing.assert_array_equal(LEG.fk(q), expected)
 
 
+def test_thread_limit_holds_for_this_thread_only(restore_threads):
+    import threading
+
+    sk.set_num_threads(8)
+    q = np.random.default_rng(1).uniform(-2, 2, size=(300_000, 3))
+    expected = LEG.fk(q)
+    seen = {}
+
+    def other():
+        seen["other"] = sk.get_num_threads()
+
+    with sk.thread_limit(1):
+        assert sk.get_num_threads() == _core.get_num_threads() == 1  # what the kernels read
+        np.testing.assert_array_equal(LEG.fk(q), expected)  # bit-identical
+        thread = threading.Thread(target=other)
+        thread.start()
+        thread.join()
+        with sk.thread_limit(3):  # nested: the inner limit holds inside
+            assert sk.get_num_threads() == 3
+        assert sk.get_num_threads() == 1
+        sk.set_num_threads(2)  # the setting stays the upper bound
+        assert sk.get_num_threads() == 1
+    assert seen["other"] == 8 and sk.get_num_threads() == 2
+    with sk.thread_limit(64):  # above the setting: the setting
+        assert sk.get_num_threads() == 2
+    with pytest.raises(RuntimeError), sk.thread_limit(1):
+        raise RuntimeError  # the limit is lifted on the way out
+    assert sk.get_num_threads() == 2
+
+
+@pytest.mark.parametrize(
+    ("bad", "error"), [(0, ValueError), (-1, ValueError), (1.0, TypeError), ("2", TypeError)]
+)
+def test_thread_limit_checks_its_argument(bad, error):
+    with pytest.raises(error, match="n must"), sk.thread_limit(bad):
+        pass
+
+
 @pytest.mark.parametrize(
     ("value", "expected"),
     [("1000000000", 1024), ("3", 3), (" 7", 7), ("abc", None), ("0", None), ("-2", None), ("1.5", None)],

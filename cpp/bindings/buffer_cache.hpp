@@ -5,7 +5,8 @@
 // sample). Outputs of at least kMinBytes are therefore mmap'd with
 // MADV_HUGEPAGE, and when the NumPy array that owns one dies, the buffer goes
 // to a small cache for the next call of a similar size. The cache is bounded
-// (kMaxBuffers buffers, kMaxBytes in all); SPOTKIN_BUFFER_CACHE=0 disables it.
+// (kMaxBuffers buffers, kMaxBytes in all; the count allows the chunks a pool of
+// worker threads releases together); SPOTKIN_BUFFER_CACHE=0 disables it.
 // Buffers are not zeroed: every kernel writes every output element.
 #pragma once
 
@@ -25,7 +26,7 @@ namespace spotkin::bindings {
 class BufferCache {
  public:
   static constexpr std::size_t kMinBytes = std::size_t(4) << 20;
-  static constexpr std::size_t kMaxBuffers = 4;
+  static constexpr std::size_t kMaxBuffers = 32;
   static constexpr std::size_t kMaxBytes = std::size_t(1) << 30;
 
   static BufferCache& instance() {

@@ -77,6 +77,15 @@ void bind_runtime(pybind11::module_& m) {
   m.def("_register_status", [](pybind11::object members) { status_members() = members; },
         pybind11::arg("members"));
   m.def("set_num_threads", [](py::handle n) { set_num_threads(thread_count_argument(n)); }, pybind11::arg("n"));
+  // Sets this thread's limit (None lifts it) and returns the previous one (None: none).
+  m.def(
+      "_set_thread_limit",
+      [](py::handle n) -> py::object {
+        const int previous = thread_limit();
+        thread_limit() = n.is_none() ? 0 : thread_count_argument(n);
+        return previous > 0 ? py::object(py::int_(previous)) : py::object(py::none());
+      },
+      pybind11::arg("n"));
   m.def("_parse_thread_count", [](const std::string& text) { return parse_thread_count(text.c_str()); },
         pybind11::arg("text"));
 }

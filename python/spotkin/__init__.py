@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from . import dynamics, inertia, paul, trajectory, urdf
-from ._runtime import MAX_THREADS, get_num_threads, set_num_threads
+from ._runtime import MAX_THREADS, get_num_threads, set_num_threads, thread_limit
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from ._workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
@@ -56,6 +56,7 @@ __all__ = [
     "rotation_z",
     "set_num_threads",
     "singular_values",
+    "thread_limit",
     "trajectory",
     "transform",
     "translation",

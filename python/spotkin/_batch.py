@@ -89,6 +89,9 @@ _Q = ("q", "--q", True, "joint values (N, dof)")
 _SEED = ("seed", "--seed", False, "seeds (N, dof), or one shared (dof,)")
 _POINTS = ("target", "--targets", True, "foot points (N, 3) in the leg frame")
 _TOOL = ("target", "--targets", True, "tool poses (N, 4, 4) or (N, 7) in the body frame")
+_QD = ("qd", "--qd", True, "joint rates (N, dof)")
+_Q_FLOATING = ("q", "--q", True, "floating-base coordinates (N, 7 + n): [x, y, z, qx, qy, qz, qw], joints")
+_V_FLOATING = ("qd", "--qd", True, "floating-base velocities (N, 6 + n): [v; w] in the body frame, rates")
 _CHAIN_TARGETS = ("target", "--targets", True, "points (N, 3) for 3 joints, tool poses (N, 4, 4) for 6")
 
 OPERATIONS: dict[str, Operation] = {
@@ -190,6 +193,69 @@ OPERATIONS: dict[str, Operation] = {
         (),
         "closed-form IK of the chain, every solution: q, valid, exists, exact, status",
     ),
+    # rigid-body dynamics: a chain from the URDF (fixed at --base), or the robot's floating base
+    "chain-inverse-dynamics": Operation(
+        "chain",
+        (_Q, _QD, ("qdd", "--qdd", True, "joint accelerations (N, dof)")),
+        lambda m, a, o: _skd()._plan_inverse_dynamics(m, a["q"], a["qd"], a["qdd"], tuple(o.gravity)),
+        ("gravity",),
+        "joint torques tau (N, dof) = A(q) qdd + C(q, qd) qd + G(q) of the chain (recursive Newton-Euler)",
+    ),
+    "chain-forward-dynamics": Operation(
+        "chain",
+        (_Q, _QD, ("tau", "--tau", True, "joint torques (N, dof)")),
+        lambda m, a, o: _skd()._plan_forward_dynamics(m, a["q"], a["qd"], a["tau"], tuple(o.gravity)),
+        ("gravity",),
+        "joint accelerations qdd (N, dof) of the chain under torques tau (articulated-body algorithm)",
+    ),
+    "chain-mass-matrix": Operation(
+        "chain",
+        (_Q,),
+        lambda m, a, o: _skd()._plan_mass_matrix(m, a["q"]),
+        (),
+        "joint-space inertia matrices A (N, dof, dof) of the chain (composite-rigid-body algorithm)",
+    ),
+    "chain-gravity": Operation(
+        "chain",
+        (_Q,),
+        lambda m, a, o: _skd()._plan_gravity(m, a["q"], tuple(o.gravity)),
+        ("gravity",),
+        "gravity torques G (N, dof) of the chain",
+    ),
+    "floating-inverse-dynamics": Operation(
+        "robot",
+        (_Q_FLOATING, _V_FLOATING, ("qdd", "--qdd", True, "accelerations (N, 6 + n): dv/dt")),
+        lambda m, a, o: _skd()._plan_inverse_dynamics(m, a["q"], a["qd"], a["qdd"], tuple(o.gravity)),
+        ("gravity",),
+        "generalised forces tau (N, 6 + n) of the floating base (body wrench, then joint torques)",
+    ),
+    "floating-forward-dynamics": Operation(
+        "robot",
+        (_Q_FLOATING, _V_FLOATING, ("tau", "--tau", True, "generalised forces (N, 6 + n)")),
+        lambda m, a, o: _skd()._plan_forward_dynamics(m, a["q"], a["qd"], a["tau"], tuple(o.gravity)),
+        ("gravity",),
+        "accelerations qdd (N, 6 + n) of the floating base under generalised forces tau",
+    ),
+    "floating-mass-matrix": Operation(
+        "robot",
+        (_Q_FLOATING,),
+        lambda m, a, o: _skd()._plan_mass_matrix(m, a["q"]),
+        (),
+        "inertia matrices A (N, 6 + n, 6 + n) of the floating base",
+    ),
+    "standing-torques": Operation(
+        "robot",
+        (
+            _POSES,
+            ("q", "--q", True, "joints (N, 3 n) in the robot's leg-joint order, or with the arm's after"),
+            ("stance", "--stance", False, "stance feet (N, n) bool, or one shared (n,) (default: all)"),
+        ),
+        lambda m, a, o: _skd()._plan_standing_torques(
+            m, a["body_pose"], a["q"], a.get("stance"), tuple(o.gravity), o.seq
+        ),
+        ("gravity", "seq"),
+        "leg torques tau (N, 3 n) holding the robot still on its feet, forces (N, n, 3), status, margin",
+    ),
 }
 
 
@@ -248,6 +314,16 @@ def add_parser(commands) -> None:
         if "tolerance" in operation.options:
             parser.add_argument(
                 "--tolerance", type=float, default=1e-6, help="singular-value threshold (default 1e-6)"
+            )
+        if "gravity" in operation.options:
+            parser.add_argument(
+                "--gravity",
+                type=float,
+                nargs=3,
+                default=[0.0, 0.0, -9.81],  # a list, as the run's record reads back from JSON
+                metavar=("GX", "GY", "GZ"),
+                help="gravity in the base's (a chain's) or the world's (a robot's) frame, m/s2 "
+                "(default 0 0 -9.81)",
             )
         if "frame" in operation.options:
             parser.add_argument(
@@ -358,6 +434,25 @@ class Source:
 
     def __getitem__(self, index):
         return np.asarray(self._array()[index])
+
+
+class Constant:
+    """An input given on the command line as a value (``--gravity GX GY GZ``), shared by every chunk;
+    read like a :class:`Source`."""
+
+    kind, chunk_rows = "value", None
+
+    def __init__(self, option: str, value: np.ndarray) -> None:
+        self.option, self.value = option, np.array(value)
+        self.given = " ".join(str(v) for v in self.value.reshape(-1).tolist())
+        self.shape, self.dtype = tuple(self.value.shape), self.value.dtype
+
+    def read(self, rows: slice | None) -> np.ndarray:
+        return self.value
+
+    @property
+    def fingerprint(self) -> dict:
+        return {"value": self.value.tolist(), "dtype": self.dtype.str}
 
 
 class _PerRun:
@@ -558,6 +653,9 @@ def plan(args) -> Run:
         planned = operation.plan(model, arrays, args)
     except (ValueError, TypeError) as error:
         raise BatchError(_describe_error(str(error), named)) from None
+    for name, array in zip(planned.names, planned.arrays):
+        if name not in sources:  # a value option the plan takes as an input (--gravity)
+            sources[name] = Constant(f"--{name}", array.compute(scheduler="synchronous"))
     lead = planned.lead
     if not lead:
         raise BatchError(

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
+from collections.abc import Iterator
 
 from . import _core
 from ._boundary import as_index
 
-__all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads"]
+__all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads", "thread_limit"]
 
 MAX_THREADS: int = _core.MAX_THREADS
 """The most threads :func:`set_num_threads` accepts (1024)."""
@@ -53,5 +55,28 @@ def set_num_threads(n: int) -> None:
 
 
 def get_num_threads() -> int:
-    """The current maximum number of worker threads."""
+    """The most worker threads a call from this thread uses: :func:`set_num_threads`' setting, or
+    less inside :func:`thread_limit`."""
     return _core.get_num_threads()
+
+
+@contextlib.contextmanager
+def thread_limit(n: int) -> Iterator[None]:
+    """Within the block, spotkin calls made from *this* thread use at most ``n`` threads.
+
+    For code that runs its own threads: a Dask worker thread, a thread pool of one batch per
+    thread, a data-loader worker. Each thread that calls spotkin with the full thread count would
+    start a full set of its own, so ``k`` such threads would run ``k`` times the cores' worth.
+    ``spotkin.dask`` sets it for its chunks. Other threads are not affected, nor is
+    :func:`set_num_threads`' setting, which stays the upper bound; blocks nest (the inner limit
+    holds inside). ``n`` follows :func:`set_num_threads`' rules. Results are bit-identical
+    whatever the thread count::
+
+        with sk.thread_limit(1):
+            res = spot.body_ik(poses, feet)     # on this thread alone
+    """
+    previous = _core._set_thread_limit(as_index(n, "n"))  # n checked as set_num_threads checks it
+    try:
+        yield
+    finally:
+        _core._set_thread_limit(previous)

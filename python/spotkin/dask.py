@@ -27,7 +27,9 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
   ``ik_all``; ``Chain.ik_position``, ``ik``, ``ik_nearest``) round their full vector blocks and their
   remainder apart in the last bits: for them a chunk computes its samples as the whole call does, in
   full blocks (padded to multiples of :data:`ALIGNMENT`, the core's thread alignment), and the whole
-  batch's last ``N mod 64`` samples come from one call on them (one small extra task).
+  batch's last ``N mod 64`` samples come from one call on them (one small extra task). The dynamics
+  kernels choose their vector width on the batch's size (fewer samples than a vector: a narrow
+  model): a chunk shorter than a vector, of a batch that is not, runs padded to a whole vector.
 - **Checked at once.** Shapes, dtypes, broadcasting and options are checked when the function
   is called, with the in-memory call's ``ValueError``/``TypeError`` messages; NaN samples give
   NaN and ``INVALID_INPUT`` when computed, as everywhere.
@@ -37,7 +39,9 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
 - **Schedulers.** The models (:class:`~spotkin.Spot`, :class:`~spotkin.Robot`,
   :class:`~spotkin.Leg`, :class:`~spotkin.SpotArm`, :class:`~spotkin.Chain`) pickle, so the
   threaded (the kernels release the GIL), multiprocessing and distributed schedulers all run
-  these graphs; a model is unpickled once per worker process, not once per chunk.
+  these graphs; a model is unpickled once per worker process, not once per chunk. A chunk's call
+  uses its share of the threads (:func:`spotkin.thread_limit`: the thread count over the graph's
+  chunks, at least 1), so the scheduler's threads do not each start a thread per core.
 - **Several outputs** (``q`` and ``status``) come from one kernel call per chunk: compute or
   store them together (``dask.compute(res.q, res.status)``, ``da.store([...], [...])``), or the
   kernel runs once for each.
@@ -46,6 +50,7 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
 from __future__ import annotations
 
 import collections
+import functools
 import hashlib
 import itertools
 import math
@@ -69,13 +74,32 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
     ) from error
 
 from ._boundary import as_real, broadcast_lead, check_trailing
+from ._runtime import get_num_threads, thread_limit
 from .arm import SpotArm
 from .body import pose_format
 from .chain import Chain
 from .leg import Leg
 from .robot import Robot
 
-__all__ = ["body_fk", "body_ik", "body_jacobian", "body_rates", "fk", "ik", "ik_all", "jacobian"]
+__all__ = [
+    "body_fk",
+    "body_ik",
+    "body_jacobian",
+    "body_rates",
+    "center_of_mass",
+    "coriolis_matrix",
+    "fk",
+    "forward_dynamics",
+    "gravity",
+    "ik",
+    "ik_all",
+    "inverse_dynamics",
+    "jacobian",
+    "joint_torques_from_forces",
+    "mass_matrix",
+    "nonlinear_effects",
+    "standing_torques",
+]
 
 # A core (per-sample) shape: a tuple, or one of these pose forms resolved from the array's shape.
 _BODY_POSE = "body_pose"  # (6,) Euler, (4, 4) matrix or (7,) position + quaternion
@@ -132,12 +156,31 @@ class _Kernel:
     below ``cut``) in batches padded to a multiple of :data:`ALIGNMENT`, the others (the whole batch's
     tail) by one call on that tail."""
 
-    __slots__ = ("_data", "_digest", "cores", "cut", "dtypes", "method", "model", "options", "outputs")
+    __slots__ = (
+        "_data",
+        "_digest",
+        "cores",
+        "cut",
+        "dtypes",
+        "method",
+        "minimum",
+        "model",
+        "options",
+        "outputs",
+        "tasks",
+    )
 
-    def __init__(self, model, method, options, dtypes, cores=(), outputs=(), total=0) -> None:
+    def __init__(self, model, method, options, dtypes, cores=(), outputs=(), total=0, lanes=0) -> None:
         self.model, self.method, self.options, self.dtypes = model, method, options, dtypes
         self.cores, self.outputs = cores, outputs  # per-sample shapes of the inputs and outputs
         self.cut = total - total % ALIGNMENT if (_kind(model), method) in _BLOCKED else None
+        # a kernel whose vector width is chosen on the batch's size (dynamics: batches shorter than
+        # ``lanes`` run on narrow models, which may round apart): when the whole batch is that long,
+        # a shorter chunk runs padded to ``lanes`` samples, so it gets the whole call's width
+        self.minimum = lanes if lanes and total >= lanes else 0
+        # the graph's chunks (set by _lazy): the threads of a call are the cores' share of one chunk, so
+        # that the scheduler's threads, one chunk each, do not each start every core's worth
+        self.tasks = 0
         self._data = pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL)
         self._digest = hashlib.sha256(self._data).hexdigest()
 
@@ -146,13 +189,35 @@ class _Kernel:
         return self.cut is not None
 
     def __call__(self, *blocks: np.ndarray) -> tuple:
-        result = getattr(self.model, self.method)(*blocks, **self.options)
+        blocks = _whole(blocks)
+        if self.minimum:
+            lead = np.broadcast_shapes(
+                *(b.shape[: b.ndim - len(core)] for b, core in zip(blocks, self.cores))
+            )
+            count = math.prod(lead)
+            if 0 < count < self.minimum:
+                take = np.minimum(np.arange(self.minimum), count - 1)  # the last sample repeated
+                flat = [
+                    np.broadcast_to(b, lead + core).reshape((count, *core))[take]
+                    for b, core in zip(blocks, self.cores)
+                ]
+                leaves = self._call(*flat)
+                return tuple(leaf[:count].reshape(lead + core) for leaf, core in zip(leaves, self.outputs))
+        return self._call(*blocks)
+
+    def _call(self, *blocks: np.ndarray) -> tuple:
+        if self.tasks > 1:
+            with thread_limit(max(1, get_num_threads() // self.tasks)):
+                result = _method(self.model, self.method)(*blocks, **self.options)
+        else:
+            result = _method(self.model, self.method)(*blocks, **self.options)
         leaves = result if isinstance(result, tuple) else (result,)
         return tuple(np.asarray(leaf, dtype=dtype) for leaf, dtype in zip(leaves, self.dtypes))
 
     def lanes(self, index: np.ndarray, *blocks: np.ndarray) -> tuple:
         """The samples of a chunk whose flat indices in the whole batch (``index``, the chunk's
         batch shape) are below ``cut``, as in full blocks; the others zero (see :meth:`patch`)."""
+        blocks = _whole(blocks)
         lead, count = index.shape, index.size
         flat = [
             np.broadcast_to(b, lead + core).reshape((count, *core)) for b, core in zip(blocks, self.cores)
@@ -182,25 +247,64 @@ class _Kernel:
 
     @property
     def token(self) -> str:
-        return tokenize(self._digest, self.method, sorted(self.options.items()), self.dtypes, self.cut)
+        return tokenize(
+            self._digest, self.method, sorted(self.options.items()), self.dtypes, self.cut, self.minimum
+        )
 
     def __reduce__(self):
-        state = (self.method, self.options, self.dtypes, self.cores, self.outputs, self.cut)
+        state = (
+            self.method,
+            self.options,
+            self.dtypes,
+            self.cores,
+            self.outputs,
+            self.cut,
+            self.minimum,
+            self.tasks,
+        )
         return (_rebuild_kernel, (self._digest, self._data, state))
 
     def __repr__(self) -> str:
         return f"spotkin kernel {type(self.model).__name__}.{self.method}"
 
 
+def _whole(blocks: tuple) -> tuple:
+    """The kernel's blocks as arrays. The graph hands an input whose per-sample axes are not the
+    output's (a pose's 6 numbers) as nested one-element lists, those axes being one chunk each:
+    ``concatenate=True`` would copy every input block (np.concatenate of one block)."""
+    if not any(isinstance(block, list) for block in blocks):
+        return blocks
+    out = []
+    for block in blocks:
+        while isinstance(block, list):
+            (block,) = block
+        out.append(block)
+    return tuple(out)
+
+
 def _kind(model) -> str:
     return "SpotArm" if isinstance(model, SpotArm) else "Chain" if isinstance(model, Chain) else ""
+
+
+def _method(model, method: str) -> Callable:
+    """``model.method``; a dotted name walks attributes (``"floating_base.mass_matrix"``)."""
+    return functools.reduce(getattr, method.split("."), model)
 
 
 def _rebuild_kernel(digest, data, state) -> _Kernel:
     kernel = _Kernel.__new__(_Kernel)
     kernel.model = _model_from_pickle(digest, data)
     kernel._data, kernel._digest = data, digest
-    kernel.method, kernel.options, kernel.dtypes, kernel.cores, kernel.outputs, kernel.cut = state
+    (
+        kernel.method,
+        kernel.options,
+        kernel.dtypes,
+        kernel.cores,
+        kernel.outputs,
+        kernel.cut,
+        kernel.minimum,
+        kernel.tasks,
+    ) = state
     return kernel
 
 
@@ -263,12 +367,22 @@ def _core_of(array, name: str, core) -> tuple[tuple[int, ...], tuple[int, ...]]:
     return check_trailing(array, name, core), tuple(core)
 
 
-def _plan(model, method: str, inputs: Sequence, options: dict, fields: tuple, single: str | None) -> _Plan:
+def _plan(
+    model,
+    method: str,
+    inputs: Sequence,
+    options: dict,
+    fields: tuple,
+    single: str | None,
+    lanes: int | Callable = 0,
+) -> _Plan:
     """Checks a call of ``model.method`` on ``inputs`` [(name, value, core)] and plans it: a None
-    ``seed`` is left out (the method's default). ``single``: the field name of a one-array result."""
+    ``seed`` or ``stance`` is left out (the method's default). ``single``: the field name of a
+    one-array result. ``lanes``: see :class:`_Kernel` (0: every sample's answer is its own), or a
+    function of the first output's dtype giving it."""
     names, arrays, cores, leads = [], [], [], {}
     for name, value, core in inputs:
-        if value is None and name == "seed":
+        if value is None and name in ("seed", "stance"):
             continue
         array = _as_dask(value, name)
         lead, sample = _core_of(array, name, core)
@@ -280,7 +394,7 @@ def _plan(model, method: str, inputs: Sequence, options: dict, fields: tuple, si
     # one sample of each input, of its dtype: the in-memory call checks the options and gives the
     # result's structure, dtypes and per-sample shapes
     samples = [np.zeros((1, *core), dtype=array.dtype) for array, core in zip(arrays, cores)]
-    result = getattr(model, method)(*samples, **options)
+    result = _method(model, method)(*samples, **options)
     leaves = result if isinstance(result, tuple) else (result,)
     outputs = tuple((np.asarray(leaf).dtype, np.asarray(leaf).shape[1:]) for leaf in leaves)
     if isinstance(result, tuple):
@@ -288,6 +402,8 @@ def _plan(model, method: str, inputs: Sequence, options: dict, fields: tuple, si
         fields = getattr(type(result), "_fields", fields)
     else:
         record, fields = None, (single,)
+    if callable(lanes):
+        lanes = lanes(outputs[0][0])
     kernel = _Kernel(
         model,
         method,
@@ -296,6 +412,7 @@ def _plan(model, method: str, inputs: Sequence, options: dict, fields: tuple, si
         tuple(cores),
         tuple(core for _, core in outputs),
         math.prod(lead),
+        lanes,
     )
     return _Plan(
         kernel, tuple(names), tuple(arrays), tuple(cores), tuple(lead), tuple(fields), outputs, record
@@ -320,14 +437,15 @@ def _lazy(plan: _Plan):
         index = loop[ndim - lead_ndim :] + tuple(f"c{number}_{k}" for k in range(len(core)))
         pairs += [array, index]
     token = tokenize(plan.kernel.token, *plan.arrays)
-    name = f"spotkin-{plan.kernel.method.replace('_', '-')}-{token}"
+    name = f"spotkin-{plan.kernel.method.replace('_', '-').replace('.', '-')}-{token}"
     metas = tuple(np.empty((0,) * (ndim + len(core)), dtype=dtype) for dtype, core in plan.outputs)
     chunkss, _ = unify_chunks(*pairs)
     loop_chunks = tuple(chunkss[index] for index in loop)
+    plan.kernel.tasks = math.prod(len(c) for c in loop_chunks)
     blocked = plan.kernel.blocked and math.prod(len(c) for c in loop_chunks) > 1
     if not blocked:  # every sample's answer is its own (or a single chunk: the whole call itself)
         chunked = da.blockwise(
-            plan.kernel, loop, *pairs, name=name, concatenate=True, align_arrays=True, meta=metas
+            plan.kernel, loop, *pairs, name=name, concatenate=False, align_arrays=True, meta=metas
         )
     else:
         flat = _flat_index(plan.lead, loop_chunks)
@@ -338,7 +456,7 @@ def _lazy(plan: _Plan):
             loop,
             *pairs,
             name=name,
-            concatenate=True,
+            concatenate=False,
             align_arrays=True,
             meta=metas,
         )
@@ -396,7 +514,7 @@ def _tail(plan: _Plan, pairs: list, token: str, metas: tuple):
         picked = whole[cut:] if len(plan.lead) == 1 else whole.vindex[positions]
         inputs += [picked.rechunk(-1), ("t", *(f"c{number}_{k}" for k in range(len(core))))]
     return da.blockwise(
-        plan.kernel, ("t",), *inputs, name=f"spotkin-tail-{token}", concatenate=True, meta=metas
+        plan.kernel, ("t",), *inputs, name=f"spotkin-tail-{token}", concatenate=False, meta=metas
     )
 
 
@@ -575,3 +693,176 @@ def ik_all(model, target, seed=None):
     (3 joints, points) or :meth:`Chain.ik` (6 joints, tool poses). Only the arm takes a ``seed``.
     """
     return _lazy(_plan_ik_all(model, target, seed))
+
+
+# ---- dynamics ----------------------------------------------------------------------------------------
+
+_GRAVITY = (0.0, 0.0, -9.81)
+
+# The dynamics kernels' vector widths (cpp/bindings/dynamics_boundary.hpp, kLanes64 and kLanes32): a
+# batch shorter than this runs on a narrow model.
+_DYNAMICS_LANES = {np.dtype(np.float64): 8, np.dtype(np.float32): 16}
+
+
+def _dynamics(model) -> tuple[str, int, int]:
+    """(method prefix, nq, nv): a :class:`~spotkin.Chain`'s own methods (fixed base: q and its rates
+    (..., dof)), or a :class:`~spotkin.Robot`'s :attr:`~spotkin.Robot.floating_base` (q (..., 7 + n),
+    v (..., 6 + n))."""
+    if isinstance(model, Chain):
+        return "", model.dof, model.dof
+    if isinstance(model, Robot):
+        floating = model.floating_base  # ValueError for a robot without a URDF description
+        return "floating_base.", floating.nq, floating.nv
+    raise TypeError(
+        f"model must be an sk.Chain or an sk.Robot (its floating base), got {type(model).__name__}"
+    )
+
+
+def _dynamics_lanes(dtype) -> int:
+    return _DYNAMICS_LANES.get(np.dtype(dtype), 8)
+
+
+def _plan_dynamics(model, method: str, inputs: Sequence, single: str) -> _Plan:
+    prefix, _, _ = _dynamics(model)
+    return _plan(model, prefix + method, inputs, {}, (), single, _dynamics_lanes)
+
+
+_NO_GRAVITY = object()  # a call without a gravity argument (A(q), C(q, qd))
+
+
+def _rates(model, names: Sequence[str], values: Sequence, gravity=_NO_GRAVITY) -> list:
+    """The (name, value, core) inputs of a dynamics call: q (nq,), then each rate (nv,), then
+    ``gravity`` (3,) for the calls that take it."""
+    _, nq, nv = _dynamics(model)
+    inputs = [(name, value, (nq if name == "q" else nv,)) for name, value in zip(names, values)]
+    if gravity is not _NO_GRAVITY:
+        inputs.append(("gravity", gravity, (3,)))
+    return inputs
+
+
+def _plan_inverse_dynamics(model, q, qd, qdd, gravity=_GRAVITY) -> _Plan:
+    return _plan_dynamics(
+        model, "inverse_dynamics", _rates(model, ("q", "qd", "qdd"), (q, qd, qdd), gravity), "tau"
+    )
+
+
+def inverse_dynamics(model, q, qd, qdd, gravity=_GRAVITY):
+    """Lazy joint torques tau = A(q) qdd + C(q, qd) qd + G(q) (recursive Newton–Euler).
+
+    ``model``: a :class:`~spotkin.Chain` with inertials (:meth:`Chain.inverse_dynamics`: ``q``,
+    ``qd``, ``qdd`` (..., dof)), or a :class:`~spotkin.Robot` for its floating base
+    (:meth:`spotkin.dynamics.FloatingBase.inverse_dynamics`: ``q`` (..., 7 + n) as
+    :meth:`Robot.floating_q` gives it, ``qd``, ``qdd`` (..., 6 + n)). ``gravity`` (3,) or (..., 3).
+    All broadcast over their leading dimensions."""
+    return _lazy(_plan_inverse_dynamics(model, q, qd, qdd, gravity))
+
+
+def _plan_mass_matrix(model, q) -> _Plan:
+    return _plan_dynamics(model, "mass_matrix", _rates(model, ("q",), (q,)), "A")
+
+
+def mass_matrix(model, q):
+    """Lazy joint-space inertia matrices A(q), (..., nv, nv) (composite-rigid-body algorithm) of a
+    :class:`~spotkin.Chain` or a :class:`~spotkin.Robot`'s floating base (see :func:`inverse_dynamics`)."""
+    return _lazy(_plan_mass_matrix(model, q))
+
+
+def _plan_gravity(model, q, gravity=_GRAVITY) -> _Plan:
+    return _plan_dynamics(model, "gravity", _rates(model, ("q",), (q,), gravity), "G")
+
+
+def gravity(model, q, gravity=_GRAVITY):
+    """Lazy gravity torques G(q), (..., nv) (see :func:`inverse_dynamics` for ``model``)."""
+    return _lazy(_plan_gravity(model, q, gravity))
+
+
+def _plan_nonlinear_effects(model, q, qd, gravity=_GRAVITY) -> _Plan:
+    return _plan_dynamics(model, "nonlinear_effects", _rates(model, ("q", "qd"), (q, qd), gravity), "h")
+
+
+def nonlinear_effects(model, q, qd, gravity=_GRAVITY):
+    """Lazy h = C(q, qd) qd + G(q), (..., nv) (see :func:`inverse_dynamics` for ``model``)."""
+    return _lazy(_plan_nonlinear_effects(model, q, qd, gravity))
+
+
+def _plan_coriolis_matrix(model, q, qd) -> _Plan:
+    return _plan_dynamics(model, "coriolis_matrix", _rates(model, ("q", "qd"), (q, qd)), "C")
+
+
+def coriolis_matrix(model, q, qd):
+    """Lazy Coriolis matrices C(q, qd), (..., nv, nv), with dA/dt - 2 C skew-symmetric (see
+    :func:`inverse_dynamics` for ``model``)."""
+    return _lazy(_plan_coriolis_matrix(model, q, qd))
+
+
+def _plan_forward_dynamics(model, q, qd, tau, gravity=_GRAVITY) -> _Plan:
+    inputs = _rates(model, ("q", "qd", "tau"), (q, qd, tau), gravity)
+    return _plan_dynamics(model, "forward_dynamics", inputs, "qdd")
+
+
+def forward_dynamics(model, q, qd, tau, gravity=_GRAVITY):
+    """Lazy accelerations qdd = A(q)^-1 (tau - C qd - G), (..., nv) (articulated-body algorithm; see
+    :func:`inverse_dynamics` for ``model``)."""
+    return _lazy(_plan_forward_dynamics(model, q, qd, tau, gravity))
+
+
+def _last_axis(value, name: str, check: Callable) -> tuple[int, ...]:
+    """The per-sample shape (k,) of an input whose width the model allows several values of: the
+    array's last axis, after ``check`` (the in-memory call's own shape check) accepted it."""
+    shape = _as_dask(value, name).shape  # a TypeError for what is not a real numeric array
+    check(np.zeros(shape[-1:] if shape else ()))
+    return tuple(shape[-1:])
+
+
+def _plan_joint_torques_from_forces(chain, q, forces) -> _Plan:
+    if not isinstance(chain, Chain):
+        raise TypeError(f"chain must be an sk.Chain, got {type(chain).__name__}")
+
+    def check(forces):
+        if forces.ndim == 0 or forces.shape[-1] not in (3, 6):
+            raise ValueError(f"forces must have shape (..., 6) or (..., 3), got {forces.shape}")
+
+    inputs = [("q", q, (chain.dof,)), ("forces", forces, _last_axis(forces, "forces", check))]
+    return _plan(chain, "joint_torques_from_forces", inputs, {}, (), "tau")
+
+
+def joint_torques_from_forces(chain, q, forces):
+    """Lazy tau = J(q)^T F, (..., dof) (:meth:`Chain.joint_torques_from_forces`): ``forces`` (..., 6)
+    or (..., 3) at the tool, base axes."""
+    return _lazy(_plan_joint_torques_from_forces(chain, q, forces))
+
+
+def _robot_q(robot: Robot, q) -> tuple[int, ...]:
+    return _last_axis(q, "q", robot._legs_and_arm)
+
+
+def _plan_center_of_mass(robot, body_pose, q, seq="XYZ") -> _Plan:
+    robot = _robot(robot)
+    inputs = [("body_pose", body_pose, _BODY_POSE), ("q", q, _robot_q(robot, q))]
+    # the floating base's kernels run in float64 (Robot.center_of_mass converts the result)
+    return _plan(robot, "center_of_mass", inputs, {"seq": seq}, (), "com", _dynamics_lanes(np.float64))
+
+
+def center_of_mass(robot: Robot, body_pose, q, seq: str = "XYZ"):
+    """Lazy centres of mass in the world (..., 3) (:meth:`Robot.center_of_mass`): ``body_pose`` as
+    :func:`body_fk` takes it, ``q`` the legs' joints (..., 3 n), or the legs' and the arm's."""
+    return _lazy(_plan_center_of_mass(robot, body_pose, q, seq))
+
+
+def _plan_standing_torques(robot, body_pose, q, stance=None, gravity=_GRAVITY, seq="XYZ") -> _Plan:
+    robot = _robot(robot)
+    inputs = [
+        ("body_pose", body_pose, _BODY_POSE),
+        ("q", q, _robot_q(robot, q)),
+        ("stance", stance, (robot.n_legs,)),
+    ]
+    g = as_real(gravity, "gravity", np.float64)
+    options = {"gravity": tuple(float(v) for v in g) if g.shape == (3,) else g, "seq": seq}
+    return _plan(robot, "standing_torques", inputs, options, (), None, _dynamics_lanes(np.float64))
+
+
+def standing_torques(robot: Robot, body_pose, q, stance=None, gravity=_GRAVITY, seq: str = "XYZ"):
+    """Lazy :meth:`Robot.standing_torques`: a :class:`~spotkin.Standing` of dask arrays (``tau``
+    (..., 3 n), ``forces`` (..., n, 3), ``status`` (...) int8, ``margin`` (...)). ``stance`` (..., n)
+    bool (default every foot) broadcasts with ``body_pose`` and ``q``; ``gravity`` is one (3,) vector."""
+    return _lazy(_plan_standing_torques(robot, body_pose, q, stance, gravity, seq))

@@ -49,7 +49,20 @@ inline std::atomic<int>& num_threads_setting() noexcept {
   return value;
 }
 
-inline int get_num_threads() noexcept { return num_threads_setting().load(); }
+// A limit for the calls made from this thread (0: none), under the process-wide
+// setting: a caller that already runs its own threads (a Dask worker thread)
+// keeps each call from spawning a full set of its own.
+inline int& thread_limit() noexcept {
+  thread_local int limit = 0;
+  return limit;
+}
+
+// The threads a call from this thread may use.
+inline int get_num_threads() noexcept {
+  const int n = num_threads_setting().load();
+  const int limit = thread_limit();
+  return limit > 0 && limit < n ? limit : n;
+}
 // Clamped into [1, kMaxThreads]; the bindings reject values outside it first.
 inline void set_num_threads(int n) noexcept { num_threads_setting().store(std::clamp(n, 1, kMaxThreads)); }
 
