@@ -2113,9 +2113,7 @@ def _chain_entries(tool_extra):
             mixed="f64",
             nan_rule="check",
             check=path_check,
-            outputs=outs(
-                ("float", (3, dof)), ("flag", (3,)), ("int", (3,)), *[("f64", (3,))] * 3
-            ),
+            outputs=outs(("float", (3, dof)), ("flag", (3,)), ("int", (3,)), *[("f64", (3,))] * 3),
         )
 
     # constructors
@@ -3872,8 +3870,10 @@ def _function_entries():
             Flag("return_residual", default="omit"),
         ],
         baseline=diff_base,
-        outputs=lambda args, kw: [Out("float", (jshape(args)[1],))]
-        + ([Out("float", ())] if kw.get("return_residual") in (True, np.True_) else []),
+        outputs=lambda args, kw: (
+            [Out("float", (jshape(args)[1],))]
+            + ([Out("float", ())] if kw.get("return_residual") in (True, np.True_) else [])
+        ),
         mixed="f64",
         check=diff_check(dls_ref),
     )
@@ -4013,9 +4013,35 @@ def _function_entries():
         probe=lambda n, kw, c: None if isinstance(n, int) and n >= 1 else f"get_num_threads() = {n!r}",
     )
 
+    def limited(n):
+        """(threads inside the block, after it, singular values computed inside)."""
+        J = np.random.default_rng(0).normal(size=(3000, 16, 16))
+        with sk.thread_limit(n):
+            inside = sk.get_num_threads()
+            values = sk.singular_values(J)
+        return inside, sk.get_num_threads(), values
+
+    def limit_probe(result, kw, c):
+        inside, after, values = result
+        setting = sk._core.get_num_threads()
+        if inside != min(int(kw["n"]), setting) or after != setting:
+            return f"thread_limit({kw['n']!r}): {inside} threads inside, {after} after (setting {setting})"
+        if not np.array_equal(
+            values, sk.singular_values(np.random.default_rng(0).normal(size=(3000, 16, 16)))
+        ):
+            return "singular values differ inside the limit"
+        return None
+
+    register(
+        name="thread_limit",
+        covers="spotkin.thread_limit",
+        call=lambda c, **k: limited(**k),
+        slots=[Int("n", 2, 1, max_threads + 1)],
+        probe=limit_probe,
+    )
+
 
 # -- Paul's equations --
-
 
 
 def _workspace_entries():
