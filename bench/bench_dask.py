@@ -47,6 +47,7 @@ DASK_CHUNK = int(float(os.environ.get("SPOTKIN_BENCH_DASK_CHUNK", "1e6")))
 BATCH_N = int(float(os.environ.get("SPOTKIN_BENCH_BATCH_N", "1e7")))
 BATCH_CHUNK = os.environ.get("SPOTKIN_BENCH_BATCH_CHUNK")
 ROUNDS = int(os.environ.get("SPOTKIN_BENCH_BATCH_ROUNDS", "3"))
+SETTLE = float(os.environ.get("SPOTKIN_BENCH_SETTLE", "3"))  # seconds; see _interleaved
 
 
 def poses(n: int, seed: int = 0) -> np.ndarray:
@@ -72,12 +73,14 @@ def _interleaved(op: str, n: int, impls: dict, rounds: int, capsys, warm: bool =
     (the 2 cores are shared: a burst of load then hits all of them alike), and records the best round
     of each for the summary table; prints every round.
 
-    ``warm``: each timed run follows an untimed one of the same impl, so each is timed in its own steady
-    state. Memory is what this is about: spotkin keeps a few freed output buffers (up to 1 GB) for the next
-    call, and the in-memory call's 1 GB buffer and the chunks' buffers evict each other when the impls
-    alternate. Fresh memory costs far more than the kernels on some virtual machines (about 1 s per GB on
-    the development machine, whose hypervisor takes freed pages back), so without the warm-up each round
-    measured the previous impl's memory more than its own work."""
+    ``warm``: each timed run follows an untimed one of the same impl, then a pause of ``SETTLE`` seconds,
+    so each is timed in its own steady state. Memory is what this is about: spotkin keeps a few freed
+    output buffers (up to 1 GB) for the next call, and the in-memory call's 1 GB buffer and the chunks'
+    buffers evict each other when the impls alternate. Fresh memory costs far more than the kernels on
+    some virtual machines: the development machine's hypervisor takes freed memory back (free page
+    reporting, a guest kernel thread working for a while after a large free), and touching it again costs
+    about 1 s per GB. Without the warm-up and the pause, each round measured the previous impl's memory
+    more than its own work."""
     import time
 
     times = {name: [] for name in impls}
@@ -87,6 +90,7 @@ def _interleaved(op: str, n: int, impls: dict, rounds: int, capsys, warm: bool =
                 if setup is not None:
                     setup()
                 run()
+                time.sleep(SETTLE)
             if setup is not None:
                 setup()
             start = time.perf_counter()
@@ -119,7 +123,6 @@ def test_dask_body_ik(dask_poses, capsys):
             None,
             lambda: da.store(list(res), [q, status], lock=False, scheduler="threads"),
         ),
-        "dask-threads-compute": (None, lambda: dask.compute(*res, scheduler="threads")),
         # each chunk's q and status reduced where they were computed: nothing copied, 1 GB of q read
         "dask-threads-reduce": (
             None,
@@ -127,6 +130,9 @@ def test_dask_body_ik(dask_poses, capsys):
         ),
         # the kernel and the scheduling alone: q computed in every chunk and dropped, the status reduced
         "dask-threads-kernel": (None, lambda: dask.compute(res.status.max(), scheduler="threads")),
+        # last in the round: it frees 1 GB of NumPy memory, which the machine's hypervisor then takes back
+        # (free page reporting) while the next run starts
+        "dask-threads-compute": (None, lambda: dask.compute(*res, scheduler="threads")),
     }
     impls["ref:in-memory"][1]()  # warm-up: the buffers, the thread pool
     _interleaved("dask.body_ik", DASK_N, impls, 5, capsys, warm=True)
