@@ -94,6 +94,24 @@ _Q_FLOATING = ("q", "--q", True, "floating-base coordinates (N, 7 + n): [x, y, z
 _V_FLOATING = ("qd", "--qd", True, "floating-base velocities (N, 6 + n): [v; w] in the body frame, rates")
 _CHAIN_TARGETS = ("target", "--targets", True, "points (N, 3) for 3 joints, tool poses (N, 4, 4) for 6")
 
+
+# the dynamics plans, shared by a chain's and a floating base's operations
+def _inverse_dynamics(model, arrays, options):
+    return _skd()._plan_inverse_dynamics(
+        model, arrays["q"], arrays["qd"], arrays["qdd"], tuple(options.gravity)
+    )
+
+
+def _forward_dynamics(model, arrays, options):
+    return _skd()._plan_forward_dynamics(
+        model, arrays["q"], arrays["qd"], arrays["tau"], tuple(options.gravity)
+    )
+
+
+def _mass_matrix(model, arrays, options):
+    return _skd()._plan_mass_matrix(model, arrays["q"])
+
+
 OPERATIONS: dict[str, Operation] = {
     "body-ik": Operation(
         "robot",
@@ -197,21 +215,21 @@ OPERATIONS: dict[str, Operation] = {
     "chain-inverse-dynamics": Operation(
         "chain",
         (_Q, _QD, ("qdd", "--qdd", True, "joint accelerations (N, dof)")),
-        lambda m, a, o: _skd()._plan_inverse_dynamics(m, a["q"], a["qd"], a["qdd"], tuple(o.gravity)),
+        _inverse_dynamics,
         ("gravity",),
         "joint torques tau (N, dof) = A(q) qdd + C(q, qd) qd + G(q) of the chain (recursive Newton-Euler)",
     ),
     "chain-forward-dynamics": Operation(
         "chain",
         (_Q, _QD, ("tau", "--tau", True, "joint torques (N, dof)")),
-        lambda m, a, o: _skd()._plan_forward_dynamics(m, a["q"], a["qd"], a["tau"], tuple(o.gravity)),
+        _forward_dynamics,
         ("gravity",),
         "joint accelerations qdd (N, dof) of the chain under torques tau (articulated-body algorithm)",
     ),
     "chain-mass-matrix": Operation(
         "chain",
         (_Q,),
-        lambda m, a, o: _skd()._plan_mass_matrix(m, a["q"]),
+        _mass_matrix,
         (),
         "joint-space inertia matrices A (N, dof, dof) of the chain (composite-rigid-body algorithm)",
     ),
@@ -225,21 +243,21 @@ OPERATIONS: dict[str, Operation] = {
     "floating-inverse-dynamics": Operation(
         "robot",
         (_Q_FLOATING, _V_FLOATING, ("qdd", "--qdd", True, "accelerations (N, 6 + n): dv/dt")),
-        lambda m, a, o: _skd()._plan_inverse_dynamics(m, a["q"], a["qd"], a["qdd"], tuple(o.gravity)),
+        _inverse_dynamics,
         ("gravity",),
         "generalised forces tau (N, 6 + n) of the floating base (body wrench, then joint torques)",
     ),
     "floating-forward-dynamics": Operation(
         "robot",
         (_Q_FLOATING, _V_FLOATING, ("tau", "--tau", True, "generalised forces (N, 6 + n)")),
-        lambda m, a, o: _skd()._plan_forward_dynamics(m, a["q"], a["qd"], a["tau"], tuple(o.gravity)),
+        _forward_dynamics,
         ("gravity",),
         "accelerations qdd (N, 6 + n) of the floating base under generalised forces tau",
     ),
     "floating-mass-matrix": Operation(
         "robot",
         (_Q_FLOATING,),
-        lambda m, a, o: _skd()._plan_mass_matrix(m, a["q"]),
+        _mass_matrix,
         (),
         "inertia matrices A (N, 6 + n, 6 + n) of the floating base",
     ),
