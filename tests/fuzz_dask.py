@@ -307,6 +307,13 @@ def register_entries(api) -> None:
             statuses=sk.StanceStatus,
         )
         twin(
+            f"dask.floating_q[{key}]",
+            "spotkin.dask.floating_q",
+            skd.floating_q,
+            f"{cls}.floating_q[{key}]",
+            robot,
+        )
+        twin(
             f"dask.center_of_mass[{key}]",
             "spotkin.dask.center_of_mass",
             skd.center_of_mass,

@@ -100,8 +100,11 @@ def test_any_chunking_keeps_the_whole_calls_vector_width(n, chunk, dtype, which)
 
 
 def test_floating_base_matches_the_in_memory_calls():
-    _, _, q, v, a = floating_states(SPOT_ARM, 157, 2)
+    pose, legs, q, v, a = floating_states(SPOT_ARM, 157, 2)
     floating = SPOT_ARM.floating_base
+    assert_same(
+        skd.floating_q(SPOT_ARM, chunked(pose, 40), chunked(legs, 25)), SPOT_ARM.floating_q(pose, legs)
+    )
     x, xv, xa = chunked(q, 30), chunked(v, 30), chunked(a, 45)
     tau = floating.inverse_dynamics(q, v, a)
     assert tau.shape == (157, floating.nv) and np.isnan(tau[4]).all()

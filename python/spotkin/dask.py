@@ -89,6 +89,7 @@ __all__ = [
     "center_of_mass",
     "coriolis_matrix",
     "fk",
+    "floating_q",
     "forward_dynamics",
     "gravity",
     "ik",
@@ -834,6 +835,19 @@ def joint_torques_from_forces(chain, q, forces):
 
 def _robot_q(robot: Robot, q) -> tuple[int, ...]:
     return _last_axis(q, "q", robot._legs_and_arm)
+
+
+def _plan_floating_q(robot, body_pose, q, seq="XYZ") -> _Plan:
+    robot = _robot(robot)
+    inputs = [("body_pose", body_pose, _BODY_POSE), ("q", q, _robot_q(robot, q))]
+    return _plan(robot, "floating_q", inputs, {"seq": seq}, (), "q")
+
+
+def floating_q(robot: Robot, body_pose, q, seq: str = "XYZ"):
+    """Lazy floating-base coordinates (..., 7 + n) (:meth:`Robot.floating_q`): the body's position and
+    quaternion, then ``q``, the legs' joints (..., 3 n) or the legs' and the arm's, for
+    :func:`inverse_dynamics` and the other functions of a robot's floating base."""
+    return _lazy(_plan_floating_q(robot, body_pose, q, seq))
 
 
 def _plan_center_of_mass(robot, body_pose, q, seq="XYZ") -> _Plan:
