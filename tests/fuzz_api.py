@@ -4996,6 +4996,22 @@ def _dynamics_entries():
                 (dof,),
                 lambda c, x, kw, t=t: rd.aba(t(c), x["q"], x["qd"], x["tau"], g(x)),
             ),
+            "center_of_mass": ([q_slot], (3,), lambda c, x, kw, t=t: rd.center_of_mass(t(c), x["q"])),
+            "center_of_mass_jacobian": (
+                [q_slot],
+                (3, dof),
+                lambda c, x, kw, t=t: rd.center_of_mass_jacobian(t(c), x["q"]),
+            ),
+            "kinetic_energy": (
+                [q_slot, qd],
+                (),
+                lambda c, x, kw, t=t: rd.kinetic_energy(t(c), x["q"], x["qd"]),
+            ),
+            "potential_energy": (
+                [q_slot, gravity],
+                (),
+                lambda c, x, kw, t=t: rd.potential_energy(t(c), x["q"], g(x)),
+            ),
             "joint_torques_from_forces": (
                 [q_slot, Batch("forces", (6,))],
                 (dof,),

@@ -391,6 +391,31 @@ class Chain:
 
         return dynamics.forward_dynamics(self, q, qd, tau, gravity)
 
+    def center_of_mass(self, q: ArrayLike) -> np.ndarray:
+        """The links' centre of mass (..., 3) in the frame before :attr:`base` (needs :attr:`inertials`)."""
+        from . import dynamics
+
+        return dynamics.center_of_mass(self, q)
+
+    def center_of_mass_jacobian(self, q: ArrayLike) -> np.ndarray:
+        """J_com (..., 3, dof): d com / dt = J_com qd, in the frame before :attr:`base`."""
+        from . import dynamics
+
+        return dynamics.center_of_mass_jacobian(self, q)
+
+    def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
+        """The links' kinetic energy qd^T A(q) qd / 2, (...), in J."""
+        from . import dynamics
+
+        return dynamics.kinetic_energy(self, q, qd)
+
+    def potential_energy(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
+        """The links' potential energy -m g . c, (...), in J (zero with the centre of mass at the origin of
+        the frame before :attr:`base`); :meth:`gravity` is its gradient. ``gravity`` (3,) or (..., 3)."""
+        from . import dynamics
+
+        return dynamics.potential_energy(self, q, gravity)
+
     def joint_torques_from_forces(self, q: ArrayLike, forces: ArrayLike) -> np.ndarray:
         """tau = J(q)^T F, (..., dof): the joint torques that balance, statically, a wrench F the tool
         exerts on its surroundings (gravity aside; add :meth:`gravity`).

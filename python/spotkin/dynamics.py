@@ -31,18 +31,23 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors, real_dtype
 from .inertia import LinkInertials
 
 __all__ = [
     "FloatingBase",
     "LinkInertials",
+    "center_of_mass",
+    "center_of_mass_jacobian",
     "coriolis_matrix",
     "forward_dynamics",
     "gravity",
     "inertials_of",
     "inverse_dynamics",
+    "kinetic_energy",
     "mass_matrix",
     "nonlinear_effects",
+    "potential_energy",
 ]
 
 GRAVITY = (0.0, 0.0, -9.81)
@@ -116,6 +121,83 @@ def forward_dynamics(
     return _core_of(chain, inertials).aba(q, qd, tau, gravity)
 
 
+def _carried(chain, inertials) -> FloatingBase:
+    """The chain on a massless floating body held at its root frame: the floating-base kernels then give
+    the chain's centre of mass and its Jacobian (the body adds nothing). Kept like the chain models."""
+    raw = inertials if inertials is not None else getattr(chain, "inertials", None)
+    key = ("carried", id(chain), id(raw))
+    hit = _CACHE.get(key)
+    if hit is not None and hit[0] is chain and hit[1] is raw:
+        _CACHE.move_to_end(key)
+        return hit[2]
+    floating = FloatingBase((0.0, np.zeros(3), np.zeros((3, 3))), [chain], [inertials])
+    _CACHE[key] = (chain, raw, floating)
+    if len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return floating
+
+
+def _held(chain, q: ArrayLike) -> np.ndarray:
+    """Floating coordinates (..., 7 + n) with the body at the origin, then ``q`` (..., n)."""
+    q = as_real(q, "q")
+    lead = check_trailing(q, "q", (chain.dof,))
+    body = np.zeros((*lead, 7), dtype=q.dtype)
+    body[..., 6] = 1.0
+    return np.concatenate([body, q], axis=-1)
+
+
+def center_of_mass(chain, q: ArrayLike, *, inertials=None) -> np.ndarray:
+    """The centre of mass of the chain's links, (..., 3), in its root frame (the frame before ``base``)."""
+    return _carried(chain, inertials).center_of_mass(_held(chain, q))
+
+
+def center_of_mass_jacobian(chain, q: ArrayLike, *, inertials=None) -> np.ndarray:
+    """J_com (..., 3, n) with d com / dt = J_com qd, root-frame axes."""
+    return np.ascontiguousarray(_carried(chain, inertials).center_of_mass_jacobian(_held(chain, q))[..., 6:])
+
+
+def _quadratic(A: np.ndarray, v: np.ndarray, name: str) -> np.ndarray:
+    """v^T A v / 2 per sample: A (..., n, n) and v (..., n) broadcast over their leading dimensions."""
+    n = A.shape[-1]
+    lead = broadcast_lead(q=(A.shape[:-2], A.shape), **{name: (check_trailing(v, name, (n,)), v.shape)})
+    dtype = real_dtype(A, v)
+    A = np.broadcast_to(A, (*lead, n, n)).astype(dtype, copy=False)
+    v = np.broadcast_to(v, (*lead, n)).astype(dtype, copy=False)
+    energy = 0.5 * np.einsum("...i,...ij,...j->...", v, A, v)
+    return np.where(np.isfinite(v).all(axis=-1) & np.isfinite(A).all(axis=(-2, -1)), energy, np.nan).astype(
+        dtype, copy=False
+    )
+
+
+def _weight_potential(mass: float, com: np.ndarray, gravity: ArrayLike) -> np.ndarray:
+    """U = -m g . c (zero at the root frame's origin): com (..., 3), gravity (3,) or (..., 3). The dtype is
+    com's (q's), as the kernels' gravity never changes theirs; a NaN or Inf sample gives NaN."""
+    g = as_real(gravity, "gravity")
+    lead = broadcast_lead(
+        q=(com.shape[:-1], com.shape), gravity=(check_trailing(g, "gravity", (3,)), g.shape)
+    )
+    dtype = com.dtype
+    com, g = np.broadcast_to(com, (*lead, 3)), np.broadcast_to(g, (*lead, 3))
+    potential = -mass * np.einsum("...i,...i->...", com, g)
+    finite = np.isfinite(com).all(axis=-1) & np.isfinite(g).all(axis=-1)
+    return np.where(finite, potential, np.nan).astype(dtype, copy=False)
+
+
+@quiet_float_errors
+def kinetic_energy(chain, q: ArrayLike, qd: ArrayLike, *, inertials=None) -> np.ndarray:
+    """T = qd^T A(q) qd / 2, (...): the links' kinetic energy (J)."""
+    return _quadratic(mass_matrix(chain, q, inertials=inertials), as_real(qd, "qd"), "qd")
+
+
+@quiet_float_errors
+def potential_energy(chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None) -> np.ndarray:
+    """U = -m g . c, (...): the links' potential energy (J) in ``gravity``, zero with the centre of mass
+    at the root frame's origin; G(q) = dU/dq."""
+    mass = float(np.sum(inertials_of(chain, inertials).mass))
+    com = center_of_mass(chain, q, inertials=inertials)
+    return _weight_potential(mass, com, gravity)
+
+
 class FloatingBase:
     """A floating body (free-flyer) carrying chains, each mounted at its ``base`` on the body.
 
@@ -126,7 +208,7 @@ class FloatingBase:
     moment on the body (body frame), then the joint torques. ``gravity`` is a world vector.
     """
 
-    __slots__ = ("_chains", "_core")
+    __slots__ = ("_chains", "_core", "_mass")
 
     def __init__(self, body: tuple, chains, inertials=None) -> None:
         """``body`` = (mass, com (3,), inertia (3, 3) about the com), in the body frame;
@@ -139,6 +221,9 @@ class FloatingBase:
         mass, com, inertia = body
         self._core = _core.FloatingDynamics(np.asarray(mass, float), com, inertia, cores)
         self._chains = chains
+        self._mass = float(mass) + sum(
+            float(np.sum(inertials_of(c, i).mass)) for c, i in zip(chains, inertials)
+        )
 
     @property
     def nq(self) -> int:
@@ -178,3 +263,18 @@ class FloatingBase:
     def center_of_mass_jacobian(self, q) -> np.ndarray:
         """(..., 3, 6 + n): d com / dt = J v."""
         return self._core.com_jacobian(q)
+
+    @property
+    def mass(self) -> float:
+        """The total mass (kg): the body's and the chains' links'."""
+        return self._mass
+
+    @quiet_float_errors
+    def kinetic_energy(self, q, v) -> np.ndarray:
+        """T = v^T A(q) v / 2, (...), in J."""
+        return _quadratic(self.mass_matrix(q), as_real(v, "v"), "v")
+
+    @quiet_float_errors
+    def potential_energy(self, q, gravity=GRAVITY) -> np.ndarray:
+        """U = -m g . c, (...), in J: zero with the centre of mass at the world origin."""
+        return _weight_potential(self._mass, self.center_of_mass(q), gravity)
