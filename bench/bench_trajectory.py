@@ -40,8 +40,9 @@ def test_baselines_agree_with_spotkin():
         if profile == "quintic":
             want = p2p_quintic(t, Q0, QF, traj.duration)
         else:
-            want = p2p_trapezoid(t, Q0, QF, traj.acceleration, traj.cruise_velocity, traj.ramp_time,
-                                 traj.duration)
+            want = p2p_trapezoid(
+                t, Q0, QF, traj.acceleration, traj.cruise_velocity, traj.ramp_time, traj.duration
+            )
         for g, w in zip(traj.sample(t), want):
             np.testing.assert_allclose(g, w, atol=1e-12)
     V, A, tf = path_baseline_args()

@@ -516,8 +516,13 @@ def test_block_and_single_target_paths_agree(rng, kind):
             chain = chain_with_closed_form(rng, "mdh", "RRR")
             if chain.ik_kind == kind:
                 break
-        chain = sk.Chain(chain.rows, convention="mdh", base=chain.base, tool=chain.tool,
-                         limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)])
+        chain = sk.Chain(
+            chain.rows,
+            convention="mdh",
+            base=chain.base,
+            tool=chain.tool,
+            limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)],
+        )
         q = rng.uniform(-np.pi, np.pi, (53, 3))  # 3 blocks of 16 and a tail of 5
         q[::4, 1], q[1::4, 0], q[2::8, 2] = np.pi, -np.pi, np.pi
         p = chain.fk(q)[:, :3, 3]
@@ -606,8 +611,13 @@ def nearest_by_hand(sol, seed, sigma):
 def test_ik_nearest_picks_the_valid_solution_nearest_to_the_seed(rng, kind):
     if kind == "3R":
         chain = chain_with_closed_form(rng, "mdh", "RRR")
-        chain = sk.Chain(chain.rows, convention="mdh", base=chain.base, tool=chain.tool,
-                         limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)])
+        chain = sk.Chain(
+            chain.rows,
+            convention="mdh",
+            base=chain.base,
+            tool=chain.tool,
+            limits=[(-2.5, 2.0), (-1.0, 3.0), (-np.pi, np.pi)],
+        )
         target = chain.fk(rng.uniform(-np.pi, np.pi, (300, 3)))[:, :3, 3]
         target[5] *= 50.0  # unreachable
         sol = chain.ik_position(target)

@@ -103,7 +103,12 @@ def test_kind_matches_the_reference_classification(name):
     assert not chain.ik_idealised
     geometry = chain.ik_geometry
     assert set(geometry) == {
-        "wrist_meeting", "shoulder_meeting", "parallel_234", "parallel_123", "axes_5_6_gap", "axes_4_5_gap"
+        "wrist_meeting",
+        "shoulder_meeting",
+        "parallel_234",
+        "parallel_123",
+        "axes_5_6_gap",
+        "axes_4_5_gap",
     }
     # the gaps between axes 5 and 6, 4 and 5: |(p_j - p_i) . n| along their common normal
     for key, (i, j) in {"axes_5_6_gap": (4, 5), "axes_4_5_gap": (3, 4)}.items():

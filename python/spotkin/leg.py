@@ -157,8 +157,13 @@ class Leg:
             raise ValueError("leg lengths must be finite")
         h1 = float(hip_offset) if side == "left" else -float(hip_offset)
         self._init(
-            (0.0, h1, 0.0), (float(knee_offset), 0.0, -float(upper)), (0.0, 0.0, -float(lower)),
-            (1.0, 1.0, 1.0), _limit_table(limits), name, None,
+            (0.0, h1, 0.0),
+            (float(knee_offset), 0.0, -float(upper)),
+            (0.0, 0.0, -float(lower)),
+            (1.0, 1.0, 1.0),
+            _limit_table(limits),
+            name,
+            None,
         )
 
     @classmethod
@@ -190,7 +195,12 @@ class Leg:
             if not 0 <= preferred_slot < 4:
                 raise ValueError(f"preferred_slot must be 0, 1, 2 or 3, got {preferred_slot}")
         leg._init(
-            _vector3(a, "a"), _vector3(b, "b"), _vector3(c, "c"), sign_values, _limit_table(limits), name,
+            _vector3(a, "a"),
+            _vector3(b, "b"),
+            _vector3(c, "c"),
+            sign_values,
+            _limit_table(limits),
+            name,
             preferred_slot,
         )
         if nominal is not None and preferred_slot is None:
