@@ -111,3 +111,39 @@ def test_batches_dtypes_nan_and_errors():
         chain.center_of_mass("q")
     with pytest.raises(ValueError, match="inertial"):
         dyn.center_of_mass(sk.Chain.from_dh([(0, 0.0, 0.0, 0.3, 0.0)]), np.zeros(1))
+
+
+def test_huge_joint_angles_give_the_result_of_their_exact_remainder():
+    """A revolute joint angle beyond 1e5 rad is reduced exactly (libm) before the dynamics kernels, as
+    in the kinematics; a prismatic displacement never is."""
+    import math
+
+    go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+    chain = go2.chain("FL_foot")
+    rng = np.random.default_rng(8)
+    q, qd, qdd = rng.uniform(-1, 1, (3, 4, 3))
+    huge = q.copy()
+    huge[:, 1] = [1e6, 3e15, -7e300, 2.5e38]
+    exact = np.vectorize(lambda x: math.atan2(math.sin(x), math.cos(x)))(huge)
+    for method, args in (
+        ("inverse_dynamics", (qd, qdd)),
+        ("mass_matrix", ()),
+        ("forward_dynamics", (qd, qdd)),
+        ("coriolis_matrix", (qd,)),
+        ("center_of_mass", ()),
+    ):
+        got, want = getattr(chain, method)(huge, *args), getattr(chain, method)(exact, *args)
+        close(got, want, 1e-12)
+    floating = go2.floating_base
+    qf = go2.floating_q(np.array([0.1, 0.0, 0.3, 0.0, 0.0, 0.0]), np.tile(q[0], 4))
+    qf_huge, qf_exact = qf.copy(), qf.copy()
+    qf_huge[8], qf_exact[8] = 4e20, math.atan2(math.sin(4e20), math.cos(4e20))
+    close(floating.mass_matrix(qf_huge), floating.mass_matrix(qf_exact), 1e-12)
+    qf_far = qf.copy()
+    qf_far[0] = 4e20  # the body's position is a length: never reduced
+    assert floating.center_of_mass(qf_far)[0] > 1e20
+    prismatic = sk.Chain.from_dh([(1, 0.0, 0.0, 0.0, 0.0), (0, 0.0, 0.0, 0.3, 0.0)]).with_inertials(
+        [1.0, 2.0], np.zeros((2, 3)), np.tile(np.eye(3) * 0.01, (2, 1, 1))
+    )
+    far = prismatic.center_of_mass(np.array([1e7, 0.3]))  # 1e7 m along the slide, not an angle
+    assert abs(far[2] - 1e7) < 1.0 or abs(far[0] - 1e7) < 1.0 or abs(far[1] - 1e7) < 1.0

@@ -54,7 +54,7 @@ constexpr double kNsPerSample = 150.0;
 
 py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -66,7 +66,7 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
 
 py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -78,7 +78,7 @@ py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
 
 py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -90,7 +90,7 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
 
 py::object chain_crba(const ChainDynamics& d, py::handle q) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n}}, {n, n}, kNsPerSample,
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}}, {n, n}, kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -102,7 +102,7 @@ py::object chain_crba(const ChainDynamics& d, py::handle q) {
 
 py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -114,7 +114,7 @@ py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
 
 py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;

@@ -78,7 +78,8 @@ struct BatchArg {
   py::handle obj;
   const char* name;
   py::ssize_t width;
-  bool primary = true;  // a parameter (gravity) does not decide the working dtype
+  bool primary = true;        // a parameter (gravity) does not decide the working dtype
+  std::uint64_t angles = 0;   // columns that are angles: reduced exactly when huge (reduce_seed_angles)
 };
 
 // NumPy's broadcast of the leading shapes; ValueError naming the arguments.
@@ -135,7 +136,10 @@ Prepared<T> prepare(const std::vector<py::array>& arrs, const std::vector<BatchA
       for (std::size_t k = 0; k < full.size(); ++k) shape[k] = py::int_(full[k]);
       arr = py::module_::import("numpy").attr("broadcast_to")(arr, shape);
     }
-    p.arrays.push_back(contiguous<T>(arr));
+    auto working = contiguous<T>(arr);
+    // a joint angle beyond kReducibleLimit gives the result of its exact remainder, as in the kinematics
+    if (args[a].angles) working = reduce_seed_angles(std::move(working), args[a].width, args[a].angles);
+    p.arrays.push_back(std::move(working));
     p.rows.push_back(Rows<T>{p.arrays.back().data(), stride});
   }
   return p;

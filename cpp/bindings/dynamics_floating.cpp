@@ -25,6 +25,7 @@ struct FloatingDynamics {
   const FloatingModel<float, kLanes32>& get(float) const { return f32; }
   const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
   const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
+  std::uint64_t angles = 0;  // the q columns that are joint angles (7 + each revolute joint's index)
 };
 
 FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inertia, const py::sequence& chain_list) {
@@ -47,11 +48,16 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
   std::vector<ChainModel<double, kSmallLanes64>> s64;
   std::vector<ChainModel<float, kSmallLanes32>> s32;
   for (const auto& c : chains) c64.push_back(c.f64), c32.push_back(c.f32), s64.push_back(c.f64_small), s32.push_back(c.f32_small);
+  std::uint64_t angles = 0;
+  int column = 7;  // after [x, y, z, qx, qy, qz, qw]
+  for (const auto& c : chains)
+    for (int j = 0; j < c.dof(); ++j, ++column)
+      if (column < 64 && ((c.f64.angle_columns() >> j) & 1U)) angles |= std::uint64_t{1} << column;
   try {
     return FloatingDynamics{FloatingModel<double, kLanes64>(links[0], std::move(c64)),
                             FloatingModel<float, kLanes32>(links[0], std::move(c32)),
                             FloatingModel<double, kSmallLanes64>(links[0], std::move(s64)),
-                            FloatingModel<float, kSmallLanes32>(links[0], std::move(s32))};
+                            FloatingModel<float, kSmallLanes32>(links[0], std::move(s32)), angles};
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }
@@ -89,7 +95,7 @@ constexpr double kNsFloating = 400.0;
 
 py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -100,7 +106,7 @@ py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, 
 }
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -111,7 +117,7 @@ py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle 
 }
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -122,7 +128,7 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
 }
 py::object floating_crba(const FloatingDynamics& d, py::handle q) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}}, {nv, nv}, kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}}, {nv, nv}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -133,7 +139,7 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q) {
 }
 py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
@@ -144,7 +150,7 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
 }
 py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, total, [&](const auto& model) { f_coriolis_k(model, rows[0], rows[1], out, b, e); });
@@ -152,7 +158,7 @@ py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle
 }
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
+  return run_batch({{q, "q", nq, true, d.angles}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;

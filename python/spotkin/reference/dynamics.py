@@ -572,7 +572,8 @@ def standing_torques(tree, body_pose, q, stance_feet, gravity=GRAVITY) -> Standi
     then tau = G_joints - sum J_i^T f_i over the stance feet (J_i: the foot point's Jacobian, joint
     columns). Status, in this order:
       STANCE_UNBALANCED when |A f - b| > 1e-9 m |g| (NaN tau and forces);
-      STANCE_OK when every normal component -f_i . g / |g| >= -1e-9 m |g|;
+      STANCE_OK when every normal component -f_i . g / |g| >= -1e-9 m |g| (with g = 0, the forces are
+      zero and the status OK; the margin is then NaN);
       otherwise STANCE_PULLING when the centre of mass projects inside the support polygon
       (margin > 0), STANCE_OUTSIDE when not.
     """
@@ -618,7 +619,7 @@ def standing_torques(tree, body_pose, q, stance_feet, gravity=GRAVITY) -> Standi
     for f, Jp in zip(forces, foot_jacobians):
         tau -= joint_torques_from_forces(Jp[:, 6:], f)
     normals = forces @ up
-    if (normals >= -1e-9 * weight).all():
+    if weight == 0.0 or (normals >= -1e-9 * weight).all():  # no gravity: zero forces, nothing pulls
         status = STANCE_OK
     else:
         status = STANCE_PULLING if margin > 0 else STANCE_OUTSIDE

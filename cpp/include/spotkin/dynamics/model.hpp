@@ -133,6 +133,13 @@ class ChainModel {
 
   int dof() const noexcept { return static_cast<int>(joints_.size()); }
   const BodyConstants<M>& body(int j) const noexcept { return bodies_[static_cast<std::size_t>(j)]; }
+  // Bit j set when joint j is revolute (its q is an angle), for joints below 64.
+  std::uint64_t angle_columns() const noexcept {
+    std::uint64_t bits = 0;
+    for (int j = 0; j < dof() && j < 64; ++j)
+      if (body(j).revolute) bits |= std::uint64_t{1} << j;
+    return bits;
+  }
 
   SPOTKIN_INLINE Motion<P> subspace(int j) const noexcept {
     const BodyConstants<M>& b = body(j);
