@@ -50,6 +50,7 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
 from __future__ import annotations
 
 import collections
+import contextlib
 import functools
 import hashlib
 import itertools
@@ -207,10 +208,12 @@ class _Kernel:
         return self._call(*blocks)
 
     def _call(self, *blocks: np.ndarray) -> tuple:
-        if self.tasks > 1:
-            with thread_limit(max(1, get_num_threads() // self.tasks)):
-                result = _method(self.model, self.method)(*blocks, **self.options)
-        else:
+        share = (
+            thread_limit(max(1, get_num_threads() // self.tasks))
+            if self.tasks > 1
+            else contextlib.nullcontext()
+        )
+        with share:
             result = _method(self.model, self.method)(*blocks, **self.options)
         leaves = result if isinstance(result, tuple) else (result,)
         return tuple(np.asarray(leaf, dtype=dtype) for leaf, dtype in zip(leaves, self.dtypes))

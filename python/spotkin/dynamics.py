@@ -69,20 +69,29 @@ _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 16
 
 
-def _core_of(chain, inertials) -> _core.ChainDynamics:
-    """The C++ model of (chain, inertials), kept for the last few pairs (keyed on identity)."""
+def _cached(kind: str, chain, inertials, make):
+    """``make()`` for (kind, chain, inertials), kept for the last few (keyed on identity)."""
     raw = inertials if inertials is not None else getattr(chain, "inertials", None)
-    key = (id(chain), id(raw))
+    key = (kind, id(chain), id(raw))
     hit = _CACHE.get(key)
     if hit is not None and hit[0] is chain and hit[1] is raw:
         _CACHE.move_to_end(key)
         return hit[2]
-    mass, com, inertia = inertials_of(chain, inertials)
-    core = _core.ChainDynamics(chain._core, mass, com, inertia)
-    _CACHE[key] = (chain, raw, core)
+    value = make()
+    _CACHE[key] = (chain, raw, value)
     if len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)
-    return core
+    return value
+
+
+def _core_of(chain, inertials) -> _core.ChainDynamics:
+    """The C++ model of (chain, inertials)."""
+
+    def make():
+        mass, com, inertia = inertials_of(chain, inertials)
+        return _core.ChainDynamics(chain._core, mass, com, inertia)
+
+    return _cached("core", chain, inertials, make)
 
 
 def inverse_dynamics(
@@ -123,18 +132,13 @@ def forward_dynamics(
 
 def _carried(chain, inertials) -> FloatingBase:
     """The chain on a massless floating body held at its root frame: the floating-base kernels then give
-    the chain's centre of mass and its Jacobian (the body adds nothing). Kept like the chain models."""
-    raw = inertials if inertials is not None else getattr(chain, "inertials", None)
-    key = ("carried", id(chain), id(raw))
-    hit = _CACHE.get(key)
-    if hit is not None and hit[0] is chain and hit[1] is raw:
-        _CACHE.move_to_end(key)
-        return hit[2]
-    floating = FloatingBase((0.0, np.zeros(3), np.zeros((3, 3))), [chain], [inertials])
-    _CACHE[key] = (chain, raw, floating)
-    if len(_CACHE) > _CACHE_SIZE:
-        _CACHE.popitem(last=False)
-    return floating
+    the chain's centre of mass and its Jacobian (the body adds nothing)."""
+    return _cached(
+        "carried",
+        chain,
+        inertials,
+        lambda: FloatingBase((0.0, np.zeros(3), np.zeros((3, 3))), [chain], [inertials]),
+    )
 
 
 def _held(chain, q: ArrayLike) -> np.ndarray:

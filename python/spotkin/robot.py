@@ -408,16 +408,14 @@ class Robot:
                     )
                 chains.append(arm)
             body = self.body_inertial
-            mass = float(body.mass) + sum(float(np.sum(c.inertials.mass)) for c in chains)
-            floating = (FloatingBase((body.mass, body.com, body.inertia), chains), mass)
+            floating = FloatingBase((body.mass, body.com, body.inertia), chains)
             self._floating = floating
-        return floating[0]
+        return floating
 
     @property
     def mass(self) -> float:
         """The robot's total mass (kg): the body's, the legs' and the arm's links."""
-        _ = self.floating_base
-        return self._floating[1]
+        return self.floating_base.mass
 
     def floating_q(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """The generalised coordinates (..., 7 + n) of :attr:`floating_base`: the body's position and unit
