@@ -106,6 +106,20 @@ py::array_t<T, py::array::c_style> contiguous(const py::array& arr) {
       return narrow;
     }
   }
+  if (arr.dtype().kind() == 'f' && arr.dtype().itemsize() > 8) {  // longdouble: beyond the float64 range
+    // it becomes Inf (then NaN or INVALID_INPUT), quietly: numpy's cast would warn (an error under -W error)
+    py::object quiet = py::module_::import("numpy").attr("errstate")(py::arg("over") = "ignore");
+    quiet.attr("__enter__")();
+    py::object cast;
+    try {
+      cast = py::array_t<T, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(arr));
+    } catch (...) {
+      quiet.attr("__exit__")(py::none(), py::none(), py::none());
+      throw;
+    }
+    quiet.attr("__exit__")(py::none(), py::none(), py::none());
+    return py::reinterpret_steal<Exact>(cast.release());
+  }
   return py::array_t<T, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(arr));
 }
 

@@ -23,6 +23,7 @@ inspect`` work without them.
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import os
 import re
@@ -414,7 +415,7 @@ class Source:
         self.shape, self.dtype = tuple(array.shape), np.dtype(array.dtype)
         chunks = getattr(array, "chunks", None)
         self.chunk_rows = int(chunks[0]) if chunks and self.shape else None
-        self.stamp = {}
+        self.stamp = {} if "://" in path else _folder_stamp(self.path)
 
     def __getstate__(self) -> dict:
         return {key: value for key, value in self.__dict__.items() if key != "_zarr"}
@@ -437,7 +438,8 @@ class Source:
 
     @property
     def fingerprint(self) -> dict:
-        """What a resumed run must find again: path, shape, dtype (and a file's size and time)."""
+        """What a resumed run must find again: path, shape, dtype, and a file's size and time (a local
+        Zarr array's files' count, total size and latest time; a remote one's are not read)."""
         return {
             "path": self.path,
             "shape": list(self.shape),
@@ -452,6 +454,20 @@ class Source:
 
     def __getitem__(self, index):
         return np.asarray(self._array()[index])
+
+
+def _folder_stamp(path: str) -> dict:
+    """A local Zarr array's stamp, as a .npy file's size and time: its files' count, total size and latest
+    modification time (data rewritten in place, same shape, dtype and chunks, changes the times)."""
+    files = size = latest = 0
+    for folder, _, names in os.walk(path):
+        for name in names:
+            try:
+                stat = os.stat(os.path.join(folder, name))
+            except OSError:  # removed while listed
+                continue
+            files, size, latest = files + 1, size + stat.st_size, max(latest, stat.st_mtime_ns)
+    return {"files": files, "bytes": size, "mtime_ns": latest}
 
 
 class Constant:
@@ -746,7 +762,7 @@ def _chunk_size(args, planned, sources, batched, rows) -> int:
                 f"the batch axis ({length} rows): each task would read parts of several stored chunks; "
                 f"use a multiple of {length} or rechunk the input"
             )
-    return chunk
+    return int(min(chunk, max(rows, 1)))  # a chunk larger than the batch is the whole batch
 
 
 # ---- the output ----------------------------------------------------------------------------------------
@@ -950,8 +966,60 @@ def _cores() -> int:
         return os.cpu_count() or 1
 
 
-def execute(run: Run, scheduler: str, workers: int | None, progress: Progress) -> None:
-    """Runs the pending chunks on a Dask scheduler, reporting each finished chunk to ``progress``."""
+def _die_with_parent(parent: int) -> None:
+    """The initializer of ``--scheduler processes`` workers: a worker ends when the ``spotkin batch``
+    process that started it does, also when that one is killed (SIGKILL leaves it no chance to stop its
+    pool): on Linux by ``prctl(PR_SET_PDEATHSIG, SIGKILL)``, and everywhere by a thread that checks the
+    parent process id every second."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl: the thread below
+            pass
+    if os.getppid() != parent:  # the parent died before the request above
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="spotkin-batch-parent", daemon=True).start()
+
+
+def connect(scheduler: str):
+    """A ``dask.distributed`` client of the scheduler at address ``scheduler`` (None for a local
+    scheduler), connected before the output is created: an unreachable scheduler is a ``BatchError``
+    and nothing is written. The timeout is Dask's ``distributed.comm.timeouts.connect`` (30 s)."""
+    if scheduler in LOCAL_SCHEDULERS:
+        return None
+    try:
+        from distributed import Client
+    except ImportError as error:
+        raise ImportError(
+            f"--scheduler {scheduler} needs dask.distributed: install it with {INSTALL}"
+        ) from error
+    try:
+        return Client(scheduler)
+    except (OSError, TimeoutError, ValueError) as error:
+        reason = f"{type(error).__name__}: {error}"
+        raise BatchError(f"--scheduler {scheduler}: cannot connect ({reason})") from None
+
+
+def _close(client) -> None:
+    if client is not None:
+        try:
+            client.close()
+        except Exception:  # pragma: no cover - closing only
+            pass
+
+
+def execute(run: Run, scheduler: str, workers: int | None, progress: Progress, client=None) -> None:
+    """Runs the pending chunks on a Dask scheduler, reporting each finished chunk to ``progress``
+    (``client``: a connected ``dask.distributed`` client for a scheduler address, see :func:`connect`)."""
     dask, _ = require()
     from dask.callbacks import Callback
 
@@ -985,6 +1053,8 @@ def execute(run: Run, scheduler: str, workers: int | None, progress: Progress) -
             os.environ["SPOTKIN_NUM_THREADS"] = str(threads_each)  # for spawned worker processes
             with Report():
                 options = {} if local == "synchronous" else {"num_workers": workers}
+                if local == "processes":  # the workers end with this process, even when it is killed
+                    options["initializer"] = functools.partial(_die_with_parent, os.getpid())
                 dask.compute(*tasks, scheduler=local, **options)
         finally:
             _runtime.set_num_threads(before)
@@ -993,19 +1063,20 @@ def execute(run: Run, scheduler: str, workers: int | None, progress: Progress) -
             else:
                 os.environ["SPOTKIN_NUM_THREADS"] = variable
         return
+    from distributed import as_completed
+
+    own = client is None
+    client = connect(scheduler) if own else client
     try:
-        from distributed import Client, as_completed
-    except ImportError as error:
-        raise ImportError(
-            f"--scheduler {scheduler} needs dask.distributed: install it with {INSTALL}"
-        ) from error
-    with Client(scheduler, timeout="30s") as client:
         futures = client.compute(tasks)
         try:
             for future in as_completed(futures):
                 progress.update(future.result())
         finally:
             client.cancel(futures)
+    finally:
+        if own:
+            _close(client)
 
 
 def main(args) -> int:
@@ -1013,19 +1084,24 @@ def main(args) -> int:
     (nothing was done), 1 when the run failed midway (run the same command to resume), 130 when
     interrupted."""
     name = f"spotkin batch {args.operation}"
+    client = None
     try:
         run = plan(args)
         if args.dry_run:
             _print_plan(run, args, sys.stdout, dry=True)
             return 0
+        client = connect(args.scheduler)  # before the output exists: an unreachable scheduler writes nothing
         prepare_output(run, args.overwrite)
     except BatchError as error:
+        _close(client)
         print(f"{name}: error: {error}", file=sys.stderr)
         return 2
     except ImportError as error:
+        _close(client)
         print(f"{name}: {error}", file=sys.stderr)
         return 1
     if run.complete:
+        _close(client)
         if not args.quiet:
             print(f"{name}: {run.job.out} is complete: nothing to do", file=sys.stderr)
         return 0
@@ -1041,7 +1117,7 @@ def main(args) -> int:
         previous_handler = signal.getsignal(signal.SIGTERM)
         signal.signal(signal.SIGTERM, _raise_interrupt)  # a polite kill stops like Ctrl-C
     try:
-        execute(run, args.scheduler, args.workers, progress)
+        execute(run, args.scheduler, args.workers, progress, client)
         finish_output(run)
     except KeyboardInterrupt:
         interrupted = True
@@ -1055,6 +1131,7 @@ def main(args) -> int:
         )
         return 1
     finally:
+        _close(client)
         if previous_handler is not None:
             signal.signal(signal.SIGTERM, previous_handler)
     progress.close()

@@ -30,6 +30,8 @@ __all__ = [
     "fallback_is_nearest",
     "quiet_float_errors",
     "real_dtype",
+    "rigid_transforms",
+    "rotation_tolerance",
 ]
 
 
@@ -69,7 +71,44 @@ def as_real(value: ArrayLike, name: str, dtype=None) -> np.ndarray:
         what = _type_name(value) if plain else f"dtype {array.dtype}"
         raise TypeError(f"{name} must be a real numeric array, got {what}")
     target = dtype if dtype is not None else real_dtype(array)
+    if kind == "f" and array.dtype.itemsize > np.dtype(target).itemsize:
+        with np.errstate(over="ignore"):  # longdouble beyond the range: Inf (then NaN or ValueError)
+            return array.astype(target, copy=False)
     return array.astype(target, copy=False)
+
+
+def rotation_tolerance(dtype) -> float:
+    """The largest ``max |R^T R - I|`` a rotation given in ``dtype`` may have: 1e-9 in float64, 1e-6 in
+    float32, whose rounding alone leaves up to about 5e-8 (1e-6 is the IK's pose tolerance, which
+    :meth:`spotkin.SpotArm.ik` and :meth:`spotkin.Chain.ik` apply to targets of either dtype)."""
+    return 1e-6 if np.dtype(dtype) == _FLOAT32 else 1e-9
+
+
+def rigid_transforms(value: ArrayLike, name: str) -> np.ndarray:
+    """Rigid-transform model parameters (a base, a tool: (4, 4); placements: (n, 4, 4)) as a new float64
+    array for the core, which checks them to 1e-9. float32 input is checked here to its own precision
+    (:func:`rotation_tolerance`: finite, last row [0, 0, 0, 1], det > 0), then each rotation is replaced
+    by the nearest rotation in float64, which removes the float32 rounding and nothing else; ``ValueError``
+    naming the argument otherwise. Other dtypes go to the core's checks as they are."""
+    array = as_real(value, name)
+    matrices = array.astype(np.float64)  # a copy
+    if array.dtype != _FLOAT32 or matrices.ndim < 2 or matrices.shape[-2:] != (4, 4):
+        return matrices
+    tolerance = rotation_tolerance(np.float32)
+    flat = matrices.reshape(-1, 4, 4)
+    for k, T in enumerate(flat):
+        R = T[:3, :3]
+        rigid = np.isfinite(T).all() and (T[3] == [0.0, 0.0, 0.0, 1.0]).all()
+        rigid = rigid and np.abs(R.T @ R - np.eye(3)).max() <= tolerance and np.linalg.det(R) > 0
+        if not rigid:
+            where = name if matrices.ndim == 2 else f"{name}[{k}]"
+            raise ValueError(
+                f"{where} must be a finite rigid transform: last row [0, 0, 0, 1], rotation part "
+                f"orthonormal to {tolerance:g} (float32) with determinant +1"
+            )
+        U, _, Vt = np.linalg.svd(R)
+        T[:3, :3] = U @ Vt
+    return matrices
 
 
 def real_dtype(*arrays: np.ndarray) -> type:

@@ -31,6 +31,18 @@ from .leg import Leg
 __all__ = ["Dexterity", "WorkspaceSamples", "dexterity", "workspace", "workspace_volume"]
 
 _BATCH = 65_536
+MAX_SAMPLES = 20_000_000
+"""The most samples :func:`workspace` (and :func:`dexterity`'s ``samples``) draws: they are kept in memory
+(about 80 bytes each for a 6-joint arm)."""
+MAX_VOLUME_SAMPLES = 10**10
+"""The most Monte Carlo points :func:`workspace_volume` tests (streamed: a bound on the time, several
+minutes at the bound)."""
+MAX_GRID = 10_000_000
+"""The most grid positions :func:`dexterity` evaluates (about 100 bytes each while it runs)."""
+MAX_ORIENTATIONS = 1_000_000
+"""The most orientations :func:`dexterity` samples per position."""
+MAX_SOLVES = 10**10
+"""The most IK solves :func:`dexterity` runs (grid positions times orientations: hours at the bound)."""
 
 
 class WorkspaceSamples(NamedTuple):
@@ -116,10 +128,13 @@ def _rng(seed) -> np.random.Generator:
     return np.random.default_rng(None if seed is None else as_index(seed, "seed"))
 
 
-def _count(n, name: str) -> int:
+def _count(n, name: str, maximum: int) -> int:
+    """A count in [0, maximum], checked before anything is allocated."""
     n = as_index(n, name)
     if n < 0:
         raise ValueError(f"{name} must be >= 0, got {n}")
+    if n > maximum:
+        raise ValueError(f"{name} must be at most {maximum:,}, got {n:,}")
     return n
 
 
@@ -127,13 +142,15 @@ def workspace(obj, n: int = 100_000, seed: int | None = 0) -> WorkspaceSamples:
     """``n`` samples of the workspace of ``obj`` (a :class:`Leg`, :class:`SpotArm` or
     :class:`Chain`), drawn uniformly in joint space within its limits (``seed`` for
     :func:`numpy.random.default_rng`; None for fresh entropy), with their FK points and branch
-    counts (see :class:`WorkspaceSamples`). A prismatic joint without finite limits raises
-    ``ValueError``; another object ``TypeError``."""
+    counts (see :class:`WorkspaceSamples`). ``n`` is at most :data:`MAX_SAMPLES` (20,000,000). A
+    prismatic joint without finite limits raises ``ValueError``; another object ``TypeError``."""
     kind = _kind(obj)
-    n = _count(n, "n")
+    n = _count(n, "n", MAX_SAMPLES)
     lower, upper = _limits(obj, kind)
     rng = _rng(seed)
-    q = lower + (upper - lower) * rng.random((n, lower.size))
+    q = rng.random((n, lower.size))  # then lower + (upper - lower) * q, in place (the same numbers)
+    q *= upper - lower
+    q += lower
     points = np.empty((n, 3))
     branches = np.empty(n, dtype=np.int8)
     for start in range(0, n, _BATCH):
@@ -157,10 +174,10 @@ def workspace_volume(obj, n: int = 1_000_000, seed: int | None = 0, pad: float =
 
     The box is the bounding box of 100,000 workspace samples (:func:`workspace`), widened by
     ``pad`` (in [0, 1]) times its size on each side so it holds the whole workspace; ``n`` points uniform in
-    the box are tested by the closed-form IK (some slot valid). volume = box volume x hit fraction
-    p, standard error = box volume x sqrt(p (1 - p) / n)."""
+    the box are tested by the closed-form IK (some slot valid), ``n`` at most :data:`MAX_VOLUME_SAMPLES`
+    (1e10). volume = box volume x hit fraction p, standard error = box volume x sqrt(p (1 - p) / n)."""
     kind = _kind(obj)
-    n = _count(n, "n")
+    n = _count(n, "n", MAX_VOLUME_SAMPLES)
     if n < 1:
         raise ValueError("n must be >= 1")
     pad = as_finite(pad, "pad", 0.0)
@@ -197,6 +214,27 @@ def _random_rotations(rng: np.random.Generator, m: int) -> np.ndarray:
     )
 
 
+def _check_grid(low: np.ndarray, high: np.ndarray, spacing: float, orientations: int) -> None:
+    """``ValueError`` when the grid of ``spacing`` over the box [low, high] would exceed :data:`MAX_GRID`
+    positions or :data:`MAX_SOLVES` solves (counted as floats: a 1e-9 spacing gives ~1e27)."""
+    size = high - low
+    with np.errstate(over="ignore"):  # a tiny spacing: Inf positions, refused below
+        count = float(np.prod(np.maximum(1.0, np.ceil(size / spacing))))
+    box = " x ".join(f"{float(side):.3g}" for side in size)
+    if count > MAX_GRID:
+        least = float(np.cbrt(np.prod(np.maximum(size, 1e-300)) / MAX_GRID))
+        raise ValueError(
+            f"spacing {spacing:g} m makes a grid of about {count:.3g} positions over the workspace's "
+            f"{box} m box; at most {MAX_GRID:,}: use a spacing of at least about {least:.2g} m"
+        )
+    if count * orientations > MAX_SOLVES:
+        raise ValueError(
+            f"spacing {spacing:g} m and orientations {orientations:,} make about {count * orientations:.3g} "
+            f"IK solves ({count:.3g} positions); at most {MAX_SOLVES:.0e}: use a larger spacing or fewer "
+            "orientations"
+        )
+
+
 def dexterity(
     obj, spacing: float = 0.05, orientations: int = 64, seed: int | None = 0, samples: int = 100_000
 ) -> Dexterity:
@@ -205,20 +243,24 @@ def dexterity(
     bounding box of ``samples`` workspace samples, the fraction of ``orientations`` rotations
     (uniform on SO(3), the same set at every position) for which the IK finds a solution within the
     limits. See :class:`Dexterity`; positions that no sampled orientation reaches are kept with
-    fraction 0."""
+    fraction 0. The grid holds at most :data:`MAX_GRID` (10,000,000) positions, ``orientations`` is
+    at most :data:`MAX_ORIENTATIONS` (1,000,000), their product at most :data:`MAX_SOLVES` (1e10) and
+    ``samples`` at most :data:`MAX_SAMPLES`: ``ValueError`` (naming the argument and the bound) before
+    anything is allocated."""
     kind = _kind(obj)
     if kind == "leg" or (kind == "chain" and obj.dof != 6):
         raise ValueError("dexterity needs a 6-joint arm or chain")
     spacing = as_finite(spacing, "spacing", 0.0, strict=True)
-    orientations = _count(orientations, "orientations")
+    orientations = _count(orientations, "orientations", MAX_ORIENTATIONS)
     if orientations < 1:
         raise ValueError("orientations must be >= 1")
-    samples = _count(samples, "samples")
+    samples = _count(samples, "samples", MAX_SAMPLES)
     if samples < 1:
         raise ValueError("samples must be >= 1")
     rng = _rng(seed)
     points = workspace(obj, samples, int(rng.integers(2**63))).points
     low, high = points.min(0), points.max(0)
+    _check_grid(low, high, spacing, orientations)
     axes = [np.arange(lo + spacing / 2, hi + spacing / 2, spacing) for lo, hi in zip(low, high)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
     rotations = _random_rotations(rng, orientations)

@@ -61,8 +61,18 @@ def inertials_of(chain, inertials=None) -> LinkInertials:
         raise ValueError(
             "this chain carries no inertial parameters: pass inertials=LinkInertials(mass, com, inertia)"
         )
-    mass, com, inertia = inertials
-    return LinkInertials(np.asarray(mass, float), np.asarray(com, float), np.asarray(inertia, float))
+    try:
+        mass, com, inertia = inertials
+    except (TypeError, ValueError):
+        raise TypeError(
+            "inertials must be a LinkInertials(mass, com, inertia) or a (mass, com, inertia) triple, "
+            f"got {type(inertials).__name__}"
+        ) from None
+    return LinkInertials(
+        as_real(mass, "inertials.mass", np.float64),
+        as_real(com, "inertials.com", np.float64),
+        as_real(inertia, "inertials.inertia", np.float64),
+    )
 
 
 _CACHE: OrderedDict = OrderedDict()
@@ -86,6 +96,12 @@ def _cached(kind: str, chain, inertials, make):
 
 def _core_of(chain, inertials) -> _core.ChainDynamics:
     """The C++ model of (chain, inertials)."""
+
+    if getattr(chain, "full_chain", None) is not None:
+        raise ValueError(
+            "this chain has mimic joints: call its own methods (chain.inverse_dynamics, chain.mass_matrix, "
+            "...), which map q to its full chain; the functions here and FloatingBase take chains without"
+        )
 
     def make():
         mass, com, inertia = inertials_of(chain, inertials)
@@ -210,24 +226,32 @@ class FloatingBase:
     order the chains were given; ``v`` (..., 6 + n) is the body's linear then angular velocity
     in the body frame, then the joint rates; ``a`` = dv/dt; ``tau`` (..., 6 + n) the force then
     moment on the body (body frame), then the joint torques. ``gravity`` is a world vector.
+
+    Results are bit-identical for any thread count and any chunking of a batch of 8 or more
+    samples (16 in float32) into calls of at least that many; a batch shorter than one vector
+    (8 float64, 16 float32 samples) runs a narrow model that may differ in the last bit. Pickles
+    (rebuilt from its body, chains and inertials).
     """
 
-    __slots__ = ("_chains", "_core", "_mass")
+    __slots__ = ("_args", "_chains", "_core", "_mass")
 
     def __init__(self, body: tuple, chains, inertials=None) -> None:
         """``body`` = (mass, com (3,), inertia (3, 3) about the com), in the body frame;
         ``chains`` a sequence of chains (their ``base`` is their mount on the body);
         ``inertials`` their ``LinkInertials`` (default: each chain's ``inertials``)."""
         chains = tuple(chains)
-        if inertials is None:
-            inertials = [None] * len(chains)
+        inertials = (None,) * len(chains) if inertials is None else tuple(inertials)
         cores = [_core_of(c, i) for c, i in zip(chains, inertials)]
         mass, com, inertia = body
         self._core = _core.FloatingDynamics(np.asarray(mass, float), com, inertia, cores)
         self._chains = chains
+        self._args = (body, chains, inertials)  # what a pickle rebuilds it from
         self._mass = float(mass) + sum(
             float(np.sum(inertials_of(c, i).mass)) for c, i in zip(chains, inertials)
         )
+
+    def __reduce__(self):
+        return (FloatingBase, self._args)
 
     @property
     def nq(self) -> int:

@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._boundary import as_real
+from ._boundary import as_index, as_real
 from ._transforms import rotation_x, rotation_z, translation
 
 __all__ = ["LinkInertials", "Tree", "link_inertials", "merge_inertials", "model_tree", "tree_of"]
@@ -88,15 +88,20 @@ def link_inertials(
 ) -> LinkInertials:
     """Checked, read-only :class:`LinkInertials` from mass (n,), com (n, 3) and inertia (n, 3, 3).
 
-    ``TypeError`` for non-numeric input; ``ValueError`` naming the argument for a wrong shape, a
-    non-finite value, a negative mass, or an inertia that is not symmetric (to 1e-9 of its largest
-    entry, then symmetrised) or not positive semidefinite (an eigenvalue below -1e-9 of its trace).
+    ``TypeError`` for non-numeric input or a non-integer ``n``; ``ValueError`` naming the argument
+    for a wrong shape, a negative ``n``, a non-finite value, a negative mass, or an inertia that is
+    not symmetric (to 1e-9 of its largest entry, then symmetrised) or not positive semidefinite (an
+    eigenvalue below -1e-9 of its trace).
     """
     mass_arr = as_real(mass, "mass", np.float64)
     if n is None:
         if mass_arr.ndim != 1:
             raise ValueError(f"mass must have shape (n,), got {mass_arr.shape}")
         n = mass_arr.shape[0]
+    else:
+        n = as_index(n, "n")  # 1.5, True, "3": TypeError
+        if n < 0:
+            raise ValueError(f"n must be a count >= 0, got {n}")
     mass_arr = _shaped(mass_arr, "mass", (n,))
     if (mass_arr < 0).any():
         raise ValueError(f"mass must be >= 0, got {mass_arr.tolist()}")
@@ -252,6 +257,11 @@ def _chain_tree(chain) -> Tree:
     first, ``T(j-1, j) = RotZ(theta) · M(q) · P_j`` with ``P_j = TransZ(d) TransX(a) RotX(alpha)``:
     body j's frame is then frame j + 1 times ``P_j^-1``, and its inertials are moved by ``P_j``.
     """
+    if getattr(chain, "full_chain", None) is not None:
+        raise ValueError(
+            "this chain has mimic joints: tree_of(chain.full_chain) gives the tree of every joint, which "
+            "moves as q_full = chain.mimic_matrix @ q + chain.mimic_offset"
+        )
     inertials = chain.inertials
     if inertials is None:
         raise ValueError("the chain has no inertials: give them with Chain.with_inertials")

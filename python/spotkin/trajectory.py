@@ -55,7 +55,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_index, as_real
+from ._boundary import as_index, as_real, quiet_float_errors, rotation_tolerance
 from .body import unchecked_transform
 
 __all__ = [
@@ -189,9 +189,11 @@ def point_to_point(
 # ---- Cartesian paths ---------------------------------------------------------------------------
 
 
-def _pose_matrices(poses: np.ndarray, name) -> np.ndarray:
+def _pose_matrices(poses: np.ndarray, name, dtypes=(np.float64,)) -> np.ndarray:
     """Checked rigid transforms (N, 4, 4) of N poses (N, 4, 4), (N, 7) or (N, 6) (float64, shape
-    already checked); ``name(i)`` names pose i in the errors."""
+    already checked); ``name(i)`` names pose i in the errors. ``dtypes``, one or one per pose, is the
+    dtype each was given in: a float32 rotation is checked to float32 precision
+    (:func:`rotation_tolerance`) and then replaced by the nearest rotation."""
     flat = poses.reshape(len(poses), -1)
     bad = np.flatnonzero(~np.isfinite(flat).all(axis=1))
     if bad.size:
@@ -206,9 +208,11 @@ def _pose_matrices(poses: np.ndarray, name) -> np.ndarray:
     T = unchecked_transform(poses)  # checked here: quaternions are normalised above
     if poses.shape[1:] == (4, 4):
         R = T[:, :3, :3]
+        tolerance = np.broadcast_to([rotation_tolerance(dtype) for dtype in dtypes], len(R))
         with np.errstate(over="ignore", invalid="ignore"):  # huge entries: not orthonormal
             gram_error = np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3))
-            orthonormal = (gram_error <= 1e-9 + 1e-5 * np.eye(3)).all(axis=(1, 2))  # np.allclose(atol=1e-9)
+            # np.allclose(atol=tolerance): 1e-9 in float64
+            orthonormal = (gram_error <= tolerance[:, None, None] + 1e-5 * np.eye(3)).all(axis=(1, 2))
             det = np.einsum("ni,ni->n", R[:, 0], np.cross(R[:, 1], R[:, 2]))
         rigid = orthonormal & (det > 0) & (poses[:, 3] == [0.0, 0.0, 0.0, 1.0]).all(axis=1)
         bad = np.flatnonzero(~rigid)
@@ -216,6 +220,10 @@ def _pose_matrices(poses: np.ndarray, name) -> np.ndarray:
             raise ValueError(
                 f"{name(bad[0])} must be a rigid transform (orthonormal rotation, last row [0, 0, 0, 1])"
             )
+        rounded = tolerance > 1e-9
+        if rounded.any():  # float32 rotations: the nearest rotation, without the float32 rounding
+            U, _, Vt = np.linalg.svd(R[rounded])
+            T[rounded, :3, :3] = U @ Vt
     return T
 
 
@@ -578,14 +586,18 @@ def linear(
     """
     vmax_, amax_, wmax_, alphamax_ = _limits(vmax, amax, wmax, alphamax)
     names = ("T0", "T1")
-    ends = [as_real(pose, name, np.float64) for pose, name in zip((T0, T1), names)]
+    given = [as_real(pose, name) for pose, name in zip((T0, T1), names)]
+    dtypes = [arr.dtype for arr in given]
+    ends = [arr.astype(np.float64, copy=False) for arr in given]
     for arr, name in zip(ends, names):
         if arr.shape not in ((4, 4), (7,), (6,)):
             raise ValueError(f"{name} must have shape (4, 4), (7,) or (6,), got {arr.shape}")
     if ends[0].shape == ends[1].shape:  # one checked conversion for both
-        mats = _pose_matrices(np.stack(ends), names.__getitem__)
+        mats = _pose_matrices(np.stack(ends), names.__getitem__, dtypes)
     else:
-        mats = np.concatenate([_pose_matrices(a[None], lambda _, n=name: n) for a, name in zip(ends, names)])
+        mats = np.concatenate(
+            [_pose_matrices(a[None], lambda _, n=name: n, (d,)) for a, name, d in zip(ends, names, dtypes)]
+        )
     return _plan(mats, vmax_, amax_, wmax_, alphamax_, 0.0)
 
 
@@ -617,12 +629,13 @@ def via_points(
     Non-numeric or masked poses and bool/str/complex limits raise TypeError; wrong shapes,
     non-finite poses and non-finite or negative limits ValueError.
     """
-    arr = as_real(poses, "poses", np.float64)
+    arr = as_real(poses, "poses")
+    dtype, arr = arr.dtype, arr.astype(np.float64, copy=False)
     if arr.ndim not in (2, 3) or arr.shape[0] < 2 or arr.shape[1:] not in ((4, 4), (7,), (6,)):
         raise ValueError(f"poses must have shape (N, 4, 4), (N, 7) or (N, 6) with N >= 2, got {arr.shape}")
     min_blend = _limit(blend, "blend", zero_ok=True)
     vmax_, amax_, wmax_, alphamax_ = _limits(vmax, amax, wmax, alphamax)
-    mats = _pose_matrices(arr, lambda i: f"poses[{i}]")
+    mats = _pose_matrices(arr, lambda i: f"poses[{i}]", (dtype,))
     return _plan(mats, vmax_, amax_, wmax_, alphamax_, min_blend)
 
 
@@ -640,6 +653,7 @@ class BranchPath(NamedTuple):
     """(K,) the largest joint move from the previous sample (0 at k = 0; revolute moves wrapped)."""
 
 
+@quiet_float_errors
 def hold_branch(q_slots: ArrayLike, valid: ArrayLike, branch: int, max_step: float = 0.2) -> BranchPath:
     """Hold IK slot ``branch`` along a path and report every jump.
 

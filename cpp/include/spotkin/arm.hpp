@@ -288,10 +288,11 @@ class Arm {
         const double wr1 = vector_math::atan2(-M12, M11);
         double* q0 = q[4 * sb + 2 * eb];
         double* q1 = q[4 * sb + 2 * eb + 1];
-        q0[0] = q1[0] = sh0_b;
-        q0[1] = q1[1] = sh1;
+        // atan2 gives -pi for a -0 sine: the angle pi, which (-pi, pi] keeps (wrap_angle_vec maps it)
+        q0[0] = q1[0] = wrap_angle_vec(sh0_b);
+        q0[1] = q1[1] = wrap_angle_vec(sh1);
         q0[2] = q1[2] = el0;
-        q0[3] = el1, q0[4] = wr0, q0[5] = wr1;
+        q0[3] = wrap_angle_vec(el1), q0[4] = wr0, q0[5] = wrap_angle_vec(wr1);
         q1[3] = wrap_angle_vec(el1 + kPi<double>);
         q1[4] = wrap_angle_vec(-wr0);
         q1[5] = wrap_angle_vec(wr1 + kPi<double>);

@@ -345,7 +345,14 @@ class Leg {
   SPOTKIN_INLINE C hip_roll(C y, C z, const Hip<C>& hip, C eps) const noexcept {
     const C h = C(h_);
     const C t1 = vector_math::atan2(z * h + eps * y * hip.S, y * h - eps * z * hip.S);
-    return hip.r2 > C(0) ? C(sign1_) * t1 : C(0);
+    return hip.r2 > C(0) ? half_open(C(sign1_) * t1) : C(0);
+  }
+
+  // An angle in [-pi, pi] (an atan2, maybe negated) into (-pi, pi]: -pi (atan2 of a -0 sine, or pi
+  // negated) is pi.
+  template <typename C>
+  static SPOTKIN_INLINE C half_open(C t) noexcept {
+    return t <= -kPi<C> ? kPi<C> : t;
   }
 
   // theta3 = psi - phi, then q3 = s3 theta3 in (-pi, pi].
@@ -366,7 +373,7 @@ class Leg {
     const C s3 = sin_psi * cos_phi - k.cos_psi * sin_phi;
     const C dz = Bz + c3 * Cz - s3 * Cx, dx = Bx + c3 * Cx + s3 * Cz;
     const C t2 = vector_math::atan2(wx * dz - wz * dx, wz * dz + wx * dx);
-    return C(sign2_) * t2;
+    return half_open(C(sign2_) * t2);
   }
 
   void update(int preferred_slot) noexcept {
