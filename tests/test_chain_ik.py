@@ -681,7 +681,7 @@ def test_ik_nearest_bad_input():
         chain.ik_nearest(T, "zero")
     rows = [(0, 0.0, 0.0, 0.0, 0.0), (0, 0.0, np.pi / 2, 0.1, 0.0), (0, 0.3, 0.0, 0.0, 0.0)]
     three = sk.Chain.from_mdh(rows, tool=sk.translation([0.3, 0.0, 0.0]))
-    with pytest.raises(ValueError, match=r"p must have shape \(\.\.\., 3\)"):
+    with pytest.raises(ValueError, match=r"^target must have shape \(\.\.\., 3\)"):  # the argument's name
         three.ik_nearest(np.zeros((2, 4)))
     q, status = three.ik_nearest(np.full(3, np.inf))
     assert status == sk.Status.INVALID_INPUT and np.isnan(q).all()

@@ -490,7 +490,7 @@ def test_reference_rotations():
     np.testing.assert_allclose(ref.axis_angle_matrix([0, 1, 0], 0.7), ref.rot_y(0.7), atol=1e-15)
 
 
-def test_mimic_is_accepted_and_not_applied():
+def test_mimic_joint_follows_its_leader():
     text = robot(
         '<link name="a"/><link name="b"/>',
         f'<joint name="j1" type="revolute"><parent link="base"/><child link="a"/><limit lower="-1" upper="1" '
@@ -499,8 +499,15 @@ def test_mimic_is_accepted_and_not_applied():
         f'{LIMIT}/><mimic joint="j1" multiplier="2" offset="0.1"/></joint>',
     )
     m = parse_urdf(text)
-    assert [j.name for j in m.actuated_joints] == ["j1", "j2"]
-    assert m.chain_data("b").n == 2
+    assert [j.name for j in m.actuated_joints] == ["j1"]  # a mimic joint is no independent variable
+    assert [j.name for j in m.mimic_joints] == ["j2"]
+    assert (m.joint("j2").mimic, m.joint("j2").multiplier, m.joint("j2").offset) == ("j1", 2.0, 0.1)
+    assert m.joint("j1").index == 0 and m.joint("j2").index == -1
+    data = m.chain_data("b")
+    assert data.n == 2 and data.mimic == (None, ("j1", 2.0, 0.1))  # the full chain, mimic included
+    # placement: j2 = 2 * 0.3 + 0.1 about x
+    expected = su._motion(m.joint("j1"), 0.3) @ su._motion(m.joint("j2"), 0.7)
+    np.testing.assert_allclose(m.placement("b", {"j1": 0.3}), expected, atol=1e-15)
     np.testing.assert_allclose(m.joint("j1").axis, [1, 0, 0])  # the URDF default axis
 
 
@@ -935,8 +942,12 @@ INVALID = {
         "joint 'j': a prismatic joint needs a <limit>",
     ),
     "floating": (
-        robot('<link name="a"/>', joint(jtype="floating", body="")),
-        "joint 'j': type 'floating' is not supported as an internal joint",
+        robot(
+            '<link name="a"/><link name="b"/>',
+            joint(),
+            joint(name="k", jtype="floating", parent="a", child="b"),
+        ),
+        "joint 'k': type 'floating' is only supported as the root joint",
     ),
     "planar": (
         robot('<link name="a"/>', joint(jtype="planar", body="")),

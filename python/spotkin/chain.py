@@ -8,13 +8,15 @@ Every joint is a fixed placement followed by a motion about (revolute) or along
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_finite, as_index, as_real, broadcast_lead
+from ._boundary import as_finite, as_index, as_real, broadcast_lead, quiet_float_errors, rigid_transforms
 from ._status import Status
 from .arm import _broadcast_seed
 from .leg import _broadcast_pair
@@ -47,6 +49,50 @@ def _limits(limits: ArrayLike | None, dof: int) -> tuple[np.ndarray, np.ndarray]
     if np.isnan(table).any() or (lower > upper).any():
         raise ValueError("limits must satisfy lower <= upper, with no NaN")
     return lower, upper
+
+
+def _limit_override(limits, current, names, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) from ``current`` with ``limits`` applied: a (dof, 2) table, or a dict joint name
+    or index -> (lower, upper) for the joints it names."""
+    lower, upper = current[0].copy(), current[1].copy()
+    dof = len(lower)
+    if not isinstance(limits, Mapping):
+        return _limits(limits, dof)
+    for key, pair in limits.items():
+        if isinstance(key, str):
+            if names is None or key not in names:
+                known = "this chain has no joint names" if names is None else f"the joints are {names}"
+                raise ValueError(f"{what}: {key!r} is not a joint of this chain ({known})")
+            k = names.index(key)
+        elif isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+            if not -dof <= int(key) < dof:
+                raise ValueError(f"{what}: joint index {key} is out of range for {dof} joints")
+            k = int(key) % dof
+        else:
+            raise TypeError(f"{what}: keys must be joint names or indices, got {type(key).__name__}")
+        row = as_real(pair, f"{what}[{key!r}]", np.float64)
+        if row.shape != (2,):
+            raise ValueError(f"{what}[{key!r}] must be a (lower, upper) pair, got shape {row.shape}")
+        if np.isnan(row).any() or row[0] > row[1]:
+            raise ValueError(f"{what}[{key!r}] must satisfy lower <= upper, with no NaN, got {row.tolist()}")
+        lower[k], upper[k] = row
+    return lower, upper
+
+
+MAX_FREE_VALUES = 100_000
+"""The most values of a held joint :meth:`Chain.ik_self_motion` and :meth:`Chain.ik_nearest_free` sample
+(each builds a 6R solver, and every pose gets 8 solutions per value)."""
+
+
+def _reduced(angles: np.ndarray) -> np.ndarray:
+    """Revolute angles (float64) with those beyond pi reduced into [-pi, pi] first, as atan2(sin, cos):
+    NumPy's sin and cos reduce any argument exactly (a difference taken before reducing loses a 1e17
+    angle's fraction, and all of a 1e300 one's). NaN and Inf give NaN, quietly."""
+    with np.errstate(invalid="ignore"):
+        wide = ~(np.abs(angles) <= np.pi)
+        if not wide.any():
+            return angles
+        return np.where(wide, np.arctan2(np.sin(angles), np.cos(angles)), angles)
 
 
 class ChainSolutions(NamedTuple):
@@ -133,8 +179,8 @@ class Chain:
         self._convention = convention
         self._joints = None
         self._names = None
-        self._base = None if base is None else as_real(base, "base", np.float64).copy()
-        self._tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
+        self._base = None if base is None else rigid_transforms(base, "base")
+        self._tool = None if tool is None else rigid_transforms(tool, "tool")
         self._core = _core.Chain(_CONVENTIONS[convention], table, self._base, self._tool)
         self._limits = _limits(limits, table.shape[0])
         self._ik = None
@@ -161,7 +207,7 @@ class Chain:
         before joint 0 and ``tool`` the last joint's frame to the tool frame.
         """
         chain = cls.__new__(cls)
-        placements = as_real(placements, "placements", np.float64).copy()
+        placements = rigid_transforms(placements, "placements")
         if placements.ndim != 3 or placements.shape[1:] != (4, 4):
             raise ValueError(f"placements must have shape (n, 4, 4), got {placements.shape}")
         n = placements.shape[0]
@@ -172,8 +218,8 @@ class Chain:
         if types.shape != (n,) or not np.isin(types, (0, 1)).all():
             raise ValueError(f"types must have shape ({n},) with 0 (revolute) or 1 (prismatic) entries")
         types = types.astype(np.int8)
-        chain._base = None if base is None else as_real(base, "base", np.float64).copy()
-        chain._tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
+        chain._base = None if base is None else rigid_transforms(base, "base")
+        chain._tool = None if tool is None else rigid_transforms(tool, "tool")
         chain._core = _core.Chain.from_joints(
             placements, axes, types.astype(np.float64), chain._base, chain._tool
         )
@@ -188,6 +234,57 @@ class Chain:
         chain._ik_tolerance = None
         chain._inertials = None
         return chain
+
+    @classmethod
+    def from_urdf(
+        cls, source: str | bytes | os.PathLike[str], tip: str | None = None, base: str | None = None
+    ) -> Chain:
+        """The chain from link ``base`` to link ``tip`` of a URDF: a robot arm, a gripper, a head, a leg.
+
+        ``source`` is a file path (``str`` or ``os.PathLike``; a ``.xacro`` file is expanded with the
+        ``xacro`` package, ``pip install "spotkin[xacro]"``) or the URDF's XML (a ``str`` starting with
+        ``<``, or ``bytes``). ``base`` defaults to the root link (below a ``world`` link and its
+        ``floating`` or ``fixed`` root joint, which are read past). ``tip`` defaults to the end of the
+        only chain below ``base``: each leaf link moved by an actuated joint ends one, cut before the
+        first joint of a gripper on its way (a mimic joint whose leader is on another branch, or that
+        leader: fingers; the tip is then the hand they hang from; a mimic joint below its leader is
+        part of the chain), and leaves moved by the same joints (a flange and a tool frame) end at the
+        link where they branch; with several chains (two arms, four legs, fingers that are no mimic of
+        each other) ``ValueError`` lists their tips. ``tip`` may be any link below ``base``.
+
+        The chain is :meth:`spotkin.Robot.chain`'s: fixed joints merged, the URDF's joint names and
+        limits, the bodies' mass properties when the file gives ``<inertial>`` (:attr:`inertials`), and
+        the closed-form IK family recognised from the geometry (:attr:`ik_kind`). A path holding mimic
+        joints gives a chain whose q holds the independent joints and the mimic joints' leaders (a
+        leader off the path included); the mimic joints follow them in FK, Jacobians, IK and dynamics
+        (``full_chain``, ``mimic_matrix``: ``q_full = M q + b``).
+
+        ``TypeError`` for another ``source``, ``tip`` or ``base`` type; ``ValueError`` naming the
+        joint or link for a malformed description, an unknown link, or a description above 64 MiB;
+        ``OSError`` when the file cannot be read; ``ImportError`` (saying what to install) for xacro
+        without the ``xacro`` package.
+        """
+        from . import _urdf_chain, urdf
+
+        if isinstance(source, (bytes, bytearray, memoryview)) or (
+            isinstance(source, str) and source.lstrip().startswith("<")
+        ):
+            data = urdf.read_text(source.lstrip() if isinstance(source, str) else source)
+        elif isinstance(source, (str, os.PathLike)):
+            data = urdf.read_file(source)
+        else:
+            raise TypeError(
+                "source must be a URDF path (str or os.PathLike) or its XML (str or bytes), "
+                f"got {type(source).__name__}"
+            )
+        model = urdf.parse_urdf(data)
+        if base is not None:
+            base = _urdf_chain.link_name(base, "base", model)
+        if tip is None:
+            tip = _urdf_chain.default_tip(model, base)
+        else:
+            tip = _urdf_chain.link_name(tip, "tip", model)
+        return _urdf_chain.chain_from_model(model, tip, base)
 
     @classmethod
     def from_mdh(
@@ -440,9 +537,19 @@ class Chain:
     # -- closed-form IK ------------------------------------------------------------------------------
 
     def _ik_core(self):
-        if self._ik is None:
+        if self._ik is None or isinstance(self._ik, dict):  # a dict: a 7-joint chain's free-joint solvers
             angle, distance = self._ik_tolerance or (1e-9, -1.0)
-            self._ik = _core.ChainIK(self._core, *self._limits, angle, distance)
+            try:
+                core = _core.ChainIK(self._core, *self._limits, angle, distance)
+            except ValueError as error:
+                if self.dof == 7:
+                    raise ValueError(_SEVEN_JOINTS) from None
+                if "ik_differential" in str(error):
+                    raise
+                raise ValueError(f"{error}; Chain.ik_differential solves it numerically") from None
+            if self._ik is None:
+                self._ik = core
+            return core
         return self._ik
 
     def with_ik_tolerance(self, angle: float = 1e-3, distance: float = 1e-3) -> Chain:
@@ -468,6 +575,30 @@ class Chain:
             setattr(chain, name, getattr(self, name))
         chain._ik = None
         chain._ik_tolerance = (float(angle), float(distance))
+        return chain
+
+    def with_limits(self, limits) -> Chain:
+        """This chain with other joint limits: a new Chain (the same model, inertials and IK tolerances;
+        the original is unchanged). Every limit-aware call of the new chain uses them: the closed-form
+        IK's validity and choice, the free-joint grids, :meth:`ik_differential`'s clamping, and the
+        workspace and dexterity estimates.
+
+        ``limits`` is a (dof, 2) table of (lower, upper) rows, or a dict whose keys are joint names
+        (:attr:`joint_names`) or indices and whose values are (lower, upper) pairs; the joints a dict
+        does not name keep their limits. ±inf means unlimited. ``ValueError`` naming the joint for an
+        unknown name or index, NaN, or lower > upper; ``TypeError`` for non-numeric values.
+        """
+        if not isinstance(limits, Mapping) and (limits is None or np.ndim(limits) == 0):
+            raise TypeError(
+                "limits must be a (dof, 2) table or a dict joint -> (lower, upper), "
+                f"got {type(limits).__name__}"
+            )
+        lower, upper = _limit_override(limits, self._limits, self._names, "limits")
+        chain = self.__class__.__new__(self.__class__)
+        for name in self.__slots__:
+            setattr(chain, name, getattr(self, name))
+        chain._limits = (lower, upper)
+        chain._ik = None  # the closed-form solvers hold the limits
         return chain
 
     @property
@@ -503,7 +634,8 @@ class Chain:
         on the idealised family (:attr:`ik_idealised`) and polished. Raises ``ValueError``, saying
         what was checked and by how much each check failed, for chains without a closed form here
         (other joint counts, a tool point that three joints cannot place in 3D, a 6R chain of no
-        family); :meth:`ik_differential` solves those numerically.
+        family); :meth:`ik_differential` solves those numerically. For a 7-joint chain the message
+        names ``free_joint``: :meth:`ik` with one joint held is in closed form (:meth:`ik_free_kind`).
         """
         return self._ik_core().kind
 
@@ -572,7 +704,8 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT. The
         derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
-        if free_joint is None and free_value is None and self._ik is not None:  # the single-call fast path
+        fast = self._ik is not None and not isinstance(self._ik, dict)
+        if free_joint is None and free_value is None and fast:  # the single-call fast path
             return ChainSolutions._make(self._ik.ik(T))
         if free_joint is None:
             if free_value is not None:
@@ -580,7 +713,7 @@ class Chain:
             if self.dof == 7:
                 raise ValueError(
                     "a 7-joint chain is redundant: pass free_joint (0..6) and free_value to hold one "
-                    "joint, or use ik_self_motion to sample it"
+                    "joint, or use ik_self_motion to sample it, or ik_differential to solve it numerically"
                 )
             return ChainSolutions(*self._ik_core().ik(T))
         core = self._free_core(free_joint)
@@ -609,8 +742,9 @@ class Chain:
     def ik_self_motion(self, T: ArrayLike, free_joint: int, values: ArrayLike | int = 36):
         """Samples the self-motion of a 7-joint chain: every solution with ``free_joint`` held at each
         of ``values`` ((n,) values, or a count n spread evenly over the joint's limits, or over
-        [-pi, pi) when unlimited). Returns (values (n,), :class:`ChainSolutions` with q (..., n, 8, 7)),
-        computed in one batched call (redundancy resolution by a free joint)."""
+        [-pi, pi) when unlimited; n at most :data:`MAX_FREE_VALUES`, 100,000, else ``ValueError``).
+        Returns (values (n,), :class:`ChainSolutions` with q (..., n, 8, 7)), computed in one batched
+        call (redundancy resolution by a free joint)."""
         k = as_index(free_joint, "free_joint")
         self._free_core(k)
         grid = self._free_grid(k, values)
@@ -624,6 +758,8 @@ class Chain:
             count = int(values)
             if count < 1:
                 raise ValueError(f"values must be a positive count or an array of values, got {count}")
+            if count > MAX_FREE_VALUES:  # checked before anything is allocated
+                raise ValueError(f"values must be a count of at most {MAX_FREE_VALUES:,}, got {count:,}")
             lower, upper = self._limits[0][k], self._limits[1][k]
             if np.isfinite(lower) and np.isfinite(upper):
                 return np.linspace(lower, upper, count)
@@ -631,14 +767,20 @@ class Chain:
         grid = as_real(values, "values")
         if grid.ndim != 1:
             raise ValueError(f"values must have shape (n,), got {grid.shape}")
+        if grid.size > MAX_FREE_VALUES:
+            raise ValueError(f"values must hold at most {MAX_FREE_VALUES:,} values, got {grid.size:,}")
         return grid
 
-    def ik_nearest_free(self, T: ArrayLike, seed: ArrayLike, free_joint: int, values: ArrayLike | int = 36):
+    @quiet_float_errors
+    def ik_nearest_free(
+        self, T: ArrayLike, seed: ArrayLike, free_joint: int, values: ArrayLike | int = 36
+    ) -> tuple[np.ndarray, np.ndarray | Status]:
         """One solution per pose for a 7-joint chain: of every solution over the sampled values of
         ``free_joint`` (:meth:`ik_self_motion`) plus the seed's own value, the valid one nearest the
-        seed (the largest single-joint move on the circle). Returns (q (..., 7), status (...,)): OK,
-        or JOINT_LIMIT / UNREACHABLE / INVALID_INPUT as in :class:`ChainSolutions` when none is valid
-        (q NaN). ``seed`` (..., 7) broadcasts against T's leading dimensions."""
+        seed (the largest single-joint move on the circle; a seed angle beyond pi is reduced exactly
+        first). Returns (q (..., 7), status (...,)): OK, or JOINT_LIMIT / UNREACHABLE / INVALID_INPUT
+        as in :class:`ChainSolutions` when none is valid (q NaN; a NaN or Inf seed: INVALID_INPUT).
+        ``seed`` (..., 7) broadcasts against T's leading dimensions."""
         k = as_index(free_joint, "free_joint")
         self._free_core(k)
         T, seed = _broadcast_seed(T, seed)
@@ -652,7 +794,8 @@ class Chain:
         shape = (*lead, grid.size + 1, *T.shape[-trailing:])
         poses = np.broadcast_to(np.expand_dims(T, axis=T.ndim - trailing), shape)
         sol = self.ik(poses, free_joint=k, free_value=candidates.astype(T.dtype, copy=False))
-        gap = sol.q - seed[..., None, None, :].astype(np.float64)
+        # reduced before the difference: q - 1e17 would lose q (and q - 1e300 everything)
+        gap = sol.q - _reduced(seed.astype(np.float64))[..., None, None, :]
         move = np.abs(np.angle(np.exp(1j * gap))).max(axis=-1)
         width = (grid.size + 1) * 8  # every (value, slot) candidate of a pose; explicit for empty batches
         move = np.where(sol.valid, move, np.inf).reshape(*lead, width)
@@ -672,7 +815,9 @@ class Chain:
             return q, Status(int(status))
         return q, status
 
-    def ik_nearest(self, target: ArrayLike, seed: ArrayLike | None = None):
+    def ik_nearest(
+        self, target: ArrayLike, seed: ArrayLike | None = None
+    ) -> tuple[np.ndarray, np.ndarray | Status]:
         """One closed-form solution per target: (q (..., dof), status (...,)).
 
         ``target`` is what :meth:`ik_position` (3-joint chains: p (..., 3)) or :meth:`ik`
@@ -684,13 +829,22 @@ class Chain:
         target's leading dimensions. Runs in C++ per block of targets, with no temporary
         array of every solution (for control loops and large batches alike).
         """
-        if seed is None:
-            return self._ik_core().ik_nearest(target, None)
-        if self.dof == 3:
-            target, seed = _broadcast_pair(target, seed, "p", "seed")
-        else:
-            target, seed = _broadcast_seed(target, seed)
-        return self._ik_core().ik_nearest(target, seed)
+        core = self._ik_core()
+        try:
+            if seed is None:
+                return core.ik_nearest(target, None)
+            if self.dof == 3:
+                target, seed = _broadcast_pair(target, seed, "p", "seed")
+            else:
+                target, seed = _broadcast_seed(target, seed)
+            return core.ik_nearest(target, seed)
+        except (TypeError, ValueError) as error:  # the kernels call it p or T: name the argument
+            message = str(error)
+            for name in ("p", "T"):
+                if message.startswith(f"{name} "):
+                    message = "target" + message[len(name) :].replace(f" {name}.filled", " target.filled")
+                    raise type(error)(message) from None
+            raise
 
     def ik_differential(
         self,
@@ -798,6 +952,14 @@ class Chain:
     def __repr__(self) -> str:
         kinds = "".join("RP"[int(s)] for s in self.sigma)
         return f"Chain({kinds}, convention={self._convention!r}, dof={self.dof})"
+
+
+_SEVEN_JOINTS = (
+    "a 7-joint chain is redundant: no closed form solves all 7 joints at once; "
+    "ik(T, free_joint=k, free_value=v) solves the other six in closed form with joint k held "
+    "(ik_free_kind(k) names their family; ik_self_motion samples the redundancy), and "
+    "ik_differential solves the whole chain numerically"
+)
 
 
 def _rebuild(rows, convention, base, tool, limits) -> Chain:

@@ -1,9 +1,21 @@
 """URDF parsing, kinematic-tree utilities and recognition of legs and arms.
 
 Standard library plus NumPy only: the XML is read with :mod:`xml.etree.ElementTree`.
-Only kinematics and inertia are kept; meshes, visuals, collisions, transmissions and
-``<gazebo>`` tags are read past and never loaded. ``<mimic>`` is accepted but not applied:
-a mimic joint is an ordinary, independent joint here.
+Only kinematics and inertia are kept; meshes (``package://`` paths or any other),
+visuals, collisions, transmissions and ``<gazebo>`` tags are read past and never loaded.
+A ``.xacro`` description is expanded first with the ``xacro`` package when it is
+installed (``pip install "spotkin[xacro]"``; see :func:`read_description`).
+
+Joints
+------
+* ``<mimic joint="leader" multiplier="m" offset="o"/>``: the joint follows its leader,
+  ``q = m q_leader + o``. It is no independent variable: :attr:`Model.actuated_joints`
+  leaves it out (:attr:`Model.mimic_joints` lists it), and every chain it lies on moves it
+  with its leader (:meth:`spotkin.Chain.from_urdf`).
+* A ``floating`` joint from the root link (a massless ``world`` link), or a ``fixed`` joint
+  from a link called ``world``, is the robot's root joint (:class:`RootJoint`): the world
+  link and that joint are dropped and the robot's base link becomes the root. A
+  ``floating`` joint anywhere else, and every ``planar`` joint, is refused.
 
 Conventions (standard URDF semantics)
 -------------------------------------
@@ -24,11 +36,12 @@ whether their wrist is spherical. :func:`describe` prints a summary.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -43,15 +56,19 @@ __all__ = [
     "LegSpec",
     "Link",
     "Model",
+    "RootJoint",
     "describe",
+    "expand_xacro",
     "find_arms",
     "find_legs",
+    "is_xacro",
     "load_urdf",
     "parse_urdf",
+    "read_file",
+    "read_text",
 ]
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
-_UNSUPPORTED_TYPES = ("floating", "planar")
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _FOOT_WORDS = ("foot", "toe", "contact", "tip")
 _TIP_WORDS = re.compile(r"hand|tool|gripper|flange|tip|(?:^|[^a-z])ee(?:[^a-z]|$)", re.IGNORECASE)
@@ -169,8 +186,12 @@ class Joint:
     ``origin`` (4, 4) places the joint frame in the parent link frame; the child link frame
     is the joint frame moved by the joint. ``axis`` is a unit vector in the joint frame
     (``None`` for fixed joints). ``lower``/``upper`` are ±inf for continuous joints.
-    ``index`` is the position among the actuated (non-fixed) joints in file order, -1 for
-    fixed joints.
+    ``index`` is the position among the actuated joints (:attr:`Model.actuated_joints`: neither
+    fixed nor mimic) in file order, -1 for fixed and mimic joints.
+
+    ``mimic`` names the joint this one follows (URDF ``<mimic joint=... multiplier=... offset=...>``),
+    None for an independent joint: ``q = multiplier * q_mimic + offset``. A mimic joint is not an
+    independent variable: it moves with its leader in every chain it lies on.
     """
 
     name: str
@@ -184,10 +205,25 @@ class Joint:
     effort: float | None = None
     velocity: float | None = None
     index: int = -1
+    mimic: str | None = None
+    multiplier: float = 1.0
+    offset: float = 0.0
 
     def __post_init__(self) -> None:
         if self.type not in JOINT_TYPES:
             raise ValueError(f"joint {self.name!r}: unknown type {self.type!r}")
+        if self.mimic is not None:
+            if not isinstance(self.mimic, str) or not self.mimic:
+                raise ValueError(f"joint {self.name!r}: mimic must name a joint, got {self.mimic!r}")
+            if self.type == "fixed":
+                raise ValueError(f"joint {self.name!r}: a fixed joint cannot mimic another joint")
+            if self.mimic == self.name:
+                raise ValueError(f"joint {self.name!r}: a joint cannot mimic itself")
+        for key in ("multiplier", "offset"):
+            value = float(getattr(self, key))
+            if not math.isfinite(value):
+                raise ValueError(f"joint {self.name!r}: mimic {key} must be finite")
+            object.__setattr__(self, key, value)
         object.__setattr__(self, "origin", _readonly(self.origin, (4, 4), f"joint {self.name!r} origin"))
         if self.type == "fixed":
             object.__setattr__(self, "axis", None)
@@ -212,8 +248,34 @@ class Joint:
 
     @property
     def actuated(self) -> bool:
-        """True for revolute, continuous and prismatic joints."""
+        """True for revolute, continuous and prismatic joints (a mimic joint moves too, with its
+        leader; :attr:`Model.actuated_joints` leaves it out as it is no independent variable)."""
         return self.type != "fixed"
+
+    def follows(self, value: float) -> float:
+        """This mimic joint's value when its leader is at ``value``: ``multiplier * value + offset``."""
+        return self.multiplier * value + self.offset
+
+
+@dataclass(frozen=True, eq=False)
+class RootJoint:
+    """The joint a URDF hangs its robot from: a ``floating`` joint (the robot's base moves freely: a
+    legged robot's body) or a ``fixed`` one from a link called ``world`` (a mounted arm), from the
+    world link ``parent`` to the robot's root link ``child``, placed by ``origin`` (4, 4). It is read,
+    not modelled: frames are in the root link's frame (see :attr:`Model.root_joint`)."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    origin: np.ndarray
+
+    def __post_init__(self) -> None:
+        if self.type not in ("floating", "fixed"):
+            raise ValueError(
+                f"root joint {self.name!r}: type must be 'floating' or 'fixed', got {self.type!r}"
+            )
+        object.__setattr__(self, "origin", _readonly(self.origin, (4, 4), f"root joint {self.name!r} origin"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,6 +285,10 @@ class ChainData:
     With ``F_0 = I``, the frame of the child link of actuated joint ``j`` in the base frame
     is ``F_{j+1} = F_j · placements[j] · M_j(q_j)``, with ``M_j`` the rotation about (types 0)
     or translation along (type 1) ``axes[j]``; the tip frame is ``F_n · tool``.
+
+    Every moving joint on the path is a row, mimic joints included: ``mimic[j]`` is None for an
+    independent joint and ``(leader, multiplier, offset)`` for a mimic one
+    (``q_j = multiplier * q_leader + offset``; the leader may be off the path).
     """
 
     joint_names: tuple[str, ...]
@@ -234,10 +300,15 @@ class ChainData:
     base: str
     tip: str
     continuous: np.ndarray
+    mimic: tuple[tuple[str, float, float] | None, ...] | None = None
 
     def __post_init__(self) -> None:
         n = len(self.joint_names)
         object.__setattr__(self, "joint_names", tuple(self.joint_names))
+        mimic = (None,) * n if self.mimic is None else tuple(self.mimic)
+        if len(mimic) != n:
+            raise ValueError(f"mimic: expected {n} entries, got {len(mimic)}")
+        object.__setattr__(self, "mimic", mimic)
         object.__setattr__(self, "placements", _readonly(self.placements, (n, 4, 4), "placements"))
         object.__setattr__(self, "axes", _readonly(self.axes, (n, 3), "axes"))
         types = np.array(self.types, dtype=np.int8).reshape(n)
@@ -262,13 +333,19 @@ class Model:
     """A kinematic tree: links (file order), joints (file order) and the root link name.
 
     Construction validates the tree (declared links, one parent per link, no loop, a
-    single root).
+    single root) and the mimic joints (their leader exists, moves the same way and is no mimic).
+
+    ``root_joint`` is the joint the file hangs the root link from, when it has one: a
+    ``floating`` joint from the root link, or a ``fixed`` one from a link called ``world``. That
+    link and joint are not part of the tree: the root (the body, for a legged robot) is the joint's
+    child, and every frame is in its frame.
     """
 
     name: str
     links: dict[str, Link]
     joints: tuple[Joint, ...]
     root: str
+    root_joint: RootJoint | None = None
     _joint_by_name: dict[str, Joint] = field(init=False, repr=False)
     _parent: dict[str, Joint] = field(init=False, repr=False)
     _children: dict[str, tuple[Joint, ...]] = field(init=False, repr=False)
@@ -299,6 +376,24 @@ class Model:
                 )
             parent[j.child] = j
             children[j.parent].append(j)
+        for j in joints:
+            if j.mimic is None:
+                continue
+            leader = by_name.get(j.mimic)
+            if leader is None:
+                raise ValueError(f"joint {j.name!r}: it mimics joint {j.mimic!r}, which does not exist")
+            if leader.type == "fixed":
+                raise ValueError(f"joint {j.name!r}: it mimics joint {leader.name!r}, which is fixed")
+            if leader.mimic is not None:
+                raise ValueError(
+                    f"joint {j.name!r}: it mimics joint {leader.name!r}, itself a mimic of {leader.mimic!r}; "
+                    f"make {j.name!r} mimic {leader.mimic!r} directly"
+                )
+            if (leader.type == "prismatic") != (j.type == "prismatic"):
+                raise ValueError(
+                    f"joint {j.name!r} ({j.type}) mimics joint {leader.name!r} ({leader.type}): a mimic "
+                    "joint must move the way its leader does (both prismatic, or both revolute/continuous)"
+                )
         # Each link has at most one parent: follow parents to find loops.
         state: dict[str, int] = {}
         for start in links:
@@ -322,16 +417,23 @@ class Model:
             )
         if self.root != roots[0]:
             raise ValueError(f"robot {self.name!r}: the root link is {roots[0]!r}, not {self.root!r}")
+        if self.root_joint is not None and self.root_joint.child != self.root:
+            raise ValueError(
+                f"robot {self.name!r}: the root joint's child is not the root link {self.root!r}"
+            )
         object.__setattr__(self, "_joint_by_name", by_name)
         object.__setattr__(self, "_parent", parent)
         object.__setattr__(self, "_children", {k: tuple(v) for k, v in children.items()})
-        # Placements at zero angles, in the root frame (parents before children).
+        # Placements at zero angles, in the root frame (parents before children); a mimic joint sits
+        # at its offset (its leader at zero).
         zero = {self.root: np.eye(4)}
         stack = [self.root]
         while stack:
             link = stack.pop()
             for j in reversed(self._children[link]):
                 zero[j.child] = zero[link] @ j.origin
+                if j.mimic is not None and j.offset != 0.0:
+                    zero[j.child] = zero[j.child] @ _motion(j, j.offset)
                 stack.append(j.child)
         for T in zero.values():
             T.setflags(write=False)
@@ -340,7 +442,8 @@ class Model:
     def __repr__(self) -> str:
         links, joints = _plural(len(self.links), "link"), _plural(len(self.joints), "joint")
         n = len(self.actuated_joints)
-        return f"Model(name={self.name!r}, {links}, {joints} ({n} actuated), root={self.root!r})"
+        mimic = f", {len(self.mimic_joints)} mimic" if self.mimic_joints else ""
+        return f"Model(name={self.name!r}, {links}, {joints} ({n} actuated{mimic}), root={self.root!r})"
 
     # ---- look-ups
 
@@ -350,8 +453,14 @@ class Model:
 
     @property
     def actuated_joints(self) -> tuple[Joint, ...]:
-        """The non-fixed joints, in file order."""
-        return tuple(j for j in self.joints if j.type != "fixed")
+        """The independent moving joints (neither fixed nor mimic), in file order: the variables of
+        the description."""
+        return tuple(j for j in self.joints if j.type != "fixed" and j.mimic is None)
+
+    @property
+    def mimic_joints(self) -> tuple[Joint, ...]:
+        """The mimic joints (each follows an actuated joint, :attr:`Joint.mimic`), in file order."""
+        return tuple(j for j in self.joints if j.mimic is not None)
 
     def joint(self, name: str) -> Joint:
         """The joint called ``name``."""
@@ -398,29 +507,58 @@ class Model:
     def placement(self, link: str, q: Mapping[str, float] | None = None) -> np.ndarray:
         """The (4, 4) frame of ``link`` in the root frame, at zero angles or at ``q``.
 
-        ``q`` maps actuated joint names to values; joints not named are at zero.
+        ``q`` maps actuated joint names to values; joints not named are at zero. A mimic joint
+        follows its leader (``multiplier * q[leader] + offset``), also when ``q`` is empty.
         """
         self._check_link(link)
+        q = {} if q is None else q
         if not q:
             return self._zero[link].copy()
+        path = self.path(link)
         for name in q:
-            if self.joint(name).type == "fixed":
+            joint = self.joint(name)
+            if joint.type == "fixed":
                 raise ValueError(f"joint {name!r} is fixed and takes no value")
+            if joint.mimic is not None:
+                raise ValueError(
+                    f"joint {name!r} mimics joint {joint.mimic!r} and takes no value: give {joint.mimic!r}'s"
+                )
         T = np.eye(4)
-        for j in self.path(link):
+        for j in path:
             T = T @ j.origin
             if j.type != "fixed":
-                value = float(q.get(j.name, 0.0))
+                if j.mimic is None:
+                    value = float(q.get(j.name, 0.0))
+                else:
+                    value = j.follows(float(q.get(j.mimic, 0.0)))
                 if not math.isfinite(value):
                     raise ValueError(f"joint {j.name!r}: value must be finite")
                 T = T @ _motion(j, value)
         return T
 
+    def with_limits(self, limits: Mapping[str, tuple[float, float]]) -> Model:
+        """A new Model whose named moving joints have other (lower, upper) limits; a continuous joint
+        given finite limits becomes revolute. ``ValueError`` for an unknown or fixed joint."""
+        table = dict(limits)
+        for name in table:
+            if self.joint(name).type == "fixed":
+                raise ValueError(f"limits: joint {name!r} is fixed and has no limits")
+        joints = []
+        for j in self.joints:
+            if j.name in table:
+                lower, upper = (float(v) for v in table[j.name])
+                kind = "revolute" if j.type == "continuous" and math.isfinite(upper - lower) else j.type
+                j = dataclasses.replace(j, type=kind, lower=lower, upper=upper)
+            joints.append(j)
+        return Model(
+            name=self.name, links=self.links, joints=tuple(joints), root=self.root, root_joint=self.root_joint
+        )
+
     def chain_data(self, link: str, base: str | None = None) -> ChainData:
         """The serial chain from ``base`` (default: the root) to ``link``, fixed joints merged."""
         base = self.root if base is None else base
         path = self.path(link, base)
-        names, placements, axes, types, limits, continuous = [], [], [], [], [], []
+        names, placements, axes, types, limits, continuous, mimic = [], [], [], [], [], [], []
         acc = np.eye(4)
         for j in path:
             acc = acc @ j.origin
@@ -432,6 +570,7 @@ class Model:
             types.append(1 if j.type == "prismatic" else 0)
             limits.append((j.lower, j.upper))
             continuous.append(j.type == "continuous")
+            mimic.append(None if j.mimic is None else (j.mimic, j.multiplier, j.offset))
             acc = np.eye(4)
         n = len(names)
         return ChainData(
@@ -444,6 +583,7 @@ class Model:
             base=base,
             tip=link,
             continuous=np.array(continuous, dtype=bool),
+            mimic=tuple(mimic),
         )
 
 
@@ -528,8 +668,15 @@ def _parse_joint(el: ET.Element, k: int, index: int) -> Joint:
     jtype = el.get("type")
     if jtype is None:
         raise ValueError(f"{what}: missing type")
-    if jtype in _UNSUPPORTED_TYPES:
-        raise ValueError(f"{what}: type {jtype!r} is not supported as an internal joint")
+    if jtype == "planar":
+        raise ValueError(
+            f"{what}: type 'planar' is not supported: spotkin's chains and trees are made of 1-dof revolute "
+            "and prismatic joints, and a planar joint moves in 3 (x, y and the rotation about the normal); "
+            "describe it as two prismatic joints and a revolute one through massless links"
+        )
+    floating = jtype == "floating"  # the root joint, when it is one: parse_urdf decides
+    if floating:
+        jtype = "fixed"
     if jtype not in JOINT_TYPES:
         raise ValueError(f"{what}: unknown type {jtype!r}")
     links = []
@@ -560,6 +707,16 @@ def _parse_joint(el: ET.Element, k: int, index: int) -> Joint:
                 upper = _float(limit.get("upper"), f"{what}: limit upper", 0.0)
                 if lower > upper:
                     raise ValueError(f"{what}: lower limit {lower:g} is above upper limit {upper:g}")
+    mimic, multiplier, offset = None, 1.0, 0.0
+    mimic_el = el.find("mimic")
+    if mimic_el is not None and jtype != "fixed":
+        mimic = mimic_el.get("joint")
+        if not mimic:
+            raise ValueError(f"{what}: <mimic> names no joint")
+        multiplier = _float(mimic_el.get("multiplier"), f"{what}: mimic multiplier", 1.0)
+        offset = _float(mimic_el.get("offset"), f"{what}: mimic offset", 0.0)
+    elif mimic_el is not None:
+        raise ValueError(f"{what}: a {'floating' if floating else jtype} joint cannot mimic another joint")
     return Joint(
         name=name,
         type=jtype,
@@ -571,12 +728,18 @@ def _parse_joint(el: ET.Element, k: int, index: int) -> Joint:
         upper=upper,
         effort=effort,
         velocity=velocity,
-        index=index if jtype != "fixed" else -1,
+        index=index if jtype != "fixed" and mimic is None else -1,
+        mimic=mimic,
+        multiplier=multiplier,
+        offset=offset,
     )
 
 
 def parse_urdf(text: str | bytes) -> Model:
-    """Parse URDF text (``str``, or ``bytes`` honouring the XML encoding declaration)."""
+    """Parse URDF text (``str``, or ``bytes`` honouring the XML encoding declaration); ``TypeError``
+    for another type."""
+    if not isinstance(text, (str, bytes, bytearray)):
+        raise TypeError(f"text must be a str or bytes holding URDF XML, got {type(text).__name__}")
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -600,6 +763,7 @@ def parse_urdf(text: str | bytes) -> Model:
     joints = []
     index = 0
     seen: set[str] = set()
+    floating: list[str] = []
     for k, el in enumerate(robot.iterfind("joint")):
         j = _parse_joint(el, k, index)
         if j.name in seen:
@@ -608,20 +772,128 @@ def parse_urdf(text: str | bytes) -> Model:
         for role, link in (("parent", j.parent), ("child", j.child)):
             if link not in links:
                 raise ValueError(f"joint {j.name!r}: {role} link {link!r} is not declared")
-        if j.type != "fixed":
+        if el.get("type") == "floating":
+            floating.append(j.name)
+        if j.type != "fixed" and j.mimic is None:
             index += 1
         joints.append(j)
     children = {j.child for j in joints}
     roots = [link for link in links if link not in children]
+    root_joint = _root_joint(links, joints, roots, floating)
+    if root_joint is not None:
+        del links[root_joint.parent]
+        joints = [j for j in joints if j.name != root_joint.name]
+        roots = [root_joint.child]
+    for j in floating:
+        if root_joint is None or j != root_joint.name:
+            raise ValueError(
+                f"joint {j!r}: type 'floating' is only supported as the root joint, from the root link (a "
+                "'world' link with no mass and no other joint) to the robot's base"
+            )
     # Model validates the tree (loops, several roots) with a message naming the links.
-    return Model(name=name, links=links, joints=tuple(joints), root=roots[0] if roots else next(iter(links)))
+    root = roots[0] if roots else next(iter(links))
+    return Model(name=name, links=links, joints=tuple(joints), root=root, root_joint=root_joint)
+
+
+def _root_joint(links: dict[str, Link], joints: list[Joint], roots: list[str], floating: list[str]):
+    """The :class:`RootJoint` of a file whose single root link hangs the robot by a floating joint (or a
+    fixed joint from a link called ``world``), or None."""
+    if len(roots) != 1:
+        return None
+    top = roots[0]
+    below = [j for j in joints if j.parent == top]
+    if len(below) != 1:
+        return None
+    j = below[0]
+    if j.name not in floating and not (j.type == "fixed" and top == "world"):
+        return None
+    inertial = links[top].inertial
+    if inertial is not None and inertial.mass > 0:
+        if j.name in floating:
+            raise ValueError(
+                f"link {top!r}, above the floating root joint {j.name!r}, has a mass: the root joint must "
+                "start from a massless world link"
+            )
+        return None
+    kind = "floating" if j.name in floating else "fixed"
+    return RootJoint(name=j.name, type=kind, parent=top, child=j.child, origin=j.origin)
 
 
 def load_urdf(path: str | os.PathLike) -> Model:
-    """Read and parse a URDF file (bytes, so the XML encoding declaration is honoured)."""
-    with open(os.fspath(path), "rb") as fh:
-        data = fh.read()
-    return parse_urdf(data)
+    """Read and parse a URDF file (bytes, so the XML encoding declaration is honoured); a ``.xacro``
+    file is expanded first (:func:`read_file`)."""
+    return parse_urdf(read_file(path))
+
+
+MAX_BYTES = 64 * 2**20
+"""The largest description read (64 MiB): a URDF of kinematics and inertials is far smaller."""
+
+XACRO_EXTRA = 'pip install "spotkin[xacro]"'
+
+
+def read_file(path: str | os.PathLike) -> str | bytes:
+    """The URDF XML in the file at ``path`` (``str`` or ``os.PathLike``): its bytes (so the XML encoding
+    declaration decides), or, for a xacro file (:func:`is_xacro`), its expansion. ``OSError`` when it
+    cannot be read (``IsADirectoryError``, ``FileNotFoundError``, ...), ``ValueError`` above
+    :data:`MAX_BYTES`, ``TypeError`` for another type."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
+    name = os.fsdecode(os.fspath(path))
+    with open(name, "rb") as fh:
+        data = fh.read(MAX_BYTES + 1)
+    if len(data) > MAX_BYTES:
+        raise ValueError(f"{name!r} is larger than {MAX_BYTES // 2**20} MiB: not a URDF description")
+    return expand_xacro(data, name) if is_xacro(data, name) else data
+
+
+def read_text(text: str | bytes) -> str | bytes:
+    """URDF XML given as text (``str``, or ``bytes`` honouring the XML encoding declaration), expanded
+    when it is xacro (:func:`is_xacro`). ``ValueError`` above :data:`MAX_BYTES`."""
+    if isinstance(text, (bytearray, memoryview)):
+        text = bytes(text)
+    if not isinstance(text, (str, bytes)):
+        raise TypeError(f"text must be a str or bytes holding URDF XML, got {type(text).__name__}")
+    if len(text) > MAX_BYTES:
+        raise ValueError(f"the text is larger than {MAX_BYTES // 2**20} MiB: not a URDF description")
+    return expand_xacro(text) if is_xacro(text) else text
+
+
+def is_xacro(data: str | bytes, name: str | None = None) -> bool:
+    """Whether a description is xacro: its file name ends in ``.xacro``, or its text declares the
+    ``xmlns:xacro`` namespace or uses ``<xacro:`` elements."""
+    if name is not None and name.lower().endswith(".xacro"):
+        return True
+    markers = ("xmlns:xacro", "<xacro:")
+    if isinstance(data, bytes):
+        return any(m.encode() in data for m in markers)
+    return any(m in data for m in markers)
+
+
+def expand_xacro(data: str | bytes, name: str | None = None) -> str:
+    """The URDF a xacro description expands to, with the ``xacro`` package (``pip install
+    "spotkin[xacro]"``); ``name`` is its file (relative ``<xacro:include>`` are resolved from its
+    folder). ``ImportError`` saying what to install when ``xacro`` is missing; ``ValueError`` when the
+    expansion fails."""
+    what = repr(name) if name else "the description"
+    try:
+        import xacro
+    except ImportError:
+        example = os.path.basename(name) if name else "robot.urdf.xacro"
+        raise ImportError(
+            f"{what} is xacro: expanding it needs the xacro package ({XACRO_EXTRA}), or expand it "
+            f"first with `xacro {example} > robot.urdf` and load the URDF"
+        ) from None
+    text = data.decode("utf-8") if isinstance(data, bytes) else data
+    try:
+        if name is not None:
+            doc = xacro.process_file(name)
+        else:
+            xacro.init_stacks(None)
+            doc = xacro.parse(text)
+            xacro.process_doc(doc)
+        return doc.toxml()
+    except Exception as error:  # xacro raises its own XacroException, XML errors, NameError...
+        raise ValueError(f"xacro could not expand {what}: {error}") from None
 
 
 # --------------------------------------------------------------------------- recognition
@@ -749,6 +1021,46 @@ def _leg_geometry(model, joints, foot, offset, tolerance):
     return dict(hip_origin=origins[0], a=a, b=b, c=c, signs=signs, limits=limits), None
 
 
+def _moving_above(
+    model: Model, keep: int, marked: Collection[str] = ()
+) -> dict[str, tuple[int, tuple[Joint, ...], bool]]:
+    """For every link: the number of moving (non-fixed) joints on its path from the root, the first
+    ``keep`` of them, and whether the path holds a joint named in ``marked``. One walk down the tree,
+    linear in its size (a path per leaf would be quadratic on a long chain with a leaf per link)."""
+    above = {model.root: (0, (), False)}
+    stack = [model.root]
+    while stack:
+        link = stack.pop()
+        count, first, on_marked = above[link]
+        for j in model._children[link]:
+            moving = j.type != "fixed"
+            above[j.child] = (
+                count + moving,
+                first + (j,) if moving and count < keep else first,
+                on_marked or j.name in marked,
+            )
+            stack.append(j.child)
+    return above
+
+
+def _link_names(value, name: str) -> tuple[str, ...] | None:
+    """None, or link names given as one ``str`` or an iterable of them; ``TypeError`` naming ``name``."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        return (value,)
+    try:
+        names = tuple(value)
+    except TypeError:
+        raise TypeError(
+            f"{name} must be a link name or a sequence of link names, got {type(value).__name__}"
+        ) from None
+    for item in names:
+        if not isinstance(item, str):
+            raise TypeError(f"{name} must hold link names (str), got {type(item).__name__}")
+    return names
+
+
 def find_legs(
     model: Model,
     feet: Iterable[str] | None = None,
@@ -766,23 +1078,25 @@ def find_legs(
     dict foot link -> (3,). Returns ``(legs, report)``: legs in URDF order of their first
     joint, and text lines on what was ignored or chosen, and why.
     """
+    feet = _link_names(feet, "feet")
     offsets = _offsets(model, contact_offset)
     report: list[str] = []
     paths = {}
+    above = _moving_above(model, 3)  # one walk down the tree: linear in its size
 
     def actuated_path(link):
-        return tuple(j for j in model.path(link) if j.type != "fixed")
+        count, first, _ = above[link]
+        return first if count <= 3 else tuple(j for j in model.path(link) if j.type != "fixed")
 
     if feet is not None:
-        feet = (feet,) if isinstance(feet, str) else tuple(feet)
         if len(set(feet)) != len(feet):
             raise ValueError("feet: a link is named twice")
         groups: dict[tuple[str, ...], list[str]] = {}
         for foot in feet:
             model.link(foot)
             joints = actuated_path(foot)
-            if len(joints) != 3 or any(j.type == "prismatic" for j in joints):
-                kinds = ", ".join(f"{j.name} ({j.type})" for j in joints) or "none"
+            if len(joints) != 3 or any(j.type == "prismatic" or j.mimic is not None for j in joints):
+                kinds = ", ".join(f"{j.name} ({'mimic' if j.mimic else j.type})" for j in joints) or "none"
                 raise ValueError(
                     f"foot link {foot!r} is not a leg candidate: it needs exactly 3 revolute or "
                     f"continuous joints above it, has {kinds}"
@@ -796,13 +1110,17 @@ def find_legs(
     else:
         groups = {}
         for leaf in model.leaves:
-            joints = actuated_path(leaf)
-            if len(joints) != 3:
-                report.append(f"ignored: {leaf} ({_plural(len(joints), 'actuated joint')})")
+            count, joints, _ = above[leaf]
+            if count != 3:
+                report.append(f"ignored: {leaf} ({_plural(count, 'actuated joint')})")
                 continue
             prismatic = [j.name for j in joints if j.type == "prismatic"]
             if prismatic:
                 report.append(f"{leaf}: not a leg: joint {prismatic[0]!r} is prismatic")
+                continue
+            mimic = [j for j in joints if j.mimic is not None]
+            if mimic:
+                report.append(f"{leaf}: not a leg: joint {mimic[0].name!r} mimics {mimic[0].mimic!r}")
                 continue
             key = tuple(j.name for j in joints)
             groups.setdefault(key, []).append(leaf)
@@ -888,21 +1206,26 @@ def find_arms(
     leg_joints = {name for leg in legs for name in leg.joint_names}
     report: list[str] = []
     found: dict[tuple[str, ...], dict] = {}
+    listed = 3  # the joints past the sixth named in the report (then how many more)
+    above = _moving_above(model, 6 + listed, leg_joints)  # one walk down the tree: linear in its size
     for leaf in model.leaves:
-        path = model.path(leaf)
-        if any(j.name in leg_joints for j in path):
+        count, joints, on_leg = above[leaf]
+        if on_leg or not count:
             continue
-        joints = [j for j in path if j.type != "fixed"]
-        if not joints:
+        mimic = [j for j in joints[:6] if j.mimic is not None]
+        if mimic:
+            report.append(f"{leaf}: not an arm: joint {mimic[0].name!r} mimics {mimic[0].mimic!r}")
             continue
-        if len(joints) < 6:
-            report.append(f"{leaf}: {_plural(len(joints), 'actuated joint')}, not an arm")
+        if count < 6:
+            report.append(f"{leaf}: {_plural(count, 'actuated joint')}, not an arm")
             continue
         key = tuple(j.name for j in joints[:6])
-        if len(joints) > 6:
+        if count > 6:
             extra = ", ".join(j.name for j in joints[6:])
+            if count > 6 + listed:
+                extra += f" and {count - 6 - listed} more"
             report.append(
-                f"{leaf}: {len(joints)} actuated joints, the first 6 ({', '.join(key)}) are taken "
+                f"{leaf}: {count} actuated joints, the first 6 ({', '.join(key)}) are taken "
                 f"as an arm; {extra} not part of it"
             )
         if key not in found:
@@ -961,15 +1284,25 @@ def describe(
     lines = [
         f"robot {model.name!r}: {_plural(len(model.links), 'link')}, {_plural(len(model.joints), 'joint')} "
         f"({n_act} actuated), root {model.root!r}",
-        "tree:",
     ]
+    if model.root_joint is not None:
+        rj = model.root_joint
+        what = "a floating base" if rj.type == "floating" else "mounted (fixed)"
+        lines.append(
+            f"root joint: {rj.type} {rj.name} from {rj.parent!r} to {rj.child!r}, read as {what}: "
+            f"frames are in the frame of {rj.child!r}"
+        )
+    for j in model.mimic_joints:
+        lines.append(f"mimic: {j.name} follows {j.mimic} × {j.multiplier:.6g} + {j.offset:.6g}")
+    lines.append("tree:")
     stack: list[tuple[str, Joint | None, int]] = [(model.root, None, 1)]
     while stack:
         link, joint, depth = stack.pop()
         if joint is None:
             lines.append("  " * depth + link)
         else:
-            lines.append("  " * depth + f"{link}  <- {joint.type} {joint.name}")
+            mimic = "" if joint.mimic is None else f" (mimic of {joint.mimic})"
+            lines.append("  " * depth + f"{link}  <- {joint.type} {joint.name}{mimic}")
         stack.extend((j.child, j, depth + 1) for j in reversed(model.children(link)))
     lines.append(f"legs ({len(legs)}):")
     for leg in legs:
@@ -989,6 +1322,14 @@ def describe(
             f"  {arm.name}: joints {', '.join(arm.joint_names)}",
             f"    base {arm.base}, tip {arm.tip}, spherical wrist: {wrist}",
         ]
+    wide = [j for j in model.actuated_joints if j.type == "revolute" and j.upper - j.lower > 2 * math.pi]
+    for j in wide:
+        lines.append(
+            f"warning: joint {j.name!r} has the range [{j.lower:.6g}, {j.upper:.6g}] rad, wider than 2π: "
+            "the IK may choose configurations the robot cannot take (on a leg, a knee above its hip); "
+            "narrow it "
+            "with from_urdf(..., limits={name: (lower, upper)}) or with_limits"
+        )
     if report:
         lines.append("not recognised / notes:")
         lines += [f"  {line}" for line in report]

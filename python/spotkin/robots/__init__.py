@@ -7,9 +7,10 @@ from importlib import resources
 
 __all__ = ["NAMES", "path", "text"]
 
-NAMES = ("spot_with_arm", "go2")
-"""The packaged descriptions: ``"spot_with_arm"`` (Boston Dynamics Spot and the Spot Arm) and
-``"go2"`` (Unitree Go2)."""
+NAMES = ("spot_with_arm", "go2", "ur5", "panda")
+"""The packaged descriptions: ``"spot_with_arm"`` (Boston Dynamics Spot and the Spot Arm), ``"go2"``
+(Unitree Go2), and two arms for :meth:`spotkin.Chain.from_urdf`: ``"ur5"`` (a Universal Robots UR5)
+and ``"panda"`` (a Franka Emika Panda with its hand, whose second finger mimics the first)."""
 
 
 def _resource(name: str):
@@ -19,7 +20,8 @@ def _resource(name: str):
 
 
 def path(name: str) -> str:
-    """The file path of a packaged description, for :meth:`spotkin.Robot.from_urdf`."""
+    """The file path of a packaged description, for :meth:`spotkin.Robot.from_urdf` (legged robots) or
+    :meth:`spotkin.Chain.from_urdf` (arms)."""
     with resources.as_file(_resource(name)) as file:
         return str(file)
 
