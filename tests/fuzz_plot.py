@@ -103,12 +103,24 @@ def register_entries(api) -> None:
             want = robot.body_fk(
                 np.asarray(pose, np.float64), np.asarray(q, np.float64), kw.get("seq", "XYZ")
             )
+            view = kw.get("view", "3d")
+            if view != "3d":  # a 2D view draws the feet's projection
+                want = want[:, list({"side": (0, 2), "front": (1, 2), "top": (0, 1)}[view])]
             got = _gid_data(fig, "feet")
             if got is None or not close(got, want, False):
                 return f"drawn feet {describe(got)} are not body_fk's {describe(want)}"
             return None
 
         return probe
+
+    def view_axes(plan):
+        """A 2D view draws into a 2D Axes and refuses a 3D one (the other way round for "3d")."""
+        flat = plan["view"] in ("choice:side", "choice:front", "choice:top")
+        if flat and plan["ax"] == "3d":
+            return REJECT
+        if flat and plan["ax"] == "2d":
+            return ACCEPT
+        return None
 
     # plot.robot on Spot (SpotArm), Spot from its URDF (a Chain arm), Go2 and the hexapod (no arm)
     for key in ("spot", "spot_urdf", "go2", "hexapod"):
@@ -138,8 +150,10 @@ def register_entries(api) -> None:
                     {"text": const("a title"), "none": const(None), "int": const(3, REJECT, "type")},
                     default="omit",
                 ),
+                Choice("view", "3d", ("3d", "side", "front", "top"), default="omit"),
             ],
             probe=feet_probe(key, lambda fig: fig, lambda kw: kw.get("body_pose"), lambda kw: kw.get("q")),
+            pair_rule=view_axes,
             after=_close_figures,
             combos=(),
             pairs=8 if key in ("spot", "go2") else 4,

@@ -22,7 +22,7 @@ import pytest
 from urdf_helpers import joint, links
 
 import spotkin as sk
-from spotkin.__main__ import main
+from spotkin.__main__ import GIF_SIZE, main
 
 try:
     import matplotlib
@@ -560,8 +560,13 @@ def test_trajectory_curves_are_the_samples_and_limits_are_drawn():
     np.testing.assert_allclose(speed, np.repeat(np.sort(vmax), 2))  # one pair per axis: they differ
     accel = [line.get_ydata()[0] for line in axes[2].get_lines() if line.get_gid() == "limit:amax"]
     assert sorted(accel) == [-amax, amax]  # shared: one pair
+    # the q panel spans the motion: the limits within its view are lines, the others listed beside it
     bounds = sorted(line.get_ydata()[0] for line in axes[0].get_lines() if line.get_gid() == "limit:q")
-    np.testing.assert_allclose(bounds, np.sort(limits.ravel()))
+    np.testing.assert_allclose(bounds, [-0.9, -0.8, -0.25, 0.8])
+    low, high = axes[0].get_ylim()
+    assert low <= q.min() and high >= q.max() and all(low <= b <= high for b in bounds)
+    beyond = _artist(axes[0], "limits-beyond:q").get_text().splitlines()
+    assert beyond[1:] == ["↑ hy ≤ 2.3", "↓ kn ≥ -2.8"]
     assert axes[2].get_xlabel() == "t (s)" and axes[1].get_ylabel() == "qd (rad/s)"
     assert [t.get_text() for t in axes[0].get_legend().get_texts()][:3] == ["hx", "hy", "kn"]
 
@@ -629,6 +634,7 @@ def test_demo_plots_writes_the_pictures_and_closes_its_figures(tmp_path, capsys)
     written = [line.split("wrote ", 1)[1] for line in out.splitlines() if "wrote " in line]
     sizes = {
         "stance": (8, 6),
+        "stance_side": (8, 6),
         "leg_branches": (12, 6.5),
         "leg_branches_hip_height": (12, 6.5),
         "arm_branches": (13, 7),
@@ -636,9 +642,8 @@ def test_demo_plots_writes_the_pictures_and_closes_its_figures(tmp_path, capsys)
         "trajectory": (8, 7),
     }
     expected = [f"spot_{k}.png" for k in sizes] + ["spot_path.gif"]
-    expected += [f"go2_{k}.png" for k in ("stance", "leg_branches", "workspace", "trajectory")] + [
-        "go2_path.gif"
-    ]
+    go2 = ("stance", "stance_side", "leg_branches", "workspace", "trajectory")
+    expected += [f"go2_{k}.png" for k in go2] + ["go2_path.gif"]
     assert [os.path.basename(p) for p in written] == expected
     for path in written:
         assert os.path.getsize(path) <= 200_000, path
@@ -647,7 +652,8 @@ def test_demo_plots_writes_the_pictures_and_closes_its_figures(tmp_path, capsys)
             width, height = sizes[stem]
             assert _png_size(path) == (round(width * 40), round(height * 40)), path
         else:
-            assert _gif_info(path) == ((144, 120), 20)
+            assert _gif_info(path) == ((288, 180), 20)  # 7.2 x 4.5 in: 720 px wide at the default 100 dpi
+    assert GIF_SIZE[0] * 100 >= 640
     assert plt.get_fignums() == []
 
 
@@ -662,6 +668,10 @@ def test_plot_command_draws_any_urdf_in_its_stance(tmp_path, capsys):
     zero = tmp_path / "zero.png"
     assert main(["plot", "go2", "--out", str(zero), "--stance", "zero"]) == 0
     assert _png_size(zero) == (800, 600)
+    side = tmp_path / "side.png"
+    assert main(["plot", "spot", "--out", str(side), "--view", "side", "--size", "640x480"]) == 0
+    assert _png_size(side) == (640, 480)
+    capsys.readouterr()
     assert main(["plot", str(tmp_path / "missing.urdf"), "--out", str(out)]) == 1
     assert "spotkin plot:" in capsys.readouterr().err
     with pytest.raises(SystemExit):
@@ -678,3 +688,279 @@ def test_readme_pictures_exist_and_are_small():
     assert pictures
     for path in pictures:
         assert path.stat().st_size <= 200_000, path
+
+
+# ---- issue 32: readable pictures ---------------------------------------------------------------------------
+
+
+def _overlap(a, b) -> bool:
+    """Two display boxes share more than a pixel's sliver."""
+    return min(a.x1, b.x1) - max(a.x0, b.x0) > 0.5 and min(a.y1, b.y1) - max(a.y0, b.y0) > 0.5
+
+
+def _tick_label_boxes(ax, renderer) -> dict[str, list]:
+    """Per axis, the display boxes of the tick labels drawn (ticks within the view, non-empty labels)."""
+    axes = {"x": ax.xaxis, "y": ax.yaxis}
+    if ax.name == "3d":
+        axes["z"] = ax.zaxis
+    boxes = {}
+    for name, axis in axes.items():
+        low, high = sorted(axis.get_view_interval())
+        locs = axis.get_majorticklocs()
+        ticks = axis.get_major_ticks(len(locs))
+        span = high - low
+        boxes[name] = [
+            tick.label1.get_window_extent(renderer)
+            for loc, tick in zip(locs, ticks)
+            if low - 1e-9 * span <= loc <= high + 1e-9 * span and tick.label1.get_text()
+        ]
+    return boxes
+
+
+def _assert_tick_labels_apart(fig) -> None:
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        for name, boxes in _tick_label_boxes(ax, renderer).items():
+            assert len(boxes) >= 2, (ax.get_title(), name)
+            for k, a in enumerate(boxes):
+                for b in boxes[k + 1 :]:
+                    assert not _overlap(a, b), (ax.get_title(), name, a, b)
+
+
+@needs_matplotlib
+@pytest.mark.parametrize("which", ("spot_arm", "spot_urdf_chain6", "zoo_chain3"))
+def test_tick_labels_of_the_branch_panels_do_not_overlap(robots, which):
+    if which == "zoo_chain3":
+        solver = robots["zoo"].chain("YAW_foot")
+        fig = plot.branches(solver, solver.fk([0.3, 0.2, -1.0])[:3, 3])
+    else:
+        solver = robots["spot"].arm if which == "spot_arm" else robots["spot_urdf"].arm
+        fig = plot.branches(solver, solver.fk([0.4, -1.2, 1.9, 0.3, -0.6, 0.8]))  # the demo's target
+    _assert_tick_labels_apart(fig)
+
+
+@needs_matplotlib
+@pytest.mark.parametrize("name", ("spot", "go2"))
+def test_tick_labels_of_the_robot_and_its_animation_do_not_overlap(robots, name):
+    robot = robots[name]
+    _assert_tick_labels_apart(plot.robot(robot))
+    pose, q = plot._nominal_stance(robot)
+    anim = plot.animate(robot, np.stack([pose, pose + [0.05, 0.03, -0.03, 0.1, -0.1, 0.1]]), q)
+    _assert_tick_labels_apart(anim.figure)
+    anim._draw_was_started = True  # dropped unplayed on purpose
+
+
+def _q_of(text: str) -> np.ndarray:
+    assert text.startswith("q = (") and text.endswith(")"), text
+    return np.array([float(v.rstrip("°")) for v in text[5:-1].split(", ")])
+
+
+@needs_matplotlib
+@pytest.mark.parametrize("which", ("spot_arm", "spot_urdf_chain6", "zoo_chain3", "spot_leg"))
+def test_each_branch_panel_prints_its_q_in_degrees(robots, which):
+    if which == "spot_leg":
+        solver = robots["spot"].leg("fl")
+        target = np.array([0.3, 0.13, 0.0])
+        sol = solver.ik_all(target)
+    elif which == "zoo_chain3":
+        solver = robots["zoo"].chain("YAW_foot")
+        target = solver.fk([0.3, 0.2, -1.0])[:3, 3]
+        sol = solver.ik_position(target)
+    else:
+        solver = robots["spot"].arm if which == "spot_arm" else robots["spot_urdf"].arm
+        target = solver.fk(ARM_Q)
+        sol = solver.ik_all(target) if which == "spot_arm" else solver.ik(target)
+    fig = plot.branches(solver, target)
+    lines = _slot_lines(fig)
+    texts = {}
+    for ax in fig.axes:
+        for text in ax.texts:
+            if (text.get_gid() or "").startswith("q:"):
+                texts[int(text.get_gid()[2:])] = (ax, text.get_text())
+    assert sorted(texts) == np.flatnonzero(sol.exists).tolist() and len(texts) >= 2
+    for slot, (ax, text) in texts.items():
+        assert lines[slot][0].axes is ax  # in the branch's own panel
+        np.testing.assert_allclose(_q_of(text), np.degrees(sol.q[slot]), atol=0.05 + 1e-9)
+    qs = [text for _, text in texts.values()]
+    assert len(set(qs)) == len(qs)  # look-alike branches are told apart
+
+
+@needs_matplotlib
+def test_q_text_gives_prismatic_joints_in_metres():
+    chain = sk.Chain.from_dh(
+        [(0, 0, 0, 0, 0), (1, 0, 0, 0, 0), (0, 0.3, 0, 0, 0)]
+    )  # (sigma, a, alpha, d, theta)
+    assert plot._q_text(chain, np.array([0.5, 0.125, -np.pi / 2])) == "q = (28.6°, 0.125 m, -90.0°)"
+
+
+@needs_matplotlib
+def test_titles_name_the_robot_readably(robots):
+    def named(name):
+        return sk.Robot.from_urdf_string(ZOO.replace('name="zoo"', f'name="{name}"'))
+
+    assert plot._robot_name(robots["go2"]) == "Go2"  # go2_description
+    assert plot._robot_name(robots["spot"]) == "Spot"
+    assert plot._robot_name(named("anymal_c_robot")) == "Anymal c"
+    assert plot._robot_name(named("my-dog_Description")) == "My dog"
+    assert plot._robot_name(named("ANYmal_urdf_description")) == "ANYmal"
+    assert plot._robot_name(named("_description")) == "Robot"
+    assert plot.robot(robots["go2"]).axes[0].get_title().startswith("Go2: body at (")
+    pose, q = plot._nominal_stance(robots["go2"])
+    anim = plot.animate(robots["go2"], pose[None], q)
+    assert anim.figure.axes[0].get_title() == "Go2: frame 1 of 1"
+    anim._draw_was_started = True
+
+
+@needs_matplotlib
+@pytest.mark.parametrize("name", ("spot", "go2"))
+def test_animation_is_wide_and_its_legend_is_beside_the_robot(robots, name, tmp_path):
+    robot = robots[name]
+    pose, q = plot._nominal_stance(robot)
+    poses = np.stack([pose, pose + [0.05, 0.04, -0.03, 0.1, -0.08, 0.12]])
+    anim = plot.animate(robot, poses, robot.body_ik(poses, robot.body_fk(pose, q)).q)
+    fig = anim.figure
+    path = tmp_path / "wide.gif"
+    anim.save(str(path))
+    (width, _), frames = _gif_info(path)
+    assert width >= 640 and frames == 2
+    _assert_legend_beside(fig)
+
+
+def _assert_legend_beside(fig) -> None:
+    """The legend is inside the figure and clear of the axes and of everything drawn of the robot."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    legend = ax.get_legend().get_window_extent(renderer)
+    assert fig.bbox.x0 <= legend.x0 and legend.x1 <= fig.bbox.x1 + 1
+    assert fig.bbox.y0 <= legend.y0 and legend.y1 <= fig.bbox.y1 + 1
+    assert not _overlap(legend, ax.get_window_extent(renderer))
+    drawn = [a for a in ax.get_children() if (a.get_gid() or "").split(":")[0] in ROBOT_GIDS]
+    assert len(drawn) > 5
+    for artist in drawn:
+        assert not _overlap(legend, artist.get_window_extent(renderer)), artist.get_gid()
+    for boxes in _tick_label_boxes(ax, renderer).values():
+        assert not any(_overlap(legend, box) for box in boxes)
+
+
+ROBOT_GIDS = {"feet", "leg", "arm", "hand", "body", "support", "body-path", "tool-path", "body-start"}
+
+
+@needs_matplotlib
+@pytest.mark.parametrize("view", ("3d", "side"))
+def test_stance_legend_is_beside_the_robot(robots, view):
+    _assert_legend_beside(plot.robot(robots["spot"], view=view))
+
+
+@needs_matplotlib
+def test_the_demos_motion_is_visible(robots):
+    """The demo's body path moves the body by several centimetres and degrees on each robot: at least
+    5 % of the picture's span, and the body's outline at frame 1 stays drawn for comparison."""
+    import spotkin.__main__ as cli
+
+    for robot, height, scale in ((robots["spot"], 0.5, 1.5), (robots["go2"], 0.3, 0.9)):
+        path = sk.trajectory.via_points(cli._scaled_waypoints(height, scale), **cli.DEMO_PATH_LIMITS)
+        T = path.sample(np.linspace(0.0, path.duration, cli.GIF_FRAMES))
+        legs = robot.body_ik(T, robot.stance_feet(height))
+        assert (legs.status == sk.Status.OK).all()
+        anim = plot.animate(robot, T, legs.q, cli._held_arm(robot, T) if robot.arm is not None else None)
+        ax = anim.figure.axes[0]
+        span = max(np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim()), np.ptp(ax.get_zlim()))
+        assert np.ptp(T[:, :3, 3], axis=0).max() >= 0.05 * span
+        np.testing.assert_allclose(
+            _xyz(_artist(ax, "body-start"))[:-1], plot._frame(robot, T[0], legs.q[0], None).outline
+        )
+        anim._draw_was_started = True
+
+
+@needs_matplotlib
+@pytest.mark.parametrize(("view", "axes"), (("side", (0, 2)), ("front", (1, 2)), ("top", (0, 1))))
+@pytest.mark.parametrize("name", ("spot", "go2"))
+def test_side_front_and_top_views_project_the_robot(robots, name, view, axes):
+    robot = robots[name]
+    pose, q = _stance(robot, name, np.random.default_rng(32))
+    q_arm = ARM_Q if robot.arm is not None else None
+    fig = plot.robot(robot, pose, q, q_arm, view=view)
+    ax = fig.axes[0]
+    assert ax.name != "3d"
+    names = "xyz"
+    assert (ax.get_xlabel(), ax.get_ylabel()) == (f"{names[axes[0]]} (m)", f"{names[axes[1]]} (m)")
+    frames = robot.fk_all(pose, q, q_arm)
+    cols = list(axes)
+    np.testing.assert_allclose(_artist(ax, "feet").get_xydata(), robot.body_fk(pose, q)[:, cols], atol=1e-12)
+    for k, leg_name in enumerate(robot.leg_names):
+        points = _artist(ax, f"leg:{leg_name}").get_xydata()
+        np.testing.assert_allclose(
+            points[[0, 2, 3]],
+            np.stack([frames.hips[k], frames.knees[k], frames.feet[k]])[:, cols],
+            atol=1e-12,
+        )
+    if q_arm is not None:
+        np.testing.assert_allclose(_artist(ax, "hand").get_xydata()[0], frames.hand[:3, 3][cols], atol=1e-12)
+    if view != "top":
+        assert _artist(ax, "ground").get_ydata()[0] == pytest.approx(frames.feet[:, 2].min(), abs=1e-12)
+    assert ax.get_aspect() == 1.0
+    assert view in ax.get_title()
+
+
+@needs_matplotlib
+def test_side_view_draws_into_a_2d_axes_and_refuses_a_3d_one(robots):
+    fig = plt.figure()
+    ax = fig.add_subplot()
+    assert plot.robot(robots["go2"], ax=ax, view="side") is fig
+    with pytest.raises(ValueError, match="ax"):
+        plot.robot(robots["go2"], ax=ax, view="3d")
+    with pytest.raises(ValueError, match="ax"):
+        plot.robot(robots["go2"], ax=plt.figure().add_subplot(projection="3d"), view="top")
+    with pytest.raises(ValueError, match="view"):
+        plot.robot(robots["go2"], view="left")
+    with pytest.raises(TypeError, match="view"):
+        plot.robot(robots["go2"], view=3)
+
+
+@needs_matplotlib
+def test_the_lowest_target_line_is_drawn_for_legs_only(robots):
+    leg_ax = plot.workspace(robots["spot"].leg("fl"), "xz", 0.11, resolution=80).axes[0]
+    assert _artist(leg_ax, "lowest-two-branches") is not None
+    chain = sk.Chain.from_dh(
+        [(0, 0, np.pi / 2, 0.3, 0), (0, 0.3, 0, 0, 0), (0, 0.25, 0, 0, 0)]
+    )  # an elbow arm
+    ax, counts = _map(plot.workspace(chain, "xz", 0.0, resolution=80))
+    assert (counts >= 2).any()  # where the leg's line would be drawn
+    assert not [a for a in ax.get_children() if a.get_gid() == "lowest-two-branches"]
+    assert not [t for t in ax.get_legend().get_texts() if t.get_text().startswith("lowest")]
+
+
+@needs_matplotlib
+def test_the_q_panel_spans_the_motion_not_far_limits():
+    traj = sk.trajectory.point_to_point([0.0, 0.5], [0.4, 0.2], 1.0, 4.0)
+    q = traj.sample(np.linspace(0.0, traj.duration, 400))[0]
+    far = [(-3 * np.pi, 3 * np.pi), (-np.inf, np.inf)]
+    ax = plot.trajectory(traj, limits=far).axes[0]
+    low, high = ax.get_ylim()
+    assert low <= q.min() and high >= q.max() and high - low <= 1.5 * np.ptp(q)
+    assert not [line for line in ax.get_lines() if line.get_gid() == "limit:q"]
+    assert _artist(ax, "limits-beyond:q").get_text().splitlines()[1:] == ["↓ q1 ≥ -9.42", "↑ q1 ≤ 9.42"]
+    near = [(-0.05, 0.45), (0.1, np.inf)]  # just beyond the motion: drawn and in view
+    ax = plot.trajectory(traj, limits=near).axes[0]
+    low, high = ax.get_ylim()
+    bounds = sorted(line.get_ydata()[0] for line in ax.get_lines() if line.get_gid() == "limit:q")
+    assert bounds == [-0.05, 0.1, 0.45] and low < -0.05 and high > 0.5
+    assert not [t for t in ax.texts if t.get_gid() == "limits-beyond:q"]
+
+
+@needs_matplotlib
+def test_the_arm_is_drawn_on_its_mount(robots):
+    """A robot whose arm's base sits on an offset from the body: the drawn arm is the chain's frames
+    composed with ``arm_mount``, its tool point ``fk_all``'s hand."""
+    robot = sk.Robot.from_urdf(sk.robots.path("spot_with_arm"))
+    mount = sk.body_transform([0.1, -0.05, 0.07, 0.0, 0.3, 0.5])
+    robot._arm_mount = mount  # a mount that the URDF does not have, set as the loader sets it
+    pose, q = _stance(robot, "spot_urdf", np.random.default_rng(8))
+    ax = plot.robot(robot, pose, q, ARM_Q).axes[0]
+    T = sk.body_transform(pose) @ robot.arm_mount
+    np.testing.assert_allclose(_xyz(_artist(ax, "arm")), (T @ robot.arm.frames(ARM_Q))[:, :3, 3], atol=1e-12)
+    np.testing.assert_allclose(
+        _xyz(_artist(ax, "hand"))[0], robot.fk_all(pose, q, ARM_Q).hand[:3, 3], atol=1e-12
+    )

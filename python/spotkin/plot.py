@@ -1,11 +1,12 @@
 """Pictures of robots and their kinematics, drawn with matplotlib (an optional dependency:
 ``pip install "spotkin[plot]"``).
 
-- :func:`robot`: a 3D stick figure of any loaded robot: every link from joint frame to joint
-  frame, the joints, the feet, the support polygon, the body axes and the arm; joints beyond
-  their limits and legs at a singular configuration are marked.
+- :func:`robot`: a 3D stick figure of any loaded robot (or its side, front or top view): every
+  link from joint frame to joint frame, the joints, the feet, the support polygon, the body axes
+  and the arm; joints beyond their limits and legs at a singular configuration are marked.
 - :func:`branches`: every IK branch of one target side by side (a leg's 4, an arm's 8, a
-  3- or 6-joint chain's), the valid ones drawn solid, the status in the title.
+  3- or 6-joint chain's), the valid ones drawn solid, each with its joint values, the status in
+  the title.
 - :func:`workspace`: a planar slice of a leg's (or a 3-joint chain's) reach, coloured by the
   number of valid IK branches, from one batched IK call over the grid; the unreachable and
   limit-blocked regions, the singular sets and contours of ``|det J|``.
@@ -33,10 +34,12 @@ try:
     import matplotlib.pyplot as plt
     from matplotlib.animation import AbstractMovieWriter, FuncAnimation
     from matplotlib.axes import Axes
+    from matplotlib.collections import PolyCollection
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
+    from matplotlib.ticker import MaxNLocator
     from mpl_toolkits.mplot3d import art3d
     from PIL import Image  # a dependency of matplotlib
 except ImportError as _error:  # pragma: no cover - tested in a subprocess with matplotlib blocked
@@ -81,6 +84,11 @@ _LEG_JOINTS = ("hip roll", "hip pitch", "knee")
 _SPOT_ARM_JOINTS = ("sh0", "sh1", "el0", "el1", "wr0", "wr1")
 _LIMIT_TOL = 1e-9  # rad (or m): a joint this far beyond a bound is still within it
 _PLANES = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}  # (horizontal, vertical, fixed) axes
+# views of a robot: None (3D), else (horizontal, vertical, depth axis, sign of the depth toward the viewer):
+# the side view looks from the robot's right (x to the right, z up), the front view from ahead (y to the
+# right), the top view from above (x to the right, y up)
+_VIEWS = {"3d": None, "side": (0, 2, 1, -1.0), "front": (1, 2, 0, 1.0), "top": (0, 1, 2, 1.0)}
+_VIEW_NAMES = {"side": "side view (x–z)", "front": "front view (y–z)", "top": "top view (x–y)"}
 _MAX_RESOLUTION = 1000
 _FAR = 1e6  # m (or s): coordinates beyond this are refused; a plot that far out loses its precision
 
@@ -370,7 +378,8 @@ def _frame(robot: Robot, T: np.ndarray, q: np.ndarray, q_arm: np.ndarray | None)
     arm_points = None
     if q_arm is not None:
         arm = robot.arm
-        arm_points = _world(T, _arm_points(arm, q_arm))
+        mount = getattr(robot, "arm_mount", None)  # body <- arm base (the identity when None)
+        arm_points = _world(T if mount is None else T @ mount, _arm_points(arm, q_arm))
         outside = _beyond_limits(q_arm, _limits_of(arm), _revolute(arm))
         joints = arm_points[1 : 1 + len(q_arm)] if isinstance(arm, Chain) else arm_points[[0, 0, 1, 2, 2, 2]]
         beyond.extend(joints[np.flatnonzero(outside)])
@@ -432,21 +441,26 @@ def _zero_stance(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _RobotArtists:
-    """The artists of one robot in a 3D Axes, updated in place (for animations)."""
+    """The artists of one robot in a 3D Axes, or projected on a 2D Axes for a side, front or top view
+    (``view``: a key of :data:`_VIEWS`), updated in place (for animations)."""
 
-    def __init__(self, ax, robot: Robot, frame: _Frame, axes_length: float):
+    def __init__(self, ax, robot: Robot, frame: _Frame, axes_length: float, view: str = "3d"):
         self.ax, self.robot, self.axes_length = ax, robot, axes_length
-        # a stick figure reads best with the sticks over the translucent faces (the default orders
-        # artists by their mean depth, which hides a leg behind the support polygon)
-        ax.computed_zorder = False
-        self.body = art3d.Poly3DCollection(
-            [frame.outline], facecolor=_BODY_FACE, edgecolor=_BODY_EDGE, linewidths=1.5, alpha=0.6
+        self.projection = _VIEWS[view]
+        if self.projection is None:
+            # a stick figure reads best with the sticks over the translucent faces (the default orders
+            # artists by their mean depth, which hides a leg behind the support polygon)
+            ax.computed_zorder = False
+            polygons = art3d.Poly3DCollection
+        else:
+            polygons = PolyCollection
+        self.body = polygons(
+            [self._flat(frame.outline)], facecolor=_BODY_FACE, edgecolor=_BODY_EDGE, linewidths=1.5, alpha=0.6
         )
         self.body.set_gid("body")
         self.body.set_zorder(2)
-        ax.add_collection3d(self.body)
-        self.support = art3d.Poly3DCollection(
-            [frame.support],
+        self.support = polygons(
+            [self._flat(frame.support)],
             facecolor=_SUPPORT_FACE,
             edgecolor=_SUPPORT_EDGE,
             linewidths=1.0,
@@ -455,15 +469,20 @@ class _RobotArtists:
         )
         self.support.set_gid("support")
         self.support.set_zorder(1)
-        ax.add_collection3d(self.support)
+        for collection in (self.body, self.support):
+            if self.projection is None:
+                ax.add_collection3d(collection)
+            else:
+                ax.add_collection(collection)
         self.tree = [
-            ax.plot(*segment.T, color=_OTHER, linewidth=1.0, linestyle=":", gid="tree", zorder=3)[0]
+            self._line(segment, color=_OTHER, linewidth=1.0, linestyle=":", gid="tree", zorder=3)
             for segment in frame.tree
         ]
         self.legs = []
-        for name, points in zip(robot.leg_names, frame.legs):
-            line = ax.plot(
-                *points.T,
+        far = self._far_legs(frame)
+        for k, (name, points) in enumerate(zip(robot.leg_names, frame.legs)):
+            line = self._line(
+                points,
                 color=_LEG,
                 linewidth=2.5,
                 marker="o",
@@ -471,16 +490,17 @@ class _RobotArtists:
                 markerfacecolor="white",
                 markeredgecolor=_LEG,
                 gid=f"leg:{name}",
-                zorder=4,
-            )[0]
+                zorder=3.5 if far[k] else 4,
+                alpha=0.45 if far[k] else 1.0,
+            )
             self.legs.append(line)
-        self.feet = ax.plot(
-            *frame.feet.T, linestyle="none", marker="o", markersize=7, color="black", gid="feet", zorder=5
-        )[0]
+        self.feet = self._line(
+            frame.feet, linestyle="none", marker="o", markersize=7, color="black", gid="feet", zorder=5
+        )
         self.arm = None
         if frame.arm is not None:
-            self.arm = ax.plot(
-                *frame.arm.T,
+            self.arm = self._line(
+                frame.arm,
                 color=_ARM,
                 linewidth=3.0,
                 marker="s",
@@ -489,27 +509,21 @@ class _RobotArtists:
                 markeredgecolor=_ARM,
                 gid="arm",
                 zorder=4,
-            )[0]
-            self.hand = ax.plot(
-                *frame.arm[-1:].T,
-                linestyle="none",
-                marker="D",
-                markersize=6,
-                color=_ARM,
-                gid="hand",
-                zorder=5,
-            )[0]
-        self.beyond = ax.plot(
-            *frame.beyond.T,
+            )
+            self.hand = self._line(
+                frame.arm[-1:], linestyle="none", marker="D", markersize=6, color=_ARM, gid="hand", zorder=5
+            )
+        self.beyond = self._line(
+            frame.beyond,
             linestyle="none",
             marker="X",
             markersize=10,
             color=_LIMIT,
             gid="beyond-limits",
             zorder=6,
-        )[0]
-        self.singular = ax.plot(
-            *frame.singular.T,
+        )
+        self.singular = self._line(
+            frame.singular,
             linestyle="none",
             marker="*",
             markersize=12,
@@ -517,44 +531,86 @@ class _RobotArtists:
             markeredgecolor="black",
             gid="singular",
             zorder=6,
-        )[0]
+        )
         self.axes = []
         for k, (label, colour, style) in enumerate(_AXES):
-            line = ax.plot(
-                *self._axis(frame.T, k).T,
-                color=colour,
-                linestyle=style,
-                linewidth=1.8,
-                gid=f"body-axis:{label}",
-                zorder=4,
-            )[0]
-            tip = self._axis(frame.T, k)[1]
-            text = ax.text(*tip, label, color=colour, fontsize=9, fontweight="bold")
+            segment = self._axis(frame.T, k)
+            line = self._line(
+                segment, color=colour, linestyle=style, linewidth=1.8, gid=f"body-axis:{label}", zorder=4
+            )
+            if self.projection is None:
+                text = ax.text(*segment[1], label, color=colour, fontsize=9, fontweight="bold")
+            else:
+                text = ax.text(
+                    *self._flat(segment[1:])[0], label, color=colour, fontsize=9, fontweight="bold"
+                )
             self.axes.append((line, text))
+        self._hide_end_on_axes(frame)
+
+    def _flat(self, points: np.ndarray) -> np.ndarray:
+        """Points (m, 3) as drawn: themselves in 3D, their (m, 2) projection on a 2D view."""
+        if self.projection is None:
+            return points
+        return points[:, list(self.projection[:2])]
+
+    def _line(self, points: np.ndarray, **style):
+        if self.projection is None:
+            return self.ax.plot(*points.T, **style)[0]
+        return self.ax.plot(*self._flat(points).T, **style)[0]
+
+    def _set(self, line, points: np.ndarray) -> None:
+        if self.projection is None:
+            line.set_data_3d(*points.T)
+        else:
+            line.set_data(*self._flat(points).T)
+
+    def _count(self, line) -> int:
+        return len(line.get_data_3d()[0] if self.projection is None else line.get_xdata())
+
+    def _far_legs(self, frame: _Frame) -> np.ndarray:
+        """(n,) bool: on a 2D view, the legs whose hips lie behind the body's middle (drawn lighter)."""
+        if self.projection is None or not frame.legs:
+            return np.zeros(len(frame.legs), dtype=bool)
+        _, _, depth, sign = self.projection
+        hips = np.array([points[0, depth] for points in frame.legs]) * sign
+        return hips < hips.mean() - 1e-9
+
+    def _hide_end_on_axes(self, frame: _Frame) -> None:
+        """On a 2D view, the label of a body axis that points at the viewer (or away) is hidden."""
+        if self.projection is None:
+            return
+        for k, (_, text) in enumerate(self.axes):
+            drawn = np.ptp(self._flat(self._axis(frame.T, k)), axis=0)
+            text.set_visible(bool(np.hypot(*drawn) > 0.25 * self.axes_length))
 
     def _axis(self, T: np.ndarray, k: int) -> np.ndarray:
         origin = T[:3, 3]
         return np.array([origin, origin + self.axes_length * T[:3, k]])
 
     def update(self, frame: _Frame) -> None:
-        self.body.set_verts([frame.outline])
-        self.support.set_verts([frame.support])
+        self.body.set_verts([self._flat(frame.outline)])
+        self.support.set_verts([self._flat(frame.support)])
         for line, segment in zip(self.tree, frame.tree):
-            line.set_data_3d(*segment.T)
+            self._set(line, segment)
         for line, points in zip(self.legs, frame.legs):
-            line.set_data_3d(*points.T)
-        self.feet.set_data_3d(*frame.feet.T)
+            self._set(line, points)
+        self._set(self.feet, frame.feet)
         if self.arm is not None and frame.arm is not None:
-            self.arm.set_data_3d(*frame.arm.T)
-            self.hand.set_data_3d(*frame.arm[-1:].T)
-        self.beyond.set_data_3d(*frame.beyond.T)
-        self.singular.set_data_3d(*frame.singular.T)
+            self._set(self.arm, frame.arm)
+            self._set(self.hand, frame.arm[-1:])
+        self._set(self.beyond, frame.beyond)
+        self._set(self.singular, frame.singular)
         for k, (line, text) in enumerate(self.axes):
             segment = self._axis(frame.T, k)
-            line.set_data_3d(*segment.T)
-            text.set_position_3d(segment[1])
+            self._set(line, segment)
+            if self.projection is None:
+                text.set_position_3d(segment[1])
+            else:
+                text.set_position(self._flat(segment[1:])[0])
+        self._hide_end_on_axes(frame)
 
-    def legend(self, extra=(), fontsize: float = 7) -> None:
+    def handles(self, extra=()) -> list:
+        """The legend's entries."""
         handles = [
             Patch(facecolor=_BODY_FACE, edgecolor=_BODY_EDGE, label="body (through the hips)"),
             Line2D(
@@ -566,6 +622,21 @@ class _RobotArtists:
                 markerfacecolor="white",
                 label="legs, joint to joint",
             ),
+        ]
+        if self.projection is not None and any(line.get_alpha() < 1 for line in self.legs):
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color=_LEG,
+                    linewidth=2.5,
+                    marker="o",
+                    markerfacecolor="white",
+                    alpha=0.45,
+                    label="legs on the far side",
+                )
+            )
+        handles += [
             Line2D([], [], color="black", linestyle="none", marker="o", label="feet"),
             Patch(facecolor=_SUPPORT_FACE, edgecolor=_SUPPORT_EDGE, linestyle="--", label="support polygon"),
         ]
@@ -584,7 +655,7 @@ class _RobotArtists:
         if self.tree:
             handles.append(Line2D([], [], color=_OTHER, linestyle=":", label="other links (URDF)"))
         handles.append(Line2D([], [], color="black", linestyle="-", label="body axes x, y (--), z (:)"))
-        if len(self.beyond.get_data_3d()[0]):
+        if self._count(self.beyond):
             handles.append(
                 Line2D(
                     [],
@@ -596,7 +667,7 @@ class _RobotArtists:
                     label="joint beyond its limits",
                 )
             )
-        if len(self.singular.get_data_3d()[0]):
+        if self._count(self.singular):
             handles.append(
                 Line2D(
                     [],
@@ -610,7 +681,27 @@ class _RobotArtists:
                 )
             )
         handles.extend(extra)
-        self.ax.legend(handles=handles, loc="upper left", fontsize=fontsize, framealpha=0.85)
+        return handles
+
+    def legend(self, extra=(), fontsize: float = 7, outside: bool = False) -> None:
+        """The legend: beside the axes, right of their box (``outside``: the figure leaves room for it), or
+        in the axes' upper left corner (a 2D view: where it hides the least of the drawing)."""
+        handles = self.handles(extra)
+        if outside:  # in figure coordinates, by the box as drawn (a 3D Axes' labels spill out of it)
+            self.ax.apply_aspect()
+            box = self.ax.get_position()
+            right = self.ax.get_position(original=True).x1 if self.projection is None else box.x1
+            self.ax.legend(
+                handles=handles,
+                loc="upper left",
+                bbox_to_anchor=(right + 0.01, box.y1),
+                bbox_transform=self.ax.figure.transFigure,
+                fontsize=fontsize,
+                frameon=False,
+            )
+        else:
+            where = "upper left" if self.projection is None else "best"
+            self.ax.legend(handles=handles, loc=where, fontsize=fontsize, framealpha=0.85)
 
 
 def _frame_points(frame: _Frame) -> np.ndarray:
@@ -642,8 +733,124 @@ def _label_3d(ax, fontsize: float | None = None) -> None:
     ax.set_zlabel("z (m)", fontsize=fontsize)
 
 
+_NAME_SUFFIXES = ("description", "robot", "urdf")
+
+
+def _sparse_ticks(ax, most: int = 4) -> None:
+    """At most ``most`` ticks on the longest axis of a 3D panel and proportionally fewer (at least 2) on
+    the shorter ones, so that the tick labels of a short axis do not run into each other."""
+    spans = np.array([abs(high - low) for low, high in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())])
+    longest = max(float(spans.max()), 1e-12)
+    for axis, span in zip((ax.xaxis, ax.yaxis, ax.zaxis), spans):
+        axis.set_major_locator(MaxNLocator(nbins=max(1, round(most * span / longest)), min_n_ticks=2))
+
+
+def _q_text(solver, q: np.ndarray) -> str:
+    """A branch's joints as its panel prints them: revolute joints in degrees (0.1°), prismatic ones in
+    metres (1 mm)."""
+    values = [f"{math.degrees(v):.1f}°" if turn else f"{v:.3f} m" for v, turn in zip(q, _revolute(solver))]
+    return "q = (" + ", ".join(values) + ")"
+
+
+def _q_label(ax, solver, q: np.ndarray, slot: int, valid: bool) -> None:
+    """The branch's joints (:func:`_q_text`) at the top of its panel (a 3D panel), or just above it
+    (below its title, a 2D panel), id ``"q:SLOT"``."""
+    three_d = getattr(ax, "name", "") == "3d"
+    (ax.text2D if three_d else ax.text)(
+        0.5,
+        1.0 if three_d else 1.015,
+        _q_text(solver, q),
+        transform=ax.transAxes,
+        ha="center",
+        va="top" if three_d else "bottom",
+        fontsize=6.5,
+        color=_VALID if valid else "#525252",
+        gid=f"q:{slot}",
+    )
+
+
 def _robot_name(robot: Robot) -> str:
-    return robot.name or type(robot).__name__
+    """The robot's name as titles show it: its description's ``<robot name=...>`` without a trailing
+    ``_description``, ``_robot`` or ``_urdf`` (also after ``-`` or a space, any case, repeatedly),
+    underscores and hyphens read as spaces, the first letter capitalised ("go2_description" -> "Go2",
+    "spot" -> "Spot", "anymal_c_robot" -> "Anymal c"); the class name ("Robot") when nothing is left."""
+    words = (robot.name or "").replace("_", " ").replace("-", " ").split()
+    while words and words[-1].lower() in _NAME_SUFFIXES:
+        words.pop()
+    if not words:
+        return type(robot).__name__
+    name = " ".join(words)
+    return name[0].upper() + name[1:]
+
+
+def _check_view(view) -> str:
+    if not isinstance(view, str):
+        raise TypeError(f"view must be a str, one of {tuple(_VIEWS)}, got {type(view).__name__}")
+    if view not in _VIEWS:
+        raise ValueError(f"view must be one of {tuple(_VIEWS)}, got {view!r}")
+    return view
+
+
+def _frame_2d(ax, points: np.ndarray, ground: float | None, pad: float = 0.06) -> None:
+    """Limits of a 2D view around the drawn points (m, 2), one scale on both axes, and the ground line."""
+    low, high = _limits_2d(points, pad)
+    ax.set_xlim(low[0], high[0])
+    ax.set_ylim(low[1], high[1])
+    ax.set_aspect("equal", adjustable="box")
+    if ground is not None:
+        ax.axhline(ground, color="#525252", linewidth=1.0, zorder=0, gid="ground")
+    ax.grid(True, linewidth=0.3)
+
+
+def _description(ax, model, values: dict, title: str | None = None) -> None:
+    """Draw a URDF tree that has no legs (an arm, a gripper, a head) into the 3D ``ax`` at the joint
+    values ``values`` (actuated joint name -> value; mimic joints follow their leaders, joints not named
+    are at 0): every link from its parent's frame to its own (grey), the chain from the root to each tip
+    (:func:`spotkin._urdf_chain.tip_candidates`) with its joints (orange squares, mimic joints hollow), the
+    root's axes and each tip's frame. Used by ``spotkin plot`` for descriptions without legs."""
+    from ._urdf_chain import tip_candidates
+
+    placements = {link: model.placement(link, values) for link in model.links}
+    points = np.array([T[:3, 3] for T in placements.values()])
+    span = float(np.ptp(points, axis=0).max()) if len(points) > 1 else 0.1
+    span = max(span, 0.05)
+    for joint in model.joints:
+        start, end = placements[joint.parent][:3, 3], placements[joint.child][:3, 3]
+        if np.linalg.norm(end - start) > 1e-9:
+            ax.plot(*np.array([start, end]).T, color=_OTHER, linewidth=1.2, gid="tree")
+    tips = tip_candidates(model)
+    for tip in tips:
+        path = model.path(tip)
+        line = np.array([placements[model.root][:3, 3]] + [placements[j.child][:3, 3] for j in path])
+        ax.plot(*line.T, color=_ARM, linewidth=2.5, gid=f"chain:{tip}")
+        for j in path:
+            if j.type == "fixed":
+                continue
+            p = placements[j.child][:3, 3]
+            face = "white" if j.mimic is not None else _ARM
+            ax.plot(*p[:, None], linestyle="none", marker="s", markersize=6, color=_ARM, markerfacecolor=face)
+        _frame_axes(ax, placements[tip], 0.12 * span, "-", f"tip:{tip}")
+    for j in model.mimic_joints:
+        if not any(j in model.path(tip) for tip in tips):
+            p = placements[j.child][:3, 3]
+            ax.plot(
+                *p[:, None], linestyle="none", marker="s", markersize=5, color=_ARM, markerfacecolor="white"
+            )
+    _frame_axes(ax, np.eye(4), 0.2 * span, ":", "root")
+    _equal_3d(ax, points)
+    _sparse_ticks(ax)
+    _label_3d(ax)
+    handles = [
+        Line2D([], [], color=_ARM, linewidth=2.5, marker="s", label="chain to a tip, its joints"),
+        Line2D(
+            [], [], color=_ARM, linestyle="none", marker="s", markerfacecolor="white", label="mimic joint"
+        ),
+        Line2D([], [], color=_OTHER, linewidth=1.2, label="other links"),
+        Line2D([], [], color="black", linestyle=":", label=f"root frame ({model.root})"),
+    ]
+    ax.legend(handles=handles, loc="upper left", fontsize=7)
+    if title is not None:
+        ax.set_title(title, fontsize=10)
 
 
 def robot(
@@ -654,8 +861,10 @@ def robot(
     seq: str = "XYZ",
     ax=None,
     title: str | None = None,
+    view: str = "3d",
 ) -> Figure:
-    """A 3D stick figure of ``robot`` at one configuration, in the world frame.
+    """A stick figure of ``robot`` at one configuration, in the world frame: in 3D, or seen from the side,
+    the front or above.
 
     Drawn: the body (a polygon through the hip-roll joints), each leg from joint frame to joint
     frame (hip roll, hip pitch, knee, foot), the feet, the support polygon (the feet's convex
@@ -681,24 +890,39 @@ def robot(
     seq:
         The Euler sequence of a (6,) ``body_pose``.
     ax:
-        A 3D Axes to draw in (``fig.add_subplot(projection="3d")``); default: a new figure.
+        An Axes to draw in: 3D (``fig.add_subplot(projection="3d")``) for ``view="3d"``, 2D for the
+        other views; default: a new figure of 8 x 6 in, the legend beside the drawing on its right
+        (in a given ``ax``, the legend goes in its upper left corner, or where it hides the least on a
+        2D view).
     title:
-        The title; default: the robot's name and the body pose.
+        The title; default: the robot's name (its description's name made readable: "Go2" for
+        "go2_description") and the body pose.
+    view:
+        ``"3d"`` (default); ``"side"``: projected on the world's x–z plane, seen from the robot's right
+        (x to the right); ``"front"``: on the y–z plane, seen from ahead (y to the right); ``"top"``: on
+        the x–y plane, seen from above. The 2D views use one scale on both axes, draw the ground (the
+        plane of the lowest foot) as a line in the side and front views, and draw the legs on the far
+        side lighter.
 
     Returns
     -------
     matplotlib.figure.Figure
         The figure drawn in. Its artists carry ids (``get_gid()``): ``"feet"``, ``"leg:NAME"``,
-        ``"arm"``, ``"hand"``, ``"body"``, ``"support"``, ``"tree"``, ``"beyond-limits"``, ``"singular"``.
+        ``"arm"``, ``"hand"``, ``"body"``, ``"support"``, ``"tree"``, ``"beyond-limits"``, ``"singular"``
+        (and ``"ground"`` on the side and front views); their data are world coordinates (x, y, z) in
+        3D, the view's two coordinates on a 2D view.
 
-    Raises ``TypeError`` for a non-robot, non-numeric arrays or a non-Axes ``ax``; ``ValueError`` for
-    a wrong shape, NaN or Inf, a body pose that is not a rigid transform or puts the robot beyond 1e6 m
-    from the origin (too far to draw precisely), an unknown ``seq``, a 2D ``ax``, or ``q_arm`` for a
-    robot without an arm.
+    Raises ``TypeError`` for a non-robot, non-numeric arrays, a non-Axes ``ax`` or a non-str ``view``;
+    ``ValueError`` for a wrong shape, NaN or Inf, a body pose that is not a rigid transform or puts the
+    robot beyond 1e6 m from the origin (too far to draw precisely), an unknown ``seq`` or ``view``, an
+    ``ax`` of the other kind (2D for ``"3d"``, 3D for a 2D view), or ``q_arm`` for a robot without an
+    arm.
     """
     robot = _check_robot(robot)
     seq = _check_seq(seq)
-    ax = _check_ax(ax, three_d=True)
+    view = _check_view(view)
+    flat = _VIEWS[view] is not None
+    ax = _check_ax(ax, three_d=not flat)
     title = _check_title(title)
     nominal = None
     if body_pose is None or q is None:
@@ -713,17 +937,31 @@ def robot(
     frame = _frame(robot, T, q, q_arm)
     _near(_frame_points(frame), "body_pose", "the robot")
     points = _frame_points(frame)
+    outside = ax is None
     if ax is None:
         fig = plt.figure(figsize=(8, 6))
-        ax = fig.add_subplot(projection="3d")
+        ax = fig.add_axes(
+            (0.01, 0.03, 0.72, 0.88) if not flat else (0.1, 0.1, 0.63, 0.8), projection=None if flat else "3d"
+        )
     span = float(np.ptp(points, axis=0).max())
-    artists = _RobotArtists(ax, robot, frame, 0.15 * span)
-    _equal_3d(ax, np.concatenate([points, artists._axis(T, 0), artists._axis(T, 1), artists._axis(T, 2)]))
-    _label_3d(ax)
-    artists.legend()
+    artists = _RobotArtists(ax, robot, frame, 0.15 * span, view)
+    ends = np.concatenate([points, artists._axis(T, 0), artists._axis(T, 1), artists._axis(T, 2)])
+    if flat:
+        ground = None if view == "top" else float(frame.feet[:, 2].min()) if len(frame.feet) else None
+        _frame_2d(ax, artists._flat(ends), ground)
+        names = "xyz"
+        i, j = _VIEWS[view][:2]
+        ax.set_xlabel(f"{names[i]} (m)")
+        ax.set_ylabel(f"{names[j]} (m)")
+    else:
+        _equal_3d(ax, ends)
+        _label_3d(ax)
+        _sparse_ticks(ax, 7)
+    artists.legend(outside=outside)
     if title is None:
         position = ", ".join(f"{v:.3f}" for v in T[:3, 3])
-        title = f"{_robot_name(robot)}: body at ({position}) m"
+        seen = f", {_VIEW_NAMES[view]}" if flat else ""
+        title = f"{_robot_name(robot)}: body at ({position}) m{seen}"
     ax.set_title(title)
     return ax.figure
 
@@ -847,7 +1085,10 @@ def _branches_leg(fig, solver: Leg, sol, target: np.ndarray, names) -> None:
                     f"slot {slot}: {names[slot]}\n{mark}{text}",
                     fontsize=8,
                     fontweight="bold" if valid else "normal",
+                    pad=14,
                 )
+                if exists:
+                    _q_label(ax, solver, sol.q[slot], slot, valid)
     handles = [
         Line2D(
             [], [], color=_VALID, linewidth=2.5, marker="o", markerfacecolor="white", label="valid branch"
@@ -921,6 +1162,9 @@ def _branches_arm(fig, solver, sol, T: np.ndarray, names) -> None:
         _equal_3d(ax, cloud)
         _label_3d(ax, 7)
         ax.tick_params(labelsize=6)
+        _sparse_ticks(ax)
+        if exists:
+            _q_label(ax, solver, sol.q[slot], slot, valid)
         mark = "✓ " if valid else ""
         ax.set_title(
             f"slot {slot}: {names[slot]}\n{mark}{text}", fontsize=8, fontweight="bold" if valid else "normal"
@@ -1023,6 +1267,9 @@ def _branches_chain3(fig, solver: Chain, sol, target: np.ndarray, names) -> None
         _equal_3d(ax, cloud)
         _label_3d(ax, 7)
         ax.tick_params(labelsize=6)
+        _sparse_ticks(ax)
+        if exists:
+            _q_label(ax, solver, sol.q[slot], slot, valid)
         mark = "✓ " if valid else ""
         ax.set_title(f"{names[slot]}\n{mark}{text}", fontsize=8, fontweight="bold" if valid else "normal")
     handles = [
@@ -1155,8 +1402,9 @@ def workspace(
     a leg, the knee stretched or folded (|W| = |B| ± |C| in the pitch plane) and the hip-roll
     cylinder y² + z² = h²; contours of ``|det J|`` (m³) of the first valid branch (else the first
     existing one), which for a chain also show its singular sets; the hip-roll joint (the chain's base);
-    and, on a vertical plane, the lowest target with two or more valid branches: below it at most one
-    is valid (for Spot's legs, about 8 cm below the hip, as the tests prove on random stances).
+    and, for a leg on a vertical plane, the lowest target with two or more valid branches: below it at
+    most one is valid (for Spot's legs, about 8 cm below the hip, as the tests prove on random stances;
+    a chain's map has no such line, as "below" means nothing for a chain's base).
 
     Parameters
     ----------
@@ -1312,9 +1560,9 @@ def workspace(
             label="hip-roll joint" if leg is not None else "base",
         )
     )
-    if plane != "xy" and (grid.code >= 2).any():
+    if leg is not None and plane != "xy" and (grid.code >= 2).any():  # a leg's uniqueness height
         lowest = float(V[grid.code >= 2].min())
-        ax.axhline(lowest, color=_LIMIT, linewidth=1.2, linestyle="-.")
+        ax.axhline(lowest, color=_LIMIT, linewidth=1.2, linestyle="-.", gid="lowest-two-branches")
         handles.append(
             Line2D(
                 [],
@@ -1389,6 +1637,44 @@ def _bound_lines(ax, values: np.ndarray, name: str, unit: str) -> None:
             )
 
 
+def _joint_limit_lines(ax, q: np.ndarray, table: np.ndarray, names: tuple) -> None:
+    """The q panel's view and joint limits. The view spans the motion (every axis) with a margin of 10 %
+    of its range (at least 0.05 rad), widened to hold the bounds near their own joint's motion (within a
+    quarter of the panel's range, at least 0.1 rad, of it). Each finite bound within the view is drawn as
+    a dotted line; the others are listed beside the panel (id ``"limits-beyond:q"``), an arrow giving
+    the side of the view where they lie."""
+    low, high = float(q.min()), float(q.max())
+    span = high - low
+    margin, near = max(0.1 * span, 0.05), max(0.25 * span, 0.1)
+    view = [low - margin, high + margin]
+    bounds = [(k, side, float(b)) for k in range(len(names)) for side, b in zip(("≥", "≤"), table[k])]
+    bounds = [(k, side, b) for k, side, b in bounds if math.isfinite(b)]
+    for k, _, bound in bounds:
+        if q[:, k].min() - near <= bound <= q[:, k].max() + near:
+            view = [min(view[0], bound - 0.5 * margin), max(view[1], bound + 0.5 * margin)]
+    beyond, drawn = [], 0
+    for k, side, bound in bounds:
+        if view[0] <= bound <= view[1]:
+            ax.axhline(bound, color=_style(k)["color"], linewidth=0.8, linestyle=(0, (1, 2)), gid="limit:q")
+            drawn += 1
+        else:
+            beyond.append(f"{'↑' if bound > view[1] else '↓'} {names[k]} {side} {bound:.3g}")
+    ax.set_ylim(*view)
+    if drawn:
+        ax.plot([], [], color="black", linewidth=0.8, linestyle=(0, (1, 2)), label="joint limits")
+    if beyond:
+        ax.text(
+            1.01,
+            0.0,
+            "limits beyond the view (rad):\n" + "\n".join(beyond),
+            transform=ax.transAxes,
+            ha="left",
+            va="bottom",
+            fontsize=6.5,
+            gid="limits-beyond:q",
+        )
+
+
 def trajectory(
     traj, t: ArrayLike | None = None, limits: ArrayLike | None = None, names=None, fig=None
 ) -> Figure:
@@ -1396,7 +1682,11 @@ def trajectory(
 
     - A :class:`spotkin.trajectory.PointToPoint`: q, qd and qdd of every axis (three panels), with the
       speed and acceleration limits ±vmax and ±amax drawn (one pair of lines when every axis shares
-      them), and the joint position ``limits`` (n, 2) when given.
+      them), and the joint position ``limits`` (n, 2) when given. The q panel spans the motion (with a
+      margin of 10 % of its range, at least 0.05 rad), widened for the limits near their joint's motion
+      (within a quarter of the range, at least 0.1 rad); the limits in that view are drawn as dotted
+      lines, the farther ones (a joint that turns ±3π, say) are listed beside the panel with an arrow for
+      the side of the view they lie on; infinite bounds are not drawn.
     - A :class:`spotkin.trajectory.CartesianPath`: the position (x, y, z), the linear velocity and the
       angular velocity (world frame) with their norms; ``limits`` and ``names`` must be None.
 
@@ -1462,13 +1752,7 @@ def trajectory(
         ax.set_ylabel(ylabel)
         ax.grid(True, linewidth=0.3)
     if table is not None:
-        for k in range(n):
-            for bound in table[k]:
-                if math.isfinite(bound):
-                    axes[0].axhline(
-                        bound, color=_style(k)["color"], linewidth=0.8, linestyle=(0, (1, 2)), gid="limit:q"
-                    )
-        axes[0].plot([], [], color="black", linewidth=0.8, linestyle=(0, (1, 2)), label="joint limits")
+        _joint_limit_lines(axes[0], q, table, names)
     for ax in axes:
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
     axes[-1].set_xlabel("t (s)")
@@ -1509,9 +1793,9 @@ def _trajectory_cartesian(fig, path: CartesianPath, times: np.ndarray) -> None:
 
 
 class _GifWriter(AbstractMovieWriter):
-    """Writes a GIF with Pillow, every frame on one palette without dithering: the static parts (axes,
-    legend) stay identical between frames, so the file holds little more than what moves (a few times
-    smaller than a per-frame dithered palette)."""
+    """Writes a GIF with Pillow, every frame on one palette of 128 colours without dithering: the static
+    parts (axes, legend) stay identical between frames, so the file holds little more than what moves (a
+    few times smaller than a per-frame dithered palette; line art needs no more colours)."""
 
     def __init__(self, fps: float = 10.0):
         super().__init__(fps=fps)
@@ -1532,7 +1816,7 @@ class _GifWriter(AbstractMovieWriter):
         sample = Image.new("RGB", (frames[0].width, frames[0].height * len(picks)))
         for row, k in enumerate(picks):
             sample.paste(frames[k], (0, row * frames[0].height))
-        palette = sample.quantize(colors=255, method=0, dither=0)  # median cut, no dithering
+        palette = sample.quantize(colors=128, method=0, dither=0)  # median cut, no dithering
         images = [frame.quantize(palette=palette, dither=0) for frame in frames]
         images[0].save(
             self.outfile, save_all=True, append_images=images[1:], duration=round(1000 / self.fps), loop=0
@@ -1578,9 +1862,12 @@ def animate(
     ``body_poses`` (K, 6) [x, y, z, a, b, c] (Euler angles in ``seq``), (K, 7) or (K, 4, 4); ``q``
     (K, 3 n) leg joints (or (3 n,) for every frame), ``q_arm`` (K, 6) or (6,) for a robot with an arm
     (default: zero angles clipped into the limits). Each frame is drawn as :func:`robot` draws one
-    configuration; the body origin's path (and the tool's, with an arm) is traced dotted. ``interval``
+    configuration; the body origin's path (and the tool's, with an arm) is traced dotted and the body's
+    outline at frame 1 stays drawn dashed (id ``"body-start"``), to show the motion. ``interval``
     is the time between frames in milliseconds (> 0); ``fig``: a Figure to draw in (its contents are
-    replaced), default a new one.
+    replaced), default a new one of 8 x 5 in (800 x 500 pixels at 100 dpi). The drawing fills the
+    figure's left three quarters, framed on every frame's robot at one scale on every axis, the legend
+    beside it on the right; the title names the robot as :func:`robot` does and counts the frames.
 
     Returns a :class:`matplotlib.animation.FuncAnimation` (shown at frame 0 until it runs; its Figure
     is ``anim.figure``):
@@ -1606,12 +1893,17 @@ def animate(
     points = np.concatenate([_frame_points(frame) for frame in frames])
     _near(points, "body_poses", "the robot")
     if fig is None:
-        fig = plt.figure(figsize=(6, 5))
-    ax = fig.add_subplot(projection="3d")
+        fig = plt.figure(figsize=(8, 5))
+    ax = fig.add_axes((0.0, 0.0, 0.72, 0.92), projection="3d")
     span = float(np.ptp(points, axis=0).max())
     artists = _RobotArtists(ax, robot, frames[0], 0.15 * span)
-    ax.plot(*T[:, :3, 3].T, color="black", linewidth=1.0, linestyle=":", gid="body-path")
-    extra = [Line2D([], [], color="black", linestyle=":", label="body origin's path")]
+    start = np.vstack([frames[0].outline, frames[0].outline[:1]])
+    ax.plot(*start.T, color=_BODY_EDGE, linewidth=0.8, linestyle="--", alpha=0.6, gid="body-start", zorder=1)
+    ax.plot(*T[:, :3, 3].T, color="black", linewidth=1.2, linestyle=":", gid="body-path", zorder=4)
+    extra = [
+        Line2D([], [], color=_BODY_EDGE, linewidth=0.8, linestyle="--", alpha=0.6, label="body at frame 1"),
+        Line2D([], [], color="black", linewidth=1.2, linestyle=":", label="body origin's path"),
+    ]
     if q_arm is not None:
         tool = np.array([frame.arm[-1] for frame in frames])
         ax.plot(*tool.T, color=_ARM, linewidth=1.0, linestyle=":", gid="tool-path")
@@ -1619,7 +1911,8 @@ def animate(
     axis_ends = [artists._axis(frame.T, k) for frame in frames for k in range(3)]
     _equal_3d(ax, np.concatenate([points, *axis_ends]))
     _label_3d(ax)
-    artists.legend(extra, fontsize=5)
+    _sparse_ticks(ax, 7)
+    artists.legend(extra, fontsize=7, outside=True)
     name = _robot_name(robot)
     title = ax.set_title(f"{name}: frame 1 of {count}", fontsize=9)
 
