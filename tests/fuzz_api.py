@@ -58,8 +58,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import fuzz_dask
+import fuzz_limits
 import fuzz_plot
 import fuzz_sdk
+import fuzz_urdf
 import numpy as np
 from urdf_helpers import joint as _urdf_joint
 from urdf_helpers import links as _urdf_links
@@ -2973,6 +2975,40 @@ def _robot_options():
     return feet, contact_offset, nominal
 
 
+QUAD_ROLES = ("front_left", "front_right", "hind_left", "hind_right")
+
+
+def _limit_options():
+    """The ``limits`` and ``leg_order`` slots of from_urdf and from_urdf_string, valid for Go2's names."""
+
+    def arg(value, expect=ACCEPT, why=""):
+        return lambda c, r, b: Arg(value, expect, why)
+
+    limits = Custom(
+        "limits",
+        {
+            "none": arg(None),
+            "empty": arg({}),
+            "knee": arg({"FL_calf_joint": (-2.0, -1.0)}),
+            "unlimited": arg({"RR_hip_joint": (-np.inf, np.inf)}),
+            "array": arg({"FR_thigh_joint": np.array([-1.0, 2.0], dtype=np.float32)}),
+            "point": arg({"FR_thigh_joint": (0.5, 0.5)}),
+            "reversed": arg({"FL_calf_joint": (-1.0, -2.0)}, REJECT, "value"),
+            "nan": arg({"FL_calf_joint": (np.nan, 1.0)}, REJECT, "value"),
+            "unknown": arg({"no_such_joint": (0.0, 1.0)}, REJECT, "value"),
+            "fixed": arg({"FL_foot_joint": (0.0, 1.0)}, REJECT, "value"),
+            "three": arg({"FL_calf_joint": (0.0, 1.0, 2.0)}, REJECT, "value"),
+            "text": arg({"FL_calf_joint": "wide"}, REJECT),
+            "int_key": arg({3: (0.0, 1.0)}, REJECT, "type"),
+            "list": arg([(0.0, 1.0)], REJECT, "type"),
+            "int": arg(1, REJECT, "type"),
+        },
+        default="omit",
+    )
+    leg_order = Choice("leg_order", "urdf", ("urdf", "roles"), default="omit")
+    return limits, leg_order
+
+
 def _option_pairs(plan):
     """The options name Go2's feet and legs: a subset of feet leaves some nominal stances nameless."""
     if plan.get("nominal") == "all" and plan.get("feet") in ("one", "two"):
@@ -3002,8 +3038,27 @@ def robot_probe(robot, kw, c):
         return f"{n} legs but {len(robot.leg_joint_names)} leg joints"
     model = robot.model
     specs, _ = sk.urdf.find_legs(model, feet=kw.get("feet"), contact_offset=kw.get("contact_offset"))
+    if kw.get("leg_order") == "roles":  # the legs front to hind, left before right
+        by_name = {spec.name: spec for spec in specs}
+        if sorted(by_name) != sorted(robot.leg_names):
+            return f"legs {robot.leg_names}, the description's {sorted(by_name)}"
+        specs = [by_name[name] for name in robot.leg_names]
+        hips = robot.hip_positions
+        if n == 4 and (hips[:, 1] > 0).sum() == 2 and robot.leg_roles != QUAD_ROLES:
+            return f"leg_order='roles' gave the roles {robot.leg_roles}"
+        if any(hips[k, 0] < hips[k + 1, 0] - 1e-9 for k in range(0, n - 1, 2) if k + 1 < n and n == 4):
+            return f"leg_order='roles': the legs are not front to hind: {robot.leg_roles}"
     if tuple(spec.name for spec in specs) != robot.leg_names:
         return f"legs {robot.leg_names}, the description's {[spec.name for spec in specs]}"
+    limits = kw.get("limits")
+    if isinstance(limits, dict):  # the overrides reach the legs
+        for name, pair in limits.items():
+            if name in robot.leg_joint_names:
+                k = robot.leg_joint_names.index(name)
+                legs_of = [i for i, spec in enumerate(specs) if name in spec.joint_names]
+                row = robot.legs[legs_of[0]].limits[specs[legs_of[0]].joint_names.index(name)]
+                if not np.array_equal(row, np.asarray(pair, dtype=np.float64)):
+                    return f"limits={limits}: joint {name} (q column {k}) has the limits {row}"
     q = np.random.default_rng(0).uniform(-0.6, 0.6, 3 * n)
     pose = [0.1, -0.05, 0.3, 0.1, -0.2, 0.3]
     T = pose_matrix(pose)
@@ -3349,6 +3404,7 @@ def _robot_entries():
 
     # construction
     feet, contact_offset, nominal = _robot_options()
+    limit_slot, order_slot = _limit_options()
 
     def path_table():
         def files(c):
@@ -3389,6 +3445,8 @@ def _robot_entries():
             some(feet, ("none", "two", "calf", "int")),
             some(contact_offset, ("vector", "dict", "nan")),
             some(nominal, ("one", "unknown")),
+            limit_slot,
+            order_slot,
         ],
         probe=robot_probe,
         pair_rule=_option_pairs,
@@ -3417,6 +3475,8 @@ def _robot_entries():
         "feet": ("omit", "none"),
         "contact_offset": ("omit", "none", "vector", "list", "ints", "float32"),
         "nominal": ("omit", "none"),
+        "limits": ("omit", "none", "empty"),
+        "leg_order": ("omit", "valid", "choice:urdf", "choice:roles"),
     }
 
     def text_pairs(plan):
@@ -3433,7 +3493,7 @@ def _robot_entries():
         covers="spotkin.Robot.from_urdf_string",
         pairs=20,
         call=lambda c, **k: sk.Robot.from_urdf_string(**k),
-        slots=[Custom("text", text_table()), feet, contact_offset, nominal],
+        slots=[Custom("text", text_table()), feet, contact_offset, nominal, limit_slot, order_slot],
         probe=robot_probe,
         pair_rule=text_pairs,
     )
@@ -4424,7 +4484,9 @@ def _trajectory_entries():
             if not finite(P) or rigid_error(P) > 1e-9:
                 return "samples are not finite rigid transforms"
             a, b = first(kw), last(kw)
-            if np.abs(P[0] - a).max() > 1e-9 or np.abs(P[-1] - b).max() > 1e-9:
+            # float32 rotations are replaced by the nearest rotation: within their own rounding
+            tol = 1e-6 if any(getattr(v, "dtype", None) == np.float32 for v in kw.values()) else 1e-9
+            if np.abs(P[0] - a).max() > tol or np.abs(P[-1] - b).max() > tol:
                 return "the path does not start at the first pose and end at the last"
             _, twist = path.sample(np.array([0.0, T / 2, T]), twist=True)
             if not finite(twist):
@@ -5185,6 +5247,8 @@ _joint_name_entries()
 fuzz_sdk.register_entries(sys.modules[__name__])  # spotkin.sdk, when its optional SDK is installed
 fuzz_dask.register_entries(sys.modules[__name__])  # spotkin.dask, when Dask is installed
 fuzz_plot.register_entries(sys.modules[__name__])  # spotkin.plot, when matplotlib is installed
+fuzz_limits.register_entries(sys.modules[__name__])  # with_limits of robots and chains
+fuzz_urdf.register_entries(sys.modules[__name__])  # Chain.from_urdf (arms, mimic joints)
 BY_NAME = {entry.name: entry for entry in REGISTRY}
 assert len(BY_NAME) == len(REGISTRY), "registry names must be unique"
 

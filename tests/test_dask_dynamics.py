@@ -165,7 +165,7 @@ def test_bad_inputs_fail_at_once():
         skd.mass_matrix(sk.Chain.from_dh([(0, 0.0, 0.0, 0.3, 0.0)]), np.zeros((4, 1)))
     with pytest.raises(ValueError, match="forces"):
         skd.joint_torques_from_forces(ARM, q, np.zeros((10, 5)))
-    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 12 or 18\)"):
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 12\) or \(\.\.\., 18\)"):
         skd.center_of_mass(SPOT_ARM, np.zeros(6), np.zeros((3, 13)))
     with pytest.raises(ValueError, match="stance"):
         skd.standing_torques(GO2, np.zeros(6), np.zeros(12), stance=np.ones(3, dtype=bool))

@@ -170,9 +170,20 @@ def _demo_urdf_robot(samples: int) -> None:
 
 def inspect(path: str) -> int:
     """Print a URDF's tree, the legs and arms spotkin recognises with their geometry, and why the
-    other branches were not recognised."""
-    robot_model = Robot.from_urdf(path)
-    print(robot_model.describe())
+    other branches were not recognised. A description without legs (an arm, a gripper, a head) is
+    described with the chains from its root to each tip: joints, dof, closed-form IK or what applies
+    instead, mimic joints (:meth:`spotkin.Chain.from_urdf` builds them)."""
+    from . import urdf
+    from ._urdf_chain import chains_summary
+
+    model = urdf.load_urdf(path)
+    if urdf.find_legs(model)[0]:
+        print(Robot.from_urdf(path).describe())
+        return 0
+    text = urdf.describe(model)
+    print(text[: text.index("\nlegs (")])  # the header and the tree
+    print("no legs: not a Robot; its chains load with spotkin.Chain.from_urdf(path, tip=...)")
+    print(chains_summary(model))
     return 0
 
 
@@ -344,7 +355,7 @@ def _fd_error(chain: Chain, q: np.ndarray, step: float = 1e-6) -> float:
 
 PLOT_EXTRA = 'pip install "spotkin[plot]"'
 GIF_FRAMES = 20
-GIF_SIZE = (3.6, 3.0)  # inches: 360 x 300 pixels at 100 dpi
+GIF_SIZE = (7.2, 4.5)  # inches: 720 x 450 pixels at 100 dpi
 
 
 def _plotting():
@@ -361,11 +372,13 @@ def _plotting():
 
 def write_plots(folder: str, dpi: int = 100) -> list[str]:
     """Write the demo's pictures into ``folder`` (created if missing) for Spot and the Unitree Go2; returns
-    the paths written, in order. PNGs: ``ROBOT_stance`` (8 x 6 in), ``ROBOT_leg_branches`` (12 x 6.5 in;
-    Spot also ``spot_leg_branches_hip_height``, where two branches are valid), ``spot_arm_branches``
-    (13 x 7 in), ``ROBOT_workspace`` (9.5 x 6.5 in), ``ROBOT_trajectory`` (8 x 7 in), at ``dpi``; and
-    ``ROBOT_path.gif``, the demo's body path in 20 frames of 3.6 x 3.0 in (with the hand held in the
-    world, for a robot with an arm). Every figure is closed, also on error."""
+    the paths written, in order. PNGs: ``ROBOT_stance`` and ``ROBOT_stance_side`` (its side view; 8 x 6 in),
+    ``ROBOT_leg_branches`` (12 x 6.5 in; Spot also ``spot_leg_branches_hip_height``, where two branches are
+    valid), ``spot_arm_branches`` (13 x 7 in), ``ROBOT_workspace`` (9.5 x 6.5 in), ``ROBOT_trajectory``
+    (8 x 7 in), at ``dpi``; and ``ROBOT_path.gif``, the demo's body path in 20 frames of 7.2 x 4.5 in, its
+    motions scaled to the robot (1.5 times for Spot, 0.9 for the smaller Go2: several centimetres and
+    degrees, visible at that size), with the hand held in the world for a robot with an arm. Every figure
+    is closed, also on error."""
     plot = _plotting()
     import matplotlib.pyplot as plt
 
@@ -373,9 +386,9 @@ def write_plots(folder: str, dpi: int = 100) -> list[str]:
     before = set(plt.get_fignums())
     written: list[str] = []
     try:
-        written += _robot_plots(plot, plt, folder, "spot", Spot(), 0.5, 1.0, dpi)
+        written += _robot_plots(plot, plt, folder, "spot", Spot(), 0.5, 1.5, dpi)
         go2 = Robot.from_urdf(robots.path("go2"))
-        written += _robot_plots(plot, plt, folder, "go2", go2, 0.3, 0.5, dpi)
+        written += _robot_plots(plot, plt, folder, "go2", go2, 0.3, 0.9, dpi)
     finally:
         for number in set(plt.get_fignums()) - before:
             plt.close(number)
@@ -409,8 +422,9 @@ def _held_arm(robot: Robot, T_body: np.ndarray, rate_samples: int = 2000) -> np.
     branch of DEMO_ARM_Q held continuously (checked on a fine resampling of the path), gaps filled with
     the last reached joints."""
     arm = robot.arm
-    hand = T_body[0] @ arm.fk(DEMO_ARM_Q)
-    sol = arm.ik_all(np.linalg.solve(T_body, np.broadcast_to(hand, T_body.shape)))
+    T_base = T_body @ robot.arm_mount  # world <- arm base: the arm's chain is in its base link's frame
+    hand = T_base[0] @ arm.fk(DEMO_ARM_Q)
+    sol = arm.ik_all(np.linalg.solve(T_base, np.broadcast_to(hand, T_base.shape)))
     branch = int(np.argmin(np.abs(np.angle(np.exp(1j * (sol.q[0] - DEMO_ARM_Q)))).max(axis=-1)))
     q = hold_branch(sol.q, sol.valid, branch).q
     for k in range(len(q)):
@@ -431,7 +445,10 @@ def _robot_plots(plot, plt, folder, name, robot, height, scale, dpi) -> list[str
     pose = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0])
     stance = robot.body_ik(pose, robot.stance_feet(height))
     arm_q = DEMO_ARM_Q if robot.arm is not None else None
-    save(plot.robot(robot, pose, stance.q, arm_q, title=f"{name}: a nominal stance"), "stance.png")
+    title = f"{plot._robot_name(robot)}: a nominal stance"
+    save(plot.robot(robot, pose, stance.q, arm_q, title=title), "stance.png")
+    side = plot.robot(robot, pose, stance.q, arm_q, title=f"{title}, side view", view="side")
+    save(side, "stance_side.png")
     leg = robot.legs[0]
     q_leg = stance.q[robot._columns[0]]
     save(plot.branches(leg, leg.fk(q_leg)), "leg_branches.png")
@@ -465,23 +482,51 @@ def _load_robot(source: str) -> Robot:
 
 
 def plot_stance(
-    source: str, out: str | None = None, stance: str = "nominal", size=(800, 600), dpi=100
+    source: str, out: str | None = None, stance: str = "nominal", size=(800, 600), dpi=100, view="3d"
 ) -> int:
     """Draw a robot (see :func:`_load_robot`) in its nominal stance (the feet below the hips at about 70 %
-    of the legs' reach, solved by body_ik; the zero stance when none solves) or its zero stance, into a
-    PNG of ``size`` pixels; print the path written."""
+    of the legs' reach, solved by body_ik; the zero stance when none solves) or its zero stance, in 3D or
+    a side, front or top ``view`` (:func:`spotkin.plot.robot`), into a PNG of ``size`` pixels; print the
+    path written."""
     plot = _plotting()
     import matplotlib.pyplot as plt
 
+    if source != "spot":
+        from . import urdf
+
+        model = urdf.load_urdf(robots.path(source) if source in robots.NAMES else source)
+        if not urdf.find_legs(model)[0]:  # an arm, a gripper, a head: its tree and chains
+            return _plot_description(plot, plt, model, source, out, stance, size, dpi)
     robot = _load_robot(source)
     pose, q = plot._nominal_stance(robot) if stance == "nominal" else plot._zero_stance(robot)
     if out is None:
         out = f"{os.path.splitext(os.path.basename(source))[0]}_stance.png"
+    name = plot._robot_name(robot) if robot.name else source
+    title = f"{name}: {stance} stance, body at {pose[2]:.3f} m"
+    fig = plot.robot(robot, pose, q, title=title if view == "3d" else f"{title}, {view} view", view=view)
+    try:
+        fig.set_size_inches(size[0] / dpi, size[1] / dpi)
+        save_png(fig, out, dpi)
+    finally:
+        plt.close(fig)
+    print(f"wrote {out}")
+    return 0
+
+
+def _plot_description(plot, plt, model, source: str, out, stance: str, size, dpi) -> int:
+    """``spotkin plot`` for a description without legs: its tree at the zero configuration, or at
+    mid-limits for ``stance="nominal"`` (0 for an unlimited joint), drawn by ``plot._description``."""
+    values = {}
+    for joint in model.actuated_joints:
+        middle = 0.5 * (joint.lower + joint.upper)
+        values[joint.name] = middle if stance == "nominal" and np.isfinite(middle) else 0.0
+    if out is None:
+        out = f"{os.path.splitext(os.path.basename(source))[0]}_stance.png"
+    what = "mid-limit" if stance == "nominal" else "zero"
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi))
     try:
         ax = fig.add_subplot(projection="3d")
-        name = robot.name or source
-        plot.robot(robot, pose, q, ax=ax, title=f"{name}: {stance} stance, body at {pose[2]:.3f} m")
+        plot._description(ax, model, values, title=f"{model.name or source}: {what} configuration")
         save_png(fig, out, dpi)
     finally:
         plt.close(fig)
@@ -572,8 +617,35 @@ def _positive_int(text: str) -> int:
     return value
 
 
+DEMO_MAX_SAMPLES = 10_000_000  # the demo holds a few arrays of this many samples (GBs at the bound)
+DPI_RANGE = (10, 600)  # below 10 dpi the fonts get no pixel (FreeType refuses); above, GIF frames of GBs
+
+
+def _out_of_range(args) -> str | None:
+    """What is wrong with a parsed option's value (a count, a resolution) that argparse's types accept,
+    or None: checked before anything is loaded, computed or allocated."""
+    from . import _workspace
+
+    checks = []
+    if args.command == "demo":
+        checks.append(("--samples", args.samples, 1, DEMO_MAX_SAMPLES))
+    if args.command in ("demo", "plot"):
+        checks.append(("--dpi", args.dpi, *DPI_RANGE))
+    if args.command == "workspace":
+        checks.append(("--samples", args.samples, 1, _workspace.MAX_VOLUME_SAMPLES))
+        checks.append(("--orientations", args.orientations, 1, _workspace.MAX_ORIENTATIONS))
+        checks.append(("--seed", args.seed, 0, 2**64 - 1))
+        if not (np.isfinite(args.spacing) and args.spacing > 0):
+            return f"--spacing must be a positive number of metres, got {args.spacing}"
+    for option, value, low, high in checks:
+        if not low <= value <= high:
+            return f"{option} must be in [{low:,}, {high:,}], got {value:,}"
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="spotkin", description=__doc__)
+    # the module docstring without its reST markup: ``spotkin demo`` reads "spotkin demo" in a terminal
+    parser = argparse.ArgumentParser(prog="spotkin", description=__doc__.replace("``", '"'))
     parser.add_argument("--version", action="version", version=f"spotkin {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     demo_parser = commands.add_parser("demo", help="run the showcase on the built-in Spot model")
@@ -581,7 +653,7 @@ def main(argv: list[str] | None = None) -> int:
         "--samples",
         type=_positive_int,
         default=1_000_000,
-        help="batch size for the throughput figures (a positive integer; default 1,000,000)",
+        help="batch size for the throughput figures (1 to 10,000,000; default 1,000,000)",
     )
     inspect_parser = commands.add_parser(
         "inspect", help="show a URDF's tree and the legs and arms spotkin recognises in it"
@@ -592,7 +664,7 @@ def main(argv: list[str] | None = None) -> int:
         metavar="DIR",
         help=f"also write the demo's pictures (PNGs and GIFs) into DIR (needs matplotlib: {PLOT_EXTRA})",
     )
-    dpi_help = "resolution of the pictures (default 100)"
+    dpi_help = "resolution of the pictures (10 to 600; default 100)"
     demo_parser.add_argument("--dpi", type=_positive_int, default=100, help=dpi_help)
     plot_parser = commands.add_parser(
         "plot", help=f"draw a robot from its URDF in its nominal or zero stance (needs {PLOT_EXTRA})"
@@ -600,6 +672,9 @@ def main(argv: list[str] | None = None) -> int:
     plot_parser.add_argument("urdf", help="path of the URDF file, or spot, spot_with_arm, go2 (packaged)")
     plot_parser.add_argument("--out", help="the PNG to write (default: NAME_stance.png here)")
     plot_parser.add_argument("--stance", choices=("nominal", "zero"), default="nominal")
+    plot_parser.add_argument(
+        "--view", choices=("3d", "side", "front", "top"), default="3d", help="3D (default) or a 2D view"
+    )
     plot_parser.add_argument(
         "--size", type=_size, default=(800, 600), help="WIDTHxHEIGHT in pixels (800x600)"
     )
@@ -614,7 +689,7 @@ def main(argv: list[str] | None = None) -> int:
         "--samples",
         type=_positive_int,
         default=2_000_000,
-        help="Monte Carlo points for the leg volume (default 2,000,000)",
+        help="Monte Carlo points for the leg volume (at most 1e10; default 2,000,000)",
     )
     workspace_parser.add_argument(
         "--spacing", type=float, default=0.05, help="arm grid spacing, m (default 0.05)"
@@ -623,13 +698,17 @@ def main(argv: list[str] | None = None) -> int:
         "--orientations",
         type=_positive_int,
         default=128,
-        help="orientations sampled per arm grid position (default 128)",
+        help="orientations sampled per arm grid position (at most 1,000,000; default 128)",
     )
     workspace_parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     _batch.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/_batch.py)
     args = parser.parse_args(argv)
     if args.command == "batch":
         return _batch.main(args)
+    refused = _out_of_range(args)
+    if refused:  # before any work, as argparse refuses malformed values: one line, exit 2
+        print(f"spotkin {args.command}: error: {refused}", file=sys.stderr)
+        return 2
     if args.command == "demo":
         try:
             return demo(args.samples, args.plots, args.dpi)
@@ -638,7 +717,7 @@ def main(argv: list[str] | None = None) -> int:
             return 1
     if args.command == "plot":
         try:
-            return plot_stance(args.urdf, args.out, args.stance, args.size, args.dpi)
+            return plot_stance(args.urdf, args.out, args.stance, args.size, args.dpi, args.view)
         except (ImportError, OSError, ValueError) as error:
             print(f"spotkin plot: {error}", file=sys.stderr)
             return 1

@@ -38,7 +38,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_real, as_scalar, broadcast_lead, check_trailing, quiet_float_errors
+from ._boundary import (
+    as_real,
+    as_scalar,
+    broadcast_lead,
+    check_trailing,
+    quiet_float_errors,
+    rigid_transforms,
+)
+from ._status import Status
 from .models import SPOT
 
 __all__ = ["ArmSingularity", "ArmSolutions", "SpotArm", "pose_from"]
@@ -150,7 +158,7 @@ class SpotArm:
         mount = as_real(mount, "mount", np.float64).copy()
         if mount.shape != (3,):
             raise ValueError(f"mount must have shape (3,), got {mount.shape}")
-        tool = None if tool is None else as_real(tool, "tool", np.float64).copy()
+        tool = None if tool is None else rigid_transforms(tool, "tool")
         upper_arm, forearm = as_scalar(upper_arm, "upper_arm"), as_scalar(forearm, "forearm")
         forearm_offset, hand = as_scalar(forearm_offset, "forearm_offset"), as_scalar(hand, "hand")
         self._core = _core.Arm(
@@ -209,7 +217,7 @@ class SpotArm:
             return ArmSolutions(*self._core.ik_all(T, None))
         return ArmSolutions(*self._core.ik_all(*_broadcast_seed(T, seed)))
 
-    def ik(self, T: ArrayLike, seed: ArrayLike | None = None):
+    def ik(self, T: ArrayLike, seed: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray | Status]:
         """The in-limit solution nearest to ``seed``: (q (..., 6), status).
 
         Nearest means the smallest largest-single-joint move, measured on the circle

@@ -56,6 +56,7 @@ from ._boundary import (
     fallback_is_nearest,
     quiet_float_errors,
 )
+from ._status import Status
 
 __all__ = ["Leg", "LegSolutions"]
 
@@ -127,9 +128,9 @@ class Leg:
     limits:
         Optional (3, 2) joint limits [(lower, upper)] for hx, hy, kn; None for none.
 
-    Lengths must be real numbers and ``limits`` a real array (``TypeError`` otherwise);
-    non-finite lengths, ``upper`` or ``lower`` not positive, a negative ``hip_offset``,
-    and limits with NaN or lower > upper raise ``ValueError``.
+    Lengths must be real numbers, ``limits`` a real array and ``name`` a str or None
+    (``TypeError`` otherwise); non-finite lengths, ``upper`` or ``lower`` not positive, a
+    negative ``hip_offset``, and limits with NaN or lower > upper raise ``ValueError``.
     """
 
     __slots__ = ("_core", "_geometry", "_limits", "_name")
@@ -208,6 +209,8 @@ class Leg:
         return leg
 
     def _init(self, a, b, c, signs, limits, name, preferred_slot) -> None:
+        if name is not None and not isinstance(name, str):
+            raise TypeError(f"name must be a str or None, got {type(name).__name__}")
         try:
             self._core = _core.Leg(
                 a, b, c, signs, limits[:, 0], limits[:, 1], -1 if preferred_slot is None else preferred_slot
@@ -332,7 +335,9 @@ class Leg:
         """
         return self._core.singularity(q)
 
-    def ik(self, p: ArrayLike, seed: ArrayLike | None = None, fallback: str = "nearest"):
+    def ik(
+        self, p: ArrayLike, seed: ArrayLike | None = None, fallback: str = "nearest"
+    ) -> tuple[np.ndarray, np.ndarray | Status]:
         """Joint angles placing the foot at p: p (..., 3) -> (q (..., 3), status (...,)).
 
         Status per target (a :class:`Status` for a single target, an int8 array otherwise):

@@ -29,6 +29,8 @@ from ._boundary import (
     quiet_float_errors,
     real_dtype,
 )
+from ._status import Status
+from ._urdf_chain import chain_from_model
 from .body import body_transform, pose_format, sequence_code
 from .chain import Chain
 from .leg import Leg
@@ -138,6 +140,68 @@ def _choice(value, name: str, choices: tuple[str, ...]) -> str:
     return value
 
 
+def _side_groups(hips: np.ndarray, tolerance: float) -> dict[str, list[int]]:
+    """The legs on each side (left: y > tolerance, right: y < -tolerance, else center), front to hind."""
+    groups: dict[str, list[int]] = {"left": [], "right": [], "center": []}
+    for k, y in enumerate(hips[:, 1]):
+        groups["left" if y > tolerance else "right" if y < -tolerance else "center"].append(k)
+    for members in groups.values():
+        members.sort(key=lambda k: (-hips[k, 0], k))  # front first; a tie keeps the URDF's order
+    return groups
+
+
+def leg_roles(hips: ArrayLike, tolerance: float = 1e-6) -> tuple[str, ...]:
+    """The role of each leg from its hip position (n, 3) in the body frame (x forward, y left): see
+    :attr:`Robot.leg_roles`."""
+    hips = np.asarray(hips, dtype=np.float64).reshape(-1, 3)
+    roles = [""] * len(hips)
+    for side, members in _side_groups(hips, tolerance).items():
+        m = len(members)
+        for p, k in enumerate(members):
+            if m == 1:
+                place = None
+            elif p == 0:
+                place = "front"
+            elif p == m - 1:
+                place = "hind"
+            else:
+                place = "middle" if m == 3 else f"middle_{p}"
+            roles[k] = side if place is None else f"{place}_{side}"
+    return tuple(roles)
+
+
+def _role_order(hips: np.ndarray, tolerance: float = 1e-6) -> list[int]:
+    """Leg indices front to hind, left before right (then center): the ``leg_order="roles"`` order."""
+    ranks = {}
+    for side_rank, members in enumerate(_side_groups(hips, tolerance).values()):
+        for p, k in enumerate(members):
+            ranks[k] = (p / max(len(members) - 1, 1), side_rank)
+    return sorted(range(len(hips)), key=ranks.__getitem__)
+
+
+def _limit_table(limits, model) -> dict[str, tuple[float, float]]:
+    """``limits`` as a dict URDF joint name -> (lower, upper), checked: every name an actuated joint of
+    ``model``, every pair real with lower <= upper and no NaN (ValueError / TypeError naming it)."""
+    if limits is None:
+        return {}
+    if not isinstance(limits, Mapping):
+        raise TypeError(f"limits must be a dict joint name -> (lower, upper), got {type(limits).__name__}")
+    actuated = {joint.name for joint in model.actuated_joints}
+    table = {}
+    for name, pair in limits.items():
+        if not isinstance(name, str):
+            raise TypeError(f"limits: keys must be joint names (str), got {_described(name)}")
+        if name not in actuated:
+            raise ValueError(f"limits: {name!r} is not a moving joint of this robot")
+        row = as_real(pair, f"limits[{name!r}]", np.float64)
+        if row.shape != (2,):
+            raise ValueError(f"limits[{name!r}] must be a (lower, upper) pair, got shape {row.shape}")
+        if np.isnan(row).any() or row[0] > row[1]:
+            raise ValueError(f"limits[{name!r}] must satisfy lower <= upper, with no NaN, got {row.tolist()}")
+        table[name] = (float(row[0]), float(row[1]))
+    return table
+
+
 class Robot:
     """A legged robot: a body, its roll–pitch–pitch legs and the arms it carries.
 
@@ -155,6 +219,7 @@ class Robot:
     __slots__ = (
         "_aliases",
         "_arm",
+        "_arm_mount",
         "_arms",
         "_body_core",
         "_columns",
@@ -165,6 +230,7 @@ class Robot:
         "_legs",
         "_model",
         "_report",
+        "_roles",
         "_source",
         "_specs",
     )
@@ -181,6 +247,8 @@ class Robot:
         feet=None,
         contact_offset=None,
         nominal=None,
+        limits=None,
+        leg_order: str = "urdf",
     ) -> Robot:
         """Load a robot from a URDF file.
 
@@ -188,29 +256,41 @@ class Robot:
         ``contact_offset``: a (3,) contact point offset in the foot link's frame, for every foot or
         as a dict foot link -> (3,), when the leaf link's origin is not the contact point;
         ``nominal``: a dict leg name -> (3,) joint angles of a typical stance, which sets each
-        leg's preferred branch (default: from the knee's limits). ``ValueError`` names the joint
-        or link for malformed descriptions (see :func:`spotkin.urdf.parse_urdf`); an unreadable
+        leg's preferred branch (default: from the knee's limits); ``limits``: a dict joint name -> (lower,
+        upper) replacing the URDF's limits of those joints (see :meth:`with_limits`); ``leg_order``:
+        ``"urdf"`` (the legs, and the whole-body ``q``, in the URDF's order) or ``"roles"`` (front to
+        hind, left before right: :attr:`leg_roles` order, the same on every robot). ``ValueError`` names
+        the joint or link for malformed descriptions (see :func:`spotkin.urdf.parse_urdf`); an unreadable
         path raises ``OSError`` (``FileNotFoundError``, ...); a path that is not a ``str`` or
         ``os.PathLike`` raises ``TypeError``.
         """
         if not isinstance(path, (str, os.PathLike)):
             raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
-        with open(path, "rb") as file:
-            data = file.read()  # kept as bytes: the XML's own encoding declaration decides
+        data = urdf.read_file(path)  # bytes (the XML's own encoding declaration decides); xacro expanded
         model = urdf.parse_urdf(data)
-        return cls._from_model(model, feet, contact_offset, nominal, data)
+        return cls._from_model(model, feet, contact_offset, nominal, data, limits, leg_order)
 
     @classmethod
-    def from_urdf_string(cls, text: str, *, feet=None, contact_offset=None, nominal=None) -> Robot:
+    def from_urdf_string(
+        cls, text: str, *, feet=None, contact_offset=None, nominal=None, limits=None, leg_order: str = "urdf"
+    ) -> Robot:
         """As :meth:`from_urdf`, from the URDF's XML text."""
         if not isinstance(text, str):
             raise TypeError(f"text must be a str holding URDF XML, got {type(text).__name__}")
+        text = urdf.read_text(text)  # xacro expanded
         model = urdf.parse_urdf(text)
-        return cls._from_model(model, feet, contact_offset, nominal, text)
+        return cls._from_model(model, feet, contact_offset, nominal, text, limits, leg_order)
 
     @classmethod
-    def _from_model(cls, model, feet, contact_offset, nominal, text) -> Robot:
+    def _from_model(cls, model, feet, contact_offset, nominal, text, limits=None, leg_order="urdf") -> Robot:
+        leg_order = _choice(leg_order, "leg_order", ("urdf", "roles"))
+        limits = _limit_table(limits, model)
+        if limits:
+            model = model.with_limits(limits)
         specs, leg_report = urdf.find_legs(model, feet=feet, contact_offset=contact_offset)
+        if leg_order == "roles" and specs:
+            order = _role_order(np.array([spec.hip_origin for spec in specs]))
+            specs = tuple(specs[k] for k in order)
         arms, arm_report = urdf.find_arms(model, specs)
         if nominal is not None and not isinstance(nominal, dict):
             raise TypeError(
@@ -231,11 +311,16 @@ class Robot:
         ]
         robot = cls.__new__(cls)
         robot._model = model
-        robot._source = (text, feet, contact_offset, nominal)
+        robot._source = (text, feet, contact_offset, nominal, limits, leg_order)
         robot._report = tuple(leg_report) + tuple(arm_report)
         robot._specs = (tuple(specs), tuple(arms))
         arm_chains = tuple(robot.chain(arm.tip, base=arm.base) for arm in arms)
         robot._arms = arm_chains
+        # body <- arm base: the arm's chain starts at the link its first joint hangs from, which the
+        # recognition reaches from the body through fixed joints only (find_arms takes the first six
+        # actuated joints below the root), so the mount is that link's placement at zero angles
+        robot._arm_mount = model.placement(arms[0].base) if arms else np.eye(4)
+        robot._arm_mount.flags.writeable = False
         robot._set_legs(
             legs,
             [spec.hip_origin for spec in specs],
@@ -247,13 +332,20 @@ class Robot:
 
     def _set_legs(self, legs, hips, names, joint_names, arm) -> None:
         if not legs:
-            raise ValueError("no roll-pitch-pitch legs were recognised; see spotkin.urdf.find_legs's report")
+            raise ValueError(
+                "no roll-pitch-pitch legs were recognised (see spotkin.urdf.find_legs's report): a Robot is "
+                "a legged robot; for an arm, a gripper or a head, load its chain with "
+                "spotkin.Chain.from_urdf(path, tip=..., base=...)"
+            )
         self._legs = tuple(legs)
         self._leg_names = tuple(names)
         self._hips = np.array(hips, dtype=np.float64).reshape(len(legs), 3)
         self._hips.flags.writeable = False
+        self._roles = leg_roles(self._hips)
         flat = [name for triple in joint_names for name in triple]
-        order = self._urdf_order(flat)
+        source = getattr(self, "_source", None)
+        by_roles = source is not None and len(source) > 5 and source[5] == "roles"
+        order = {name: k for k, name in enumerate(flat)} if by_roles else self._urdf_order(flat)
         self._leg_joint_names = tuple(sorted(flat, key=order.__getitem__))
         position = {name: k for k, name in enumerate(self._leg_joint_names)}
         self._columns = np.array(
@@ -294,11 +386,28 @@ class Robot:
         return self._leg_names
 
     def leg(self, name: str) -> Leg:
-        """One leg by name (see :attr:`leg_names`)."""
-        try:
+        """One leg by name (:attr:`leg_names`) or by role (:attr:`leg_roles`, such as ``"front_left"``,
+        the same on every quadruped)."""
+        if not isinstance(name, str):
+            raise TypeError(f"name must be a leg name or role (str), got {type(name).__name__}")
+        if name in self._leg_names:
             return self._legs[self._leg_names.index(name)]
-        except ValueError:
-            raise ValueError(f"leg name must be one of {self._leg_names}, got {name!r}") from None
+        if name in self._roles:
+            return self._legs[self._roles.index(name)]
+        raise ValueError(
+            f"leg name must be one of {self._leg_names} or a leg role {self._roles}, got {name!r}"
+        )
+
+    @property
+    def leg_roles(self) -> tuple[str, ...]:
+        """Each leg's place on the body, in :attr:`legs` order, from the hips' positions in the body frame
+        (x forward, y left, as URDFs are written): ``"front_left"``, ``"front_right"``, ``"hind_left"``,
+        ``"hind_right"`` on a quadruped. A side with three legs or more has ``"middle"`` legs between its
+        front and hind ones (``"middle_1"``, ``"middle_2"``, ... front to hind when there are several);
+        a side with one leg calls it ``"left"`` or ``"right"``; hips within 1 µm of the sagittal plane are
+        on side ``"center"``. :meth:`leg` takes these names, and ``Robot.from_urdf(..., leg_order="roles")``
+        orders the legs and ``q`` by them."""
+        return self._roles
 
     @property
     def n_legs(self) -> int:
@@ -324,13 +433,35 @@ class Robot:
     def arm(self):
         """The first arm found on the body (a 6-joint :class:`Chain`), or None. Its :meth:`Chain.ik` is in
         closed form when the arm is of a 6R family (:attr:`Chain.ik_kind`: a spherical wrist, three
-        parallel axes as on UR arms and the Unitree Z1, or a spherical shoulder)."""
+        parallel axes as on UR arms and the Unitree Z1, or a spherical shoulder).
+
+        **Its frame is the arm's base link**, the link its first joint hangs from (``arm.fk`` gives
+        base <- tool), which is the body only when the arm is mounted straight on it. The whole-body
+        calls (:meth:`fk_all`, :meth:`arm_ik_world`, :meth:`center_of_mass`, the dynamics) compose
+        :attr:`arm_mount`; to use the chain alone in the body frame, compose it too:
+        ``robot.arm_mount @ robot.arm.fk(q_arm)`` is body <- tool."""
         return self._arm
 
     @property
+    def arm_mount(self) -> np.ndarray:
+        """(4, 4) body <- arm base: where :attr:`arm`'s frame sits on the body (the fixed joints between
+        the URDF's root link and the arm's base link composed; the identity when the arm hangs from the
+        body itself, as on Spot). A read-only copy; the identity when the robot has no arm."""
+        mount = getattr(self, "_arm_mount", None)
+        return np.eye(4) if mount is None else mount.copy()
+
+    @property
     def arms(self) -> tuple:
-        """Every arm found (see :attr:`arm`)."""
+        """Every arm found (see :attr:`arm`), each in its own base link's frame (:attr:`arm_mounts`)."""
         return self._arms
+
+    @property
+    def arm_mounts(self) -> tuple[np.ndarray, ...]:
+        """(4, 4) body <- arm base of each of :attr:`arms`, in that order (see :attr:`arm_mount`)."""
+        model, (_, specs) = self._model, self._specs
+        if not specs:  # Spot built from a model dict, or no arm
+            return tuple(self.arm_mount for _ in self._arms)
+        return tuple(model.placement(spec.base) for spec in specs)
 
     @property
     def report(self) -> tuple[str, ...]:
@@ -354,24 +485,16 @@ class Robot:
         subtree included) merge into it, and the joints off the path are locked at 0, so the subtree
         they carry merges too (a gripper finger joins the wrist). ``base`` and everything attached
         to it without passing through one of the chain's joints (the body and the other legs, for a
-        leg chain) is not part of the chain's dynamics. See :mod:`spotkin.inertia`."""
+        leg chain) is not part of the chain's dynamics. See :mod:`spotkin.inertia`.
+
+        Mimic joints on the path follow their leaders: the chain's q holds the independent joints and
+        the leaders (see :meth:`Chain.from_urdf`, which builds its chains the same way)."""
         if self._model is None:
             raise ValueError("this robot has no URDF description")
-        data = self._model.chain_data(link, base)
-        if len(data.joint_names) == 0:
-            raise ValueError(f"no actuated joint between {data.base!r} and {link!r}")
-        chain = Chain.from_joints(
-            data.placements,
-            data.axes,
-            data.types,
-            tool=data.tool,
-            limits=data.limits,
-            joint_names=data.joint_names,
-        )
-        if not any(item.inertial is not None for item in self._model.links.values()):
-            return chain
-        tree = inertia.model_tree(self._model, data.base, data.joint_names, floating=False)
-        return chain.with_inertials(*tree.inertials)
+        for value, name in ((link, "link"), (base, "base")):
+            if not isinstance(value, str) and not (name == "base" and value is None):
+                raise TypeError(f"{name} must be a link name (str), got {type(value).__name__}")
+        return chain_from_model(self._model, link, base)  # the route of Chain.from_urdf
 
     @property
     def body_inertial(self) -> inertia.LinkInertials:
@@ -435,9 +558,7 @@ class Robot:
         """q (..., 3 n_legs) or (..., 3 n_legs + n_arm) in float64, the arm at zero if not given."""
         q = as_real(q, "q", np.float64)
         legs, arm = 3 * len(self._legs), len(self.arm_joint_names)
-        if q.ndim == 0 or q.shape[-1] not in {legs, legs + arm}:
-            widths = f"{legs}" if not arm else f"{legs} or {legs + arm}"
-            raise ValueError(f"q must have shape (..., {widths}), got {q.shape}")
+        self._leg_q(q, "q")  # the width check
         if q.shape[-1] == legs and arm:
             q = np.concatenate([q, np.zeros((*q.shape[:-1], arm))], axis=-1)
         return q
@@ -688,12 +809,13 @@ class Robot:
         foot is brought into its hip frame, p = R^T (foot - t) - hip, and solved by the
         limit-aware leg IK: each leg's status and fallback are exactly those of
         :meth:`Leg.ik`, and a leg's failure never touches the other legs. ``seed``
-        (..., 3 n) picks the branch where several are valid. A pose with NaN, or a 4x4 /
-        quaternion that is not a rotation, gives INVALID_INPUT on every leg of that
-        sample only. ``fallback`` is the UNREACHABLE legs' answer, as in :meth:`Leg.ik`:
-        ``"nearest"`` (the in-limit configuration whose foot is nearest to the target) or
-        ``"nan"``. Computed in float32 when ``body_pose`` and ``feet`` both are float32, else
-        float64; ``seed`` takes that dtype.
+        (..., 3 n), or a whole-body q with the arm's joints after (unused), picks the
+        branch where several are valid. A pose with NaN, or a 4x4 / quaternion that is not
+        a rotation, gives INVALID_INPUT on every leg of that sample only. ``fallback`` is the
+        UNREACHABLE legs' answer, as in :meth:`Leg.ik`: ``"nearest"`` (the in-limit
+        configuration whose foot is nearest to the target) or ``"nan"``. Computed in float32
+        when ``body_pose`` and ``feet`` both are float32, else float64; ``seed`` takes that
+        dtype.
         """
         n = len(self._legs)
         if (
@@ -712,8 +834,8 @@ class Robot:
         feet = as_real(feet, "feet")
         feet_lead = check_trailing(feet, "feet", (n, 3))
         if seed is not None:
-            seed = as_real(seed, "seed")
-            seed_lead = check_trailing(seed, "seed", (3 * n,))
+            seed = self._leg_q(as_real(seed, "seed"), "seed")[0]  # a whole-body q: the arm's part unused
+            seed_lead = seed.shape[:-1]
         # nothing to broadcast for a shared stance or one stance per pose, and one seed per pose
         if (feet_lead and feet_lead != pose_lead) or (seed is not None and seed_lead != pose_lead):
             leads = {"body_pose": (pose_lead, pose.shape), "feet": (feet_lead, feet.shape)}
@@ -729,6 +851,8 @@ class Robot:
 
     def body_fk(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """(..., n, 3) world foot points: foot = t + R (hip + leg.fk(q_leg)). Leading dimensions broadcast.
+        ``q`` holds the legs' joints (..., 3 n), or the legs' then the arm's, as every whole-body call
+        takes it (the arm does not move the feet).
 
         float32 when ``body_pose`` and ``q`` both are float32, else float64. A leg with a
         NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample."""
@@ -739,10 +863,19 @@ class Robot:
         """(..., 3 n, 6 + 3 n) d(feet world) / d(body twist [v; w], q).
 
         The twist is the linear velocity of the body origin and the angular velocity,
-        both in the world frame: d foot_i = v + w x (foot_i - t) + R J_leg_i dq_i.
+        both in the world frame: d foot_i = v + w x (foot_i - t) + R J_leg_i dq_i. ``q`` (..., 3 n), or
+        (..., 3 n + n_arm) with the arm's joints after the legs': then the arm's columns follow, zero
+        (the arm does not move the feet), so that J has a column per entry of the twist and of ``q``.
         """
+        q = as_real(q, self._q_name)
+        width = q.shape[-1] if q.ndim else 0
         pose, q, fmt, code = self._pose_and_q(body_pose, q, seq)
-        return self._body_core.jacobian(pose, fmt, code, q)
+        J = self._body_core.jacobian(pose, fmt, code, q)
+        if width == q.shape[-1]:
+            return J
+        out = np.zeros((*J.shape[:-1], 6 + width), dtype=J.dtype)
+        out[..., : J.shape[-1]] = J
+        return out
 
     _q_name = "q"
 
@@ -757,6 +890,8 @@ class Robot:
     ) -> BodyRates:
         """Joint velocities that keep every foot fixed while the body moves with ``twist``.
 
+        ``q`` (..., 3 n), or with the arm's joints after the legs': ``qd`` then has the same width, the
+        arm's rates zero (the arm held still on the body; NaN in a sample with NaN or Inf input).
         ``twist`` (..., 6) is [v; w] (world frame, as in :meth:`body_jacobian`). Per leg,
         J_leg dq = -R^T (v + w x (foot - t)). Leading dimensions of ``body_pose``, ``q``
         and ``twist`` broadcast; the result is float64.
@@ -774,13 +909,15 @@ class Robot:
         """
         tolerance = as_finite(tolerance, "tolerance", 0.0)
         n_legs = len(self._legs)
-        width = 3 * n_legs
         T, pose = self._world_from_body(body_pose, seq)
         q = as_real(q, self._q_name, np.float64)
+        given = q.shape[-1] if q.ndim else 0
+        q, q_arm = self._leg_q(q, self._q_name)
+        width = 3 * n_legs
         twist = as_real(twist, "twist", np.float64)
         lead = broadcast_lead(
             body_pose=(T.shape[:-2], pose.shape),
-            **{self._q_name: (check_trailing(q, self._q_name, (width,)), q.shape)},
+            **{self._q_name: (q.shape[:-1], q.shape)},
             twist=(check_trailing(twist, "twist", (6,)), twist.shape),
         )
         n = math.prod(lead)
@@ -805,7 +942,17 @@ class Robot:
             rows = usable[finite]
             qd[rows[:, None], columns[None, :]] = solved[finite]
             singular[rows, i] = False
-        return BodyRates(qd.reshape(*lead, width), singular.reshape(*lead, n_legs))
+        if q_arm is not None:  # the arm held still on the body: zero rates, NaN for a non-finite sample
+            q_arm = np.broadcast_to(q_arm, (*lead, given - width)).reshape(n, given - width)
+            finite = (
+                np.isfinite(q_arm).all(1)
+                & np.isfinite(q).all(1)
+                & np.isfinite(twist).all(1)
+                & np.broadcast_to(np.isfinite(T).all((-2, -1)), lead).reshape(n)
+            )
+            arm_rates = np.where(finite[:, None], 0.0, np.nan) * np.ones((n, given - width))
+            qd = np.concatenate([qd, arm_rates], axis=1)
+        return BodyRates(qd.reshape(*lead, given), singular.reshape(*lead, n_legs))
 
     @quiet_float_errors
     def fk_all(
@@ -813,8 +960,9 @@ class Robot:
     ) -> BodyFrames:
         """Every frame of interest in the world frame: body, hips, knees, feet, and the hand.
 
-        Checked as :meth:`body_fk`: ``body_pose`` in any accepted form, ``q`` (..., 3 n)
-        and ``q_arm`` (..., 6) real arrays whose leading dimensions broadcast (``TypeError``
+        Checked as :meth:`body_fk`: ``body_pose`` in any accepted form, ``q`` (..., 3 n) (or with the
+        arm's joints after the legs', in place of ``q_arm``) and ``q_arm`` (..., 6) real arrays whose
+        leading dimensions broadcast (``TypeError``
         for non-numeric input such as None, ``ValueError`` naming the argument for another
         shape). A body pose with NaN or Inf, or that is not a rigid transform (a 4x4 whose
         rotation part is not a rotation or whose last row is not [0, 0, 0, 1], a non-unit
@@ -823,10 +971,14 @@ class Robot:
         """
         n_legs = len(self._legs)
         T, pose = self._world_from_body(body_pose, seq)
-        q = as_real(q, self._q_name, np.float64)
+        q, q_arm_in_q = self._leg_q(as_real(q, self._q_name, np.float64), self._q_name)
+        if q_arm_in_q is not None:
+            if q_arm is not None:
+                raise ValueError(f"{self._q_name} holds the arm's joints, so q_arm must be None")
+            q_arm = q_arm_in_q
         leads = {
             "body_pose": (T.shape[:-2], pose.shape),
-            self._q_name: (check_trailing(q, self._q_name, (3 * n_legs,)), q.shape),
+            self._q_name: (q.shape[:-1], q.shape),
         }
         if q_arm is not None:
             if self._arm is None:
@@ -847,21 +999,22 @@ class Robot:
             q_leg = q[..., self._columns[i]]
             knees[..., i, :] = self._hips[i] + leg.knee(q_leg)
             feet[..., i, :] = self._hips[i] + leg.fk(q_leg)
-        hand = None if q_arm is None else T @ self._arm.fk(q_arm)
+        hand = None if q_arm is None else T @ self.arm_mount @ self._arm.fk(q_arm)
         return BodyFrames(T.copy(), world(hips), world(knees), world(feet), hand)
 
     @quiet_float_errors
     def arm_ik_world(
         self, body_pose: ArrayLike, T_world: ArrayLike, seed: ArrayLike | None = None, seq: str = "XYZ"
-    ):
+    ) -> tuple[np.ndarray, np.ndarray | Status]:
         """Arm IK for hand targets given in the world frame: (q (..., 6), status).
 
-        T_body = T_world_body^-1 T_world, then the arm's closed-form IK (one solution, nearest to
-        ``seed`` or the first valid). ``T_world`` is (..., 4, 4) and ``seed`` (..., 6); leading
-        dimensions of body poses, targets and seeds broadcast together (``ValueError`` naming them
-        otherwise). A body pose with NaN/Inf or that is not a rigid transform (as :meth:`body_fk`
-        reads it) gives INVALID_INPUT for that sample, like a bad target. q is float32 when
-        ``body_pose`` and ``T_world`` both are, float64 otherwise.
+        T_base = (T_world_body . arm_mount)^-1 T_world, the target in the frame of :attr:`arm`, then the
+        arm's closed-form IK (one solution, nearest to ``seed`` or the first valid). ``T_world`` is
+        (..., 4, 4) and ``seed`` (..., 6); leading dimensions of body poses, targets and seeds
+        broadcast together (``ValueError`` naming them otherwise). A body pose with NaN/Inf or
+        that is not a rigid transform (as :meth:`body_fk` reads it) gives INVALID_INPUT for that
+        sample, like a bad target. q is float32 when ``body_pose`` and ``T_world`` both are,
+        float64 otherwise.
         """
         if self._arm is None:
             raise ValueError("this robot has no arm")
@@ -876,7 +1029,10 @@ class Robot:
             leads["seed"] = (check_trailing(seed, "seed", (6,)), seed.shape)
         lead = broadcast_lead(**leads)
         T_world64 = target.astype(np.float64, copy=False)
-        R, t = T_wb[..., :3, :3], T_wb[..., :3, 3]
+        # world <- arm base = world <- body . body <- arm base (arm_mount)
+        mount = self.arm_mount
+        R = T_wb[..., :3, :3] @ mount[:3, :3]
+        t = T_wb[..., :3, 3] + np.einsum("...ij,j->...i", T_wb[..., :3, :3], mount[:3, 3])
         # the blocks apart, R^T R_w and R^T (p_w - t), so that the target's last row (checked by
         # the arm as it is given) never mixes into them: a far body times a last row within
         # tolerance of [0, 0, 0, 1] would otherwise tilt the rotation
@@ -893,12 +1049,31 @@ class Robot:
     def _arm_ik(self, T_body, seed):
         return self._arm.ik_nearest(T_body, seed)
 
+    def _q_widths(self) -> tuple[int, ...]:
+        """The widths a whole-body q may have: the legs' joints, or the legs' then the arm's."""
+        legs, arm = 3 * len(self._legs), len(self.arm_joint_names)
+        return (legs, legs + arm) if arm else (legs,)
+
+    def _leg_q(self, q: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None]:
+        """(q_legs, q_arm or None) of a whole-body q (..., 3 n) or (..., 3 n + n_arm): the one width rule
+        of every whole-body call. ValueError naming ``name`` for another width."""
+        if q.ndim and q.shape[-1] == 3 * len(self._legs):  # the common case, first
+            return q, None
+        widths = self._q_widths()
+        if q.ndim == 0 or q.shape[-1] not in widths:
+            expected = " or ".join(f"(..., {w})" for w in widths)
+            what = "the legs' joints" + (", or the legs' then the arm's" if len(widths) > 1 else "")
+            raise ValueError(f"{name} must have shape {expected} ({what}), got {q.shape}")
+        if q.shape[-1] == widths[0]:
+            return q, None
+        return q[..., : widths[0]], q[..., widths[0] :]
+
     def _pose_and_q(self, body_pose, q, seq):
         pose = as_real(body_pose, "body_pose")
         fmt, pose_lead = pose_format(pose)
         code = sequence_code(seq)
-        q = as_real(q, self._q_name)
-        q_lead = check_trailing(q, self._q_name, (3 * len(self._legs),))
+        q = self._leg_q(as_real(q, self._q_name), self._q_name)[0]
+        q_lead = q.shape[:-1]
         if q_lead != pose_lead:
             lead = broadcast_lead(body_pose=(pose_lead, pose.shape), **{self._q_name: (q_lead, q.shape)})
             pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
@@ -911,6 +1086,33 @@ class Robot:
         pose = as_real(body_pose, "body_pose")
         return body_transform(pose, seq), pose
 
+    def with_limits(self, limits) -> Robot:
+        """This robot with other joint limits: a new Robot (the original is unchanged), built as
+        ``from_urdf(..., limits=...)`` builds it, so that the legs' and the arm's closed-form IK, their
+        fallbacks (the nearest configuration inside the limits), :meth:`body_ik` and the workspace code
+        all use the new limits.
+
+        ``limits`` is a dict joint name -> (lower, upper) in radians (metres for a prismatic joint);
+        ±inf means unlimited; the joints it does not name keep their limits (earlier ``with_limits``
+        calls included). A continuous joint given finite limits becomes a revolute one. ``ValueError``
+        for a name that is not a moving joint, NaN or lower > upper; ``TypeError`` for a non-dict or
+        non-numeric values. Some URDFs give wide ranges (ANYmal C's hip and knee flexion are ±9.42 rad,
+        which lets the leg IK pick a knee above the hip); :meth:`describe` flags ranges beyond 2π."""
+        if not isinstance(limits, Mapping):
+            raise TypeError(
+                f"limits must be a dict joint name -> (lower, upper), got {type(limits).__name__}"
+            )
+        text, feet, contact_offset, nominal, old, leg_order = self._source
+        aliases = self._joint_aliases()
+        to_urdf = {}  # any name a joint answers to -> its URDF name
+        for joint in self._model.actuated_joints:
+            to_urdf.setdefault(aliases.get(joint.name, joint.name), joint.name)
+        limits = {
+            to_urdf.get(aliases.get(k, k), k) if isinstance(k, str) else k: v for k, v in limits.items()
+        }
+        merged = {**(old or {}), **_limit_table(limits, self._model)}
+        return _rebuild_robot(text, feet, contact_offset, nominal, merged, leg_order)
+
     def __reduce__(self):
         return (_rebuild_robot, self._source)
 
@@ -918,9 +1120,11 @@ class Robot:
         return f"Robot({self.name!r}, legs={self._leg_names}, arm={'yes' if self._arm is not None else 'no'})"
 
 
-def _rebuild_robot(source, feet, contact_offset, nominal) -> Robot:
+def _rebuild_robot(source, feet, contact_offset, nominal, limits=None, leg_order="urdf") -> Robot:
     """From the URDF's text (str) or the file's bytes, as the robot was loaded."""
-    return Robot._from_model(urdf.parse_urdf(source), feet, contact_offset, nominal, source)
+    return Robot._from_model(
+        urdf.parse_urdf(source), feet, contact_offset, nominal, source, limits, leg_order
+    )
 
 
 class StanceStatus(IntEnum):
@@ -949,7 +1153,7 @@ class Standing(NamedTuple):
     """(..., 3 n_legs) N m: the leg joint torques that hold the pose, in leg_joint_names order."""
     forces: np.ndarray
     """(..., n_legs, 3) N: the world contact forces on the feet (ground on foot), zero on swing feet."""
-    status: np.ndarray
+    status: np.ndarray | StanceStatus
     """(...) :class:`StanceStatus` values (int8), or one member for a single sample."""
     margin: np.ndarray
     """(...) m: signed distance of the centre of mass's projection to the support polygon, in the plane

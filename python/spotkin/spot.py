@@ -15,7 +15,7 @@ from ._boundary import as_finite, as_real
 from .arm import SpotArm
 from .leg import Leg
 from .models import LEG_NAMES, SPOT
-from .robot import BodyFrames, BodyIK, BodyRates, Robot
+from .robot import BodyFrames, BodyIK, BodyRates, Robot, _limit_table
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Spot"]
 
@@ -155,7 +155,7 @@ class Spot(Robot):
     description (URDF link and leg names), also for a model dict.
     """
 
-    __slots__ = ("_foot_radius", "_spot_model")
+    __slots__ = ("_foot_radius", "_limit_override", "_spot_model")
 
     leg_names = LEG_NAMES
     """The legs in SDK order: ("fl", "fr", "hl", "hr") (h: hind)."""
@@ -169,9 +169,16 @@ class Spot(Robot):
     _q_name = "q12"
 
     def __init__(self, model: Mapping | None = None) -> None:
+        self._build(model, {})
+
+    def _build(self, model: Mapping | None, limits: dict[str, tuple[float, float]]) -> None:
+        """``limits``: packaged-URDF joint name -> (lower, upper), checked (see :meth:`with_limits`)."""
         description = _builtin_model()
+        if limits:
+            description = description.with_limits(limits)
         self._model = description
         self._source = None
+        self._limit_override = dict(limits)
         self._spot_model = None if model is None else _checked_model(model)
         if model is None:
             specs, leg_report = urdf.find_legs(description)
@@ -204,7 +211,26 @@ class Spot(Robot):
                 for name in LEG_NAMES
             ]
             hips = [checked["hip_positions"][name] for name in LEG_NAMES]
-            arm = checked["arm"]
+            arm = dict(checked["arm"])
+            # the overrides apply to a model dict too, by joint (a URDF name -> its SDK slot)
+            urdf_legs = [
+                f"{_URDF_LEGS[leg]}_{joint}" for leg in LEG_NAMES for joint in ("hip_x", "hip_y", "knee")
+            ]
+            for k, leg_model in enumerate(legs):
+                rows = np.array(leg_model.limits, dtype=float)
+                for j in range(3):
+                    rows[j] = limits.get(urdf_legs[3 * k + j], rows[j])
+                if limits:
+                    legs[k] = Leg(
+                        leg["hip_offset"],
+                        leg["upper"],
+                        leg["lower"],
+                        leg["knee_offset"],
+                        side=leg_model.side,
+                        limits=rows,
+                        name=LEG_NAMES[k],
+                    )
+            arm["limits"] = tuple(limits.get(name, row) for name, row in zip(_URDF_ARM, arm["limits"]))
             self._foot_radius = leg["foot_radius"]
             self._report = ("built from a model dict: chain() and describe() show the packaged description",)
             self._specs = ((), ())
@@ -288,8 +314,34 @@ class Spot(Robot):
         """Body, hips, knees, feet and hand in the world frame; see :meth:`Robot.fk_all`."""
         return super().fk_all(body_pose, q12, q_arm, seq)
 
+    def with_limits(self, limits) -> Spot:
+        """This Spot with other joint limits (a new Spot; see :meth:`Robot.with_limits`). The keys may be
+        the SDK's joint names (``"fl.kn"``, ``"arm0.sh1"``) or the packaged URDF's (``"front_left_knee"``);
+        the legs' and the arm's closed forms, fallbacks and workspaces use the new limits."""
+        if not isinstance(limits, Mapping):
+            raise TypeError(
+                f"limits must be a dict joint name -> (lower, upper), got {type(limits).__name__}"
+            )
+        aliases = self._joint_aliases()
+        to_urdf = {}
+        for joint in self._model.actuated_joints:
+            to_urdf.setdefault(aliases.get(joint.name, joint.name), joint.name)
+        limits = {
+            to_urdf.get(aliases.get(k, k), k) if isinstance(k, str) else k: v for k, v in limits.items()
+        }
+        table = {**self._limit_override, **_limit_table(limits, self._model)}
+        return _rebuild_spot(self._spot_model, table)
+
     def __reduce__(self):
+        if self._limit_override:
+            return (_rebuild_spot, (self._spot_model, self._limit_override))
         return (Spot, (self._spot_model,))
 
     def __repr__(self) -> str:
         return "Spot()"
+
+
+def _rebuild_spot(model, limits) -> Spot:
+    spot = Spot.__new__(Spot)
+    spot._build(model, limits)
+    return spot
