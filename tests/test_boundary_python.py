@@ -152,7 +152,10 @@ def test_float32_of_either_byte_order_stays_float32():
 @pytest.mark.parametrize(
     ("call", "message"),
     [
-        (lambda: SPOT.fk_all(POSE, 1.5), r"q12 must have shape \(\.\.\., 12\) or \(\.\.\., 18\) .*, got \(\)"),
+        (
+            lambda: SPOT.fk_all(POSE, 1.5),
+            r"q12 must have shape \(\.\.\., 12\) or \(\.\.\., 18\) .*, got \(\)",
+        ),
         (lambda: SPOT.fk_all(POSE, Q12, np.zeros(5)), r"q_arm must have shape \(\.\.\., 6\), got \(5,\)"),
         (lambda: SPOT.fk_all(np.zeros((5, 6)), np.zeros((3, 12))), r"body_pose \(5, 6\) and q12 \(3, 12\)"),
         (
