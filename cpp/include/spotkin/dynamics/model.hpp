@@ -271,8 +271,24 @@ SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width,
 // r[j] holds column j of 8 samples, on return r[i] holds sample i's 8 columns.
 SPOTKIN_INLINE void transpose8(Pack<double, 8>::Vector r[8]) noexcept {
   using V = Pack<double, 8>::Vector;
-  typedef long long I __attribute__((vector_size(64)));
   V t[8], u[8];
+#if defined(__clang__)
+  // Clang has no __builtin_shuffle: the same shuffles, the indices as constants.
+  for (int k = 0; k < 8; k += 2) {
+    t[k] = __builtin_shufflevector(r[k], r[k + 1], 0, 8, 2, 10, 4, 12, 6, 14);
+    t[k + 1] = __builtin_shufflevector(r[k], r[k + 1], 1, 9, 3, 11, 5, 13, 7, 15);
+  }
+  for (int k = 0; k < 8; k += 4)
+    for (int h = 0; h < 2; ++h) {
+      u[k + h] = __builtin_shufflevector(t[k + h], t[k + h + 2], 0, 1, 8, 9, 4, 5, 12, 13);
+      u[k + h + 2] = __builtin_shufflevector(t[k + h], t[k + h + 2], 2, 3, 10, 11, 6, 7, 14, 15);
+    }
+  for (int k = 0; k < 4; ++k) {
+    r[k] = __builtin_shufflevector(u[k], u[k + 4], 0, 1, 2, 3, 8, 9, 10, 11);
+    r[k + 4] = __builtin_shufflevector(u[k], u[k + 4], 4, 5, 6, 7, 12, 13, 14, 15);
+  }
+#else
+  typedef long long I __attribute__((vector_size(64)));
   for (int k = 0; k < 8; k += 2) {
     t[k] = __builtin_shuffle(r[k], r[k + 1], I{0, 8, 2, 10, 4, 12, 6, 14});
     t[k + 1] = __builtin_shuffle(r[k], r[k + 1], I{1, 9, 3, 11, 5, 13, 7, 15});
@@ -286,6 +302,7 @@ SPOTKIN_INLINE void transpose8(Pack<double, 8>::Vector r[8]) noexcept {
     r[k] = __builtin_shuffle(u[k], u[k + 4], I{0, 1, 2, 3, 8, 9, 10, 11});
     r[k + 4] = __builtin_shuffle(u[k], u[k + 4], I{4, 5, 6, 7, 12, 13, 14, 15});
   }
+#endif
 }
 
 // Outputs of at least this many bytes per call are written with non-temporal
