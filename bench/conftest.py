@@ -63,11 +63,37 @@ def measure(benchmark):
     return run
 
 
+def cpu_model() -> str:
+    """The CPU's model name (Linux /proc/cpuinfo; the platform's processor string elsewhere)."""
+    try:
+        with open("/proc/cpuinfo") as info:
+            for line in info:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    import platform
+
+    return platform.processor() or platform.machine()
+
+
+def level_line() -> str:
+    """The instruction-set level in use, those the CPU has, and the CPU (SPOTKIN_ISA forces a level)."""
+    return (
+        f"spotkin kernels: {sk.get_isa()} (CPU levels: {', '.join(sk.available_isas())}); CPU: {cpu_model()}"
+    )
+
+
+def pytest_report_header(config):
+    return level_line()
+
+
 def pytest_terminal_summary(terminalreporter):
     if not _RESULTS:
         return
     write = terminalreporter.write_line
     write("")
+    write(level_line())
     write(
         "spotkin benchmark summary (medians; speed-up = the chunked NumPy baseline's time, or EAIK's,"
         " over spotkin's, same run; vs unchunked = the whole-array NumPy form's)"
@@ -112,7 +138,10 @@ def _where_the_time_goes(write) -> None:
     costs = {dtype: _core._elementary_costs(dtype) for dtype in ("float64", "float32")}
     work = _core._kernel_work()
     write("")
-    write(f"where the time goes (one thread; TSC {ghz:.3f} GHz; floor = elementary operations x their cost)")
+    write(
+        f"where the time goes (one thread; level {sk.get_isa()}; TSC {ghz:.3f} GHz; floor = elementary "
+        "operations x their cost at this level)"
+    )
     for dtype, c in costs.items():
         write(
             f"  elementary costs {dtype}, cycles/element: atan2 {c['atan2'] * ghz:.2f}, sincos "

@@ -26,6 +26,15 @@ TOLERANCE = {np.float64: 1e-12, np.float32: 1e-5}
 BATCH_SHAPES = [(), (1,), (3, 1, 2)]
 
 
+@pytest.fixture(scope="module", params=sk.available_isas())
+def every_isa(request):
+    """Runs a test once per instruction-set level the CPU has (``sk.available_isas()``), with
+    the kernels of that level: modules of reference cross-checks use it through
+    ``pytestmark = pytest.mark.usefixtures("every_isa")``."""
+    with sk.isa(request.param):
+        yield request.param
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261122)

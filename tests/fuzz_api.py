@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import fuzz_dask
+import fuzz_isa
 import fuzz_limits
 import fuzz_plot
 import fuzz_sdk
@@ -5248,6 +5249,7 @@ fuzz_sdk.register_entries(sys.modules[__name__])  # spotkin.sdk, when its option
 fuzz_dask.register_entries(sys.modules[__name__])  # spotkin.dask, when Dask is installed
 fuzz_plot.register_entries(sys.modules[__name__])  # spotkin.plot, when matplotlib is installed
 fuzz_limits.register_entries(sys.modules[__name__])  # with_limits of robots and chains
+fuzz_isa.register_entries(sys.modules[__name__])  # instruction-set levels
 fuzz_urdf.register_entries(sys.modules[__name__])  # Chain.from_urdf (arms, mimic joints)
 BY_NAME = {entry.name: entry for entry in REGISTRY}
 assert len(BY_NAME) == len(REGISTRY), "registry names must be unique"

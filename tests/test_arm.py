@@ -14,6 +14,9 @@ import spotkin as sk
 from conftest import BATCH_SHAPES, vee_so3
 from spotkin.reference import arm as ref
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 ARM = sk.Spot().arm
 LIMITS = ARM.limits
 A, B, H, HAND = 0.3385, 0.4033, 0.075, 0.19557

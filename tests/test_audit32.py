@@ -560,4 +560,6 @@ def test_the_narrow_model_s_last_bit_is_documented():
     texts.append(sk.dynamics.FloatingBase.__doc__)
     for text in texts:
         flat = " ".join(text.split())
-        assert "any chunking of a batch of 8" in flat and "narrow" in flat, text[:80]
+        assert "any chunking of a batch into calls of at least one register" in flat and "narrow" in flat, (
+            text[:80]
+        )

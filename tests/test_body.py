@@ -13,6 +13,9 @@ import spotkin as sk
 from conftest import BATCH_SHAPES
 from spotkin.reference import leg as ref_leg
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 SPOT = sk.Spot()
 FEET = SPOT.stance_feet(0.5)
 NOMINAL = np.array([0.0, 0.0, 0.5, 0.0, 0.0, 0.0])

@@ -16,6 +16,9 @@ from conftest import BATCH_SHAPES, joint_distance, newton_oracle, random_rigid, 
 from spotkin.reference import course_robots as cr
 from spotkin.reference import ik3r
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 SPOT = sk.Spot()
 H1, H2, H3 = 0.110945, 0.3205, 0.3365
 

@@ -26,6 +26,9 @@ from test_reference_ik6r import (
 import spotkin as sk
 from spotkin.reference import ik6r
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 PI = math.pi
 X, Y, Z = np.eye(3)
 

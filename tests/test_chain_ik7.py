@@ -13,6 +13,9 @@ import pytest
 import spotkin as sk
 from spotkin.reference import ik6r
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 PI = math.pi
 
 # Franka Emika Panda, its published modified-DH table as (sigma, a_{i-1}, alpha_{i-1}, d_i, theta_i),

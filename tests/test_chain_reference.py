@@ -12,6 +12,9 @@ import spotkin as sk
 from conftest import BATCH_SHAPES, TOLERANCE, random_rigid, random_table
 from spotkin.reference import chain as ref
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 
 def reference_batch(func, chain: sk.Chain, q: np.ndarray, **kwargs) -> np.ndarray:
     flat = q.reshape(-1, chain.dof).astype(np.float64)

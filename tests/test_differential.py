@@ -11,6 +11,9 @@ import spotkin as sk
 from conftest import BATCH_SHAPES, TOLERANCE, random_table
 from spotkin.reference import differential as ref
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 SHAPES = [(3, 3), (6, 6), (12, 18), (6, 12), (7, 4), (1, 5), (5, 1), (2, 2)]
 DTYPES = [np.float64, np.float32]
 

@@ -20,6 +20,9 @@ from hypothesis import strategies as st
 import spotkin as sk
 from spotkin import dynamics as dyn
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 pin = pytest.importorskip("pinocchio")
 
 ROBOTS = Path(sk.__file__).parent / "robots"

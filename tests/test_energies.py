@@ -15,6 +15,9 @@ from spotkin import dynamics as dyn
 from spotkin import inertia
 from spotkin.reference import dynamics as rd
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 pin = pytest.importorskip("pinocchio")
 
 

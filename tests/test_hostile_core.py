@@ -21,6 +21,9 @@ import spotkin as sk
 from spotkin import _core
 from spotkin.reference import leg as leg_reference
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 SPOT = sk.Spot()
 LEG = SPOT.leg("fl")
 

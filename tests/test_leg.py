@@ -14,6 +14,9 @@ import spotkin as sk
 from conftest import BATCH_SHAPES
 from spotkin.reference import leg as ref
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 SPOT = sk.Spot()
 LIMITS = SPOT.leg("fl").limits
 U, L, K, H1 = 0.3205, 0.3365, 0.025, 0.110945

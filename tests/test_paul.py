@@ -10,6 +10,9 @@ from hypothesis import strategies as st
 
 import spotkin as sk
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 
 def wrap(a):
     return (a + np.pi) % (2 * np.pi) - np.pi

@@ -14,6 +14,9 @@ from conftest import BATCH_SHAPES, random_rigid, random_table, vee_so3
 from spotkin.reference import chain as ref
 from spotkin.reference import course_robots as course
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 TOLERANCE = {np.float64: 1e-12, np.float32: 2e-5}
 
 

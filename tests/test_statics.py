@@ -15,6 +15,9 @@ import spotkin as sk
 from spotkin import inertia
 from spotkin.reference import dynamics as rd
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 G = np.array([0.0, 0.0, -9.81])
 
 

@@ -16,6 +16,9 @@ from conftest import BATCH_SHAPES, TOLERANCE
 from spotkin import _core
 from spotkin.reference import trajectory as ref
 
+# the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("every_isa")
+
 PROFILES = sk.trajectory.PROFILES
 
 

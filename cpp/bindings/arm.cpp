@@ -18,25 +18,21 @@ namespace {
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(20.0);  // FK ~20 ns; IK (~200 ns) uses kMinPerThreadIk
 constexpr std::ptrdiff_t kMinPerThreadIk = min_chunk(200.0);
 
-template <typename T>
-SPOTKIN_MULTIVERSION void arm_fk_kernel(const Arm& arm, const T* q, T* out, std::ptrdiff_t n) {
+SPOTKIN_CLONES((template <typename T>), void, arm_fk_kernel, (const Arm& arm, const T* q, T* out, std::ptrdiff_t n), (arm, q, out, n),
   arm_batch::fk(arm, q, out, n);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void arm_jacobian_kernel(const Arm& arm, const T* q, T* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T>), void, arm_jacobian_kernel, (const Arm& arm, const T* q, T* out, std::ptrdiff_t n), (arm, q, out, n),
   arm_batch::jacobian(arm, q, out, n);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void arm_ik_all_kernel(const Arm& arm, const T* poses, PoseFormat format, const T* seed,
+)
+SPOTKIN_CLONES((template <typename T>), void, arm_ik_all_kernel, (const Arm& arm, const T* poses, PoseFormat format, const T* seed,
                                             T* q, std::uint8_t* valid, std::uint8_t* exists,
-                                            std::int8_t* status, std::ptrdiff_t n) {
+                                            std::int8_t* status, std::ptrdiff_t n), (arm, poses, format, seed, q, valid, exists, status, n),
   arm_batch::ik_all(arm, poses, format, seed, q, valid, exists, status, n);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void arm_ik_kernel(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
-                                        std::int8_t* status, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T>), void, arm_ik_kernel, (const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
+                                        std::int8_t* status, std::ptrdiff_t n), (arm, poses, format, seed, q, status, n),
   arm_batch::ik(arm, poses, format, seed, q, status, n);
-}
+)
 
 py::object fk(const Arm& arm, py::handle q_obj) {
   return map_batch(q_obj, "q", 6, {4, 4}, kMinPerThread,

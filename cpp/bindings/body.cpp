@@ -19,22 +19,19 @@ namespace {
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(55.0);  // body IK: ~55 ns per pose
 
-template <typename T>
-SPOTKIN_MULTIVERSION void body_ik_kernel(const Body& body, const T* poses, BodyPoseFormat format,
+SPOTKIN_CLONES((template <typename T>), void, body_ik_kernel, (const Body& body, const T* poses, BodyPoseFormat format,
                                          const EulerSequence& seq, const T* feet, bool feet_shared, const T* seed,
-                                         T* q, std::int8_t* status, std::ptrdiff_t n, bool nearest_fallback) {
+                                         T* q, std::int8_t* status, std::ptrdiff_t n, bool nearest_fallback), (body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback),
   body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void body_fk_kernel(const Body& body, const T* poses, BodyPoseFormat format,
-                                         const EulerSequence& seq, const T* q, T* feet, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T>), void, body_fk_kernel, (const Body& body, const T* poses, BodyPoseFormat format,
+                                         const EulerSequence& seq, const T* q, T* feet, std::ptrdiff_t n), (body, poses, format, seq, q, feet, n),
   body_batch::fk(body, poses, format, seq, q, feet, n);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void body_jacobian_kernel(const Body& body, const T* poses, BodyPoseFormat format,
-                                               const EulerSequence& seq, const T* q, T* J, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T>), void, body_jacobian_kernel, (const Body& body, const T* poses, BodyPoseFormat format,
+                                               const EulerSequence& seq, const T* q, T* J, std::ptrdiff_t n), (body, poses, format, seq, q, J, n),
   body_batch::jacobian(body, poses, format, seq, q, J, n);
-}
+)
 
 std::ptrdiff_t pose_width(BodyPoseFormat format) {
   return format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);

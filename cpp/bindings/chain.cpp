@@ -21,35 +21,35 @@ namespace {
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(40.0);  // 6-joint FK/Jacobian: ~40 ns
 
 // Batch kernels, one per operation and precision, cloned per CPU level.
-SPOTKIN_MULTIVERSION void fk_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n) {
+SPOTKIN_CLONES((), void, fk_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
   c.forward_batch(q, out, n);
-}
-SPOTKIN_MULTIVERSION void fk_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((), void, fk_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n), (c, q, out, n),
   c.forward_batch(q, out, n);
-}
-SPOTKIN_MULTIVERSION void frames_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((), void, frames_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
   c.frames_batch(q, out, n);
-}
-SPOTKIN_MULTIVERSION void frames_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((), void, frames_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n), (c, q, out, n),
   c.frames_batch(q, out, n);
-}
-SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n,
-                                          int rows, bool in_tool_frame) {
+)
+SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n,
+                                          int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
   c.jacobian_batch(q, out, n, rows, in_tool_frame);
-}
-SPOTKIN_MULTIVERSION void jacobian_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
-                                          int rows, bool in_tool_frame) {
+)
+SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
+                                          int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
   c.jacobian_batch(q, out, n, rows, in_tool_frame);
-}
+)
 
-SPOTKIN_MULTIVERSION void point_jacobian_kernel(const Chain<double>& c, const double* q, double* out,
-                                                std::ptrdiff_t n, int rows, int point, int frame) {
+SPOTKIN_CLONES((), void, point_jacobian_kernel, (const Chain<double>& c, const double* q, double* out,
+                                                std::ptrdiff_t n, int rows, int point, int frame), (c, q, out, n, rows, point, frame),
   point_jacobian_batch(c, q, out, n, rows, point, frame);
-}
-SPOTKIN_MULTIVERSION void point_jacobian_kernel(const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
-                                                int rows, int point, int frame) {
+)
+SPOTKIN_CLONES((), void, point_jacobian_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
+                                                int rows, int point, int frame), (c, q, out, n, rows, point, frame),
   point_jacobian_batch(c, q, out, n, rows, point, frame);
-}
+)
 
 // The chain in the precision of the batch's working dtype.
 template <typename T>

@@ -82,38 +82,34 @@ ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle up
 // About 200-300 ns per target on one core.
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(250.0);
 
-template <typename T>
-SPOTKIN_MULTIVERSION void position_kernel(const Position3& solver, const Limits& limits, const T* p, T* q,
+SPOTKIN_CLONES((template <typename T>), void, position_kernel, (const Position3& solver, const Limits& limits, const T* p, T* q,
                                           std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
-                                          std::ptrdiff_t n) {
+                                          std::ptrdiff_t n), (solver, limits, p, q, valid, exists, status, n),
   chain_ik::ik_position(solver, limits, p, q, valid, exists, status, n);
-}
+)
 
-template <typename T>
-SPOTKIN_MULTIVERSION void arm6_kernel(const Arm6& solver, const Limits& limits, const T* poses, PoseFormat format,
+SPOTKIN_CLONES((template <typename T>), void, arm6_kernel, (const Arm6& solver, const Limits& limits, const T* poses, PoseFormat format,
                                       T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t* exact,
-                                      std::int8_t* status, std::ptrdiff_t n) {
+                                      std::int8_t* status, std::ptrdiff_t n), (solver, limits, poses, format, q, valid, exists, exact, status, n),
   if (format == PoseFormat::Matrix)
     chain_ik::ik_arm6<PoseFormat::Matrix>(solver, limits, poses, q, valid, exists, exact, status, n);
   else
     chain_ik::ik_arm6<PoseFormat::PositionQuaternion>(solver, limits, poses, q, valid, exists, exact, status, n);
-}
+)
 
-template <typename T>
-SPOTKIN_MULTIVERSION void position_nearest_kernel(const Position3& solver, const Limits& limits, const T* p,
-                                                  const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n) {
+SPOTKIN_CLONES((template <typename T>), void, position_nearest_kernel, (const Position3& solver, const Limits& limits, const T* p,
+                                                  const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n), (solver, limits, p, seed, q, status, n),
   chain_ik::ik_position_nearest(solver, limits, p, seed, q, status, n);
-}
+)
 
-template <typename T>
-SPOTKIN_MULTIVERSION void arm6_nearest_kernel(const Arm6& solver, const Limits& limits, const T* poses,
+SPOTKIN_CLONES((template <typename T>), void, arm6_nearest_kernel, (const Arm6& solver, const Limits& limits, const T* poses,
                                               PoseFormat format, const T* seed, T* q, std::int8_t* status,
-                                              std::ptrdiff_t n) {
+                                              std::ptrdiff_t n), (solver, limits, poses, format, seed, q, status, n),
   if (format == PoseFormat::Matrix)
     chain_ik::ik_arm6_nearest<PoseFormat::Matrix>(solver, limits, poses, seed, q, status, n);
   else
     chain_ik::ik_arm6_nearest<PoseFormat::PositionQuaternion>(solver, limits, poses, seed, q, status, n);
-}
+)
 
 // The shared tail: (q, valid, exists, exact, status) arrays, filled on thread chunks
 // (exact is exists where the kernel has no exact output).

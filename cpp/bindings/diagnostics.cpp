@@ -18,22 +18,22 @@ namespace {
 namespace py = pybind11;
 namespace d = spotkin::diagnostics;
 
-SPOTKIN_MULTIVERSION void atan2_of(const double* y, const double* x, double* out, std::ptrdiff_t n) {
+SPOTKIN_CLONES((), void, atan2_of, (const double* y, const double* x, double* out, std::ptrdiff_t n), (y, x, out, n),
   d::atan2_loop(y, x, out, n);
-}
-SPOTKIN_MULTIVERSION void atan2_of(const float* y, const float* x, float* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((), void, atan2_of, (const float* y, const float* x, float* out, std::ptrdiff_t n), (y, x, out, n),
   d::atan2_loop(y, x, out, n);
-}
-SPOTKIN_MULTIVERSION void sincos_of(const double* x, double* s, double* c, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((), void, sincos_of, (const double* x, double* s, double* c, std::ptrdiff_t n), (x, s, c, n),
   d::sincos_loop(x, s, c, n);
-}
-SPOTKIN_MULTIVERSION void sincos_of(const float* x, float* s, float* c, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((), void, sincos_of, (const float* x, float* s, float* c, std::ptrdiff_t n), (x, s, c, n),
   d::sincos_loop(x, s, c, n);
-}
-SPOTKIN_MULTIVERSION void sqrt_of(const double* x, double* out, std::ptrdiff_t n) { d::sqrt_loop(x, out, n); }
-SPOTKIN_MULTIVERSION void sqrt_of(const float* x, float* out, std::ptrdiff_t n) { d::sqrt_loop(x, out, n); }
-SPOTKIN_MULTIVERSION void fma32_of(const double* x, double* out, std::ptrdiff_t n) { d::fma32_loop(x, out, n); }
-SPOTKIN_MULTIVERSION void fma32_of(const float* x, float* out, std::ptrdiff_t n) { d::fma32_loop(x, out, n); }
+)
+SPOTKIN_CLONES((), void, sqrt_of, (const double* x, double* out, std::ptrdiff_t n), (x, out, n), d::sqrt_loop(x, out, n); )
+SPOTKIN_CLONES((), void, sqrt_of, (const float* x, float* out, std::ptrdiff_t n), (x, out, n), d::sqrt_loop(x, out, n); )
+SPOTKIN_CLONES((), void, fma32_of, (const double* x, double* out, std::ptrdiff_t n), (x, out, n), d::fma32_loop(x, out, n); )
+SPOTKIN_CLONES((), void, fma32_of, (const float* x, float* out, std::ptrdiff_t n), (x, out, n), d::fma32_loop(x, out, n); )
 
 struct Loops {
   template <typename T>

@@ -18,6 +18,8 @@ ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::h
   const auto links = inertials_from(mass, com, inertia, chain.f64.dof());
   try {
     return ChainDynamics{ChainModel<double, kLanes64>(chain.f64, links), ChainModel<float, kLanes32>(chain.f64, links),
+                         ChainModel<double, kMidLanes64>(chain.f64, links),
+                         ChainModel<float, kMidLanes32>(chain.f64, links),
                          ChainModel<double, kSmallLanes64>(chain.f64, links),
                          ChainModel<float, kSmallLanes32>(chain.f64, links)};
   } catch (const std::invalid_argument& e) {
@@ -26,27 +28,14 @@ ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::h
 }
 
 // The kernels, one clone per CPU level and precision.
-#define SPOTKIN_DYN_KERNELS(T, L)                                                                                  \
-  SPOTKIN_MULTIVERSION void rnea_k(const ChainModel<T, L>& m, Rows<T> q, const Rows<T>* qd, const Rows<T>* qdd,    \
-                                   Rows<T> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                        \
-    dynamics::rnea_batch(m, q, qd, qdd, g, out, b, e);                                                             \
-  }                                                                                                                \
-  SPOTKIN_MULTIVERSION void crba_k(const ChainModel<T, L>& m, Rows<T> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e) { \
-    dynamics::crba_batch(m, q, out, b, e);                                                                         \
-  }                                                                                                                \
-  SPOTKIN_MULTIVERSION void coriolis_k(const ChainModel<T, L>& m, Rows<T> q, Rows<T> qd, T* out, std::ptrdiff_t b, \
-                                       std::ptrdiff_t e) {                                                         \
-    dynamics::coriolis_batch(m, q, qd, out, b, e);                                                                 \
-  }                                                                                                                \
-  SPOTKIN_MULTIVERSION void aba_k(const ChainModel<T, L>& m, Rows<T> q, Rows<T> qd, Rows<T> tau, Rows<T> g,       \
-                                  T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                                    \
-    dynamics::aba_batch(m, q, qd, tau, g, out, b, e);                                                              \
-  }
-SPOTKIN_DYN_KERNELS(double, kLanes64)
-SPOTKIN_DYN_KERNELS(float, kLanes32)
-SPOTKIN_DYN_KERNELS(double, kSmallLanes64)
-SPOTKIN_DYN_KERNELS(float, kSmallLanes32)
-#undef SPOTKIN_DYN_KERNELS
+SPOTKIN_LANE_CLONES(rnea_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* qd, const NonDeduced<Rows<T>>* qdd, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, qdd, g, out, b, e),
+               dynamics::rnea_batch(m, q, qd, qdd, g, out, b, e);)
+SPOTKIN_LANE_CLONES(crba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, b, e),
+               dynamics::crba_batch(m, q, out, b, e);)
+SPOTKIN_LANE_CLONES(coriolis_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, out, b, e),
+               dynamics::coriolis_batch(m, q, qd, out, b, e);)
+SPOTKIN_LANE_CLONES(aba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, tau, g, out, b, e),
+               dynamics::aba_batch(m, q, qd, tau, g, out, b, e);)
 
 
 // Rough single-thread cost per sample of a 6-joint chain (for the thread split).

@@ -24,22 +24,72 @@ using dynamics::ChainModel;
 using dynamics::LinkInertial;
 using dynamics::Rows;
 
-constexpr int kLanes64 = 8;   // one AVX-512 register of doubles
-constexpr int kLanes32 = 16;  // ... of floats
-// Batches shorter than a block run on models of 16-byte packs: a single sample
-// then pays for 2 (4) lanes, not 8 (16).
+// A parameter type left out of template argument deduction (std::type_identity_t in C++20):
+// the kernels deduce T and L from the model alone, so nullptr passes for an absent input.
+template <typename X>
+struct NonDeducedOf {
+  using type = X;
+};
+template <typename X>
+using NonDeduced = typename NonDeducedOf<X>::type;
+
+// Lane widths: one register of the level (AVX-512: 8 doubles, 16 floats; AVX2: 4, 8),
+// and 16-byte packs (2, 4) for SSE2, NEON and batches shorter than one register.
+constexpr int kLanes64 = 8;
+constexpr int kLanes32 = 16;
+constexpr int kMidLanes64 = 4;
+constexpr int kMidLanes32 = 8;
 constexpr int kSmallLanes64 = 2;
 constexpr int kSmallLanes32 = 4;
 
-// Calls f(model) with the wide or the narrow model of `d` in precision T, chosen on the
-// whole batch's size (never a thread's chunk: a sample's bits do not depend on the split).
+// Calls f(model) with the model of `d` in precision T whose packs fill one register of the
+// active instruction-set level, or the 16-byte one when the whole batch is shorter than
+// that register (chosen on the whole batch, never a thread's chunk: a sample's bits do not
+// depend on the split).
 template <typename T, typename D, typename F>
 SPOTKIN_INLINE void with_model(const D& d, std::ptrdiff_t samples, F&& f) {
-  if (samples < (std::is_same_v<T, float> ? kLanes32 : kLanes64))
-    f(d.small(T{}));
-  else
+  constexpr bool kFloat = std::is_same_v<T, float>;
+  const Isa isa = active_isa();
+  if (isa == Isa::Avx512 && samples >= (kFloat ? kLanes32 : kLanes64))
     f(d.get(T{}));
+  else if (isa != Isa::Baseline && samples >= (kFloat ? kMidLanes32 : kMidLanes64))
+    f(d.mid(T{}));
+  else
+    f(d.small(T{}));
 }
+
+// SPOTKIN_LANE_CLONES((parameters), (arguments), body) defines template <T, L> `name`
+// for the dynamics kernels: a model of 64-byte packs runs the AVX-512 clone, of 32-byte
+// packs the AVX2 one (with_model picks them only at those levels), and of 16-byte packs
+// the active level's. No clone is compiled for a width its level does not use.
+#if SPOTKIN_HAS_ISA_CLONES
+#define SPOTKIN_LANE_CLONES(NAME, PARAMS, ARGS, ...)                                  \
+  template <typename T, int L>                                                         \
+  SPOTKIN_TARGET_AVX512 void NAME##_avx512 PARAMS { __VA_ARGS__ }                      \
+  template <typename T, int L>                                                         \
+  SPOTKIN_TARGET_AVX2 void NAME##_avx2 PARAMS { __VA_ARGS__ }                          \
+  template <typename T, int L>                                                         \
+  void NAME##_baseline PARAMS { __VA_ARGS__ }                                          \
+  template <typename T, int L>                                                         \
+  void NAME PARAMS {                                                                   \
+    constexpr std::size_t kBytes = sizeof(T) * L;                                      \
+    if constexpr (kBytes == 64) {                                                      \
+      NAME##_avx512 ARGS;                                                              \
+    } else if constexpr (kBytes == 32) {                                               \
+      NAME##_avx2 ARGS;                                                                \
+    } else {                                                                           \
+      switch (active_isa()) {                                                          \
+        case Isa::Avx512: return NAME##_avx512 ARGS;                                   \
+        case Isa::Avx2: return NAME##_avx2 ARGS;                                       \
+        default: return NAME##_baseline ARGS;                                          \
+      }                                                                                \
+    }                                                                                  \
+  }
+#else
+#define SPOTKIN_LANE_CLONES(NAME, PARAMS, ARGS, ...) \
+  template <typename T, int L>                       \
+  void NAME PARAMS { __VA_ARGS__ }
+#endif
 
 // ---------------------------------------------------------------- inertials
 
@@ -183,10 +233,14 @@ py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, d
 struct ChainDynamics {
   ChainModel<double, kLanes64> f64;
   ChainModel<float, kLanes32> f32;
+  ChainModel<double, kMidLanes64> f64_mid;
+  ChainModel<float, kMidLanes32> f32_mid;
   ChainModel<double, kSmallLanes64> f64_small;
   ChainModel<float, kSmallLanes32> f32_small;
   const ChainModel<double, kLanes64>& get(double) const { return f64; }
   const ChainModel<float, kLanes32>& get(float) const { return f32; }
+  const ChainModel<double, kMidLanes64>& mid(double) const { return f64_mid; }
+  const ChainModel<float, kMidLanes32>& mid(float) const { return f32_mid; }
   const ChainModel<double, kSmallLanes64>& small(double) const { return f64_small; }
   const ChainModel<float, kSmallLanes32>& small(float) const { return f32_small; }
   int dof() const { return f64.dof(); }

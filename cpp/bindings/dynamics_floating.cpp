@@ -19,10 +19,14 @@ using dynamics::FloatingModel;
 struct FloatingDynamics {
   FloatingModel<double, kLanes64> f64;
   FloatingModel<float, kLanes32> f32;
+  FloatingModel<double, kMidLanes64> f64_mid;
+  FloatingModel<float, kMidLanes32> f32_mid;
   FloatingModel<double, kSmallLanes64> f64_small;
   FloatingModel<float, kSmallLanes32> f32_small;
   const FloatingModel<double, kLanes64>& get(double) const { return f64; }
   const FloatingModel<float, kLanes32>& get(float) const { return f32; }
+  const FloatingModel<double, kMidLanes64>& mid(double) const { return f64_mid; }
+  const FloatingModel<float, kMidLanes32>& mid(float) const { return f32_mid; }
   const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
   const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
   std::uint64_t angles = 0;  // the q columns that are joint angles (7 + each revolute joint's index)
@@ -45,9 +49,14 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
                                     inertia_arr.reshape(Shape{1, 3, 3}), 1, "body_");
   std::vector<ChainModel<double, kLanes64>> c64;
   std::vector<ChainModel<float, kLanes32>> c32;
+  std::vector<ChainModel<double, kMidLanes64>> m64;
+  std::vector<ChainModel<float, kMidLanes32>> m32;
   std::vector<ChainModel<double, kSmallLanes64>> s64;
   std::vector<ChainModel<float, kSmallLanes32>> s32;
-  for (const auto& c : chains) c64.push_back(c.f64), c32.push_back(c.f32), s64.push_back(c.f64_small), s32.push_back(c.f32_small);
+  for (const auto& c : chains) {
+    c64.push_back(c.f64), c32.push_back(c.f32), m64.push_back(c.f64_mid), m32.push_back(c.f32_mid);
+    s64.push_back(c.f64_small), s32.push_back(c.f32_small);
+  }
   std::uint64_t angles = 0;
   int column = 7;  // after [x, y, z, qx, qy, qz, qw]
   for (const auto& c : chains)
@@ -56,6 +65,8 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
   try {
     return FloatingDynamics{FloatingModel<double, kLanes64>(links[0], std::move(c64)),
                             FloatingModel<float, kLanes32>(links[0], std::move(c32)),
+                            FloatingModel<double, kMidLanes64>(links[0], std::move(m64)),
+                            FloatingModel<float, kMidLanes32>(links[0], std::move(m32)),
                             FloatingModel<double, kSmallLanes64>(links[0], std::move(s64)),
                             FloatingModel<float, kSmallLanes32>(links[0], std::move(s32)), angles};
   } catch (const std::invalid_argument& e) {
@@ -63,32 +74,16 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
   }
 }
 
-#define SPOTKIN_FLOAT_KERNELS(T, L)                                                                                 \
-  SPOTKIN_MULTIVERSION void f_rnea_k(const FloatingModel<T, L>& m, Rows<T> q, const Rows<T>* v, const Rows<T>* a,  \
-                                     Rows<T> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                      \
-    dynamics::floating_rnea_batch(m, q, v, a, g, out, b, e);                                                       \
-  }                                                                                                                 \
-  SPOTKIN_MULTIVERSION void f_crba_k(const FloatingModel<T, L>& m, Rows<T> q, T* out, std::ptrdiff_t b,            \
-                                     std::ptrdiff_t e) {                                                           \
-    dynamics::floating_crba_batch(m, q, out, b, e);                                                                \
-  }                                                                                                                 \
-  SPOTKIN_MULTIVERSION void f_aba_k(const FloatingModel<T, L>& m, Rows<T> q, Rows<T> v, Rows<T> tau, Rows<T> g,    \
-                                    T* out, std::ptrdiff_t b, std::ptrdiff_t e) {                                  \
-    dynamics::floating_aba_batch(m, q, v, tau, g, out, b, e);                                                      \
-  }                                                                                                                 \
-  SPOTKIN_MULTIVERSION void f_coriolis_k(const FloatingModel<T, L>& m, Rows<T> q, Rows<T> v, T* out,                \
-                                         std::ptrdiff_t b, std::ptrdiff_t e) {                                      \
-    dynamics::floating_coriolis_batch(m, q, v, out, b, e);                                                         \
-  }                                                                                                                 \
-  SPOTKIN_MULTIVERSION void f_com_k(const FloatingModel<T, L>& m, Rows<T> q, T* out, bool jacobian,                \
-                                    std::ptrdiff_t b, std::ptrdiff_t e) {                                          \
-    dynamics::floating_com_batch(m, q, out, jacobian, b, e);                                                       \
-  }
-SPOTKIN_FLOAT_KERNELS(double, kLanes64)
-SPOTKIN_FLOAT_KERNELS(float, kLanes32)
-SPOTKIN_FLOAT_KERNELS(double, kSmallLanes64)
-SPOTKIN_FLOAT_KERNELS(float, kSmallLanes32)
-#undef SPOTKIN_FLOAT_KERNELS
+SPOTKIN_LANE_CLONES(f_rnea_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* v, const NonDeduced<Rows<T>>* a, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, a, g, out, b, e),
+               dynamics::floating_rnea_batch(m, q, v, a, g, out, b, e);)
+SPOTKIN_LANE_CLONES(f_crba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, b, e),
+               dynamics::floating_crba_batch(m, q, out, b, e);)
+SPOTKIN_LANE_CLONES(f_aba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, tau, g, out, b, e),
+               dynamics::floating_aba_batch(m, q, v, tau, g, out, b, e);)
+SPOTKIN_LANE_CLONES(f_coriolis_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, out, b, e),
+               dynamics::floating_coriolis_batch(m, q, v, out, b, e);)
+SPOTKIN_LANE_CLONES(f_com_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, bool jacobian, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, jacobian, b, e),
+               dynamics::floating_com_batch(m, q, out, jacobian, b, e);)
 
 
 constexpr double kNsFloating = 400.0;

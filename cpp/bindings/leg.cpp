@@ -18,24 +18,20 @@ namespace {
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(25.0);  // leg IK: ~25 ns; FK ~7 ns pays less
 
-template <typename T>
-SPOTKIN_MULTIVERSION void leg_fk_kernel(const Leg& leg, const T* q, T* p, std::ptrdiff_t n) {
+SPOTKIN_CLONES((template <typename T>), void, leg_fk_kernel, (const Leg& leg, const T* q, T* p, std::ptrdiff_t n), (leg, q, p, n),
   leg_batch::fk(leg, q, p, n);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void leg_jacobian_kernel(const Leg& leg, const T* q, T* J, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T>), void, leg_jacobian_kernel, (const Leg& leg, const T* q, T* J, std::ptrdiff_t n), (leg, q, J, n),
   leg_batch::jacobian(leg, q, J, n);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void leg_ik_kernel(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
-                                          std::ptrdiff_t n, bool nearest_fallback) {
+)
+SPOTKIN_CLONES((template <typename T>), void, leg_ik_kernel, (const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
+                                          std::ptrdiff_t n, bool nearest_fallback), (leg, p, seed, q, status, n, nearest_fallback),
   leg_batch::ik(leg, p, seed, q, status, n, nearest_fallback);
-}
-template <typename T>
-SPOTKIN_MULTIVERSION void leg_ik_all_kernel(const Leg& leg, const T* p, T* q, std::uint8_t* valid,
-                                              std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T>), void, leg_ik_all_kernel, (const Leg& leg, const T* p, T* q, std::uint8_t* valid,
+                                              std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n), (leg, p, q, valid, exists, status, n),
   leg_batch::ik_all(leg, p, q, valid, exists, status, n);
-}
+)
 
 py::object fk(const Leg& leg, py::handle q_obj) {
   return map_batch(q_obj, "q", 3, {3}, kMinPerThread,

@@ -45,17 +45,17 @@ int thread_count_argument(py::handle n) {
 
 }  // namespace
 
-SPOTKIN_MULTIVERSION std::ptrdiff_t count_unusual(const double* x, std::ptrdiff_t n) noexcept {
+SPOTKIN_CLONES((), std::ptrdiff_t, count_unusual, (const double* x, std::ptrdiff_t n) noexcept, (x, n),
   std::ptrdiff_t count = 0;
   for (std::ptrdiff_t i = 0; i < n; ++i) count += !(std::fabs(x[i]) <= vector_math::kReducibleLimit);
   return count;
-}
-SPOTKIN_MULTIVERSION std::ptrdiff_t count_unusual(const float* x, std::ptrdiff_t n) noexcept {
+)
+SPOTKIN_CLONES((), std::ptrdiff_t, count_unusual, (const float* x, std::ptrdiff_t n) noexcept, (x, n),
   constexpr float kLimit = float(vector_math::kReducibleLimit);
   std::ptrdiff_t count = 0;
   for (std::ptrdiff_t i = 0; i < n; ++i) count += !(std::fabs(x[i]) <= kLimit);
   return count;
-}
+)
 
 void bind_runtime(pybind11::module_& m) {
   interrupt_poll().store(&poll_python_signals);
@@ -88,6 +88,31 @@ void bind_runtime(pybind11::module_& m) {
       pybind11::arg("n"));
   m.def("_parse_thread_count", [](const std::string& text) { return parse_thread_count(text.c_str()); },
         pybind11::arg("text"));
+
+  // Instruction-set levels (spotkin/isa.hpp). SPOTKIN_ISA is read once, here: a level the
+  // CPU lacks, or an unknown name, fails the import with the reason.
+  try {
+    set_isa(isa_from_environment());
+  } catch (const std::invalid_argument& e) {
+    throw py::import_error(e.what());
+  }
+  m.def("get_isa", [] { return std::string(isa_name(active_isa())); });
+  m.def("available_isas", [] {
+    py::list levels;
+    for (int level = 0; level <= static_cast<int>(best_isa()); ++level)
+      levels.append(isa_name(static_cast<Isa>(level)));
+    return py::tuple(levels);
+  });
+  m.def(
+      "set_isa",
+      [](const std::string& name) {
+        try {
+          set_isa(isa_from_name(name));
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+      },
+      pybind11::arg("level"));
 }
 
 }  // namespace spotkin::bindings

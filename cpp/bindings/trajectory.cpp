@@ -22,11 +22,10 @@ constexpr std::ptrdiff_t kMinPerThreadJoint = min_chunk(10.0);  // ~10 ns per 6-
 constexpr std::ptrdiff_t kMinPerThreadPath = min_chunk(60.0);   // two quaternion exps per sample
 
 // The path sampler compiled per CPU level (its sin/cos loop vectorises).
-template <typename T>
-SPOTKIN_MULTIVERSION void sample_path_kernel(const tj::WaypointPath& path, tj::PoseForm form, const T* t, T* pose,
-                                             T* twist, std::ptrdiff_t n) {
+SPOTKIN_CLONES((template <typename T>), void, sample_path_kernel, (const tj::WaypointPath& path, tj::PoseForm form, const T* t, T* pose,
+                                             T* twist, std::ptrdiff_t n), (path, form, t, pose, twist, n),
   tj::sample(path, form, t, pose, twist, n);
-}
+)
 
 Shape shape_of(const py::array& arr) { return Shape(arr.shape(), arr.shape() + arr.ndim()); }
 

@@ -3,7 +3,16 @@
 from __future__ import annotations
 
 from . import dynamics, inertia, paul, trajectory, urdf
-from ._runtime import MAX_THREADS, get_num_threads, set_num_threads, thread_limit
+from ._runtime import (
+    MAX_THREADS,
+    available_isas,
+    get_isa,
+    get_num_threads,
+    isa,
+    set_isa,
+    set_num_threads,
+    thread_limit,
+)
 from ._status import Status
 from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from ._workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
@@ -38,13 +47,16 @@ __all__ = [
     "Standing",
     "Status",
     "WorkspaceSamples",
+    "available_isas",
     "body_transform",
     "compatible",
     "dexterity",
     "dls",
     "dynamics",
+    "get_isa",
     "get_num_threads",
     "inertia",
+    "isa",
     "manipulability",
     "nullspace_projector",
     "paul",
@@ -54,6 +66,7 @@ __all__ = [
     "rotation_x",
     "rotation_y",
     "rotation_z",
+    "set_isa",
     "set_num_threads",
     "singular_values",
     "thread_limit",

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'compatible', 'dls', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_num_threads', 'singular_values', 'standing_torques', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'available_isas', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'standing_torques', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -242,9 +242,13 @@ def _tsc_ghz() -> float:
     """
     The TSC rate in GHz, measured against steady_clock over 0.2 s (0 off x86-64).
     """
+def available_isas() -> tuple:
+    ...
 def compatible(J: typing.Any, dx: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> tuple:
     ...
 def dls(J: typing.Any, dx: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, nullspace: typing.Any = None) -> typing.Any:
+    ...
+def get_isa() -> str:
     ...
 def get_num_threads() -> int:
     ...
@@ -261,6 +265,8 @@ def paul_type6(W: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], X: ty
 def pinv(J: typing.Any) -> typing.Any:
     ...
 def rank(J: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> typing.Any:
+    ...
+def set_isa(level: str) -> None:
     ...
 def set_num_threads(n: typing.Any) -> None:
     ...

@@ -10,7 +10,16 @@ from collections.abc import Iterator
 from . import _core
 from ._boundary import as_index
 
-__all__ = ["MAX_THREADS", "get_num_threads", "set_num_threads", "thread_limit"]
+__all__ = [
+    "MAX_THREADS",
+    "available_isas",
+    "get_isa",
+    "get_num_threads",
+    "isa",
+    "set_isa",
+    "set_num_threads",
+    "thread_limit",
+]
 
 MAX_THREADS: int = _core.MAX_THREADS
 """The most threads :func:`set_num_threads` accepts (1024)."""
@@ -80,3 +89,50 @@ def thread_limit(n: int) -> Iterator[None]:
         yield
     finally:
         _core._set_thread_limit(previous)
+
+
+# ---- instruction-set levels ---------------------------------------------------------------------
+
+
+def available_isas() -> tuple[str, ...]:
+    """The instruction-set levels this CPU runs, lowest first: on x86-64 some of ``"sse2"``,
+    ``"avx2"`` (AVX2 + FMA, x86-64-v3) and ``"avx512"`` (x86-64-v4); ``("neon",)`` on aarch64."""
+    return tuple(_core.available_isas())
+
+
+def get_isa() -> str:
+    """The level whose compiled kernels run now: the best this CPU has (the last of
+    :func:`available_isas`), unless :func:`set_isa` or the ``SPOTKIN_ISA`` environment variable
+    chose a lower one."""
+    return _core.get_isa()
+
+
+def set_isa(level: str) -> None:
+    """Run the kernels compiled for ``level`` (one of :func:`available_isas`, or ``"best"``).
+
+    For benchmarking and testing a lower level on a larger CPU: every level gives results within
+    the documented tolerances, but not bit-identical ones across levels (lane widths and fused
+    multiply-adds differ); within one level, results are bit-identical for any thread count.
+    ``SPOTKIN_ISA=avx2`` sets it for a whole process (read once, at import: a level the CPU lacks
+    fails the import). A level the CPU lacks, or an unknown name, raises ``ValueError``; a
+    non-str ``TypeError``. Calls already running keep their level; set it between calls."""
+    if not isinstance(level, str):
+        raise TypeError(f"level must be a str such as 'avx2', got {type(level).__name__}")
+    _core.set_isa(level)
+
+
+@contextlib.contextmanager
+def isa(level: str) -> Iterator[None]:
+    """Within the block, the kernels of ``level`` run (:func:`set_isa`'s rules); the previous
+    level comes back after it. The setting is process-wide::
+
+        for level in sk.available_isas():
+            with sk.isa(level):
+                q, status = spot.body_ik(poses, feet)
+    """
+    previous = get_isa()
+    set_isa(level)
+    try:
+        yield
+    finally:
+        _core.set_isa(previous)

@@ -75,7 +75,7 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
     ) from error
 
 from ._boundary import as_real, broadcast_lead, check_trailing
-from ._runtime import get_num_threads, thread_limit
+from ._runtime import get_isa, get_num_threads, thread_limit
 from .arm import SpotArm
 from .body import pose_format
 from .chain import Chain
@@ -705,7 +705,9 @@ _GRAVITY = (0.0, 0.0, -9.81)
 
 # The dynamics kernels' vector widths (cpp/bindings/dynamics_boundary.hpp, kLanes64 and kLanes32): a
 # batch shorter than this runs on a narrow model.
-_DYNAMICS_LANES = {np.dtype(np.float64): 8, np.dtype(np.float32): 16}
+# the dynamics kernels' lanes (float64, float32) at each instruction-set level: one register
+# (cpp/bindings/dynamics_boundary.hpp); 16-byte packs elsewhere
+_DYNAMICS_LANES = {"avx512": (8, 16), "avx2": (4, 8)}
 
 
 def _dynamics(model) -> tuple[str, int, int]:
@@ -723,7 +725,9 @@ def _dynamics(model) -> tuple[str, int, int]:
 
 
 def _dynamics_lanes(dtype) -> int:
-    return _DYNAMICS_LANES.get(np.dtype(dtype), 8)
+    """The vector width of a whole in-memory call at the level in use (:func:`spotkin.get_isa`)."""
+    lanes64, lanes32 = _DYNAMICS_LANES.get(get_isa(), (2, 4))
+    return lanes32 if np.dtype(dtype) == np.float32 else lanes64
 
 
 def _plan_dynamics(model, method: str, inputs: Sequence, single: str) -> _Plan:

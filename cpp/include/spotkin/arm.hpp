@@ -353,9 +353,9 @@ SPOTKIN_INLINE void block_trig(const T* q, std::ptrdiff_t m, BlockTrig& b) noexc
 }
 
 // Tool poses (16 per sample, row-major 4x4) from a block's sines and cosines.
-SPOTKIN_VECTOR_KERNEL inline void fk_block(const Arm& arm, const double (*__restrict s)[kBlock],
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, fk_block, (const Arm& arm, const double (*__restrict s)[kBlock],
                                            const double (*__restrict c)[kBlock], double (*__restrict out)[kBlock],
-                                           std::ptrdiff_t m) noexcept {
+                                           std::ptrdiff_t m) noexcept, (arm, s, c, out, m),
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     double R[3][3], p[3];
     arm.forward_arrays(s, c, i, R, p);
@@ -364,18 +364,18 @@ SPOTKIN_VECTOR_KERNEL inline void fk_block(const Arm& arm, const double (*__rest
       out[4 * r + 3][i] = p[r];
     }
   }
-}
+)
 
 // Jacobians (36 per sample, row-major 6x6) from a block's sines and cosines.
-SPOTKIN_VECTOR_KERNEL inline void jacobian_block(const Arm& arm, const double (*__restrict s)[kBlock],
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, jacobian_block, (const Arm& arm, const double (*__restrict s)[kBlock],
                                                  const double (*__restrict c)[kBlock],
-                                                 double (*__restrict out)[kBlock], std::ptrdiff_t m) noexcept {
+                                                 double (*__restrict out)[kBlock], std::ptrdiff_t m) noexcept, (arm, s, c, out, m),
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     double J[36];
     arm.jacobian_arrays(s, c, i, J);
     for (int k = 0; k < 36; ++k) out[k][i] = J[k];
   }
-}
+)
 
 template <typename T>
 SPOTKIN_INLINE void fk(const Arm& arm, const T* q, T* out, std::ptrdiff_t count) noexcept {
@@ -417,12 +417,11 @@ SPOTKIN_INLINE bool finite6(const T* v) noexcept {
 
 // The vectorised core of ik_all: every solution of every pose in a block.
 // soa[k][i] is pose element k of sample i; qs[6 * slot + joint][i] receives the angles.
-template <PoseFormat Format>
-SPOTKIN_VECTOR_KERNEL void solve_block(const Arm& arm, const double (*__restrict soa)[kBlock],
+SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void, solve_block, (<Format>), (const Arm& arm, const double (*__restrict soa)[kBlock],
                                 const double* __restrict seed_sh0, const double* __restrict seed_el1,
                                 const double* __restrict seed_ok, double* __restrict ok_pose,
                                 double* __restrict ex, double (*__restrict qs)[kBlock], std::ptrdiff_t m,
-                                double tol) noexcept {
+                                double tol) noexcept, (arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, tol),
   constexpr int kWidth = Format == PoseFormat::Matrix ? 16 : 7;
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     double in[kWidth];
@@ -436,7 +435,7 @@ SPOTKIN_VECTOR_KERNEL void solve_block(const Arm& arm, const double (*__restrict
     for (int s = 0; s < Arm::kSlots; ++s)
       for (int j = 0; j < 6; ++j) qs[6 * s + j][i] = q_all[s][j];
   }
-}
+)
 
 // Every solution: q (count, 8, 6) NaN where none exist, valid and exists
 // (count, 8), status (count). seed (count, 6) or null: used for the free angles

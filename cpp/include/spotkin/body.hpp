@@ -206,24 +206,24 @@ SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip, c
 }
 
 // One run-time dispatched kernel per compute type (target_clones takes no templates).
-SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const double* __restrict hip,
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& leg, const double* __restrict hip,
                                             const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
                                             const double* __restrict fx, const double* __restrict fy,
                                             const double* __restrict fz, double* __restrict x, double* __restrict y,
                                             double* __restrict z, double (*__restrict q0)[kBlock],
                                             double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
-                                            double tol, double limit_tol) noexcept {
+                                            double tol, double limit_tol) noexcept, (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
   leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-}
-SPOTKIN_VECTOR_KERNEL inline void leg_block(const Leg& leg, const float* __restrict hip,
+)
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& leg, const float* __restrict hip,
                                             const float (*__restrict R)[kBlock], const float (*__restrict t)[kBlock],
                                             const float* __restrict fx, const float* __restrict fy,
                                             const float* __restrict fz, float* __restrict x, float* __restrict y,
                                             float* __restrict z, float (*__restrict q0)[kBlock],
                                             float* __restrict exists, float* __restrict ok, std::ptrdiff_t m,
-                                            float tol, float limit_tol) noexcept {
+                                            float tol, float limit_tol) noexcept, (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
   leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-}
+)
 
 // Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
 // (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:

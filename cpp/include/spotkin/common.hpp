@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <limits>
 
+#include "spotkin/isa.hpp"
+
 // Forces inlining of the per-sample kernels into the batch loops, so that every
 // run-time dispatched clone of a loop gets its own vector code.
 #if defined(__GNUC__)
@@ -15,17 +17,9 @@
 #define SPOTKIN_INLINE inline
 #endif
 
-// A vectorised kernel that must not be inlined (inlining drops its __restrict
-// guarantees and with them the vectorisation) is compiled for baseline x86-64
-// for x86-64-v3 (AVX2 + FMA) and for x86-64-v4 (AVX-512), and the loader
-// picks one at run time.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SPOTKIN_NATIVE_BUILD)
-#define SPOTKIN_VECTOR_KERNEL __attribute__((noinline, target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#elif defined(__GNUC__)
-#define SPOTKIN_VECTOR_KERNEL __attribute__((noinline))
-#else
-#define SPOTKIN_VECTOR_KERNEL
-#endif
+// Run-time dispatched kernels: SPOTKIN_CLONES in isa.hpp. A vectorised kernel that must not
+// be inlined (inlining drops its __restrict guarantees and with them the vectorisation) is
+// declared there with __attribute__((noinline)).
 
 // A scalar routine called once per sample from a vector kernel: kept out of the kernel's
 // target clones so that its own callees (Eigen's fixed-size products) inline into it.

@@ -144,9 +144,8 @@ SPOTKIN_INLINE void dls_damped(const S* Jp, const S* dxp, S lambda2, int m, int 
 // L^T x = y, dq = J^T x. Padding samples (J = 0) give A = lambda^2 I.
 constexpr int kDlsBlock = 32;
 
-template <typename S, int M, int N>
-SPOTKIN_VECTOR_KERNEL void dls_block(const S (*__restrict J)[kDlsBlock], const S (*__restrict dx)[kDlsBlock], S lambda2,
-                                     S (*__restrict dq)[kDlsBlock]) noexcept {
+SPOTKIN_CLONES_T((template <typename S, int M, int N> __attribute__((noinline))), void, dls_block, (<S, M, N>), (const S (*__restrict J)[kDlsBlock], const S (*__restrict dx)[kDlsBlock], S lambda2,
+                                     S (*__restrict dq)[kDlsBlock]) noexcept, (J, dx, lambda2, dq),
   constexpr int B = kDlsBlock;
   auto at = [](int r, int c) { return r * (r + 1) / 2 + c; };  // packed lower triangle, c <= r
   S L[M * (M + 1) / 2][B], inv[M][B], y[M][B];
@@ -183,7 +182,7 @@ SPOTKIN_VECTOR_KERNEL void dls_block(const S (*__restrict J)[kDlsBlock], const S
     for (int r = 0; r < M; ++r)
       for (int i = 0; i < B; ++i) dq[c][i] += J[r * N + c][i] * y[r][i];
   }
-}
+)
 
 // The minimum-norm least-squares solution dq = J^+ dx (the limit lambda -> 0 of
 // dls) and, when z is given, the null-space term (I - J^+ J) z, which J maps to

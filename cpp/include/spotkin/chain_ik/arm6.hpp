@@ -294,10 +294,9 @@ SPOTKIN_INLINE void read_pose_lanes(const double (*pose_in)[SphericalWrist6::kLa
       }
 }
 
-template <PoseFormat Format>
-SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
+SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void, arm6_block, (<Format>), (const Arm6& solver, const Limits& limits,
                                       const double (*pose_in)[SphericalWrist6::kLanes], int m,
-                                      Arm6Block& out) noexcept {
+                                      Arm6Block& out) noexcept, (solver, limits, pose_in, m, out),
   constexpr int L = SphericalWrist6::kLanes, S = Arm6::kSlots;
   if (solver.direct_wrist()) {
     wrist_block<Format>(solver.wrist(), limits, pose_in, m, out);
@@ -471,7 +470,7 @@ SPOTKIN_VECTOR_KERNEL void arm6_block(const Arm6& solver, const Limits& limits,
   for (int k = 0; k < S; ++k)
     for (int i = 0; i < m; ++i) out.exact[k][i] *= out.exists[k][i];
   lane_status(m, out.input_ok, out.exists, out.valid, out.status);
-}
+)
 
 template <PoseFormat Format, typename T, typename Store>
 SPOTKIN_INLINE void arm6_blocks(const Arm6& solver, const Limits& limits, const T* poses, std::ptrdiff_t count,

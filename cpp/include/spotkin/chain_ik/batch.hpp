@@ -31,10 +31,10 @@ SPOTKIN_INLINE void store_lane(const FinishedBlock<Slots, Dof, L>& block, int i,
 // handled outside).
 using PositionBlock = FinishedBlock<Position3::kSlots, 3, Position3::kLanes>;
 
-__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const Position3& solver,
+SPOTKIN_CLONES((__attribute__((flatten)) __attribute__((noinline)) inline), void, position_block, (const Position3& solver,
                                                                           const Limits& limits, const double* px,
                                                                           const double* py, const double* pz, int m,
-                                                                          PositionBlock& out) noexcept {
+                                                                          PositionBlock& out) noexcept, (solver, limits, px, py, pz, m, out),
   constexpr int S = PositionBlock::S, L = Position3::kLanes;
   Position3::BlockSolutions sol;
   solver.solve_block(px, py, pz, m, sol);
@@ -57,17 +57,16 @@ __attribute__((flatten)) SPOTKIN_VECTOR_KERNEL inline void position_block(const 
   else
     finish(std::false_type{});
   lane_status(m, out.input_ok, out.exists, out.valid, out.status);
-}
+)
 
 using WristBlock = FinishedBlock<SphericalWrist6::kSlots, 6, SphericalWrist6::kLanes>;
 
-template <PoseFormat Format>
-__attribute__((flatten)) SPOTKIN_VECTOR_KERNEL void wrist_block(const SphericalWrist6& solver, const Limits& limits,
+SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((flatten)) __attribute__((noinline))), void, wrist_block, (<Format>), (const SphericalWrist6& solver, const Limits& limits,
                                                                 const double (*pose_in)[SphericalWrist6::kLanes],
-                                                                int m, WristBlock& out) noexcept {
+                                                                int m, WristBlock& out) noexcept, (solver, limits, pose_in, m, out),
   solver.solve_block<Format>(pose_in, m, limits, out.angle, out.exists, out.valid, out.input_ok);
   lane_status(m, out.input_ok, out.exists, out.valid, out.status);
-}
+)
 
 // Lane i of a finished block as one answer: the valid slot nearest to the
 // seed (the largest single-joint move: on the circle for a revolute joint,

@@ -1,0 +1,148 @@
+"""Instruction-set levels: every level the CPU has is listed, can be forced (sk.set_isa, sk.isa,
+SPOTKIN_ISA) and runs every kernel family to the same answers as the best level.
+
+The reference cross-checks of the kernels (test_leg, test_body, test_arm, test_chain_ik6,
+test_dynamics, ...) run at every level through the ``every_isa`` fixture (tests/conftest.py)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import spotkin as sk
+from spotkin import robots
+
+LEVELS = sk.available_isas()
+X86_LEVELS = ("sse2", "avx2", "avx512")
+
+
+def test_levels_are_listed_lowest_first_and_one_is_active():
+    assert LEVELS, "at least the baseline level"
+    assert sk.get_isa() in LEVELS
+    if LEVELS[0] == "sse2":
+        assert LEVELS == X86_LEVELS[: len(LEVELS)]
+    else:  # one version, compiled for the target
+        assert len(LEVELS) == 1
+
+
+@pytest.mark.skipif(bool(os.environ.get("SPOTKIN_ISA")), reason="SPOTKIN_ISA forces a level")
+def test_the_best_level_is_the_default():
+    assert sk.get_isa() == LEVELS[-1]
+
+
+def test_set_isa_and_the_block_restore_the_level():
+    before = sk.get_isa()
+    for level in LEVELS:
+        with sk.isa(level):
+            assert sk.get_isa() == level
+        assert sk.get_isa() == before
+    sk.set_isa(LEVELS[0])
+    try:
+        assert sk.get_isa() == LEVELS[0]
+        sk.set_isa("best")
+        assert sk.get_isa() == LEVELS[-1]
+    finally:
+        sk.set_isa(before)
+
+
+def test_bad_levels_are_refused_by_name():
+    with pytest.raises(TypeError, match="level must be a str"):
+        sk.set_isa(2)
+    with pytest.raises(TypeError, match="level must be a str"):
+        sk.set_isa(None)
+    with pytest.raises(ValueError, match="unknown instruction-set level 'avx3'"):
+        sk.set_isa("avx3")
+    with pytest.raises(ValueError, match="unknown instruction-set level"):
+        sk.set_isa("AVX2")
+    missing = [level for level in X86_LEVELS if level not in LEVELS] if LEVELS[0] == "sse2" else []
+    for level in missing:
+        with pytest.raises(ValueError, match=f"this CPU lacks {level}"):
+            sk.set_isa(level)
+        with pytest.raises(ValueError), sk.isa(level):
+            pass
+    assert sk.get_isa() in LEVELS
+
+
+def _import_with(level: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "SPOTKIN_ISA": level}
+    code = "import spotkin as sk; print(sk.get_isa())"
+    return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+
+
+def test_the_environment_variable_forces_a_level_at_import():
+    run = _import_with(LEVELS[0])
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == LEVELS[0]
+    run = _import_with("")
+    assert run.stdout.strip() == LEVELS[-1]
+    run = _import_with("fast")
+    assert run.returncode != 0
+    assert "SPOTKIN_ISA=fast: unknown instruction-set level 'fast'" in run.stderr
+    if LEVELS[0] == "sse2" and "avx512" not in LEVELS:
+        run = _import_with("avx512")
+        assert run.returncode != 0
+        assert "SPOTKIN_ISA=avx512: this CPU lacks avx512" in run.stderr
+
+
+# ---- every kernel family at every level, against the best level --------------------------------
+
+
+def _battery(dtype) -> dict[str, np.ndarray]:
+    """One call of each kernel family on fixed inputs (batches of 37: full lanes and a tail)."""
+    rng = np.random.default_rng(7)
+    spot = sk.Spot()
+    go2 = sk.Robot.from_urdf(robots.path("go2"))
+    ur5 = sk.Chain.from_urdf(robots.path("ur5"))
+    n = 37
+    out = {}
+    leg = spot.leg("fl")
+    q3 = np.column_stack([rng.uniform(lo, hi, n) for lo, hi in leg.limits]).astype(dtype)
+    out["leg.fk"] = leg.fk(q3)
+    out["leg.jacobian"] = leg.jacobian(q3)
+    out["leg.ik"] = leg.ik(out["leg.fk"])[0]
+    out["leg.ik_all"] = leg.ik_all(out["leg.fk"]).q
+    pose = np.column_stack([rng.uniform(-0.05, 0.05, (n, 3)), rng.uniform(-0.1, 0.1, (n, 3))])
+    pose = (pose + [0.0, 0.0, 0.5, 0.0, 0.0, 0.0]).astype(dtype)  # the body over Spot's stance
+    body = spot.body_ik(pose, spot.stance_feet())
+    out["body_ik"] = body.q
+    out["body_fk"] = spot.body_fk(pose, body.q)
+    q6 = rng.uniform(-1.0, 1.0, (n, 6)).astype(dtype)
+    out["arm.fk"] = spot.arm.fk(q6)
+    out["arm.ik_all"] = spot.arm.ik_all(out["arm.fk"]).q
+    out["ur5.fk"] = ur5.fk(q6)
+    out["ur5.jacobian"] = ur5.jacobian(q6)
+    out["ur5.ik"] = ur5.ik(out["ur5.fk"]).q
+    qd, qdd = rng.normal(size=(2, n, 6)).astype(dtype)
+    out["ur5.rnea"] = ur5.inverse_dynamics(q6, qd, qdd)
+    out["ur5.crba"] = ur5.mass_matrix(q6)
+    out["ur5.aba"] = ur5.forward_dynamics(q6, qd, out["ur5.rnea"])
+    stand = go2.body_ik([0.0, 0.0, 0.28, 0.0, 0.0, 0.0], go2.stance_feet(0.28)).q
+    q12 = stand + rng.uniform(-0.2, 0.2, (n, 12))
+    body_pose = np.column_stack([rng.uniform(-0.1, 0.1, (n, 3)), rng.uniform(-0.3, 0.3, (n, 3))])
+    q19 = go2.floating_q(body_pose, q12).astype(dtype)
+    floating = go2.floating_base
+    v, a = rng.normal(size=(2, n, floating.nv)).astype(dtype)
+    out["go2.crba"] = floating.mass_matrix(q19)
+    out["go2.rnea"] = floating.inverse_dynamics(q19, v, a)
+    out["go2.aba"] = floating.forward_dynamics(q19, v, out["go2.rnea"])
+    return out
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_every_level_gives_the_best_level_s_answers(dtype):
+    best = _battery(dtype)
+    tolerance = 1e-9 if dtype == np.float64 else 2e-3
+    for level in LEVELS:
+        with sk.isa(level):
+            got = _battery(dtype)
+        for name, expected in best.items():
+            assert got[name].dtype == expected.dtype, (level, name)
+            np.testing.assert_array_equal(np.isnan(got[name]), np.isnan(expected), err_msg=f"{level} {name}")
+            scale = max(1.0, float(np.nanmax(np.abs(expected))))
+            np.testing.assert_allclose(
+                got[name], expected, rtol=0, atol=tolerance * scale, equal_nan=True, err_msg=f"{level} {name}"
+            )
