@@ -24,6 +24,10 @@
 // widths (the 8-lane float64 path transposes in registers) and over enough
 // samples that CRBA takes the non-temporal store path. Small enough to run
 // under an emulator (tools/check_arm64.sh runs it under qemu-aarch64).
+//
+// Timings and checks run at every instruction-set level the CPU has, lowest first
+// (spotkin/isa.hpp: sse2, avx2, avx512), each with its own elementary costs and floors;
+// SPOTKIN_ISA=avx2 runs one level. The report starts with the CPU's model.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -47,89 +51,87 @@
 
 using namespace spotkin;
 
-// The same run-time CPU dispatch as the Python module's kernels.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define HARNESS_KERNEL __attribute__((noinline, target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define HARNESS_KERNEL __attribute__((noinline))
-#endif
+// The same run-time dispatch as the Python module's kernels (spotkin/isa.hpp): each
+// kernel is compiled for every instruction-set level and runs the active one's clone.
 
 namespace {
 
-template <typename T>
-HARNESS_KERNEL void leg_ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n) {
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, leg_ik, (const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n), (leg, p, seed, q, status, n),
   leg_batch::ik(leg, p, seed, q, status, n);
-}
-template <typename T>
-HARNESS_KERNEL void leg_ik_all(const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
-                               std::int8_t* status, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, leg_ik_all, (const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists,
+                               std::int8_t* status, std::ptrdiff_t n), (leg, p, q, valid, exists, status, n),
   leg_batch::ik_all(leg, p, q, valid, exists, status, n);
-}
-template <typename T>
-HARNESS_KERNEL void leg_fk(const Leg& leg, const T* q, T* p, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, leg_fk, (const Leg& leg, const T* q, T* p, std::ptrdiff_t n), (leg, q, p, n),
   leg_batch::fk(leg, q, p, n);
-}
-template <typename T>
-HARNESS_KERNEL void body_ik(const Body& body, const T* poses, const T* feet, T* q, std::int8_t* status,
-                            std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, body_ik, (const Body& body, const T* poses, const T* feet, T* q, std::int8_t* status,
+                            std::ptrdiff_t n), (body, poses, feet, q, status, n),
   body_batch::ik(body, poses, BodyPoseFormat::Euler, EulerSequence{}, feet, true, static_cast<const T*>(nullptr), q,
                  status, n);
-}
-template <typename T>
-HARNESS_KERNEL void body_fk(const Body& body, const T* poses, const T* q, T* feet, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, body_fk, (const Body& body, const T* poses, const T* q, T* feet, std::ptrdiff_t n), (body, poses, q, feet, n),
   body_batch::fk(body, poses, BodyPoseFormat::Euler, EulerSequence{}, q, feet, n);
-}
-HARNESS_KERNEL void arm_ik_all(const Arm& arm, const double* poses, double* q, std::uint8_t* valid,
-                               std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((__attribute__((noinline))), void, arm_ik_all, (const Arm& arm, const double* poses, double* q, std::uint8_t* valid,
+                               std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n), (arm, poses, q, valid, exists, status, n),
   arm_batch::ik_all(arm, poses, PoseFormat::Matrix, static_cast<const double*>(nullptr), q, valid, exists, status, n);
-}
-HARNESS_KERNEL void arm_fk(const Arm& arm, const double* q, double* poses, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((__attribute__((noinline))), void, arm_fk, (const Arm& arm, const double* q, double* poses, std::ptrdiff_t n), (arm, q, poses, n),
   arm_batch::fk(arm, q, poses, n);
-}
-HARNESS_KERNEL void chain_fk(const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((__attribute__((noinline))), void, chain_fk, (const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n), (chain, q, out, n),
   chain.forward_batch(q, out, n);
-}
-HARNESS_KERNEL void chain_jacobian(const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n) {
+)
+SPOTKIN_CLONES((__attribute__((noinline))), void, chain_jacobian, (const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n), (chain, q, out, n),
   chain.jacobian_batch(q, out, n, 6, false);
-}
+)
 
 // The chain dynamics at the lane widths of the Python module (8 float64, 16
 // float32 lanes: dynamics_boundary.hpp) and at 2 float64 lanes (no in-register
 // transpose), for the self-checks.
 namespace dyn = spotkin::dynamics;
-#define HARNESS_DYNAMICS(M, L)                                                                                    \
-  HARNESS_KERNEL void rnea(const dyn::ChainModel<M, L>& model, dyn::Rows<M> q, const dyn::Rows<M>* qd,           \
-                           const dyn::Rows<M>* qdd, dyn::Rows<M> g, M* out, std::ptrdiff_t n) {                  \
-    dyn::rnea_batch(model, q, qd, qdd, g, out, 0, n);                                                            \
-  }                                                                                                              \
-  HARNESS_KERNEL void crba(const dyn::ChainModel<M, L>& model, dyn::Rows<M> q, M* out, std::ptrdiff_t n) {       \
-    dyn::crba_batch(model, q, out, 0, n);                                                                        \
-  }                                                                                                              \
-  HARNESS_KERNEL void coriolis(const dyn::ChainModel<M, L>& model, dyn::Rows<M> q, dyn::Rows<M> qd, M* out,      \
-                               std::ptrdiff_t n) {                                                               \
-    dyn::coriolis_batch(model, q, qd, out, 0, n);                                                                \
-  }                                                                                                              \
-  HARNESS_KERNEL void aba(const dyn::ChainModel<M, L>& model, dyn::Rows<M> q, dyn::Rows<M> qd, dyn::Rows<M> tau, \
-                          dyn::Rows<M> g, M* out, std::ptrdiff_t n) {                                            \
-    dyn::aba_batch(model, q, qd, tau, g, out, 0, n);                                                             \
-  }
-HARNESS_DYNAMICS(double, 8)
-HARNESS_DYNAMICS(double, 2)
-HARNESS_DYNAMICS(float, 16)
-#undef HARNESS_DYNAMICS
+template <typename X>
+struct NonDeducedOf {
+  using type = X;
+};
+template <typename X>
+using NonDeduced = typename NonDeducedOf<X>::type;  // deduced from the model alone (nullptr passes)
+SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, rnea, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q,
+                         const NonDeduced<dyn::Rows<M>>* qd, const NonDeduced<dyn::Rows<M>>* qdd,
+                         NonDeduced<dyn::Rows<M>> g, M* out, std::ptrdiff_t n), (model, q, qd, qdd, g, out, n),
+  dyn::rnea_batch(model, q, qd, qdd, g, out, 0, n);
+)
+SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, crba, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q, M* out, std::ptrdiff_t n), (model, q, out, n),
+  dyn::crba_batch(model, q, out, 0, n);
+)
+SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, coriolis, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q,
+                             NonDeduced<dyn::Rows<M>> qd, M* out, std::ptrdiff_t n), (model, q, qd, out, n),
+  dyn::coriolis_batch(model, q, qd, out, 0, n);
+)
+SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, aba, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q, NonDeduced<dyn::Rows<M>> qd,
+                        NonDeduced<dyn::Rows<M>> tau, NonDeduced<dyn::Rows<M>> g, M* out, std::ptrdiff_t n), (model, q, qd, tau, g, out, n),
+  dyn::aba_batch(model, q, qd, tau, g, out, 0, n);
+)
 
 namespace d = spotkin::diagnostics;
 
 // The elementary operations (diagnostics.hpp), compiled as the kernels are.
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, atan2_loop, (const T* y, const T* x, T* out, std::ptrdiff_t n), (y, x, out, n), d::atan2_loop(y, x, out, n); )
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, sincos_loop, (const T* x, T* s, T* c, std::ptrdiff_t n), (x, s, c, n), d::sincos_loop(x, s, c, n); )
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, sqrt_loop, (const T* x, T* out, std::ptrdiff_t n), (x, out, n), d::sqrt_loop(x, out, n); )
+SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, fma32_loop, (const T* x, T* out, std::ptrdiff_t n), (x, out, n), d::fma32_loop(x, out, n); )
+
 struct Loops {
   template <typename T>
-  static HARNESS_KERNEL void atan2(const T* y, const T* x, T* out, std::ptrdiff_t n) { d::atan2_loop(y, x, out, n); }
+  static void atan2(const T* y, const T* x, T* out, std::ptrdiff_t n) { atan2_loop(y, x, out, n); }
   template <typename T>
-  static HARNESS_KERNEL void sincos(const T* x, T* s, T* c, std::ptrdiff_t n) { d::sincos_loop(x, s, c, n); }
+  static void sincos(const T* x, T* s, T* c, std::ptrdiff_t n) { sincos_loop(x, s, c, n); }
   template <typename T>
-  static HARNESS_KERNEL void sqrt(const T* x, T* out, std::ptrdiff_t n) { d::sqrt_loop(x, out, n); }
+  static void sqrt(const T* x, T* out, std::ptrdiff_t n) { sqrt_loop(x, out, n); }
   template <typename T>
-  static HARNESS_KERNEL void fma32(const T* x, T* out, std::ptrdiff_t n) { d::fma32_loop(x, out, n); }
+  static void fma32(const T* x, T* out, std::ptrdiff_t n) { fma32_loop(x, out, n); }
 };
 
 using d::best_seconds;
@@ -491,6 +493,50 @@ int self_check(std::ptrdiff_t n) {
 
 }  // namespace
 
+// The CPU's model name (Linux), for the report.
+std::string cpu_model() {
+  std::FILE* info = std::fopen("/proc/cpuinfo", "r");
+  std::string model = "unknown";
+  if (info == nullptr) return model;
+  char line[512];
+  while (std::fgets(line, sizeof line, info) != nullptr) {
+    const std::string text(line);
+    if (text.rfind("model name", 0) == 0 && text.find(':') != std::string::npos) {
+      model = text.substr(text.find(':') + 2);
+      if (!model.empty() && model.back() == '\n') model.pop_back();
+      break;
+    }
+  }
+  std::fclose(info);
+  return model;
+}
+
+// Runs `run` at the level SPOTKIN_ISA names, or else at every level the CPU has, lowest
+// first (isa.hpp); nonzero if any run was.
+template <typename F>
+int for_each_level(F&& run) {
+  Isa only;
+  try {
+    only = isa_from_environment();
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
+  const char* forced = std::getenv("SPOTKIN_ISA");
+  const bool all = forced == nullptr || *forced == '\0';
+  int status = 0;
+  for (int level = 0; level <= static_cast<int>(best_isa()); ++level) {
+    if (!all && level != static_cast<int>(only)) continue;
+    set_isa(static_cast<Isa>(level));
+    std::printf("== instruction-set level %s (best on this CPU: %s)\n", isa_name(active_isa()), isa_name(best_isa()));
+    std::fflush(stdout);
+    status |= run();
+  }
+  return status;
+}
+
+int timings(std::ptrdiff_t n, int repeats, std::ptrdiff_t n_arm);
+
 int main(int argc, char** argv) {
   if (argc > 1 && std::strcmp(argv[1], "--check") == 0) {
     const std::ptrdiff_t n = argc > 2 ? std::atol(argv[2]) : 2000;
@@ -498,7 +544,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "usage: spotkin_harness --check [samples > 0]\n");
       return 2;
     }
-    return self_check(n);
+    return for_each_level([&] { return self_check(n); });
   }
   const std::ptrdiff_t n = argc > 1 ? std::atol(argv[1]) : 1000000;
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 15;
@@ -507,6 +553,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: spotkin_harness [samples > 0] [repeats > 0]  |  spotkin_harness --check [samples > 0]\n");
     return 2;
   }
+  std::printf("CPU: %s\n", cpu_model().c_str());
+  return for_each_level([&] { return timings(n, repeats, n_arm); });
+}
+
+int timings(std::ptrdiff_t n, int repeats, std::ptrdiff_t n_arm) {
   Report report{d::tsc_ghz(), d::measure_costs<double, Loops>(20 * repeats),
                 d::measure_costs<float, Loops>(20 * repeats)};
   std::printf("spotkin C++ kernels, one thread, best of %d; TSC %.3f GHz\n", repeats, report.ghz);
