@@ -115,7 +115,9 @@ def set_isa(level: str) -> None:
     multiply-adds differ); within one level, results are bit-identical for any thread count.
     ``SPOTKIN_ISA=avx2`` sets it for a whole process (read once, at import: a level the CPU lacks
     fails the import). A level the CPU lacks, or an unknown name, raises ``ValueError``; a
-    non-str ``TypeError``. Calls already running keep their level; set it between calls."""
+    non-str ``TypeError``. Set it between calls: the level is read per kernel call, so a batch
+    running on other threads while it changes may compute some chunks at each level (each within
+    tolerance, not bit-identical)."""
     if not isinstance(level, str):
         raise TypeError(f"level must be a str such as 'avx2', got {type(level).__name__}")
     _core.set_isa(level)
