@@ -51,6 +51,12 @@
 
 using namespace spotkin;
 
+#if defined(__GNUC__) && !defined(__clang__)
+// The kernels' packs are inlined: no vector crosses a call by value (the wide models'
+// templates are instantiated at the end of this file, outside the headers' own pragmas).
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 // The same run-time dispatch as the Python module's kernels (spotkin/isa.hpp): each
 // kernel is compiled for every instruction-set level and runs the active one's clone.
 

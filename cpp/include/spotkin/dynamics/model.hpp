@@ -18,6 +18,7 @@
 #include <cstring>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -267,43 +268,64 @@ SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width,
   }
 }
 
-// Transposes 8 packs of 8 doubles in registers (3 stages of 2-input shuffles):
-// r[j] holds column j of 8 samples, on return r[i] holds sample i's 8 columns.
-SPOTKIN_INLINE void transpose8(Pack<double, 8>::Vector r[8]) noexcept {
-  using V = Pack<double, 8>::Vector;
-  V t[8], u[8];
+// The integer vector of a pack's width, for shuffle masks (one specialisation per
+// width: GCC ignores vector_size on a dependent typedef).
+template <typename M, int L>
+struct MaskOf;
+#define SPOTKIN_MASK_OF(M, I, L)                                  \
+  template <>                                                     \
+  struct MaskOf<M, L> {                                           \
+    typedef I type __attribute__((vector_size(sizeof(I) * L)));   \
+  };
+SPOTKIN_MASK_OF(double, long long, 2)
+SPOTKIN_MASK_OF(double, long long, 4)
+SPOTKIN_MASK_OF(double, long long, 8)
+SPOTKIN_MASK_OF(float, int, 4)
+SPOTKIN_MASK_OF(float, int, 8)
+SPOTKIN_MASK_OF(float, int, 16)
+#undef SPOTKIN_MASK_OF
+
+// Element e of a transpose stage's 2-input shuffle over blocks of B lanes: the low
+// (Hi = false) or high half of each pair of blocks, from the first input (indices
+// 0 .. L-1) then the second (L .. 2L-1).
+template <int L, int B, bool Hi>
+constexpr int transpose_index(int e) noexcept {
+  const int group = e / (2 * B) * 2 * B, offset = e % (2 * B), half = Hi ? B : 0;
+  return offset < B ? group + half + offset : L + group + half + offset - B;
+}
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"  // always inlined: no vector crosses a call by value
+#endif
+template <typename M, int L, int B, bool Hi, typename V, std::size_t... E>
+SPOTKIN_INLINE V transpose_shuffle(const V& a, const V& b, std::index_sequence<E...>) noexcept {
 #if defined(__clang__)
-  // Clang has no __builtin_shuffle: the same shuffles, the indices as constants.
-  for (int k = 0; k < 8; k += 2) {
-    t[k] = __builtin_shufflevector(r[k], r[k + 1], 0, 8, 2, 10, 4, 12, 6, 14);
-    t[k + 1] = __builtin_shufflevector(r[k], r[k + 1], 1, 9, 3, 11, 5, 13, 7, 15);
-  }
-  for (int k = 0; k < 8; k += 4)
-    for (int h = 0; h < 2; ++h) {
-      u[k + h] = __builtin_shufflevector(t[k + h], t[k + h + 2], 0, 1, 8, 9, 4, 5, 12, 13);
-      u[k + h + 2] = __builtin_shufflevector(t[k + h], t[k + h + 2], 2, 3, 10, 11, 6, 7, 14, 15);
-    }
-  for (int k = 0; k < 4; ++k) {
-    r[k] = __builtin_shufflevector(u[k], u[k + 4], 0, 1, 2, 3, 8, 9, 10, 11);
-    r[k + 4] = __builtin_shufflevector(u[k], u[k + 4], 4, 5, 6, 7, 12, 13, 14, 15);
-  }
+  return __builtin_shufflevector(a, b, transpose_index<L, B, Hi>(int(E))...);
 #else
-  typedef long long I __attribute__((vector_size(64)));
-  for (int k = 0; k < 8; k += 2) {
-    t[k] = __builtin_shuffle(r[k], r[k + 1], I{0, 8, 2, 10, 4, 12, 6, 14});
-    t[k + 1] = __builtin_shuffle(r[k], r[k + 1], I{1, 9, 3, 11, 5, 13, 7, 15});
-  }
-  for (int k = 0; k < 8; k += 4)
-    for (int h = 0; h < 2; ++h) {
-      u[k + h] = __builtin_shuffle(t[k + h], t[k + h + 2], I{0, 1, 8, 9, 4, 5, 12, 13});
-      u[k + h + 2] = __builtin_shuffle(t[k + h], t[k + h + 2], I{2, 3, 10, 11, 6, 7, 14, 15});
-    }
-  for (int k = 0; k < 4; ++k) {
-    r[k] = __builtin_shuffle(u[k], u[k + 4], I{0, 1, 2, 3, 8, 9, 10, 11});
-    r[k + 4] = __builtin_shuffle(u[k], u[k + 4], I{4, 5, 6, 7, 12, 13, 14, 15});
-  }
+  using I = typename MaskOf<M, L>::type;
+  return __builtin_shuffle(a, b, I{transpose_index<L, B, Hi>(int(E))...});
 #endif
 }
+
+// Transposes L packs of L lanes in registers (log2 L stages of 2-input shuffles, each
+// a native shuffle of the level's registers): r[j] holds column j of L samples, on
+// return r[i] holds sample i's L columns.
+template <typename M, int L, int B = 1>
+SPOTKIN_INLINE void transpose_lanes(typename Pack<M, L>::Vector r[L]) noexcept {
+  if constexpr (B < L) {
+    for (int k = 0; k < L; ++k) {
+      if (k & B) continue;
+      const auto lo = transpose_shuffle<M, L, B, false>(r[k], r[k + B], std::make_index_sequence<L>{});
+      const auto hi = transpose_shuffle<M, L, B, true>(r[k], r[k + B], std::make_index_sequence<L>{});
+      r[k] = lo, r[k + B] = hi;
+    }
+    transpose_lanes<M, L, 2 * B>(r);
+  }
+}
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 // Outputs of at least this many bytes per call are written with non-temporal
 // stores (no read for ownership, no eviction of the inputs): a batch's output
@@ -348,8 +370,8 @@ SPOTKIN_INLINE void stream_fence() noexcept {
 }
 
 // Stores `width` lanes-values of samples b0 .. b0 + m - 1, row-major; a lane
-// whose inputs were not all finite gets NaN in its whole row. Groups of 8
-// columns of 8 doubles are transposed in registers; with `stream`, rows go
+// whose inputs were not all finite gets NaN in its whole row. Groups of L
+// columns of L lanes are transposed in registers; with `stream`, rows go
 // through a small buffer and out with non-temporal stores (stream_fence after).
 template <typename M, int L>
 SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
@@ -363,11 +385,11 @@ SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, in
     return;
   }
   int j0 = 0;
-  if constexpr (std::is_same_v<M, double> && L == 8) {
-    for (; j0 + 8 <= width; j0 += 8) {
-      typename Pack<double, 8>::Vector r[8];
-      for (int k = 0; k < 8; ++k) r[k] = in[j0 + k].v;
-      transpose8(r);
+  if constexpr (L >= 2 && L <= 16) {  // groups of L columns: transposed in registers
+    for (; j0 + L <= width; j0 += L) {
+      typename Pack<M, L>::Vector r[L];
+      for (int k = 0; k < L; ++k) r[k] = in[j0 + k].v;
+      transpose_lanes<M, L>(r);
       for (int i = 0; i < m; ++i)
         if (ok[i]) std::memcpy(out + (b0 + i) * width + j0, &r[i], sizeof r[i]);
     }
