@@ -98,3 +98,29 @@ def newton_oracle(chain: sk.Chain, p, rng, starts=400, iters=60) -> list[np.ndar
         if all(joint_distance(q, f, sigma) > 1e-6 for f in found):
             found.append(q)
     return found
+
+
+# Franka Emika Panda, its published modified-DH table as (sigma, a_{i-1}, alpha_{i-1}, d_i, theta_i),
+# the flange 0.107 m along the last axis; its joint limits (rad).
+PANDA_ROWS = [
+    (0, 0.0, 0.0, 0.333, 0.0),
+    (0, 0.0, -np.pi / 2, 0.0, 0.0),
+    (0, 0.0, np.pi / 2, 0.316, 0.0),
+    (0, 0.0825, np.pi / 2, 0.0, 0.0),
+    (0, -0.0825, -np.pi / 2, 0.384, 0.0),
+    (0, 0.0, np.pi / 2, 0.0, 0.0),
+    (0, 0.088, np.pi / 2, 0.0, 0.0),
+]
+PANDA_LIMITS = [
+    (-2.8973, 2.8973),
+    (-1.7628, 1.7628),
+    (-2.8973, 2.8973),
+    (-3.0718, -0.0698),
+    (-2.8973, 2.8973),
+    (-0.0175, 3.7525),
+    (-2.8973, 2.8973),
+]
+
+
+def panda() -> sk.Chain:
+    return sk.Chain.from_mdh(PANDA_ROWS, tool=sk.translation([0.0, 0.0, 0.107]), limits=PANDA_LIMITS)

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
+from conftest import panda
 from spotkin import urdf
 from spotkin.__main__ import LEG_MDH_ROWS, main
 
@@ -38,28 +39,6 @@ def kinova_like() -> sk.Chain:
     free = (-np.inf, np.inf)
     limits = [free, (-2.41, 2.41), free, (-2.66, 2.66), free, (-2.23, 2.23), free]
     return sk.Chain.from_joints(placements, axes, tool=sk.translation([0.0, 0.0, 0.16]), limits=limits)
-
-
-def panda() -> sk.Chain:
-    rows = [
-        (0, 0.0, 0.0, 0.333, 0.0),
-        (0, 0.0, -PI / 2, 0.0, 0.0),
-        (0, 0.0, PI / 2, 0.316, 0.0),
-        (0, 0.0825, PI / 2, 0.0, 0.0),
-        (0, -0.0825, -PI / 2, 0.384, 0.0),
-        (0, 0.0, PI / 2, 0.0, 0.0),
-        (0, 0.088, PI / 2, 0.0, 0.0),
-    ]
-    limits = [
-        (-2.9, 2.9),
-        (-1.76, 1.76),
-        (-2.9, 2.9),
-        (-3.07, -0.07),
-        (-2.9, 2.9),
-        (-0.02, 3.75),
-        (-2.9, 2.9),
-    ]
-    return sk.Chain.from_mdh(rows, tool=sk.translation([0.0, 0.0, 0.107]), limits=limits)
 
 
 Q7 = np.array([0.3, 0.5, 0.2, 1.0, -0.4, 0.7, 0.1])

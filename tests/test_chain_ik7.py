@@ -11,37 +11,13 @@ import numpy as np
 import pytest
 
 import spotkin as sk
+from conftest import PANDA_ROWS, panda
 from spotkin.reference import ik6r
 
 # the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
 pytestmark = pytest.mark.usefixtures("every_isa")
 
 PI = math.pi
-
-# Franka Emika Panda, its published modified-DH table as (sigma, a_{i-1}, alpha_{i-1}, d_i, theta_i),
-# the flange 0.107 m along the last axis; its joint limits (rad).
-PANDA_ROWS = [
-    (0, 0.0, 0.0, 0.333, 0.0),
-    (0, 0.0, -PI / 2, 0.0, 0.0),
-    (0, 0.0, PI / 2, 0.316, 0.0),
-    (0, 0.0825, PI / 2, 0.0, 0.0),
-    (0, -0.0825, -PI / 2, 0.384, 0.0),
-    (0, 0.0, PI / 2, 0.0, 0.0),
-    (0, 0.088, PI / 2, 0.0, 0.0),
-]
-PANDA_LIMITS = [
-    (-2.8973, 2.8973),
-    (-1.7628, 1.7628),
-    (-2.8973, 2.8973),
-    (-3.0718, -0.0698),
-    (-2.8973, 2.8973),
-    (-0.0175, 3.7525),
-    (-2.8973, 2.8973),
-]
-
-
-def panda() -> sk.Chain:
-    return sk.Chain.from_mdh(PANDA_ROWS, tool=sk.translation([0.0, 0.0, 0.107]), limits=PANDA_LIMITS)
 
 
 def kinova_like() -> sk.Chain:

@@ -24,6 +24,7 @@ import pinocchio
 import pytest
 
 import spotkin as sk
+from conftest import PANDA_ROWS
 from spotkin import urdf
 from spotkin.__main__ import main
 
@@ -39,16 +40,6 @@ UR5_DH = [
     (0, 0.0, PI / 2, 0.10915, 0.0),
     (0, 0.0, -PI / 2, 0.09465, 0.0),
     (0, 0.0, 0.0, 0.0823, 0.0),
-]
-# The Panda's published modified-DH table (Franka), flange 0.107 m along the last axis.
-PANDA_MDH = [
-    (0, 0.0, 0.0, 0.333, 0.0),
-    (0, 0.0, -PI / 2, 0.0, 0.0),
-    (0, 0.0, PI / 2, 0.316, 0.0),
-    (0, 0.0825, PI / 2, 0.0, 0.0),
-    (0, -0.0825, -PI / 2, 0.384, 0.0),
-    (0, 0.0, PI / 2, 0.0, 0.0),
-    (0, 0.088, PI / 2, 0.0, 0.0),
 ]
 
 
@@ -275,7 +266,7 @@ def test_panda_default_tip_is_the_hand_and_its_ik_needs_a_free_joint(rng):
 
 def test_panda_matches_its_published_mdh_table(rng):
     chain = sk.Chain.from_urdf(PANDA, tip="panda_link8")
-    mdh = sk.Chain.from_mdh(PANDA_MDH, tool=sk.translation([0.0, 0.0, 0.107]))
+    mdh = sk.Chain.from_mdh(PANDA_ROWS, tool=sk.translation([0.0, 0.0, 0.107]))
     q = rng.uniform(-2.5, 2.5, (50, 7))
     np.testing.assert_allclose(chain.fk(q), mdh.fk(q), atol=1e-14)
     np.testing.assert_allclose(chain.jacobian(q), mdh.jacobian(q), atol=1e-14)
