@@ -1,12 +1,15 @@
 // Private diagnostics for the benchmark report (bench/conftest.py): the TSC
 // rate, the measured cost of the elementary vectorised operations, and each
-// kernel's operation counts (spotkin/diagnostics.hpp).
+// kernel's operation counts (spotkin/diagnostics.hpp); and the elementary
+// loops themselves on 1-D arrays, for the accuracy tests (tests/test_vector_math.py).
 #include "spotkin/diagnostics.hpp"
 
+#include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
 #include <map>
 #include <string>
+#include <utility>
 
 #include "bindings.hpp"
 #include "dispatch.hpp"
@@ -50,6 +53,63 @@ std::map<std::string, double> as_dict(const d::Costs& c) {
   return {{"atan2", c.atan2}, {"sincos", c.sincos}, {"sqrt", c.sqrt}, {"fma", c.fma}};
 }
 
+// A 1-D C-contiguous float64 or float32 array, taken as it is (the tests' inputs
+// must reach the loop unconverted): TypeError for another type or dtype,
+// ValueError for another shape or layout.
+py::array vector_argument(py::handle obj, const char* name) {
+  if (!py::isinstance<py::array>(obj))
+    throw py::type_error(std::string(name) + " must be a numpy array, got " +
+                         std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  auto arr = py::reinterpret_borrow<py::array>(obj);
+  if (!py::array_t<double>::check_(arr) && !py::array_t<float>::check_(arr))
+    throw py::type_error(std::string(name) + " must have dtype float64 or float32, got " +
+                         std::string(py::str(arr.dtype())));
+  if (arr.ndim() != 1)
+    throw py::value_error(std::string(name) + " must be 1-D, got " + std::to_string(arr.ndim()) +
+                          " dimensions");
+  if (!(arr.flags() & py::array::c_style)) throw py::value_error(std::string(name) + " must be contiguous");
+  return arr;
+}
+
+bool is_single(const py::array& arr) { return py::array_t<float>::check_(arr); }
+
+// `other` (a vector_argument) beside `first`: the same dtype and length.
+void check_alike(const py::array& first, const char* first_name, const py::array& other, const char* name) {
+  if (is_single(other) != is_single(first))
+    throw py::type_error(std::string(name) + " must have the dtype of " + first_name + ", " +
+                         std::string(py::str(first.dtype())) + ", got " +
+                         std::string(py::str(other.dtype())));
+  if (other.shape(0) != first.shape(0))
+    throw py::value_error(std::string(name) + " must have the length of " + first_name + ", " +
+                          std::to_string(first.shape(0)) + ", got " + std::to_string(other.shape(0)));
+}
+
+template <typename T>
+py::object vector_atan2(const py::array& y, const py::array& x) {
+  const py::ssize_t n = y.shape(0);
+  py::array_t<T> out(n);
+  const T *yd = static_cast<const T*>(y.data()), *xd = static_cast<const T*>(x.data());
+  T* od = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    atan2_of(yd, xd, od, n);
+  }
+  return std::move(out);
+}
+
+template <typename T>
+py::object vector_sincos(const py::array& x) {
+  const py::ssize_t n = x.shape(0);
+  py::array_t<T> s(n), c(n);
+  const T* xd = static_cast<const T*>(x.data());
+  T *sd = s.mutable_data(), *cd = c.mutable_data();
+  {
+    py::gil_scoped_release release;
+    sincos_of(xd, sd, cd, n);
+  }
+  return py::make_tuple(std::move(s), std::move(c));
+}
+
 }  // namespace
 
 void bind_diagnostics(py::module_& m) {
@@ -84,6 +144,26 @@ void bind_diagnostics(py::module_& m) {
         return out;
       },
       "Per kernel, the elementary operations per sample that its floor estimate counts.");
+  m.def(
+      "_vector_atan2",
+      [](py::handle y_obj, py::handle x_obj) -> py::object {
+        const py::array y = vector_argument(y_obj, "y"), x = vector_argument(x_obj, "x");
+        check_alike(y, "y", x, "x");
+        return is_single(y) ? vector_atan2<float>(y, x) : vector_atan2<double>(y, x);
+      },
+      py::arg("y"), py::arg("x"),
+      "The kernels' vectorised atan2 loop (vector_math.hpp, at the active ISA level) on 1-D contiguous "
+      "float64 or float32 arrays y and x of one dtype and length.");
+  m.def(
+      "_vector_sincos",
+      [](py::handle x_obj) -> py::object {
+        const py::array x = vector_argument(x_obj, "x");
+        return is_single(x) ? vector_sincos<float>(x) : vector_sincos<double>(x);
+      },
+      py::arg("x"),
+      "The kernels' vectorised sincos loop (vector_math.hpp sincos_bounded, at the active ISA level; "
+      "no fallback beyond its reducible limit) on a 1-D contiguous float64 or float32 array: the tuple "
+      "(sin, cos).");
 }
 
 }  // namespace spotkin::bindings

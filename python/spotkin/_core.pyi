@@ -242,6 +242,14 @@ def _tsc_ghz() -> float:
     """
     The TSC rate in GHz, measured against steady_clock over 0.2 s (0 off x86-64).
     """
+def _vector_atan2(y: typing.Any, x: typing.Any) -> typing.Any:
+    """
+    The kernels' vectorised atan2 loop (vector_math.hpp, at the active ISA level) on 1-D contiguous float64 or float32 arrays y and x of one dtype and length.
+    """
+def _vector_sincos(x: typing.Any) -> typing.Any:
+    """
+    The kernels' vectorised sincos loop (vector_math.hpp sincos_bounded, at the active ISA level; no fallback beyond its reducible limit) on a 1-D contiguous float64 or float32 array: the tuple (sin, cos).
+    """
 def available_isas() -> tuple:
     ...
 def compatible(J: typing.Any, dx: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> tuple:
