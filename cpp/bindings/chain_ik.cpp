@@ -3,6 +3,7 @@
 #include "spotkin/chain_ik.hpp"
 #include "spotkin/chain_ik/arm6.hpp"
 #include "spotkin/chain_ik/free_joint.hpp"
+#include "spotkin/chain_ik/kernels.hpp"
 
 #include <memory>
 #include <optional>
@@ -82,34 +83,10 @@ ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle up
 // About 200-300 ns per target on one core.
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(250.0);
 
-SPOTKIN_CLONES((template <typename T>), void, position_kernel, (const Position3& solver, const Limits& limits, const T* p, T* q,
-                                          std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
-                                          std::ptrdiff_t n), (solver, limits, p, q, valid, exists, status, n),
-  chain_ik::ik_position(solver, limits, p, q, valid, exists, status, n);
-)
-
-SPOTKIN_CLONES((template <typename T>), void, arm6_kernel, (const Arm6& solver, const Limits& limits, const T* poses, PoseFormat format,
-                                      T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t* exact,
-                                      std::int8_t* status, std::ptrdiff_t n), (solver, limits, poses, format, q, valid, exists, exact, status, n),
-  if (format == PoseFormat::Matrix)
-    chain_ik::ik_arm6<PoseFormat::Matrix>(solver, limits, poses, q, valid, exists, exact, status, n);
-  else
-    chain_ik::ik_arm6<PoseFormat::PositionQuaternion>(solver, limits, poses, q, valid, exists, exact, status, n);
-)
-
-SPOTKIN_CLONES((template <typename T>), void, position_nearest_kernel, (const Position3& solver, const Limits& limits, const T* p,
-                                                  const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n), (solver, limits, p, seed, q, status, n),
-  chain_ik::ik_position_nearest(solver, limits, p, seed, q, status, n);
-)
-
-SPOTKIN_CLONES((template <typename T>), void, arm6_nearest_kernel, (const Arm6& solver, const Limits& limits, const T* poses,
-                                              PoseFormat format, const T* seed, T* q, std::int8_t* status,
-                                              std::ptrdiff_t n), (solver, limits, poses, format, seed, q, status, n),
-  if (format == PoseFormat::Matrix)
-    chain_ik::ik_arm6_nearest<PoseFormat::Matrix>(solver, limits, poses, seed, q, status, n);
-  else
-    chain_ik::ik_arm6_nearest<PoseFormat::PositionQuaternion>(solver, limits, poses, seed, q, status, n);
-)
+using chain_ik::arm6_kernel;
+using chain_ik::arm6_nearest_kernel;
+using chain_ik::position_kernel;
+using chain_ik::position_nearest_kernel;
 
 // The shared tail: (q, valid, exists, exact, status) arrays, filled on thread chunks
 // (exact is exists where the kernel has no exact output).

@@ -111,12 +111,12 @@ py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z
     const T lambda2 = T(damping * damping);
     {
       ReleaseGilFor release(count(batch));
-      auto solve = [&](auto M, auto N) {
+      // Other shapes, a null-space task or no damping: one sample at a time.
+      auto solve = [&] {
         parallel_for(count(batch), min_per_thread(m, n, has_z || damping == 0.0), [&](std::ptrdiff_t b, std::ptrdiff_t e) {
           for (std::ptrdiff_t i = b; i < e; ++i)
-            diff::dls<T, decltype(M)::value, decltype(N)::value>(
-                jd + j_index(i) * m * n, dd + dx_index(i) * m, zd ? zd + z_index(i) * n : nullptr, lambda2, m, n,
-                od + i * n);
+            diff::dls<T>(jd + j_index(i) * m * n, dd + dx_index(i) * m, zd ? zd + z_index(i) * n : nullptr, lambda2,
+                         m, n, od + i * n);
         });
       };
       // The fixed shapes without a null-space task: blocks of samples, vectorised.
@@ -148,7 +148,7 @@ py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z
         });
       };
       if (has_z || damping == 0.0)  // decomposition-bound: no fixed-size path
-        solve(std::integral_constant<int, diff::Dyn>{}, std::integral_constant<int, diff::Dyn>{});
+        solve();
       else if (m == 6 && n == 6)
         solve_blocks(std::integral_constant<int, 6>{}, std::integral_constant<int, 6>{});
       else if (m == 3 && n == 3)
@@ -156,7 +156,7 @@ py::object dls(py::handle J_obj, py::handle dx_obj, double damping, py::handle z
       else if (m == 12 && n == 18)
         solve_blocks(std::integral_constant<int, 12>{}, std::integral_constant<int, 18>{});
       else
-        diff::with_shape(m, n, solve);
+        solve();
     }
     return std::move(out);
   };

@@ -15,17 +15,14 @@
 // lambda^2); the pseudo-inverse (lambda = 0, pinv, the null-space projector)
 // uses the complete orthogonal decomposition; only the quantities that are
 // singular values (singular_values, rank, manipulability) pay for an SVD.
-// The Cholesky path has fixed-size code for 3x3, 6x6 and 12x18 and
-// stack-allocated dynamic-size matrices (up to kMaxDim) for other shapes. The
-// SVD and COD run on the dynamic-size matrices for every shape: fixed-size
-// instantiations of them for the three shapes took this one file over ten
-// minutes to compile (GCC -O3), for a speed that matters less off the hot path.
+// The Cholesky path has vectorised fixed-size blocks for 3x3, 6x6 and 12x18
+// (dls_block, here, instantiated by the bindings) and stack-allocated
+// dynamic-size Eigen matrices (up to kMaxDim) for other shapes. The Eigen code
+// (LLT, COD, SVD) is compiled once, in cpp/src/differential.cpp, for float and
+// double: each instantiation of it costs GCC's front end about 10 s, and every
+// translation unit that included it paid again.
 #pragma once
 
-#include <Eigen/Cholesky>
-#include <Eigen/Core>
-#include <Eigen/QR>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -37,24 +34,6 @@
 namespace spotkin::differential {
 
 constexpr int kMaxDim = 64;
-constexpr int Dyn = Eigen::Dynamic;
-
-// Matrix types for compile-time sizes (M, N), or Dyn with a kMaxDim cap.
-template <typename S, int M, int N>
-struct Types {
-  static constexpr int kMaxM = M == Dyn ? kMaxDim : M;
-  static constexpr int kMaxN = N == Dyn ? kMaxDim : N;
-  static constexpr int kMin = (M == Dyn || N == Dyn) ? Dyn : (M < N ? M : N);
-  static constexpr int kMaxMin = kMaxM < kMaxN ? kMaxM : kMaxN;
-  using Jac = Eigen::Matrix<S, M, N, Eigen::RowMajor, kMaxM, kMaxN>;  // row-major like numpy
-  using JacT = Eigen::Matrix<S, N, M, Eigen::RowMajor, kMaxN, kMaxM>;
-  using SquareM = Eigen::Matrix<S, M, M, Eigen::ColMajor, kMaxM, kMaxM>;
-  using SquareN = Eigen::Matrix<S, N, N, Eigen::RowMajor, kMaxN, kMaxN>;
-  using VecM = Eigen::Matrix<S, M, 1, Eigen::ColMajor, kMaxM, 1>;
-  using VecN = Eigen::Matrix<S, N, 1, Eigen::ColMajor, kMaxN, 1>;
-  using Svd = Eigen::JacobiSVD<Eigen::Matrix<S, M, N, Eigen::ColMajor, kMaxM, kMaxN>, Eigen::ColPivHouseholderQRPreconditioner>;
-  using Cod = Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<S, M, N, Eigen::ColMajor, kMaxM, kMaxN>>;
-};
 
 template <typename S>
 SPOTKIN_INLINE bool all_finite(const S* x, std::ptrdiff_t count) noexcept {
@@ -81,43 +60,6 @@ SPOTKIN_INLINE S cod_threshold(int m, int n) noexcept {
   return S(std::max(m, n)) * std::numeric_limits<S>::epsilon();
 }
 
-template <typename S, int M, int N>
-SPOTKIN_INLINE Eigen::Map<const typename Types<S, M, N>::Jac> map_jacobian(const S* J, int m, int n) noexcept {
-  return Eigen::Map<const typename Types<S, M, N>::Jac>(J, m, n);
-}
-
-template <typename S>
-inline void pinv_solve(const S* Jp, const S* dxp, const S* zp, int m, int n, S* dqp) noexcept;
-
-// Damped least squares, lambda2 = damping^2 > 0:
-//   dq = J^T (J J^T + lambda^2 I_m)^-1 dx          (m <= n)
-//      = (J^T J + lambda^2 I_n)^-1 J^T dx          (m > n; the same matrix, since
-//        J^T (J J^T + l^2 I) = (J^T J + l^2 I) J^T)
-// solved by Cholesky on the smaller Gram matrix (see damping_below_rounding for
-// a damping too small to matter; a factorisation that still meets a
-// non-positive pivot also gives J^+ dx, never NaN).
-// Returns false when the factorisation met a non-positive pivot.
-template <typename S, int M, int N>
-SPOTKIN_INLINE bool dls_damped_cholesky(const S* Jp, const S* dxp, S lambda2, int m, int n, S* dqp) noexcept {
-  using T = Types<S, M, N>;
-  const auto J = map_jacobian<S, M, N>(Jp, m, n);
-  const Eigen::Map<const typename T::VecM> dx(dxp, m);
-  Eigen::Map<typename T::VecN> dq(dqp, n);
-  if (m <= n) {
-    typename T::SquareM A = J * J.transpose();
-    A.diagonal().array() += lambda2;
-    const Eigen::LLT<typename T::SquareM> llt(A);
-    dq.noalias() = J.transpose() * llt.solve(dx);
-    return llt.info() == Eigen::Success;
-  }
-  typename T::SquareN A = J.transpose() * J;
-  A.diagonal().array() += lambda2;
-  const typename T::VecN rhs = J.transpose() * dx;
-  const Eigen::LLT<typename T::SquareN> llt(A);
-  dq = llt.solve(rhs);
-  return llt.info() == Eigen::Success;
-}
-
 // lambda^2 at or below the rounding of J J^T: (J J^T + lambda^2 I) is J J^T in
 // floating point, and a singular J's factorisation is rounding noise. Such a
 // damping is numerically zero: the step is its lambda -> 0 limit, J^+ dx. The
@@ -130,13 +72,45 @@ SPOTKIN_INLINE bool damping_below_rounding(const S* J, int m, int n, S lambda2) 
   return double(lambda2) <= std::numeric_limits<double>::epsilon() * frobenius2;
 }
 
-template <typename S, int M, int N>
-SPOTKIN_INLINE void dls_damped(const S* Jp, const S* dxp, S lambda2, int m, int n, S* dqp) noexcept {
-  if (damping_below_rounding(Jp, m, n, lambda2)) return pinv_solve<S>(Jp, dxp, nullptr, m, n, dqp);
-  bool ok = dls_damped_cholesky<S, M, N>(Jp, dxp, lambda2, m, n, dqp);
-  for (int j = 0; j < n; ++j) ok = ok && std::isfinite(dqp[j]);
-  if (!ok) pinv_solve<S>(Jp, dxp, nullptr, m, n, dqp);
-}
+// The minimum-norm least-squares solution dq = J^+ dx (the limit lambda -> 0 of
+// dls) and, when z is given, the null-space term (I - J^+ J) z, which J maps to
+// zero, so J dq = J J^+ dx whatever z is. zp and dxp may be null.
+template <typename S>
+void pinv_solve(const S* Jp, const S* dxp, const S* zp, int m, int n, S* dqp) noexcept;
+
+// dls with an optional secondary task z projected into the null space:
+//   dq = J^T (J J^T + lambda^2 I)^-1 dx + (I - J^+ J) z
+// The projector uses the exact pseudo-inverse, so J (I - J^+ J) z = 0 and the
+// primary task is the same as without z. lambda = 0 gives J^+ dx. Non-finite
+// input gives an all-NaN dq.
+template <typename S>
+void dls(const S* J, const S* dx, const S* z, S lambda2, int m, int n, S* dq) noexcept;
+
+// J^+ (n x m, row-major) from the complete orthogonal decomposition
+// J P = Q [T 0; 0 0] Z: J^+ = P Z^T [T^-1 0; 0 0] Q^T.
+template <typename S>
+void pinv(const S* Jp, int m, int n, S* outp) noexcept;
+
+// Null-space projector P = I_n - J^+ J (n x n, row-major): symmetric,
+// idempotent, J P = 0.
+template <typename S>
+void nullspace_projector(const S* Jp, int m, int n, S* outp) noexcept;
+
+// Singular values, descending, min(m, n) of them (two-sided Jacobi SVD: small
+// singular values to full relative accuracy of the input, unlike the
+// eigenvalues of J J^T). Returns false (and NaN) for non-finite input.
+template <typename S>
+bool singular_values(const S* Jp, int m, int n, S* sigma) noexcept;
+
+// rank = #{sigma_i > tol}, tol = max(m, n) * eps * sigma_max unless tol >= 0 is
+// given. Non-finite J gives -1.
+template <typename S>
+std::int64_t rank(const S* Jp, int m, int n, S tol) noexcept;
+
+// Yoshikawa's manipulability sqrt(det(J J^T)) = prod sigma_i for m <= n; for
+// m > n, J J^T (m x m) has rank <= n < m, so it is 0.
+template <typename S>
+S manipulability(const S* Jp, int m, int n) noexcept;
 
 // dls_damped for a block of kDlsBlock samples at fixed M <= N, vectorised
 // across samples (structure of arrays: J[r * N + c][i] is J_rc of sample i):
@@ -183,137 +157,6 @@ SPOTKIN_CLONES_T((template <typename S, int M, int N> __attribute__((noinline)))
       for (int i = 0; i < B; ++i) dq[c][i] += J[r * N + c][i] * y[r][i];
   }
 )
-
-// The minimum-norm least-squares solution dq = J^+ dx (the limit lambda -> 0 of
-// dls) and, when z is given, the null-space term (I - J^+ J) z, which J maps to
-// zero, so J dq = J J^+ dx whatever z is.
-template <typename S>
-inline void pinv_solve(const S* Jp, const S* dxp, const S* zp, int m, int n, S* dqp) noexcept {
-  using T = Types<S, Dyn, Dyn>;
-  const auto J = map_jacobian<S, Dyn, Dyn>(Jp, m, n);
-  typename T::Cod cod(m, n);
-  cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(J);
-  Eigen::Map<typename T::VecN> dq(dqp, n);
-  if (dxp != nullptr) {
-    dq = cod.solve(Eigen::Map<const typename T::VecM>(dxp, m));
-  } else {
-    dq.setZero();
-  }
-  if (zp != nullptr) {
-    const Eigen::Map<const typename T::VecN> z(zp, n);
-    const typename T::VecM Jz = J * z;
-    const typename T::VecN back = cod.solve(Jz);
-    dq += z - back;
-  }
-}
-
-// dls with an optional secondary task z projected into the null space:
-//   dq = J^T (J J^T + lambda^2 I)^-1 dx + (I - J^+ J) z
-// The projector uses the exact pseudo-inverse, so J (I - J^+ J) z = 0 and the
-// primary task is the same as without z. lambda = 0 gives J^+ dx. Non-finite
-// input gives an all-NaN dq.
-template <typename S, int M, int N>
-SPOTKIN_INLINE void dls(const S* J, const S* dx, const S* z, S lambda2, int m, int n, S* dq) noexcept {
-  if (!all_finite(J, std::ptrdiff_t(m) * n) || !all_finite(dx, m) || (z != nullptr && !all_finite(z, n))) {
-    fill_nan(dq, n);
-    return;
-  }
-  if (lambda2 > S(0)) {
-    dls_damped<S, M, N>(J, dx, lambda2, m, n, dq);
-    if (z == nullptr) return;
-    S null_part[kMaxDim];
-    pinv_solve<S>(J, nullptr, z, m, n, null_part);
-    for (int j = 0; j < n; ++j) dq[j] += null_part[j];
-  } else {
-    pinv_solve<S>(J, dx, z, m, n, dq);
-  }
-}
-
-// J^+ (n x m, row-major) from the complete orthogonal decomposition
-// J P = Q [T 0; 0 0] Z: J^+ = P Z^T [T^-1 0; 0 0] Q^T.
-template <typename S>
-inline void pinv(const S* Jp, int m, int n, S* outp) noexcept {
-  using T = Types<S, Dyn, Dyn>;
-  if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
-    fill_nan(outp, std::ptrdiff_t(m) * n);
-    return;
-  }
-  typename T::Cod cod(m, n);
-  cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(map_jacobian<S, Dyn, Dyn>(Jp, m, n));
-  Eigen::Map<typename T::JacT>(outp, n, m) = cod.pseudoInverse();
-}
-
-// Null-space projector P = I_n - J^+ J (n x n, row-major): symmetric,
-// idempotent, J P = 0.
-template <typename S>
-inline void nullspace_projector(const S* Jp, int m, int n, S* outp) noexcept {
-  using T = Types<S, Dyn, Dyn>;
-  if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
-    fill_nan(outp, std::ptrdiff_t(n) * n);
-    return;
-  }
-  const auto J = map_jacobian<S, Dyn, Dyn>(Jp, m, n);
-  typename T::Cod cod(m, n);
-  cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(J);
-  typename T::SquareN P = -(cod.pseudoInverse() * J);
-  P.diagonal().array() += S(1);
-  Eigen::Map<typename T::SquareN>(outp, n, n) = S(0.5) * (P + P.transpose());  // exactly symmetric
-}
-
-// Singular values, descending, min(m, n) of them (two-sided Jacobi SVD: small
-// singular values to full relative accuracy of the input, unlike the
-// eigenvalues of J J^T). Returns false (and NaN) for non-finite input.
-template <typename S>
-inline bool singular_values(const S* Jp, int m, int n, S* sigma) noexcept {
-  using T = Types<S, Dyn, Dyn>;
-  const int k = std::min(m, n);
-  if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
-    fill_nan(sigma, k);
-    return false;
-  }
-  typename T::Svd svd(m, n);
-  svd.compute(map_jacobian<S, Dyn, Dyn>(Jp, m, n));
-  for (int i = 0; i < k; ++i) sigma[i] = svd.singularValues()[i];
-  return true;
-}
-
-// rank = #{sigma_i > tol}, tol = max(m, n) * eps * sigma_max unless tol >= 0 is
-// given. Non-finite J gives -1.
-template <typename S>
-inline std::int64_t rank(const S* Jp, int m, int n, S tol) noexcept {
-  S sigma[kMaxDim];
-  if (!singular_values<S>(Jp, m, n, sigma)) return -1;
-  const int k = std::min(m, n);
-  const S cutoff = tol >= S(0) ? tol : default_tolerance<S>(m, n, k > 0 ? sigma[0] : S(0));
-  std::int64_t r = 0;
-  for (int i = 0; i < k; ++i) r += sigma[i] > cutoff;
-  return r;
-}
-
-// Yoshikawa's manipulability sqrt(det(J J^T)) = prod sigma_i for m <= n; for
-// m > n, J J^T (m x m) has rank <= n < m, so it is 0.
-template <typename S>
-inline S manipulability(const S* Jp, int m, int n) noexcept {
-  S sigma[kMaxDim];
-  if (!singular_values<S>(Jp, m, n, sigma)) return quiet_nan<S>();
-  if (m > n) return S(0);
-  S w = S(1);
-  for (int i = 0; i < m; ++i) w *= sigma[i];
-  return w;
-}
-
-// Calls f(std::integral_constant M, N) for the fixed-size shapes of the
-// Cholesky path, or with Dyn.
-template <typename F>
-decltype(auto) with_shape(int m, int n, F&& f) {
-  if (m == 6 && n == 6) return f(std::integral_constant<int, 6>{}, std::integral_constant<int, 6>{});
-  if (m == 3 && n == 3) return f(std::integral_constant<int, 3>{}, std::integral_constant<int, 3>{});
-  if (m == 12 && n == 18) return f(std::integral_constant<int, 12>{}, std::integral_constant<int, 18>{});
-  return f(std::integral_constant<int, Dyn>{}, std::integral_constant<int, Dyn>{});
-}
 
 // ---------------------------------------------------------------------------
 // Closed-loop IK along a path of targets.
@@ -367,18 +210,6 @@ inline void pose_error(const Rigid<double>& target, const Rigid<double>& T, doub
   }
 }
 
-// One DLS step dq = J^T (J J^T + lambda^2 I)^-1 e with the columns of locked
-// joints zeroed (rows <= 6).
-inline void ik_step(const double* J, const double* e, const bool* locked, int rows, int n, double lambda2,
-                    double* dq) noexcept {
-  using Mat = Eigen::Matrix<double, Dyn, Dyn, Eigen::RowMajor, 6, Chain<double>::kMaxJoints>;
-  Eigen::Map<const Mat> Jfull(J, rows, n);
-  Mat Jm = Jfull;
-  for (int j = 0; j < n; ++j)
-    if (locked[j]) Jm.col(j).setZero();
-  dls_damped<double, Dyn, Dyn>(Jm.data(), e, lambda2, rows, n, dq);
-}
-
 
 // A finite (4, 4) rigid transform, row-major: last row [0, 0, 0, 1] (1e-9),
 // max |R^T R - I| <= 1e-6 and det R > 0, as the closed-form IK accepts (Arm::read_pose).
@@ -404,58 +235,8 @@ inline bool is_rigid_transform(const double* T) noexcept {
 // capped at max_step per joint, then clamped into [lower, upper]. A joint at a
 // limit whose step points out of range is locked (its column removed) and the
 // step re-solved, so the others make up for it.
-inline void ik_differential(const Chain<double>& chain, const double* lower, const double* upper,
-                            const double* targets, std::ptrdiff_t K, const double* q0, const IkOptions& opt,
-                            double* q_path, IkResult* results) noexcept {
-  const int n = chain.dof();
-  const int rows = opt.rows;
-  const double lambda2 = opt.damping * opt.damping;
-  double q[Chain<double>::kMaxJoints], dq[Chain<double>::kMaxJoints], J[6 * Chain<double>::kMaxJoints];
-  bool locked[Chain<double>::kMaxJoints];
-  for (int j = 0; j < n; ++j) q[j] = std::clamp(q0[j], lower[j], upper[j]);
-  bool finite_seed = all_finite(q0, n);
-  for (std::ptrdiff_t k = 0; k < K; ++k) {
-    const double* Tk = targets + 16 * k;
-    Rigid<double> target;
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) target.R(i, j) = Tk[4 * i + j];
-      target.p[i] = Tk[4 * i + 3];
-    }
-    IkResult& res = results[k];
-    double* qk = q_path + k * n;
-    if (!finite_seed || !is_rigid_transform(Tk)) {  // invalid in, NaN out; the path continues from q
-      fill_nan(qk, n);
-      res = {false, 0, quiet_nan<double>(), quiet_nan<double>()};
-      continue;
-    }
-    double e[6];
-    int it = 0;
-    bool converged = false;
-    for (;; ++it) {
-      pose_error(target, chain.forward(q), e);
-      const double ep = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-      const double eo = std::sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]);
-      res.position_error = ep;
-      res.orientation_error = eo;
-      converged = ep <= opt.position_tolerance && (rows == 3 || eo <= opt.orientation_tolerance);
-      if (converged || it >= opt.max_iterations || !std::isfinite(ep + eo)) break;
-      chain.jacobian(q, J, rows, false);
-      std::fill(locked, locked + n, false);
-      ik_step(J, e, locked, rows, n, lambda2, dq);
-      bool relock = false;
-      for (int j = 0; j < n; ++j) {
-        if ((q[j] <= lower[j] && dq[j] < 0) || (q[j] >= upper[j] && dq[j] > 0)) locked[j] = relock = true;
-      }
-      if (relock) ik_step(J, e, locked, rows, n, lambda2, dq);
-      double largest = 0;
-      for (int j = 0; j < n; ++j) largest = std::max(largest, std::abs(dq[j]));
-      const double scale = largest > opt.max_step ? opt.max_step / largest : 1.0;
-      for (int j = 0; j < n; ++j) q[j] = locked[j] ? q[j] : std::clamp(q[j] + scale * dq[j], lower[j], upper[j]);
-    }
-    res.converged = converged;
-    res.iterations = it;
-    std::copy(q, q + n, qk);
-  }
-}
+void ik_differential(const Chain<double>& chain, const double* lower, const double* upper, const double* targets,
+                     std::ptrdiff_t K, const double* q0, const IkOptions& opt, double* q_path,
+                     IkResult* results) noexcept;
 
 }  // namespace spotkin::differential

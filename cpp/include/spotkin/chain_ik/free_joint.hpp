@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-#include "spotkin/chain_ik/arm6.hpp"
+#include "spotkin/chain_ik/kernels.hpp"
 
 namespace spotkin::chain_ik {
 
@@ -118,8 +118,8 @@ void ik_free_joint(const FreeJoint7& solver, const double* lower, const double* 
     for (std::ptrdiff_t e = 0; e < n * width; ++e) pose_run[std::size_t(e)] = double(poses[i * width + e]);
     q6.resize(std::size_t(n * S * 6)), valid6.resize(std::size_t(n * S)), exists6.resize(std::size_t(n * S));
     exact6.resize(std::size_t(n * S)), status6.resize(std::size_t(n));
-    ik_arm6<Format>(*arm, limits6, pose_run.data(), q6.data(), valid6.data(), exists6.data(), exact6.data(),
-                    status6.data(), n);
+    arm6_kernel<double>(*arm, limits6, pose_run.data(), Format, q6.data(), valid6.data(), exists6.data(),
+                        exact6.data(), status6.data(), n);
     const bool value_fits = lower[k] <= value && value <= upper[k];
     for (std::ptrdiff_t r = 0; r < n; ++r) {
       const std::ptrdiff_t at = i + r;

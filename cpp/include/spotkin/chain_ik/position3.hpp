@@ -63,6 +63,11 @@ class Position3 {
   // q[k] for k < n, sorted by (q1, q2, q3) with revolute angles in [-pi, pi]
   // (compared through their cosines and sines). 0 for a non-finite or an
   // unreachable p.
+  // solve, out of line: the one-target path of solve_block, compiled once rather
+  // than inlined into every instruction-set clone of the block kernels (it is
+  // scalar code, and it carries the Newton polish's SVD).
+  SPOTKIN_SCALAR_PATH int solve_one(const V3& p, JointValue q[kSlots][3]) const noexcept { return solve(p, q); }
+
   SPOTKIN_INLINE int solve(const V3& p, JointValue q[kSlots][3]) const noexcept {
     if (!p.allFinite()) return 0;
     const V3 target = M0_inv_.R * p + M0_inv_.p;  // p' of (F')
@@ -113,7 +118,7 @@ class Position3 {
     if (!revolute_ || m < kLanes) {  // one by one (a short block costs no more than its targets)
       for (int i = 0; i < m; ++i) {
         JointValue q[kSlots][3];
-        store(i, q, solve(V3(px[i], py[i], pz[i]), q));
+        store(i, q, solve_one(V3(px[i], py[i], pz[i]), q));
       }
       return;
     }

@@ -66,6 +66,12 @@ class SphericalWrist6 {
   // Every solution for a target pose: returns 1 if the position part has any
   // solution; q[slot] = (cos, sin) of the 6 angles, exists[slot] per slot.
   // Slot 2 k + b: position solution k (as Position3 orders them), wrist branch b.
+  // solve, out of line, for the pose-by-pose path of solve_block (compiled once,
+  // not in every instruction-set clone of the block kernels).
+  SPOTKIN_SCALAR_PATH void solve_one(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots]) const noexcept {
+    solve(target, q, exists);
+  }
+
   SPOTKIN_INLINE void solve(const Arm::Pose& target, JointValue q[kSlots][6], bool exists[kSlots]) const noexcept {
     M3 R;
     V3 p;
@@ -142,7 +148,7 @@ class SphericalWrist6 {
         input_ok[i] = Arm::read_pose<Format>(in, target);
         JointValue q[kSlots][6];
         bool ok[kSlots] = {};
-        if (input_ok[i] != 0.0) solve(target, q, ok);
+        if (input_ok[i] != 0.0) solve_one(target, q, ok);
         for (int k = 0; k < kSlots; ++k) {
           exists[k][i] = ok[k] ? 1.0 : 0.0;
           for (int j = 0; j < 6; ++j)
