@@ -22,23 +22,27 @@ namespace {
 // Returns false when the factorisation met a non-positive pivot.
 template <typename S>
 bool dls_damped_cholesky(const S* Jp, const S* dxp, S lambda2, int m, int n, S* dqp) noexcept {
-  using T = Types<S>;
-  const auto J = map_jacobian<S>(Jp, m, n);
-  const Eigen::Map<const typename T::VecM> dx(dxp, m);
-  Eigen::Map<typename T::VecN> dq(dqp, n);
+  using T = Types<double>;
+  const T::Jac J = jacobian_in_double(Jp, m, n);
+  const T::VecM dx = vector_in_double(dxp, m);
+  T::VecN dq;
+  bool ok;
   if (m <= n) {
-    typename T::SquareM A = J * J.transpose();
-    A.diagonal().array() += lambda2;
-    const Eigen::LLT<typename T::SquareM> llt(A);
+    T::SquareM A = J * J.transpose();
+    A.diagonal().array() += double(lambda2);
+    const Eigen::LLT<T::SquareM> llt(A);
     dq.noalias() = J.transpose() * llt.solve(dx);
-    return llt.info() == Eigen::Success;
+    ok = llt.info() == Eigen::Success;
+  } else {
+    T::SquareN A = J.transpose() * J;
+    A.diagonal().array() += double(lambda2);
+    const T::VecN rhs = J.transpose() * dx;
+    const Eigen::LLT<T::SquareN> llt(A);
+    dq = llt.solve(rhs);
+    ok = llt.info() == Eigen::Success;
   }
-  typename T::SquareN A = J.transpose() * J;
-  A.diagonal().array() += lambda2;
-  const typename T::VecN rhs = J.transpose() * dx;
-  const Eigen::LLT<typename T::SquareN> llt(A);
-  dq = llt.solve(rhs);
-  return llt.info() == Eigen::Success;
+  Eigen::Map<VecOf<S>>(dqp, n) = dq.template cast<S>();
+  return ok;
 }
 
 template <typename S>
@@ -65,23 +69,20 @@ void ik_step(const double* J, const double* e, const bool* locked, int rows, int
 
 template <typename S>
 void pinv_solve(const S* Jp, const S* dxp, const S* zp, int m, int n, S* dqp) noexcept {
-  using T = Types<S>;
-  const auto J = map_jacobian<S>(Jp, m, n);
-  Eigen::CompleteOrthogonalDecomposition<typename T::ColMajor> cod(m, n);
+  using T = Types<double>;
+  const T::Jac J = jacobian_in_double(Jp, m, n);
+  Eigen::CompleteOrthogonalDecomposition<T::ColMajor> cod(m, n);
   cod.setThreshold(cod_threshold<S>(m, n));
   cod.compute(J);
-  Eigen::Map<typename T::VecN> dq(dqp, n);
-  if (dxp != nullptr) {
-    dq = cod.solve(Eigen::Map<const typename T::VecM>(dxp, m));
-  } else {
-    dq.setZero();
-  }
+  T::VecN dq = T::VecN::Zero(n);
+  if (dxp != nullptr) dq = cod.solve(vector_in_double(dxp, m));
   if (zp != nullptr) {
-    const Eigen::Map<const typename T::VecN> z(zp, n);
-    const typename T::VecM Jz = J * z;
-    const typename T::VecN back = cod.solve(Jz);
+    const T::VecN z = vector_in_double(zp, n);
+    const T::VecM Jz = J * z;
+    const T::VecN back = cod.solve(Jz);
     dq += z - back;
   }
+  Eigen::Map<VecOf<S>>(dqp, n) = dq.template cast<S>();
 }
 
 template <typename S>
@@ -103,31 +104,33 @@ void dls(const S* J, const S* dx, const S* z, S lambda2, int m, int n, S* dq) no
 
 template <typename S>
 void pinv(const S* Jp, int m, int n, S* outp) noexcept {
-  using T = Types<S>;
+  using T = Types<double>;
   if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
     fill_nan(outp, std::ptrdiff_t(m) * n);
     return;
   }
-  Eigen::CompleteOrthogonalDecomposition<typename T::ColMajor> cod(m, n);
+  Eigen::CompleteOrthogonalDecomposition<T::ColMajor> cod(m, n);
   cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(map_jacobian<S>(Jp, m, n));
-  Eigen::Map<typename T::JacT>(outp, n, m) = cod.pseudoInverse();
+  cod.compute(jacobian_in_double(Jp, m, n));
+  using Out = Eigen::Matrix<S, Dyn, Dyn, Eigen::RowMajor, kMaxDim, kMaxDim>;
+  Eigen::Map<Out>(outp, n, m) = cod.pseudoInverse().template cast<S>();
 }
 
 template <typename S>
 void nullspace_projector(const S* Jp, int m, int n, S* outp) noexcept {
-  using T = Types<S>;
+  using T = Types<double>;
   if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
     fill_nan(outp, std::ptrdiff_t(n) * n);
     return;
   }
-  const auto J = map_jacobian<S>(Jp, m, n);
-  Eigen::CompleteOrthogonalDecomposition<typename T::ColMajor> cod(m, n);
+  const T::Jac J = jacobian_in_double(Jp, m, n);
+  Eigen::CompleteOrthogonalDecomposition<T::ColMajor> cod(m, n);
   cod.setThreshold(cod_threshold<S>(m, n));
   cod.compute(J);
-  typename T::SquareN P = -(cod.pseudoInverse() * J);
-  P.diagonal().array() += S(1);
-  Eigen::Map<typename T::SquareN>(outp, n, n) = S(0.5) * (P + P.transpose());  // exactly symmetric
+  T::SquareN P = -(cod.pseudoInverse() * J);
+  P.diagonal().array() += 1.0;
+  using Out = Eigen::Matrix<S, Dyn, Dyn, Eigen::RowMajor, kMaxDim, kMaxDim>;
+  Eigen::Map<Out>(outp, n, n) = (0.5 * (P + P.transpose())).template cast<S>();  // exactly symmetric
 }
 
 void ik_differential(const Chain<double>& chain, const double* lower, const double* upper,

@@ -14,15 +14,14 @@ namespace spotkin::differential {
 
 template <typename S>
 bool singular_values(const S* Jp, int m, int n, S* sigma) noexcept {
-  using T = Types<S>;
   const int k = std::min(m, n);
   if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
     fill_nan(sigma, k);
     return false;
   }
-  Eigen::JacobiSVD<typename T::ColMajor, Eigen::ColPivHouseholderQRPreconditioner> svd(m, n);
-  svd.compute(map_jacobian<S>(Jp, m, n));
-  for (int i = 0; i < k; ++i) sigma[i] = svd.singularValues()[i];
+  Eigen::JacobiSVD<Types<double>::ColMajor, Eigen::ColPivHouseholderQRPreconditioner> svd(m, n);
+  svd.compute(jacobian_in_double(Jp, m, n));
+  for (int i = 0; i < k; ++i) sigma[i] = S(svd.singularValues()[i]);
   return true;
 }
 
@@ -50,31 +49,32 @@ S manipulability(const S* Jp, int m, int n) noexcept {
 // tol >= 0 is absolute; tol < 0 asks for the default above.
 template <typename S>
 Compatibility<S> compatibility(const S* Jp, const S* dxp, int m, int n, S tol) noexcept {
-  using T = Types<S>;
+  using T = Types<double>;
   if (!all_finite(Jp, std::ptrdiff_t(m) * n) || !all_finite(dxp, m)) return {quiet_nan<S>(), false};
-  Eigen::JacobiSVD<typename T::ColMajor, Eigen::ColPivHouseholderQRPreconditioner> svd(m, n, Eigen::ComputeFullU);
-  svd.compute(map_jacobian<S>(Jp, m, n));
+  Eigen::JacobiSVD<T::ColMajor, Eigen::ColPivHouseholderQRPreconditioner> svd(m, n, Eigen::ComputeFullU);
+  svd.compute(jacobian_in_double(Jp, m, n));
   const auto& sigma = svd.singularValues();
   const int k = std::min(m, n);
-  const S sigma_max = k > 0 ? sigma[0] : S(0);
-  const S cutoff = default_tolerance<S>(m, n, sigma_max);
+  const double sigma_max = k > 0 ? sigma[0] : 0.0;
+  const double cutoff = std::max(m, n) * double(std::numeric_limits<S>::epsilon()) * sigma_max;  // as rank()
   // dx / scale, so the squares neither underflow nor overflow
-  S scale = 0;
-  for (int i = 0; i < m; ++i) scale = std::max(scale, std::fabs(dxp[i]));
-  if (scale == S(0)) return {S(0), true};
-  const typename T::VecM dx = Eigen::Map<const typename T::VecM>(dxp, m) / scale;
-  S outside = 0, pinv_norm2 = 0;
+  double scale = 0;
+  for (int i = 0; i < m; ++i) scale = std::max(scale, std::fabs(double(dxp[i])));
+  if (scale == 0.0) return {S(0), true};
+  const T::VecM dx = vector_in_double(dxp, m) / scale;
+  double outside = 0, pinv_norm2 = 0;
   for (int i = 0; i < m; ++i) {
-    const S c = svd.matrixU().col(i).dot(dx);
+    const double c = svd.matrixU().col(i).dot(dx);
     if (i < k && sigma[i] > cutoff)
       pinv_norm2 += (c / sigma[i]) * (c / sigma[i]);
     else
       outside += c * c;
   }
-  const S residual = scale * std::sqrt(outside);
+  // the rounding bound of the input's precision (S's epsilon)
+  const S residual = S(scale * std::sqrt(outside));
   const S bound = tol >= S(0) ? tol
-                              : S(std::max(m, n)) * std::numeric_limits<S>::epsilon() * scale *
-                                    (dx.norm() + sigma_max * std::sqrt(pinv_norm2));
+                              : S(std::max(m, n) * double(std::numeric_limits<S>::epsilon()) * scale *
+                                  (dx.norm() + sigma_max * std::sqrt(pinv_norm2)));
   return {residual, residual <= bound};
 }
 
