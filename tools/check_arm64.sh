@@ -5,7 +5,7 @@
 # builds statically linked, under qemu-aarch64.
 #
 #   tools/check_arm64.sh              # from a checkout; builds into build/arm64/
-#   tools/check_arm64.sh --bindings   # also compiles cpp/bindings/*.cpp (-c) per compiler
+#   tools/check_arm64.sh --bindings   # also compiles cpp/bindings/*.cpp and cpp/src/*.cpp (-c) per compiler
 #
 # Needs: apt-get install -y g++-aarch64-linux-gnu qemu-user clang, and Eigen from
 # the cmeel-eigen wheel of .venv/bin/python or of python3 (or EIGEN_INCLUDE).
@@ -151,15 +151,15 @@ if ((bindings)); then
       name=${name_cxx%%:*}
       read -r -a cxx <<<"${name_cxx#*:}"
       echo
-      echo "== bindings: ${cxx[*]} -c cpp/bindings/*.cpp"
+      echo "== bindings: ${cxx[*]} -c cpp/bindings/*.cpp cpp/src/*.cpp"
       mkdir -p "$build/bindings_$name"
-      for src in cpp/bindings/*.cpp; do
-        base=$(basename "$src" .cpp)
+      for src in cpp/bindings/*.cpp cpp/src/*.cpp; do
+        base=$(basename "$(dirname "$src")")_$(basename "$src" .cpp)
         if timed "$build/bindings_$name/$base.log" "${cxx[@]}" "${flags[@]}" -fPIC -isystem "${py_includes[0]}" \
           -isystem "${py_includes[1]}" -c "$src" -o "$build/bindings_$name/$base.o"; then
-          note PASS "$name bindings/$base.cpp" "${took} s"
+          note PASS "$name ${src#cpp/}" "${took} s"
         else
-          note FAIL "$name bindings/$base.cpp" "see $build/bindings_$name/$base.log"
+          note FAIL "$name ${src#cpp/}" "see $build/bindings_$name/$base.log"
         fi
       done
     done
