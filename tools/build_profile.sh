@@ -17,11 +17,11 @@ rm -rf "$out" && mkdir -p "$out"
 mkdir -p "$out/tree" && (cd "$src" && git ls-files -z --cached --others --exclude-standard | xargs -0 cp --parents -t "$out/tree")
 cat > "$out/launch.sh" <<'LAUNCH'
 #!/bin/sh
-src=$(for a in "$@"; do case "$a" in *.cpp) echo "$a";; esac; done | tail -1)
-exec /usr/bin/time -a -o "$SPOTKIN_BUILD_LOG" -f "%e %U %S %M ${src:-link}" "$@"
+src=$(for a in "$@"; do case "$a" in *.cpp|*.cxx) echo "$a";; esac; done | tail -1)
+exec /usr/bin/time -a -o "$SPOTKIN_BUILD_LOG" -f "%e %U %S %M ${src:-other}" "$@"
 LAUNCH
 chmod +x "$out/launch.sh"
-export SPOTKIN_BUILD_LOG="$out/units.txt"
+export SPOTKIN_BUILD_LOG="$out/units.txt"  # the precompiled header shows as cmake_pch.hxx.cxx
 flags="${1:-}"
 python3 -m venv "$out/venv"
 start=$(date +%s)
