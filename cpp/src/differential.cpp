@@ -65,15 +65,24 @@ void ik_step(const double* J, const double* e, const bool* locked, int rows, int
   dls_damped<double>(Jm.data(), e, lambda2, rows, n, dq);
 }
 
+using Cod = Eigen::CompleteOrthogonalDecomposition<Types<double>::ColMajor>;
+
+// J's complete orthogonal decomposition, in double, with the rank cutoff of the input's type.
+template <typename S>
+Cod complete_orthogonal(const Types<double>::Jac& J, int m, int n) noexcept {
+  Cod cod(m, n);
+  cod.setThreshold(cod_threshold<S>(m, n));
+  cod.compute(J);
+  return cod;
+}
+
 }  // namespace
 
 template <typename S>
 void pinv_solve(const S* Jp, const S* dxp, const S* zp, int m, int n, S* dqp) noexcept {
   using T = Types<double>;
   const T::Jac J = jacobian_in_double(Jp, m, n);
-  Eigen::CompleteOrthogonalDecomposition<T::ColMajor> cod(m, n);
-  cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(J);
+  const Cod cod = complete_orthogonal<S>(J, m, n);
   T::VecN dq = T::VecN::Zero(n);
   if (dxp != nullptr) dq = cod.solve(vector_in_double(dxp, m));
   if (zp != nullptr) {
@@ -104,16 +113,12 @@ void dls(const S* J, const S* dx, const S* z, S lambda2, int m, int n, S* dq) no
 
 template <typename S>
 void pinv(const S* Jp, int m, int n, S* outp) noexcept {
-  using T = Types<double>;
   if (!all_finite(Jp, std::ptrdiff_t(m) * n)) {
     fill_nan(outp, std::ptrdiff_t(m) * n);
     return;
   }
-  Eigen::CompleteOrthogonalDecomposition<T::ColMajor> cod(m, n);
-  cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(jacobian_in_double(Jp, m, n));
-  using Out = Eigen::Matrix<S, Dyn, Dyn, Eigen::RowMajor, kMaxDim, kMaxDim>;
-  Eigen::Map<Out>(outp, n, m) = cod.pseudoInverse().template cast<S>();
+  const Cod cod = complete_orthogonal<S>(jacobian_in_double(Jp, m, n), m, n);
+  Eigen::Map<RowMajorOf<S>>(outp, n, m) = cod.pseudoInverse().template cast<S>();
 }
 
 template <typename S>
@@ -124,13 +129,10 @@ void nullspace_projector(const S* Jp, int m, int n, S* outp) noexcept {
     return;
   }
   const T::Jac J = jacobian_in_double(Jp, m, n);
-  Eigen::CompleteOrthogonalDecomposition<T::ColMajor> cod(m, n);
-  cod.setThreshold(cod_threshold<S>(m, n));
-  cod.compute(J);
+  const Cod cod = complete_orthogonal<S>(J, m, n);
   T::SquareN P = -(cod.pseudoInverse() * J);
   P.diagonal().array() += 1.0;
-  using Out = Eigen::Matrix<S, Dyn, Dyn, Eigen::RowMajor, kMaxDim, kMaxDim>;
-  Eigen::Map<Out>(outp, n, n) = (0.5 * (P + P.transpose())).template cast<S>();  // exactly symmetric
+  Eigen::Map<RowMajorOf<S>>(outp, n, n) = (0.5 * (P + P.transpose())).template cast<S>();  // exactly symmetric
 }
 
 void ik_differential(const Chain<double>& chain, const double* lower, const double* upper,

@@ -31,6 +31,8 @@ inline Eigen::Map<const typename Types<S>::Jac> map_jacobian(const S* J, int m, 
 
 template <typename S>
 using VecOf = Eigen::Matrix<S, Dyn, 1, Eigen::ColMajor, kMaxDim, 1>;
+template <typename S>
+using RowMajorOf = Eigen::Matrix<S, Dyn, Dyn, Eigen::RowMajor, kMaxDim, kMaxDim>;  // numpy's layout
 
 // J (m x n) and x (k) as double matrices.
 template <typename S>
