@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import spotkin as sk
 from conftest import PANDA_ROWS, panda
@@ -36,7 +37,15 @@ def kinova_like() -> sk.Chain:
     return sk.Chain.from_joints(placements, axes, tool=tool, limits=limits)
 
 
-ARMS = {"panda": (panda, 6, "6R-spherical-shoulder"), "kinova": (kinova_like, 2, "6R-spherical-wrist")}
+# (chain, held joint, family of the other six): the first and last joints go through one 6R solver
+# for every value (the pose moved by the held joint's motion), a middle joint through one per value
+ARMS = {
+    "panda-7": (panda, 6, "6R-spherical-shoulder"),
+    "panda-5": (panda, 4, "6R-spherical-shoulder"),
+    "kinova-1": (kinova_like, 0, "6R-spherical-wrist"),
+    "kinova-3": (kinova_like, 2, "6R-spherical-wrist"),
+    "kinova-7": (kinova_like, 6, "6R-spherical-shoulder"),
+}
 
 
 def angle_gap(a, b):
@@ -89,6 +98,72 @@ def test_matches_the_reference(name, rng):
         assert len(ours) >= len(theirs) > 0
         for row in theirs:
             assert angle_gap(ours, row).max(axis=1).min() < 1e-7
+
+
+@pytest.mark.parametrize("name", ["panda-5", "kinova-3"])
+def test_middle_joint_solvers_are_cached_and_grouped_by_value(name, rng):
+    make, k, _ = ARMS[name]
+    chain = make()
+    core = chain._free_core(k)
+    poses = chain.fk(configurations(chain, rng, 40))
+    grid = np.linspace(-1.0, 1.0, 7)
+    # 40 poses against 7 values, interleaved: one 6R solver per value, kept across calls
+    first = chain.ik(poses[:, None], free_joint=k, free_value=grid)
+    assert core.cached_values == 7
+    again = chain.ik(poses[:, None], free_joint=k, free_value=grid)
+    for a, b in zip(first, again):
+        np.testing.assert_array_equal(a, b)
+    # a pose's answer does not depend on its neighbours: shuffled, each sample alone, other threads
+    flat_T = np.broadcast_to(poses[:, None], (40, 7, 4, 4)).reshape(-1, 4, 4)
+    flat_v = np.broadcast_to(grid, (40, 7)).reshape(-1)
+    order = rng.permutation(len(flat_v))
+    shuffled = chain.ik(flat_T[order], free_joint=k, free_value=flat_v[order])
+    np.testing.assert_array_equal(shuffled.q, first.q.reshape(-1, 8, 7)[order])
+    np.testing.assert_array_equal(shuffled.status, first.status.reshape(-1)[order])
+    for i in (0, 13, 279):
+        one = chain.ik(flat_T[i], free_joint=k, free_value=flat_v[i])
+        np.testing.assert_array_equal(one.q, first.q.reshape(-1, 8, 7)[i])
+    threads = sk.get_num_threads()
+    try:
+        sk.set_num_threads(2)
+        two = chain.ik(flat_T, free_joint=k, free_value=flat_v)
+    finally:
+        sk.set_num_threads(threads)
+    np.testing.assert_array_equal(two.q, first.q.reshape(-1, 8, 7))
+    # bounded: the most recently used values only; -0.0 is 0.0
+    chain.ik(np.broadcast_to(poses[0], (1500, 4, 4)), free_joint=k, free_value=np.linspace(-2, 2, 1500))
+    assert core.cached_values == 1024
+    zero, negative_zero = chain.ik(poses[0], free_joint=k, free_value=np.array([0.0, -0.0]))[0]
+    np.testing.assert_array_equal(zero, negative_zero)
+
+
+@pytest.mark.parametrize("name", ["panda-7", "kinova-1", "kinova-7"])
+def test_end_joints_take_a_value_per_pose(name, rng):
+    """The first or last joint held: a distinct value per pose, in one batch, round trips exactly;
+    a bad pose or value is INVALID_INPUT for that sample only."""
+    make, k, _ = ARMS[name]
+    chain = make()
+    q = configurations(chain, rng, 3000)
+    T = chain.fk(q)
+    sol = chain.ik(T, free_joint=k, free_value=q[:, k])
+    assert (sol.status == sk.Status.OK).all()
+    found = sol.q[sol.exists]
+    assert np.abs(chain.fk(found) - np.repeat(T, sol.exists.sum(axis=1), axis=0)).max() < 1e-9
+    # position + quaternion poses give the same solutions
+    pq = np.concatenate([T[:, :3, 3], Rotation.from_matrix(T[:, :3, :3]).as_quat()], axis=1)
+    by_pq = chain.ik(pq, free_joint=k, free_value=q[:, k])
+    assert (by_pq.status == sk.Status.OK).all()
+    found = by_pq.q[by_pq.exists]
+    assert np.abs(chain.fk(found) - np.repeat(T, by_pq.exists.sum(axis=1), axis=0)).max() < 1e-9
+    bad = T[:4].copy()
+    bad[1, 0, 0] += 1e-3  # not a rotation
+    values = q[:4, k].copy()
+    values[2] = np.inf
+    out = chain.ik(bad, free_joint=k, free_value=values)
+    assert out.status[1] == sk.Status.INVALID_INPUT and np.isnan(out.q[1]).all()
+    assert out.status[2] == sk.Status.INVALID_INPUT and np.isnan(out.q[2]).all()
+    assert out.status[0] == out.status[3] == sk.Status.OK
+    np.testing.assert_array_equal(out.q[[0, 3]], sol.q[[0, 3]])
 
 
 def test_free_values_broadcast_and_sample_the_self_motion(rng):

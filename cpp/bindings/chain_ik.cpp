@@ -219,7 +219,8 @@ FreeJointIK make_free_joint_ik(const ChainPair& pair, py::handle lower_obj, py::
   return out;
 }
 
-// Each distinct free value costs its own 6R solver (tens of us), then the 6R solve per pose.
+// The first or last joint held: one 6R solver for every value. A middle joint: each distinct value
+// costs its own 6R solver (cached across calls), then the 6R solve per pose.
 py::object ik_free(const FreeJointIK& ik, py::handle T_obj, py::handle value_obj) {
   return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
     using T = decltype(tag);
@@ -257,6 +258,7 @@ void bind_chain_ik(py::module_& m) {
            py::arg("free_joint"), py::arg("angle_tolerance") = chain_ik::Tolerance::angle,
            py::arg("distance_tolerance") = -1.0)
       .def_property_readonly("kind", [](const FreeJointIK& ik) { return ik.solver.kind(); })
+      .def_property_readonly("cached_values", [](const FreeJointIK& ik) { return ik.solver.cached_values(); })
       .def("ik", &ik_free, py::arg("T"), py::arg("free_value"));
   py::class_<ChainIK>(m, "ChainIK")
       .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),

@@ -204,17 +204,16 @@ class SphericalWrist6 {
     const double A = a[0] * b[0] + a[1] * b[1], B = a[1] * b[0] - a[0] * b[1];
     const double r2 = A * A + B * B, inv = r2 > 0.0 ? 1.0 / std::sqrt(r2) : 1.0, ca = A * inv, sa = B * inv;
     const Limits limit = limits;  // a local copy: the stores below cannot alias it
-    const bool prismatic[3] = {position_.sigma(0) == 1, position_.sigma(1) == 1, position_.sigma(2) == 1};
     for (int k = 0; k < K; ++k) {
-      // position solution k (cos, sin) = (1, 0) for a prismatic joint) -> slots 2k, 2k + 1
+      // position solution k (lane_form: every joint revolute) -> slots 2k, 2k + 1
       const int slot0 = 2 * k, slot1 = 2 * k + 1;
       for (int i = 0; i < L; ++i) {
         const double found = k < arm.n[i] ? input_ok[i] : 0.0;
         // q1..q3 wrapped into their limits, once for both slots
         double position_fit = 1.0, position_angle[3];
+#pragma GCC unroll 3
         for (int j = 0; j < 3; ++j) {
-          const double value = prismatic[j] ? arm.v[k][j][i] : vector_math::atan2(arm.s[k][j][i], arm.c[k][j][i]);
-          position_angle[j] = limit.wrap_value(j, value, position_fit);
+          position_angle[j] = limit.wrap_value(j, vector_math::atan2(arm.s[k][j][i], arm.c[k][j][i]), position_fit);
         }
         // W e = A4^T Rz3^T R2^T Rz2^T R1^T Rz1^T (R0^T R_F6 e) for e = z, x
         double w[3] = {z0[0][i], z0[1][i], z0[2][i]}, wx[3] = {x0[0][i], x0[1][i], x0[2][i]};
@@ -253,6 +252,7 @@ class SphericalWrist6 {
           const double wrist[3] = {vector_math::atan2(s4, c4), vector_math::atan2(s5, c5),
                                    vector_math::atan2(x6[1], x6[0])};
           double fit = solvable * position_fit;
+#pragma GCC unroll 3
           for (int j = 0; j < 3; ++j) {
             const double wrapped = limit.wrap_value(3 + j, wrist[j], fit);
             angle[slot][j][i] = solvable != 0.0 ? position_angle[j] : nan;
