@@ -12,6 +12,8 @@ Implementations, per configuration:
   spotkin-1thread           one call on the whole batch, spotkin limited to one thread
   ref:pin-parallel-1thread  pin.rneaInParallel(1, ModelPool, q, v, a) (RNEA only: Pinocchio has no
                             parallel CRBA) at the same thread count
+  spotkin-packed[-f32]-1thread  CRBA with layout="packed" (the lower triangle row by row), float64
+                            or float32
   ref:pin-loop              a Python loop over pin.rnea / pin.crba
 and single calls (N = 1) from Python (target: under 3 us). ``pytest bench/bench_dynamics.py -s``
 prints per-configuration times and the ratios (reference time over spotkin's, same run) at the end.
@@ -170,11 +172,19 @@ def test_rnea(benchmark, name, impl):
 
 
 @pytest.mark.parametrize("name", sorted(WORKLOADS))
-@pytest.mark.parametrize("impl", ["spotkin-1thread", "ref:pin-loop"])
+@pytest.mark.parametrize(
+    "impl", ["spotkin-1thread", "spotkin-packed-1thread", "spotkin-packed-f32-1thread", "ref:pin-loop"]
+)
 def test_crba(benchmark, name, impl):
     model, _, crba, q, *_ = workload(name)
     if impl == "spotkin-1thread":
         run(benchmark, f"crba.{name} N={N}", impl, crba, q)
+    elif impl.startswith("spotkin-packed"):
+        if name == "legs12-fixed":
+            pytest.skip("four 3 x 3 blocks: no packed form in this workload")
+        # the lower triangle row by row (layout="packed"): (6 + n) (7 + n) / 2 values, not (6 + n)^2
+        q_in = q.astype(np.float32) if "f32" in impl else q
+        run(benchmark, f"crba.{name} N={N}", impl, lambda x: crba(x, "packed"), q_in)
     else:
         data = model.createData()
 
@@ -207,8 +217,9 @@ def test_summary():
     lines = []
     for key, impls in sorted(_TIMES.items()):
         n = N if "N=" in key else 1
-        ours = next((t for i, t in impls.items() if not i.startswith("ref:")), None)
+        ours = {i: t for i, t in impls.items() if not i.startswith("ref:")}
         for impl, t in sorted(impls.items(), key=lambda kv: kv[1]):
-            ratio = f"  {impl} / spotkin = {t / ours:5.1f}" if ours and impl.startswith("ref:") else ""
+            ratios = [f"{t / o:5.1f}x {i}" for i, o in ours.items()] if impl.startswith("ref:") else []
+            ratio = f"  {impl} over: {', '.join(ratios)}" if ratios else ""
             lines.append(f"{key:<24} {impl:<26} {t / n * 1e9:10.1f} ns/config{ratio}")
     print("\n" + "\n".join(lines))

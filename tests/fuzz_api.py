@@ -3828,6 +3828,32 @@ def _function_entries():
         check=reference(pose_from_ref),
     )
 
+    def unpack_ref(x, kw):  # element by element: A[i, j] = A[j, i] = packed[i (i + 1) / 2 + j], j <= i
+        packed, A = np.asarray(x["packed"], dtype=np.float64), np.empty((6, 6))
+        for i in range(6):
+            for j in range(i + 1):
+                A[i, j] = A[j, i] = packed[i * (i + 1) // 2 + j]
+        return A
+
+    def unpack_check(x, out, kw, c):
+        want = unpack_ref(x, kw)
+        got = np.asarray(out[0], dtype=np.float64)
+        if not np.array_equal(got, want, equal_nan=True):  # a copy: exact, NaN where its element is
+            return f"{describe(out[0])} differs from the reference {describe(want)}"
+        return None
+
+    register(
+        name="unpack_symmetric",
+        covers="spotkin.unpack_symmetric",
+        call=lambda c, **k: sk.unpack_symmetric(**k),
+        # (..., 21, 1) is a valid batch of 1 x 1 matrices (any triangular width is): not a bad shape here
+        slots=[Batch("packed", (21,), skip=("extra_dim",))],
+        baseline=lambda c, rng, n: {"packed": rng.normal(size=(n, 21))},
+        outputs=outs(("float", (6, 6))),
+        nan_rule="check",
+        check=unpack_check,
+    )
+
     # differential
     def diff_base(c, rng, n):
         return {
@@ -4977,6 +5003,16 @@ def _roundtrip_entries():
 G0 = np.array([0.0, 0.0, -9.81])
 
 
+def laid_out(A, layout):
+    """One sample's full symmetric matrix in a mass-matrix layout (lower: upper triangle zero;
+    packed: the lower triangle row by row)."""
+    if layout == "lower":
+        return np.tril(A)
+    if layout == "packed":
+        return A[np.tril_indices(A.shape[-1])]
+    return A
+
+
 def _dynamics_entries():
     from spotkin import inertia
     from spotkin.reference import dynamics as rd
@@ -5041,7 +5077,11 @@ def _dynamics_entries():
                 (dof,),
                 lambda c, x, kw, t=t: rd.rnea(t(c), x["q"], x["qd"], x["qdd"], g(x)),
             ),
-            "mass_matrix": ([q_slot], (dof, dof), lambda c, x, kw, t=t: rd.crba(t(c), x["q"])),
+            "mass_matrix": (
+                [q_slot, Choice("layout", "full", ("full", "lower", "packed"), default="omit")],
+                None,  # (dof, dof), or (dof (dof + 1) / 2,) packed
+                lambda c, x, kw, t=t: laid_out(rd.crba(t(c), x["q"]), kw.get("layout", "full")),
+            ),
             "gravity": (
                 [q_slot, gravity],
                 (dof,),
@@ -5084,6 +5124,10 @@ def _dynamics_entries():
                 lambda c, x, kw, get=get: get(c).jacobian(x["q"]).T @ x["forces"],
             ),
         }
+        def symmetric_out(args, kw, dof=dof):
+            packed = kw.get("layout") == "packed"
+            return [Out("float", (dof * (dof + 1) // 2,) if packed else (dof, dof))]
+
         for method, (slots, trailing, reference) in methods.items():
             register(
                 name=f"Chain.{method}[{key}]",
@@ -5091,7 +5135,7 @@ def _dynamics_entries():
                 call=lambda c, get=get, method=method, **k: getattr(get(c), method)(**k),
                 slots=slots,
                 baseline=base,
-                outputs=outs(("float", trailing)),
+                outputs=outs(("float", trailing)) if trailing is not None else symmetric_out,
                 check=against(reference),
                 overflow_ok=True,
             )

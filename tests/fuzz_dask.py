@@ -295,6 +295,8 @@ def register_entries(api) -> None:
                 getattr(skd, method),
                 f"Chain.{method}[{key}]",
                 model,
+                # the mass matrix's layouts have no Dask form: full matrices only
+                change=lambda slots: [slot for slot in slots if slot.name != "layout"],
             )
     for key, cls in (("spot", "Spot"), ("go2", "Robot")):
         robot = model_slot("robot", lambda c, key=key: c.robot(key), lambda c: c.leg)

@@ -30,8 +30,8 @@ ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::h
 // The kernels, one clone per CPU level and precision.
 SPOTKIN_LANE_CLONES(rnea_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* qd, const NonDeduced<Rows<T>>* qdd, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, qdd, g, out, b, e),
                dynamics::rnea_batch(m, q, qd, qdd, g, out, b, e);)
-SPOTKIN_LANE_CLONES(crba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, b, e),
-               dynamics::crba_batch(m, q, out, b, e);)
+SPOTKIN_LANE_CLONES(crba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, dynamics::SymmetricLayout layout), (m, q, out, b, e, layout),
+               dynamics::crba_batch(m, q, out, b, e, layout);)
 SPOTKIN_LANE_CLONES(coriolis_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, out, b, e),
                dynamics::coriolis_batch(m, q, qd, out, b, e);)
 SPOTKIN_LANE_CLONES(aba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, tau, g, out, b, e),
@@ -77,14 +77,15 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
                    });
 }
 
-py::object chain_crba(const ChainDynamics& d, py::handle q) {
+py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_name) {
   const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}}, {n, n}, kNsPerSample,
+  const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
+  return run_batch({{q, "q", n, true, d.f64.angle_columns()}}, symmetric_shape(n, layout), kNsPerSample,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, total, [&](const auto& model) {
-                       crba_k(model, rows[0], out, b, e);
+                       crba_k(model, rows[0], out, b, e, layout);
                      });
                    });
 }
@@ -122,7 +123,7 @@ void bind_dynamics(py::module_& m) {
       .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"))
       .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"))
       .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"))
-      .def("crba", &chain_crba, py::arg("q"))
+      .def("crba", &chain_crba, py::arg("q"), py::arg("layout") = "full")
       .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"))
       .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"));
   bind_floating_dynamics(m);

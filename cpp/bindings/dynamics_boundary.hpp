@@ -228,6 +228,22 @@ py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, d
   });
 }
 
+// The mass matrix's layout argument ("full", "lower" or "packed") and its output's trailing shape.
+inline dynamics::SymmetricLayout symmetric_layout(py::handle layout) {
+  if (!py::isinstance<py::str>(layout))
+    throw py::type_error("layout must be a str, 'full', 'lower' or 'packed', got " +
+                         std::string(py::str(py::type::of(layout).attr("__name__"))));
+  const std::string name = layout.cast<std::string>();
+  if (name == "full") return dynamics::SymmetricLayout::Full;
+  if (name == "lower") return dynamics::SymmetricLayout::Lower;
+  if (name == "packed") return dynamics::SymmetricLayout::Packed;
+  throw py::value_error("layout must be 'full', 'lower' or 'packed', got '" + name + "'");
+}
+inline Shape symmetric_shape(py::ssize_t n, dynamics::SymmetricLayout layout) {
+  if (layout == dynamics::SymmetricLayout::Packed) return {n * (n + 1) / 2};
+  return {n, n};
+}
+
 // ---------------------------------------------------------------- fixed base
 
 struct ChainDynamics {

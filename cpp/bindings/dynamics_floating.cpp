@@ -76,8 +76,8 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
 
 SPOTKIN_LANE_CLONES(f_rnea_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* v, const NonDeduced<Rows<T>>* a, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, a, g, out, b, e),
                dynamics::floating_rnea_batch(m, q, v, a, g, out, b, e);)
-SPOTKIN_LANE_CLONES(f_crba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, b, e),
-               dynamics::floating_crba_batch(m, q, out, b, e);)
+SPOTKIN_LANE_CLONES(f_crba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, dynamics::SymmetricLayout layout), (m, q, out, b, e, layout),
+               dynamics::floating_crba_batch(m, q, out, b, e, layout);)
 SPOTKIN_LANE_CLONES(f_aba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, tau, g, out, b, e),
                dynamics::floating_aba_batch(m, q, v, tau, g, out, b, e);)
 SPOTKIN_LANE_CLONES(f_coriolis_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, out, b, e),
@@ -121,14 +121,15 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
                      });
                    });
 }
-py::object floating_crba(const FloatingDynamics& d, py::handle q) {
+py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle layout_name) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}}, {nv, nv}, kNsFloating,
+  const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
+  return run_batch({{q, "q", nq, true, d.angles}}, symmetric_shape(nv, layout), kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
                        std::ptrdiff_t total) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, total, [&](const auto& model) {
-                       f_crba_k(model, rows[0], out, b, e);
+                       f_crba_k(model, rows[0], out, b, e, layout);
                      });
                    });
 }
@@ -174,7 +175,7 @@ void bind_floating_dynamics(py::module_& m) {
       .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"))
       .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"))
       .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"))
-      .def("crba", &floating_crba, py::arg("q"))
+      .def("crba", &floating_crba, py::arg("q"), py::arg("layout") = "full")
       .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"))
       .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"))
       .def("com", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, false); }, py::arg("q"))

@@ -273,9 +273,11 @@ class MimicChain(Chain):
         )
         return self._row(full)
 
-    def mass_matrix(self, q: ArrayLike) -> np.ndarray:
-        """A = M^T A_full(M q + b) M, (..., dof, dof)."""
-        return self._square(self._full.mass_matrix(self.full_q(q)))
+    def mass_matrix(self, q: ArrayLike, layout: str = "full") -> np.ndarray:
+        """A = M^T A_full(M q + b) M, (..., dof, dof); ``layout`` as :meth:`Chain.mass_matrix`."""
+        from .dynamics import _in_layout
+
+        return _in_layout(self._square(self._full.mass_matrix(self.full_q(q))), layout)
 
     def gravity(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
         """G = M^T G_full(M q + b), (..., dof)."""

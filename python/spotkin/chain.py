@@ -454,11 +454,13 @@ class Chain:
 
         return dynamics.inverse_dynamics(self, q, qd, qdd, gravity)
 
-    def mass_matrix(self, q: ArrayLike) -> np.ndarray:
-        """The joint-space inertia matrix A(q), (..., dof, dof): composite-rigid-body algorithm."""
+    def mass_matrix(self, q: ArrayLike, layout: str = "full") -> np.ndarray:
+        """The joint-space inertia matrix A(q), (..., dof, dof): composite-rigid-body algorithm.
+        ``layout="lower"`` zeroes the strict upper triangle; ``"packed"`` gives the lower triangle
+        row by row, (..., dof (dof + 1) / 2) (:func:`spotkin.dynamics.unpack_symmetric`)."""
         from . import dynamics
 
-        return dynamics.mass_matrix(self, q)
+        return dynamics.mass_matrix(self, q, layout=layout)
 
     def gravity(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
         """The gravity torques G(q) = dU/dq, (..., dof)."""

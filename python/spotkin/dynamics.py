@@ -17,6 +17,13 @@ Conventions
     ``C`` the matrix for which ``dA/dt - 2 C`` is skew-symmetric (as Pinocchio's
     ``computeCoriolisMatrix``).
 
+Mass matrix layouts
+    ``layout="full"`` gives A (..., n, n). ``"lower"`` gives the same shape with the strict
+    upper triangle zero (the storage ``numpy.linalg.cholesky`` and
+    ``scipy.linalg.cho_factor(..., lower=True)`` read). ``"packed"`` gives the lower triangle
+    row by row, (..., n (n + 1) / 2): ``A[i, j]`` (``j <= i``) at ``i (i + 1) / 2 + j``, about
+    half the memory of a large batch; :func:`unpack_symmetric` restores (..., n, n).
+
 Batches
     Every argument broadcasts over its leading dimensions like NumPy; float32 inputs (all
     of them) give float32 results, anything else float64. A sample with a NaN or an Inf in
@@ -48,6 +55,7 @@ __all__ = [
     "mass_matrix",
     "nonlinear_effects",
     "potential_energy",
+    "unpack_symmetric",
 ]
 
 GRAVITY = (0.0, 0.0, -9.81)
@@ -117,9 +125,49 @@ def inverse_dynamics(
     return _core_of(chain, inertials).rnea(q, qd, qdd, gravity)
 
 
-def mass_matrix(chain, q: ArrayLike, *, inertials=None) -> np.ndarray:
-    """The joint-space inertia matrix A(q), (..., n, n): composite-rigid-body algorithm."""
-    return _core_of(chain, inertials).crba(q)
+def mass_matrix(chain, q: ArrayLike, *, inertials=None, layout: str = "full") -> np.ndarray:
+    """The joint-space inertia matrix A(q), (..., n, n): composite-rigid-body algorithm.
+    ``layout`` ``"lower"`` or ``"packed"`` (..., n (n + 1) / 2): see the module's notes."""
+    return _core_of(chain, inertials).crba(q, layout)
+
+
+def _layouts(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The row and column of each packed element: np.tril_indices, row by row."""
+    return np.tril_indices(n)
+
+
+def unpack_symmetric(packed: ArrayLike) -> np.ndarray:
+    """The symmetric (..., n, n) matrices of packed lower triangles (..., n (n + 1) / 2), as
+    ``mass_matrix(..., layout="packed")`` gives them (``A[i, j]``, ``j <= i``, at ``i (i + 1) / 2 + j``)."""
+    packed = as_real(packed, "packed")
+    if packed.ndim < 1:
+        raise ValueError("packed must have shape (..., n (n + 1) / 2), got a scalar")
+    width = packed.shape[-1]
+    n = int(round((np.sqrt(8 * width + 1) - 1) / 2))
+    if n < 1 or n * (n + 1) // 2 != width:
+        raise ValueError(
+            f"packed must have shape (..., n (n + 1) / 2) (1, 3, 6, 10, ... values), got {packed.shape}"
+        )
+    rows, cols = _layouts(n)
+    out = np.empty((*packed.shape[:-1], n, n), dtype=packed.dtype)
+    out[..., rows, cols] = packed
+    out[..., cols, rows] = packed
+    return out
+
+
+def _in_layout(A: np.ndarray, layout) -> np.ndarray:
+    """A full (..., n, n) symmetric matrix in ``layout`` (for the chains computed in Python)."""
+    if not isinstance(layout, str):
+        raise TypeError(f"layout must be a str, 'full', 'lower' or 'packed', got {type(layout).__name__}")
+    if layout == "full":
+        return A
+    n = A.shape[-1]
+    if layout == "lower":
+        return np.where(np.tri(n, dtype=bool), A, A.dtype.type(0))
+    if layout == "packed":
+        rows, cols = _layouts(n)
+        return np.ascontiguousarray(A[..., rows, cols])
+    raise ValueError(f"layout must be 'full', 'lower' or 'packed', got {layout!r}")
 
 
 def gravity(chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None) -> np.ndarray:
@@ -265,9 +313,10 @@ class FloatingBase:
         """Generalised forces tau = A(q) a + h(q, v), (..., 6 + n)."""
         return self._core.rnea(q, v, a, gravity)
 
-    def mass_matrix(self, q) -> np.ndarray:
-        """A(q), (..., 6 + n, 6 + n); invariant to the body's pose."""
-        return self._core.crba(q)
+    def mass_matrix(self, q, layout: str = "full") -> np.ndarray:
+        """A(q), (..., 6 + n, 6 + n); invariant to the body's pose. ``layout`` ``"lower"`` or
+        ``"packed"`` (..., m) with m = (6 + n) (7 + n) / 2, as :func:`mass_matrix`."""
+        return self._core.crba(q, layout)
 
     def gravity(self, q, gravity=GRAVITY) -> np.ndarray:
         return self._core.gravity(q, gravity)

@@ -60,20 +60,21 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   if (stream) stream_fence();
 }
 
-// A(q), row-major n x n per sample.
+// A(q) per sample, in layout (row-major n x n, or its lower triangle: SymmetricLayout).
 template <typename M, int L>
 SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                               std::ptrdiff_t end) {
+                               std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
-  const int n = model.dof();
+  const int n = model.dof(), width = symmetric_width(n, layout);
   ChainBlock<M, L> blk(n, n * n);
-  const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
+  const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
     crba_chain(model, blk.X.data(), blk.out.data(), Ic.data());
-    store(blk.out.data(), n * n, b0, m, blk.ok, A, stream);
+    to_layout(blk.out.data(), n, layout);
+    store(blk.out.data(), width, b0, m, blk.ok, A, stream);
   }
   if (stream) stream_fence();
 }

@@ -129,15 +129,15 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
   if (stream) stream_fence();
 }
 
-// A(q), (6 + n) x (6 + n): the chains' blocks by CRBA (RBDA Table 6.2), their
+// A(q), (6 + n) x (6 + n) in layout (SymmetricLayout): the chains' blocks by CRBA (RBDA Table 6.2), their
 // columns' forces and composite inertias carried to the body.
 template <typename M, int L>
 SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                                        std::ptrdiff_t end) {
+                                        std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
-  const int nv = model.nv();
+  const int nv = model.nv(), width = symmetric_width(nv, layout);
   FloatingBlock<M, L> blk(model, nv * nv);
-  const bool stream = std::size_t(end - begin) * std::size_t(nv * nv) * sizeof(M) >= kStreamBytes;
+  const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
   std::vector<Force<P>> F(static_cast<std::size_t>(model.joints()));
   std::vector<P> H(static_cast<std::size_t>(model.joints() * model.joints()));
@@ -174,7 +174,8 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
         out[(3 + r) * nv + c] = hx[r][c];
         out[r * nv + 3 + c] = -hx[r][c];
       }
-    store(out, nv * nv, b0, m, blk.ok, A, stream);
+    to_layout(out, nv, layout);
+    store(out, width, b0, m, blk.ok, A, stream);
   }
   if (stream) stream_fence();
 }

@@ -369,6 +369,29 @@ SPOTKIN_INLINE void stream_fence() noexcept {
 #endif
 }
 
+// The layout of a symmetric n x n output (the mass matrix): Full, row-major n x n; Lower, the
+// same with the strict upper triangle zero (LAPACK's lower storage); Packed, the lower triangle
+// row by row, n (n + 1) / 2 values: A_ij (j <= i) at i (i + 1) / 2 + j.
+enum class SymmetricLayout : int { Full = 0, Lower = 1, Packed = 2 };
+
+constexpr int symmetric_width(int n, SymmetricLayout layout) noexcept {
+  return layout == SymmetricLayout::Packed ? n * (n + 1) / 2 : n * n;
+}
+
+// A full row-major n x n block (in place) in layout: Lower zeroes the strict upper triangle,
+// Packed moves the lower triangle to the front (row i starts at i (i + 1) / 2 <= i n, so the
+// moves never overwrite an element still to be read).
+template <typename M, int L>
+SPOTKIN_INLINE void to_layout(Pack<M, L>* A, int n, SymmetricLayout layout) noexcept {
+  if (layout == SymmetricLayout::Lower) {
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) A[i * n + j] = Pack<M, L>(M(0));
+  } else if (layout == SymmetricLayout::Packed) {
+    for (int i = 1; i < n; ++i)
+      for (int j = 0; j <= i; ++j) A[i * (i + 1) / 2 + j] = A[i * n + j];
+  }
+}
+
 // Stores `width` lanes-values of samples b0 .. b0 + m - 1, row-major; a lane
 // whose inputs were not all finite gets NaN in its whole row. Groups of L
 // columns of L lanes are transposed in registers; with `stream`, rows go
