@@ -1,6 +1,7 @@
 // Bindings for spotkin::Chain: construction from DH tables or URDF joints, batched FK,
 // frames and Jacobians.
 #include "spotkin/chain.hpp"
+#include "spotkin/chain_lanes.hpp"
 
 #include <type_traits>
 
@@ -22,10 +23,10 @@ constexpr std::ptrdiff_t kMinPerThread = min_chunk(40.0);  // 6-joint FK/Jacobia
 
 // Batch kernels, one per operation and precision, cloned per CPU level.
 SPOTKIN_CLONES((), void, fk_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
-  c.forward_batch(q, out, n);
+  chain_lanes::forward_batch(c, q, out, n);
 )
 SPOTKIN_CLONES((), void, fk_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n), (c, q, out, n),
-  c.forward_batch(q, out, n);
+  chain_lanes::forward_batch(c, q, out, n);
 )
 SPOTKIN_CLONES((), void, frames_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
   c.frames_batch(q, out, n);
@@ -35,11 +36,11 @@ SPOTKIN_CLONES((), void, frames_kernel, (const Chain<float>& c, const float* q, 
 )
 SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n,
                                           int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
-  c.jacobian_batch(q, out, n, rows, in_tool_frame);
+  chain_lanes::jacobian_batch(c, q, out, n, rows, in_tool_frame);
 )
 SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
                                           int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
-  c.jacobian_batch(q, out, n, rows, in_tool_frame);
+  chain_lanes::jacobian_batch(c, q, out, n, rows, in_tool_frame);
 )
 
 SPOTKIN_CLONES((), void, point_jacobian_kernel, (const Chain<double>& c, const double* q, double* out,

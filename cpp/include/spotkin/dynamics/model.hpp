@@ -268,65 +268,6 @@ SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width,
   }
 }
 
-// The integer vector of a pack's width, for shuffle masks (one specialisation per
-// width: GCC ignores vector_size on a dependent typedef).
-template <typename M, int L>
-struct MaskOf;
-#define SPOTKIN_MASK_OF(M, I, L)                                  \
-  template <>                                                     \
-  struct MaskOf<M, L> {                                           \
-    typedef I type __attribute__((vector_size(sizeof(I) * L)));   \
-  };
-SPOTKIN_MASK_OF(double, long long, 2)
-SPOTKIN_MASK_OF(double, long long, 4)
-SPOTKIN_MASK_OF(double, long long, 8)
-SPOTKIN_MASK_OF(float, int, 4)
-SPOTKIN_MASK_OF(float, int, 8)
-SPOTKIN_MASK_OF(float, int, 16)
-#undef SPOTKIN_MASK_OF
-
-// Element e of a transpose stage's 2-input shuffle over blocks of B lanes: the low
-// (Hi = false) or high half of each pair of blocks, from the first input (indices
-// 0 .. L-1) then the second (L .. 2L-1).
-template <int L, int B, bool Hi>
-constexpr int transpose_index(int e) noexcept {
-  const int group = e / (2 * B) * 2 * B, offset = e % (2 * B), half = Hi ? B : 0;
-  return offset < B ? group + half + offset : L + group + half + offset - B;
-}
-
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"  // always inlined: no vector crosses a call by value
-#endif
-template <typename M, int L, int B, bool Hi, typename V, std::size_t... E>
-SPOTKIN_INLINE V transpose_shuffle(const V& a, const V& b, std::index_sequence<E...>) noexcept {
-#if defined(__clang__)
-  return __builtin_shufflevector(a, b, transpose_index<L, B, Hi>(int(E))...);
-#else
-  using I = typename MaskOf<M, L>::type;
-  return __builtin_shuffle(a, b, I{transpose_index<L, B, Hi>(int(E))...});
-#endif
-}
-
-// Transposes L packs of L lanes in registers (log2 L stages of 2-input shuffles, each
-// a native shuffle of the level's registers): r[j] holds column j of L samples, on
-// return r[i] holds sample i's L columns.
-template <typename M, int L, int B = 1>
-SPOTKIN_INLINE void transpose_lanes(typename Pack<M, L>::Vector r[L]) noexcept {
-  if constexpr (B < L) {
-    for (int k = 0; k < L; ++k) {
-      if (k & B) continue;
-      const auto lo = transpose_shuffle<M, L, B, false>(r[k], r[k + B], std::make_index_sequence<L>{});
-      const auto hi = transpose_shuffle<M, L, B, true>(r[k], r[k + B], std::make_index_sequence<L>{});
-      r[k] = lo, r[k + B] = hi;
-    }
-    transpose_lanes<M, L, 2 * B>(r);
-  }
-}
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
-
 // Outputs of at least this many bytes per call are written with non-temporal
 // stores (no read for ownership, no eviction of the inputs): a batch's output
 // (2.6 kB per sample for an 18 x 18 mass matrix) is memory-bandwidth bound.
