@@ -35,7 +35,9 @@ def test_baselines_agree_with_spotkin():
 
 
 @pytest.mark.parametrize("n", SIZES)
-@pytest.mark.parametrize("impl", ["spotkin", "spotkin-1thread", "spotkin-float32-1thread", "numpy", "numpy-unchunked"])
+@pytest.mark.parametrize(
+    "impl", ["spotkin", "spotkin-1thread", "spotkin-float32-1thread", "numpy", "numpy-unchunked"]
+)
 @pytest.mark.parametrize("op", ["fk", "jacobian"])
 def test_chain6(measure, op, impl, n):
     q = joint_samples(n)

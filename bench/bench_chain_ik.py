@@ -212,7 +212,7 @@ def test_6r_shoulder_and_7r_free_joint_vs_wrist_path(measure, impl, n):
         q = rng.uniform(-1.0, 1.0, (n, 7))
         q[:, 3] = -1.5
         T = PANDA.fk(q)
-        # one value for every pose, or each pose's own (1e5 distinct values; the target: at most 3x the wrist path)
+        # one value for every pose, or each pose's own (1e5 distinct values; target: <= 3x the wrist path)
         value = 0.3 if "one value" in impl else q[:, 6]
         func = lambda T: PANDA.ik(T, free_joint=6, free_value=value)  # noqa: E731
         measure("6R shoulder, 7R free joint vs the wrist path, all 8", n, impl, func, T)

@@ -5124,6 +5124,7 @@ def _dynamics_entries():
                 lambda c, x, kw, get=get: get(c).jacobian(x["q"]).T @ x["forces"],
             ),
         }
+
         def symmetric_out(args, kw, dof=dof):
             packed = kw.get("layout") == "packed"
             return [Out("float", (dof * (dof + 1) // 2,) if packed else (dof, dof))]

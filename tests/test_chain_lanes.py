@@ -68,7 +68,9 @@ def test_dh_chains_match_the_reference(count, rng):
         q = rng.uniform(-np.pi, np.pi, (count, 6))
         want = np.array([ref.fk(chain.rows, chain.convention, qi, chain.base, chain.tool) for qi in q])
         np.testing.assert_allclose(chain.fk(q), want, rtol=0, atol=1e-12)
-        want_J = np.array([ref.jacobian(chain.rows, chain.convention, qi, chain.base, chain.tool) for qi in q])
+        want_J = np.array(
+            [ref.jacobian(chain.rows, chain.convention, qi, chain.base, chain.tool) for qi in q]
+        )
         np.testing.assert_allclose(chain.jacobian(q), want_J, rtol=0, atol=1e-12)
 
 

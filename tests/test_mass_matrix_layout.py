@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_dynamics import SPOT, Fixed, Floating, close, sym
 
 import spotkin as sk
 from spotkin import dynamics as dyn
-from test_dynamics import SPOT, Fixed, Floating, close, sym
 
 pytestmark = pytest.mark.usefixtures("every_isa")
 pin = pytest.importorskip("pinocchio")

@@ -32,6 +32,7 @@ Batches
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 
 import numpy as np
@@ -143,7 +144,7 @@ def unpack_symmetric(packed: ArrayLike) -> np.ndarray:
     if packed.ndim < 1:
         raise ValueError("packed must have shape (..., n (n + 1) / 2), got a scalar")
     width = packed.shape[-1]
-    n = int(round((np.sqrt(8 * width + 1) - 1) / 2))
+    n = round((math.sqrt(8 * width + 1) - 1) / 2)
     if n < 1 or n * (n + 1) // 2 != width:
         raise ValueError(
             f"packed must have shape (..., n (n + 1) / 2) (1, 3, 6, 10, ... values), got {packed.shape}"
