@@ -29,10 +29,10 @@ SPOTKIN_CLONES((), void, fk_kernel, (const Chain<float>& c, const float* q, floa
   chain_lanes::forward_batch(c, q, out, n);
 )
 SPOTKIN_CLONES((), void, frames_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
-  c.frames_batch(q, out, n);
+  chain_lanes::frames_batch(c, q, out, n);
 )
 SPOTKIN_CLONES((), void, frames_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n), (c, q, out, n),
-  c.frames_batch(q, out, n);
+  chain_lanes::frames_batch(c, q, out, n);
 )
 SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n,
                                           int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),

@@ -7,7 +7,9 @@
 //   J_j = [z_j x (p_tool - o_j); z_j] (revolute) or [z_j; 0] (prismatic),
 // with the sines and cosines of the block computed first (vector_math::sincos, in the
 // batch's precision). A short block is padded with its last sample, whose copies are not
-// stored: a sample's result does not depend on its neighbours or on how a batch is split.
+// stored: a sample's result does not depend on its neighbours, on how a batch is split or on
+// the size of the call (without fused multiply-adds, the same equations give the same bits in
+// blocks of 16 and of 4 lanes).
 #pragma once
 
 #include <algorithm>
@@ -25,35 +27,32 @@
 namespace spotkin::chain_lanes {
 
 constexpr int kBlock = SPOTKIN_CHAIN_LANES;  // samples per block: a multiple of every register width
-// A call with fewer samples runs Chain's per-sample code instead (a block costs as much as 16
-// samples): a batch that small never spans threads (a thread's chunk is thousands of samples),
-// so the choice depends on the whole batch only; the two may differ in the last bit.
-constexpr std::ptrdiff_t kFewSamples = 8;
+constexpr int kSmallBlock = 4;               // calls of fewer than kBlock samples
 
-template <typename S>
+template <typename S, int B>
 struct LaneFrame {
-  S R[3][3][kBlock];
-  S p[3][kBlock];
+  S R[3][3][B];
+  S p[3][B];
 
   SPOTKIN_INLINE void set(const Rigid<S>& X) noexcept {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c)
-        for (int i = 0; i < kBlock; ++i) R[r][c][i] = X.R(r, c);
-      for (int i = 0; i < kBlock; ++i) p[r][i] = X.p[r];
+        for (int i = 0; i < B; ++i) R[r][c][i] = X.R(r, c);
+      for (int i = 0; i < B; ++i) p[r][i] = X.p[r];
     }
   }
 };
 
 // T <- T . P for every lane (Placement::apply, lane by lane).
-template <typename S>
-SPOTKIN_INLINE void apply(LaneFrame<S>& T, const Placement<S>& P) noexcept {
+template <typename S, int B>
+SPOTKIN_INLINE void apply(LaneFrame<S, B>& T, const Placement<S>& P) noexcept {
   switch (P.kind) {
     case PlacementKind::Identity:
       return;
     case PlacementKind::XScrew: {  // TransX(a) RotX(alpha)
       const S a = P.a, ca = P.cos_alpha, sa = P.sin_alpha;
       for (int r = 0; r < 3; ++r)
-        for (int i = 0; i < kBlock; ++i) {
+        for (int i = 0; i < B; ++i) {
           T.p[r][i] += a * T.R[r][0][i];
           const S y = T.R[r][1][i], z = T.R[r][2][i];
           T.R[r][1][i] = ca * y + sa * z;
@@ -64,7 +63,7 @@ SPOTKIN_INLINE void apply(LaneFrame<S>& T, const Placement<S>& P) noexcept {
     case PlacementKind::Translation: {
       const S x0 = P.X.p[0], x1 = P.X.p[1], x2 = P.X.p[2];
       for (int r = 0; r < 3; ++r)
-        for (int i = 0; i < kBlock; ++i) T.p[r][i] += T.R[r][0][i] * x0 + T.R[r][1][i] * x1 + T.R[r][2][i] * x2;
+        for (int i = 0; i < B; ++i) T.p[r][i] += T.R[r][0][i] * x0 + T.R[r][1][i] * x1 + T.R[r][2][i] * x2;
       return;
     }
     case PlacementKind::General: {
@@ -74,7 +73,7 @@ SPOTKIN_INLINE void apply(LaneFrame<S>& T, const Placement<S>& P) noexcept {
         x[a] = P.X.p[a];
       }
       for (int r = 0; r < 3; ++r)
-        for (int i = 0; i < kBlock; ++i) {
+        for (int i = 0; i < B; ++i) {
           const S r0 = T.R[r][0][i], r1 = T.R[r][1][i], r2 = T.R[r][2][i];
           T.p[r][i] += r0 * x[0] + r1 * x[1] + r2 * x[2];
           for (int k = 0; k < 3; ++k) T.R[r][k][i] = r0 * X[0][k] + r1 * X[1][k] + r2 * X[2][k];
@@ -86,11 +85,11 @@ SPOTKIN_INLINE void apply(LaneFrame<S>& T, const Placement<S>& P) noexcept {
 
 // Rotation about +-e_k (k the third axis after I, J, cyclic) by (c, sign s), then the shift
 // along it: columns I and J mix (Joint::rotate_columns).
-template <int I, int J, typename S>
-SPOTKIN_INLINE void rotate_columns(LaneFrame<S>& T, const S* c, const S* s, const S* shift, S sign) noexcept {
+template <int I, int J, typename S, int B>
+SPOTKIN_INLINE void rotate_columns(LaneFrame<S, B>& T, const S* c, const S* s, const S* shift, S sign) noexcept {
   constexpr int K = 3 - I - J;
   for (int r = 0; r < 3; ++r)
-    for (int i = 0; i < kBlock; ++i) {
+    for (int i = 0; i < B; ++i) {
       const S ci = T.R[r][I][i], cj = T.R[r][J][i], si = sign * s[i];
       T.R[r][I][i] = c[i] * ci + si * cj;
       T.R[r][J][i] = c[i] * cj - si * ci;
@@ -99,8 +98,8 @@ SPOTKIN_INLINE void rotate_columns(LaneFrame<S>& T, const S* c, const S* s, cons
 }
 
 // T <- T . Rot(axis, angle) . Trans(axis, shift) per lane (Joint::apply_motion).
-template <typename S>
-SPOTKIN_INLINE void apply_motion(LaneFrame<S>& T, const Joint<S>& joint, const S* c, const S* s,
+template <typename S, int B>
+SPOTKIN_INLINE void apply_motion(LaneFrame<S, B>& T, const Joint<S>& joint, const S* c, const S* s,
                                  const S* shift) noexcept {
   switch (joint.axis_kind) {
     case AxisKind::X:
@@ -113,7 +112,7 @@ SPOTKIN_INLINE void apply_motion(LaneFrame<S>& T, const Joint<S>& joint, const S
       // R Rot(u, angle) = c R + s R [u]x + (1 - c) (R u) u^T (Rodrigues)
       const S u0 = joint.axis[0], u1 = joint.axis[1], u2 = joint.axis[2];
       for (int r = 0; r < 3; ++r)
-        for (int i = 0; i < kBlock; ++i) {
+        for (int i = 0; i < B; ++i) {
           const S c0 = T.R[r][0][i], c1 = T.R[r][1][i], c2 = T.R[r][2][i];
           const S w = c0 * u0 + c1 * u1 + c2 * u2, one_c = S(1) - c[i];
           T.R[r][0][i] = c[i] * c0 + s[i] * (u2 * c1 - u1 * c2) + one_c * u0 * w;
@@ -127,17 +126,17 @@ SPOTKIN_INLINE void apply_motion(LaneFrame<S>& T, const Joint<S>& joint, const S
 }
 
 // The joint axis in the frame reached after pre, per lane (Joint::axis_in).
-template <typename S>
-SPOTKIN_INLINE void axis_in(const LaneFrame<S>& T, const Joint<S>& joint, S (*out)[kBlock]) noexcept {
+template <typename S, int B>
+SPOTKIN_INLINE void axis_in(const LaneFrame<S, B>& T, const Joint<S>& joint, S (*out)[B]) noexcept {
   if (joint.axis_kind == AxisKind::General) {
     const S u0 = joint.axis[0], u1 = joint.axis[1], u2 = joint.axis[2];
     for (int r = 0; r < 3; ++r)
-      for (int i = 0; i < kBlock; ++i) out[r][i] = T.R[r][0][i] * u0 + T.R[r][1][i] * u1 + T.R[r][2][i] * u2;
+      for (int i = 0; i < B; ++i) out[r][i] = T.R[r][0][i] * u0 + T.R[r][1][i] * u1 + T.R[r][2][i] * u2;
     return;
   }
   const int k = static_cast<int>(joint.axis_kind);
   for (int r = 0; r < 3; ++r)
-    for (int i = 0; i < kBlock; ++i) out[r][i] = joint.axis_sign * T.R[r][k][i];
+    for (int i = 0; i < B; ++i) out[r][i] = joint.axis_sign * T.R[r][k][i];
 }
 
 // out[i * width + e] = soa[e][i] for the block's m samples. float: groups of 8 columns of 8
@@ -145,15 +144,14 @@ SPOTKIN_INLINE void axis_in(const LaneFrame<S>& T, const Joint<S>& joint, S (*ou
 // stored whole, the columns left over one by one; scalar moves were a third of the float
 // kernel. double: element by element (its 4 x 4 transposes measured slower: 35 -> 47 ns per
 // 6-joint FK on AVX2).
-template <typename S>
-SPOTKIN_INLINE void store_rows(const S (*soa)[kBlock], int width, std::ptrdiff_t m, S* out) noexcept {
+template <typename S, int B>
+SPOTKIN_INLINE void store_rows(const S (*soa)[B], int width, std::ptrdiff_t m, S* out) noexcept {
   constexpr int L = 8;
-  static_assert(kBlock % L == 0, "a block is whole registers");
   using V = typename dynamics::Pack<float, L>::Vector;
   int e0 = 0;
-  if constexpr (std::is_same_v<S, float>)
+  if constexpr (std::is_same_v<S, float> && B % L == 0)
     for (; e0 + L <= width; e0 += L)
-    for (int i0 = 0; i0 < kBlock && i0 < m; i0 += L) {
+    for (int i0 = 0; i0 < B && i0 < m; i0 += L) {
       V r[L];
       for (int k = 0; k < L; ++k) std::memcpy(&r[k], &soa[e0 + k][i0], sizeof(V));
       dynamics::transpose_lanes<S, L>(r);
@@ -163,36 +161,57 @@ SPOTKIN_INLINE void store_rows(const S (*soa)[kBlock], int width, std::ptrdiff_t
     for (int e = e0; e < width; ++e) out[i * width + e] = soa[e][i];
 }
 
+// A thread's scratch buffer of at least count values (slot: two buffers used at once), kept
+// between calls: a single sample from a control loop allocates nothing.
+template <typename S, int Slot>
+S* scratch(std::size_t count) {
+  thread_local std::vector<S> buffer;
+  if (buffer.size() < count) buffer.resize(count);
+  return buffer.data();
+}
+
 // The block's joint values by joint (padded with the last sample), their sines and cosines,
 // and the shifts along the axes (r, plus q for a prismatic joint).
-template <typename S>
+template <typename S, int B>
 struct LaneJoints {
-  std::vector<S> c, s, shift;  // [n][kBlock]
-  explicit LaneJoints(int n) : c(std::size_t(n) * kBlock), s(c.size()), shift(c.size()) {}
+  S *c, *s, *shift;  // [n][B] each, in the thread's scratch
+  explicit LaneJoints(int n) {
+    S* at = scratch<S, 0>(3 * std::size_t(n) * B);
+    c = at, s = at + std::size_t(n) * B, shift = at + 2 * std::size_t(n) * B;
+  }
 
   SPOTKIN_INLINE void load(const Chain<S>& chain, const S* q, std::ptrdiff_t m) noexcept {
     const int n = chain.dof();
-    S angle[kBlock];
+    S angle[B];
     for (int j = 0; j < n; ++j) {
       const Joint<S>& joint = chain.joints()[std::size_t(j)];
       const bool revolute = joint.type == JointType::Revolute;
-      S* sh = shift.data() + std::size_t(j) * kBlock;
-      for (int i = 0; i < kBlock; ++i) {
+      S* sh = shift + std::size_t(j) * B;
+      for (int i = 0; i < B; ++i) {
         const S qi = q[std::min<std::ptrdiff_t>(i, m - 1) * n + j];
         angle[i] = revolute ? joint.theta + qi : joint.theta;
         sh[i] = revolute ? joint.r : joint.r + qi;
       }
-      vector_math::sincos(angle, s.data() + std::size_t(j) * kBlock, c.data() + std::size_t(j) * kBlock, kBlock);
+      vector_math::sincos(angle, s + std::size_t(j) * B, c + std::size_t(j) * B, B);
     }
   }
 };
 
-// T of the block, tool included, and, when axes is given, every joint's axis and origin
-// ([3 n][kBlock] each) on the way. Each step is one pass over the block's lanes.
-template <typename S>
-SPOTKIN_INLINE void walk(const Chain<S>& chain, const Placement<S>& tool, const LaneJoints<S>& lanes,
-                         LaneFrame<S>& T, S (*axes)[kBlock], S (*origins)[kBlock]) noexcept {
+// T of the block, tool included; when axes is given, every joint's axis and origin
+// ([3 n][B] each) on the way; when frames is given, the frame after the base, after each joint
+// and after the tool ([n + 2][12][B]: R row by row, then p).
+template <typename S, int B>
+SPOTKIN_INLINE void walk(const Chain<S>& chain, const Placement<S>& tool, const LaneJoints<S, B>& lanes,
+                         LaneFrame<S, B>& T, S (*axes)[B], S (*origins)[B], S (*frames)[12][B]) noexcept {
+  auto keep = [&](int k) {
+    if (!frames) return;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) std::memcpy(frames[k][3 * r + c], T.R[r][c], sizeof T.R[r][c]);
+      std::memcpy(frames[k][9 + r], T.p[r], sizeof T.p[r]);
+    }
+  };
   T.set(chain.base());
+  keep(0);
   const int n = chain.dof();
   for (int j = 0; j < n; ++j) {
     const Joint<S>& joint = chain.joints()[std::size_t(j)];
@@ -201,34 +220,35 @@ SPOTKIN_INLINE void walk(const Chain<S>& chain, const Placement<S>& tool, const 
       axis_in(T, joint, axes + 3 * j);
       for (int r = 0; r < 3; ++r) std::memcpy(origins[3 * j + r], T.p[r], sizeof T.p[r]);
     }
-    const std::size_t o = std::size_t(j) * kBlock;
-    apply_motion(T, joint, lanes.c.data() + o, lanes.s.data() + o, lanes.shift.data() + o);
+    const std::size_t o = std::size_t(j) * B;
+    apply_motion(T, joint, lanes.c + o, lanes.s + o, lanes.shift + o);
     apply(T, joint.post);
+    keep(j + 1);
   }
   apply(T, tool);
+  keep(n + 1);
 }
 
 // Base -> tool transforms of count samples (q row-major count x n) as 4 x 4 matrices.
-template <typename S>
-SPOTKIN_INLINE void forward_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
-  if (count < kFewSamples) return chain.forward_batch(q, out, count);
+template <typename S, int B>
+SPOTKIN_INLINE void forward_blocks(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
   const int n = chain.dof();
   const Placement<S> tool = Placement<S>::rigid(chain.tool().template cast<double>());
-  LaneJoints<S> lanes(n);
-  LaneFrame<S> T;
-  alignas(64) S rows[16][kBlock];
+  LaneJoints<S, B> lanes(n);
+  LaneFrame<S, B> T;
+  alignas(64) S rows[16][B];
   for (int e = 12; e < 16; ++e)
-    for (int i = 0; i < kBlock; ++i) rows[e][i] = e == 15 ? S(1) : S(0);
-  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
-    const std::ptrdiff_t m = std::min<std::ptrdiff_t>(kBlock, count - b0);
+    for (int i = 0; i < B; ++i) rows[e][i] = e == 15 ? S(1) : S(0);
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
+    const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
     lanes.load(chain, q + b0 * n, m);
-    walk<S>(chain, tool, lanes, T, nullptr, nullptr);
+    walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, nullptr);
     if constexpr (std::is_same_v<S, float>) {  // 16 columns of lanes, transposed in registers
       for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c) std::memcpy(rows[4 * r + c], T.R[r][c], sizeof rows[0]);
         std::memcpy(rows[4 * r + 3], T.p[r], sizeof rows[0]);
       }
-      store_rows<S>(rows, 16, m, out + 16 * b0);
+      store_rows<S, B>(rows, 16, m, out + 16 * b0);
     } else {
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         S* o = out + 16 * (b0 + i);
@@ -245,28 +265,27 @@ SPOTKIN_INLINE void forward_batch(const Chain<S>& chain, const S* q, S* out, std
 
 // rows x n geometric Jacobians (rows 6, or 3 for the linear block) of count samples; in the
 // tool frame, both blocks rotated by R_tool^T.
-template <typename S>
-SPOTKIN_INLINE void jacobian_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count, int rows,
-                                   bool in_tool_frame) {
-  if (count < kFewSamples) return chain.jacobian_batch(q, out, count, rows, in_tool_frame);
+template <typename S, int B>
+SPOTKIN_INLINE void jacobian_blocks(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count, int rows,
+                                    bool in_tool_frame) {
   const int n = chain.dof();
   const Placement<S> tool = Placement<S>::rigid(chain.tool().template cast<double>());
-  LaneJoints<S> lanes(n);
-  LaneFrame<S> T;
-  std::vector<S> axis_store(std::size_t(3 * n) * kBlock), origin_store(axis_store.size());
-  auto* axes = reinterpret_cast<S(*)[kBlock]>(axis_store.data());
-  auto* origins = reinterpret_cast<S(*)[kBlock]>(origin_store.data());
+  LaneJoints<S, B> lanes(n);
+  LaneFrame<S, B> T;
+  S* store = scratch<S, 1>(2 * std::size_t(3 * n) * B);
+  auto* axes = reinterpret_cast<S(*)[B]>(store);
+  auto* origins = reinterpret_cast<S(*)[B]>(store + std::size_t(3 * n) * B);
   const std::ptrdiff_t width = std::ptrdiff_t(rows) * n;
-  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
-    const std::ptrdiff_t m = std::min<std::ptrdiff_t>(kBlock, count - b0);
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
+    const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
     lanes.load(chain, q + b0 * n, m);
-    walk<S>(chain, tool, lanes, T, axes, origins);
+    walk<S, B>(chain, tool, lanes, T, axes, origins, nullptr);
     for (int j = 0; j < n; ++j) {
       const bool revolute = chain.joints()[std::size_t(j)].type == JointType::Revolute;
-      const S(*z)[kBlock] = axes + 3 * j;
-      const S(*o)[kBlock] = origins + 3 * j;
-      S v[3][kBlock], w[3][kBlock];
-      for (int i = 0; i < kBlock; ++i) {
+      const S(*z)[B] = axes + 3 * j;
+      const S(*o)[B] = origins + 3 * j;
+      S v[3][B], w[3][B];
+      for (int i = 0; i < B; ++i) {
         const S d0 = T.p[0][i] - o[0][i], d1 = T.p[1][i] - o[1][i], d2 = T.p[2][i] - o[2][i];
         v[0][i] = revolute ? z[1][i] * d2 - z[2][i] * d1 : z[0][i];
         v[1][i] = revolute ? z[2][i] * d0 - z[0][i] * d2 : z[1][i];
@@ -275,7 +294,7 @@ SPOTKIN_INLINE void jacobian_batch(const Chain<S>& chain, const S* q, S* out, st
       }
       if (in_tool_frame)
         for (auto* x : {v, w})
-          for (int i = 0; i < kBlock; ++i) {
+          for (int i = 0; i < B; ++i) {
             const S x0 = x[0][i], x1 = x[1][i], x2 = x[2][i];
             for (int c = 0; c < 3; ++c) x[c][i] = T.R[0][c][i] * x0 + T.R[1][c][i] * x1 + T.R[2][c][i] * x2;
           }
@@ -287,6 +306,54 @@ SPOTKIN_INLINE void jacobian_batch(const Chain<S>& chain, const S* q, S* out, st
       }
     }
   }
+}
+
+// (n + 2) frames per sample (base, after each joint, tool), as Chain::frames: the walk FK
+// takes, so the last frame is FK's pose bit for bit.
+template <typename S, int B>
+SPOTKIN_INLINE void frames_blocks(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
+  const int n = chain.dof();
+  const std::ptrdiff_t stride = 16 * (n + 2);
+  const Placement<S> tool = Placement<S>::rigid(chain.tool().template cast<double>());
+  LaneJoints<S, B> lanes(n);
+  LaneFrame<S, B> T;
+  auto* frames = reinterpret_cast<S(*)[12][B]>(scratch<S, 1>(std::size_t(n + 2) * 12 * B));
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
+    const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
+    lanes.load(chain, q + b0 * n, m);
+    walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, frames);
+    for (std::ptrdiff_t i = 0; i < m; ++i)
+      for (int k = 0; k < n + 2; ++k) {
+        S* o = out + stride * (b0 + i) + 16 * k;
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) o[4 * r + c] = frames[k][3 * r + c][i];
+          o[4 * r + 3] = frames[k][9 + r][i];
+        }
+        o[12] = o[13] = o[14] = S(0);
+        o[15] = S(1);
+      }
+  }
+}
+
+// The entry points: blocks of kBlock lanes, or of kSmallBlock for a call of fewer than kBlock
+// samples (a single pose pays for 4 lanes, not 16). The translation unit is compiled without
+// fused multiply-adds (-ffp-contract=off, CMakeLists.txt), so the same equations give the same
+// bits lane by lane at either width (tested at every level: single calls equal a batch's rows).
+template <typename S>
+SPOTKIN_INLINE void forward_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
+  if (count < kBlock) return forward_blocks<S, kSmallBlock>(chain, q, out, count);
+  forward_blocks<S, kBlock>(chain, q, out, count);
+}
+template <typename S>
+SPOTKIN_INLINE void frames_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
+  if (count < kBlock) return frames_blocks<S, kSmallBlock>(chain, q, out, count);
+  frames_blocks<S, kBlock>(chain, q, out, count);
+}
+template <typename S>
+SPOTKIN_INLINE void jacobian_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count, int rows,
+                                   bool in_tool_frame) {
+  if (count < kBlock) return jacobian_blocks<S, kSmallBlock>(chain, q, out, count, rows, in_tool_frame);
+  jacobian_blocks<S, kBlock>(chain, q, out, count, rows, in_tool_frame);
 }
 
 }  // namespace spotkin::chain_lanes
