@@ -18,7 +18,6 @@
 #include <list>
 #include <memory>
 #include <mutex>
-#include <numeric>
 #include <unordered_map>
 #include <vector>
 
@@ -108,7 +107,7 @@ class FreeJoint7 {
     }
     return arm;
   }
-  static constexpr std::size_t kCacheSize = 1024;  // a few MB of 6R solvers at most
+  static constexpr std::size_t kCacheSize = 1024;  // 6R solvers kept at most
   std::size_t cached_values() const {
     std::lock_guard<std::mutex> lock(cache_->mutex);
     return cache_->order.size();
@@ -143,7 +142,6 @@ class FreeJoint7 {
   V3 axis_h_ = V3::Zero(), axis_p_ = V3::Zero();              // end joints: (F1), (F7)
   std::shared_ptr<Cache> cache_ = std::make_shared<Cache>();  // middle joints
 };
-
 
 // Every solution for count poses (Format) with the free joint at values[i]: q (count, 8, 7),
 // valid, exists, exact (count, 8), status (count). lower, upper: the 7 joints' limits. A value that is not
