@@ -140,6 +140,11 @@ def test_chain_methods_and_mimic_chains(rng):
     np.testing.assert_array_equal(coupled.mass_matrix(qc, layout="lower"), np.tril(A))
     with pytest.raises(ValueError, match="layout must be 'full', 'lower' or 'packed', got 'upper'"):
         coupled.mass_matrix(qc, layout="upper")
+    # a NaN sample: NaN in every element, as in the C++ layouts
+    qc[1, 0] = np.nan
+    for layout in ("lower", "packed"):
+        out = coupled.mass_matrix(qc, layout=layout)
+        assert np.isnan(out[1]).all() and np.isfinite(np.delete(out, 1, axis=0)).all()
 
 
 def test_unpack_symmetric_and_errors(fixed, rng):

@@ -275,8 +275,9 @@ class MimicChain(Chain):
 
     def mass_matrix(self, q: ArrayLike, layout: str = "full") -> np.ndarray:
         """A = M^T A_full(M q + b) M, (..., dof, dof); ``layout`` as :meth:`Chain.mass_matrix`."""
-        from .dynamics import _in_layout
+        from .dynamics import _check_layout, _in_layout
 
+        layout = _check_layout(layout)  # before the work
         return _in_layout(self._square(self._full.mass_matrix(self.full_q(q))), layout)
 
     def gravity(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:

@@ -132,11 +132,6 @@ def mass_matrix(chain, q: ArrayLike, *, inertials=None, layout: str = "full") ->
     return _core_of(chain, inertials).crba(q, layout)
 
 
-def _layouts(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The row and column of each packed element: np.tril_indices, row by row."""
-    return np.tril_indices(n)
-
-
 def unpack_symmetric(packed: ArrayLike) -> np.ndarray:
     """The symmetric (..., n, n) matrices of packed lower triangles (..., n (n + 1) / 2), as
     ``mass_matrix(..., layout="packed")`` gives them (``A[i, j]``, ``j <= i``, at ``i (i + 1) / 2 + j``)."""
@@ -149,26 +144,32 @@ def unpack_symmetric(packed: ArrayLike) -> np.ndarray:
         raise ValueError(
             f"packed must have shape (..., n (n + 1) / 2) (1, 3, 6, 10, ... values), got {packed.shape}"
         )
-    rows, cols = _layouts(n)
+    rows, cols = np.tril_indices(n)  # row by row
     out = np.empty((*packed.shape[:-1], n, n), dtype=packed.dtype)
     out[..., rows, cols] = packed
     out[..., cols, rows] = packed
     return out
 
 
-def _in_layout(A: np.ndarray, layout) -> np.ndarray:
-    """A full (..., n, n) symmetric matrix in ``layout`` (for the chains computed in Python)."""
+def _check_layout(layout) -> str:
+    """``layout`` as the C++ binding checks it, for the chains computed in Python."""
     if not isinstance(layout, str):
         raise TypeError(f"layout must be a str, 'full', 'lower' or 'packed', got {type(layout).__name__}")
-    if layout == "full":
-        return A
+    if layout not in ("full", "lower", "packed"):
+        raise ValueError(f"layout must be 'full', 'lower' or 'packed', got {layout!r}")
+    return layout
+
+
+def _in_layout(A: np.ndarray, layout: str) -> np.ndarray:
+    """A full (..., n, n) symmetric matrix in a checked ``layout``."""
     n = A.shape[-1]
-    if layout == "lower":
-        return np.where(np.tri(n, dtype=bool), A, A.dtype.type(0))
+    if layout == "lower":  # a NaN sample stays NaN in every element, as the C++ layouts leave it
+        bad = np.isnan(A).any(axis=(-2, -1), keepdims=True)
+        return np.where(np.tri(n, dtype=bool), A, np.where(bad, A.dtype.type(np.nan), A.dtype.type(0)))
     if layout == "packed":
-        rows, cols = _layouts(n)
+        rows, cols = np.tril_indices(n)
         return np.ascontiguousarray(A[..., rows, cols])
-    raise ValueError(f"layout must be 'full', 'lower' or 'packed', got {layout!r}")
+    return A
 
 
 def gravity(chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None) -> np.ndarray:

@@ -141,9 +141,9 @@ SPOTKIN_INLINE void axis_in(const LaneFrame<S, B>& T, const Joint<S>& joint, S (
 
 // out[i * width + e] = soa[e][i] for the block's m samples. float: groups of 8 columns of 8
 // lanes transposed in registers (dynamics::transpose_lanes, one AVX2 register each), then
-// stored whole, the columns left over one by one; scalar moves were a third of the float
-// kernel. double: element by element (its 4 x 4 transposes measured slower: 35 -> 47 ns per
-// 6-joint FK on AVX2).
+// stored whole, the columns left over one by one (scalar moves were a third of the float FK's
+// samples; the time gained was small, 22 -> 21 ns). double: element by element (staging the
+// rows for 4 x 4 transposes measured slower, 35 -> 47 ns per 6-joint FK on AVX2).
 template <typename S, int B>
 SPOTKIN_INLINE void store_rows(const S (*soa)[B], int width, std::ptrdiff_t m, S* out) noexcept {
   constexpr int L = 8;
