@@ -619,3 +619,40 @@ def test_dh_chains_with_prismatic_joints_match_the_reference(convention, rng):
         close(dyn.mass_matrix(chain, q), rd.crba(tree, q))
         close(dyn.coriolis_matrix(chain, q, qd), rd.coriolis_matrix(tree, q, qd))
         close(dyn.forward_dynamics(chain, q, qd, qdd, g), rd.aba(tree, q, qd, qdd, g))
+
+
+@pytest.mark.parametrize("convention", ["dh", "mdh"])
+def test_floating_base_with_general_axes_and_prismatic_joints(convention, rng):
+    """The floating CRBA's sparse (+-e_k axis) and general subspace forms, and prismatic joints: DH chains
+    (axes along z before an x-screw: general in the link frame) on a rotated mount, against the fixed-base
+    CRBA of each chain (its joint block) and against RNEA (A a + h = tau)."""
+    rows = [
+        [0, 0.1, 0.3, 0.2, 0.1],
+        [1, 0.2, -np.pi / 2, 0.15, 0.4],
+        [0, 0.25, np.pi / 2, 0.05, -0.3],
+    ]
+    mount = sk.translation([0.1, -0.2, 0.3]) @ sk.rotation_z(0.7) @ sk.rotation_x(0.4)
+    chains = []
+    for k in range(2):
+        A = rng.normal(size=(3, 3, 3))
+        chains.append(
+            getattr(sk.Chain, f"from_{convention}")(
+                rows[k:] + rows[:k], base=mount if k else np.eye(4)
+            ).with_inertials(
+                rng.uniform(0.5, 2, 3),
+                rng.normal(0, 0.1, (3, 3)),
+                A @ np.swapaxes(A, 1, 2) * 0.01 + 0.001 * np.eye(3),
+            )
+        )
+    fb = dyn.FloatingBase((3.0, np.array([0.02, -0.01, 0.03]), np.diag([0.1, 0.2, 0.25])), chains)
+    quat = rng.normal(size=(8, 4))
+    q = np.hstack([rng.normal(size=(8, 3)), quat, rng.uniform(-1, 1, (8, 6))])
+    v, a = rng.normal(size=(8, 12)), rng.normal(size=(8, 12))
+    A = fb.mass_matrix(q)
+    close(np.einsum("...ij,...j->...i", A, a) + fb.nonlinear_effects(q, v), fb.inverse_dynamics(q, v, a))
+    for k, c in enumerate(chains):
+        block = A[:, 6 + 3 * k : 9 + 3 * k, 6 + 3 * k : 9 + 3 * k]
+        close(block, dyn.mass_matrix(c, q[:, 7 + 3 * k : 10 + 3 * k]))
+    close(A[:, 6:9, 9:12], np.zeros((8, 3, 3)), 0)
+    close(fb.mass_matrix(q, layout="lower"), np.tril(A), 0)
+    close(dyn.unpack_symmetric(fb.mass_matrix(q, layout="packed")), A, 0)

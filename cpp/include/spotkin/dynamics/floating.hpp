@@ -77,7 +77,8 @@ struct FloatingBlock {
         X(static_cast<std::size_t>(model.joints())) {}
 
   SPOTKIN_INLINE void begin(const FloatingModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* v_rows,
-                            const Rows<M>* a_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m) noexcept {
+                            const Rows<M>* a_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m,
+                            bool with_poses = true) noexcept {
     for (int i = 0; i < L; ++i) ok[i] = true;
     load(q_rows, b0, m, model.nq(), q.data(), ok);
     if (v_rows) load(*v_rows, b0, m, model.nv(), v.data(), ok);
@@ -90,8 +91,9 @@ struct FloatingBlock {
     R(1, 0) = s * (x * y + z * w), R(1, 1) = P(M(1)) - s * (x * x + z * z), R(1, 2) = s * (y * z - x * w);
     R(2, 0) = s * (x * z - y * w), R(2, 1) = s * (y * z + x * w), R(2, 2) = P(M(1)) - s * (x * x + y * y);
     if (g_rows) g_body = mul_t(R, V3<P>{{g[0], g[1], g[2]}});
-    for (std::size_t k = 0; k < model.chains().size(); ++k)
-      model.chains()[k].poses(q.data() + 7 + model.offset(k), X.data() + model.offset(k));
+    if (with_poses)
+      for (std::size_t k = 0; k < model.chains().size(); ++k)
+        model.chains()[k].poses(q.data() + 7 + model.offset(k), X.data() + model.offset(k));
   }
   // The body's velocity and (gravity-shifted, RBDA section 5.3) acceleration as spatial vectors.
   SPOTKIN_INLINE Motion<P> body_velocity() const noexcept { return {{{v[3], v[4], v[5]}}, {{v[0], v[1], v[2]}}}; }
@@ -129,55 +131,91 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
   if (stream) stream_fence();
 }
 
-// A(q), (6 + n) x (6 + n) in layout (SymmetricLayout): the chains' blocks by CRBA (RBDA Table 6.2), their
-// columns' forces and composite inertias carried to the body.
-template <typename M, int L>
-SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                                        std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
+// A(q), (6 + n) x (6 + n) in layout (SymmetricLayout), with every quantity in the body frame (the
+// CRBA of RBDA Table 6.2 on a tree of depth one below the body, RBDA eq. 6.9-6.10 in one frame):
+// link j's pose T_j = X_0 ... X_j (the chain's FK walk), its motion subspace S_j^b = T_j S_j and
+// inertia I_j^b = T_j^T I_j T_j; the composite Ic_j sums I_i^b over j's subtree; F_j = Ic_j S_j^b
+// is joint j's column of the body rows, and A_ij = S_i^b . F_j for i an ancestor of j (or j).
+// No force is carried link by link, and the blocks between chains are never written (zero).
+template <SymmetricLayout layout, typename M, int L>
+SPOTKIN_INLINE void floating_crba_blocks(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
+                                         std::ptrdiff_t end) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = symmetric_width(nv, layout);
-  FloatingBlock<M, L> blk(model, nv * nv);
+  FloatingBlock<M, L> blk(model, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
-  std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
-  std::vector<Force<P>> F(static_cast<std::size_t>(model.joints()));
-  std::vector<P> H(static_cast<std::size_t>(model.joints() * model.joints()));
+  std::vector<Motion<P>> S(static_cast<std::size_t>(model.joints()));
+  std::vector<SymInertia<P>> I(static_cast<std::size_t>(model.joints()));
+  P* out = blk.out.data();
+  for (int k = 0; k < width; ++k) out[k] = P(M(0));
+  auto put = [&](int i, int j, const P& x) {  // A_ij = A_ji = x, j <= i
+    if constexpr (layout == SymmetricLayout::Packed) {
+      out[i * (i + 1) / 2 + j] = x;
+    } else {
+      out[i * nv + j] = x;
+      if constexpr (layout == SymmetricLayout::Full) out[j * nv + i] = x;
+    }
+  };
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
-    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
-    P* out = blk.out.data();
-    for (int k = 0; k < nv * nv; ++k) out[k] = P(M(0));
-    RigidInertia<P> Ib = model.body_inertia();
+    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
+    SymInertia<P> Ib = symmetric(model.body_inertia());
     for (std::size_t k = 0; k < model.chains().size(); ++k) {
       const auto& chain = model.chains()[k];
       const int o = model.offset(k), n = chain.dof();
-      RigidInertia<P> root;
-      crba_chain(chain, blk.X.data() + o, H.data(), Ic.data(), &root, F.data());
-      add_to(Ib, root);
-      for (int i = 0; i < n; ++i) {
-        for (int j = 0; j < n; ++j) out[(6 + o + i) * nv + 6 + o + j] = H[i * n + j];
+      Rigid<P> W;
+      Pose<P> T;
+      for (int j = 0; j < n; ++j) {
+        chain.advance(j, blk.q[std::size_t(7 + o + j)], W);
         for (int r = 0; r < 3; ++r) {
-          out[(6 + o + i) * nv + r] = out[r * nv + 6 + o + i] = F[i].f[r];
-          out[(6 + o + i) * nv + 3 + r] = out[(3 + r) * nv + 6 + o + i] = F[i].n[r];
+          T.p[r] = W.p[r];
+          for (int c = 0; c < 3; ++c) T.R(r, c) = W.R(r, c);
         }
+        const BodyConstants<M>& b = chain.body(j);
+        Motion<P> s;
+        if (b.axis >= 0) {  // S = sign (e_axis, 0): w = sign R e_axis, v = p x w
+          axis_switch(b.axis, [&](auto K) {
+            for (int r = 0; r < 3; ++r) s.w[r] = b.sign > 0 ? T.R(r, K) : -T.R(r, K);
+          });
+          s.v = cross(T.p, s.w);
+        } else {
+          s = to_parent(T, chain.subspace(j));
+        }
+        S[std::size_t(o + j)] = s;
+        I[std::size_t(o + j)] = to_parent(T, b.m, b.h, b.J);
       }
+      SymInertia<P> Ic = I[std::size_t(o + n - 1)];
+      for (int j = n - 1; j >= 0; --j) {
+        if (j < n - 1) add_to(Ic, I[std::size_t(o + j)]);
+        const Force<P> F = apply(Ic, S[std::size_t(o + j)]);
+        const int row = 6 + o + j;
+        for (int r = 0; r < 3; ++r) put(row, r, F.f[r]), put(row, 3 + r, F.n[r]);
+        for (int i = 0; i <= j; ++i) put(row, 6 + o + i, dot(S[std::size_t(o + i)], F));
+      }
+      if (n > 0) add_to(Ib, Ic);
     }
     // the body block, linear first: [[m 1, -[h]x], [[h]x, J]]
     const V3<P>& h = Ib.h;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) {
-        out[r * nv + c] = r == c ? Ib.m : P(M(0));
-        out[(3 + r) * nv + 3 + c] = Ib.J(r, c);
-      }
-    const P hx[3][3] = {{P(M(0)), -h[2], h[1]}, {h[2], P(M(0)), -h[0]}, {-h[1], h[0], P(M(0))}};
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) {
-        out[(3 + r) * nv + c] = hx[r][c];
-        out[r * nv + 3 + c] = -hx[r][c];
-      }
-    to_layout(out, nv, layout);
+    for (int r = 0; r < 3; ++r) put(r, r, Ib.m);
+    put(3, 3, Ib.J[0]), put(4, 4, Ib.J[1]), put(5, 5, Ib.J[2]);
+    put(4, 3, Ib.J[3]), put(5, 3, Ib.J[4]), put(5, 4, Ib.J[5]);
+    put(3, 1, -h[2]), put(3, 2, h[1]), put(4, 0, h[2]), put(4, 2, -h[0]), put(5, 0, -h[1]), put(5, 1, h[0]);
     store(out, width, b0, m, blk.ok, A, stream);
   }
   if (stream) stream_fence();
+}
+
+template <typename M, int L>
+SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
+                                        std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
+  switch (layout) {
+    case SymmetricLayout::Full:
+      return floating_crba_blocks<SymmetricLayout::Full>(model, q, A, begin, end);
+    case SymmetricLayout::Lower:
+      return floating_crba_blocks<SymmetricLayout::Lower>(model, q, A, begin, end);
+    case SymmetricLayout::Packed:
+      return floating_crba_blocks<SymmetricLayout::Packed>(model, q, A, begin, end);
+  }
 }
 
 // Solves the symmetric positive definite 6x6 system K x = b in place (LDL^T, no pivoting).

@@ -222,6 +222,20 @@ class ChainModel {
     return I;
   }
 
+  // T <- T X_j(q) (T = X_0(q) for j = 0): the chain walk of FK, with the joint's sparse forms.
+  SPOTKIN_INLINE void advance(int j, const P& q, Rigid<P>& T) const noexcept {
+    const Joint<P>& joint = joints_[static_cast<std::size_t>(j)];
+    const bool revolute = body(j).revolute;
+    P s, c;
+    sincos(revolute ? P(joint.theta + q) : joint.theta, s, c);
+    if (j == 0)
+      T = joint.pre.X;
+    else
+      joint.pre.apply(T);
+    joint.apply_motion(T, c, s, revolute ? joint.r : P(joint.r + q));
+    joint.post.apply(T);
+  }
+
   // X[j]: body j's pose in body j-1's frame (the root frame for j = 0), by the
   // chain's per-joint code: pre . Motion(axis, theta + q | r + q) . post.
   SPOTKIN_INLINE void poses(const P* q, Pose<P>* X) const noexcept {

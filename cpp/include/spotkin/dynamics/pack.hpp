@@ -53,6 +53,14 @@ struct alignas(sizeof(T) * L) Pack {
   Vector v;
 
   Pack() = default;
+  // Copies as one vector move: the implicit (trivial) copy lets GCC copy structs of packs by
+  // pieces of the translation unit's baseline width (16 bytes) inside wider target clones, and a
+  // pack stored in two halves then loaded whole stalls store forwarding.
+  SPOTKIN_INLINE Pack(const Pack& o) noexcept : v(o.v) {}
+  SPOTKIN_INLINE Pack& operator=(const Pack& o) noexcept {
+    v = o.v;
+    return *this;
+  }
   SPOTKIN_INLINE Pack(T x) noexcept : v(Vector{} + x) {}  // NOLINT: implicit broadcast of constants
   SPOTKIN_INLINE explicit Pack(const Vector& x) noexcept : v(x) {}
 

@@ -227,6 +227,56 @@ SPOTKIN_INLINE RigidInertia<S> to_parent(const Pose<S>& X, const RigidInertia<S>
   return o;
 }
 
+// A rigid inertia with J's six distinct entries (xx, yy, zz, xy, xz, yz): the composite
+// inertias of the floating-base CRBA, summed in one frame.
+template <typename S>
+struct SymInertia {
+  S m;
+  V3<S> h;
+  S J[6];
+};
+template <typename S>
+SPOTKIN_INLINE void add_to(SymInertia<S>& a, const SymInertia<S>& b) noexcept {
+  a.m += b.m;
+  a.h += b.h;
+  for (int k = 0; k < 6; ++k) a.J[k] += b.J[k];
+}
+template <typename S>
+SPOTKIN_INLINE SymInertia<S> symmetric(const RigidInertia<S>& I) noexcept {
+  return {I.m, I.h, {I.J(0, 0), I.J(1, 1), I.J(2, 2), I.J(0, 1), I.J(0, 2), I.J(1, 2)}};
+}
+// I u: n = J w + h x v, f = m v - h x w.
+template <typename S>
+SPOTKIN_INLINE Force<S> apply(const SymInertia<S>& I, const Motion<S>& u) noexcept {
+  const S* J = I.J;
+  const V3<S> Jw{{J[0] * u.w[0] + J[3] * u.w[1] + J[4] * u.w[2], J[3] * u.w[0] + J[1] * u.w[1] + J[5] * u.w[2],
+                  J[4] * u.w[0] + J[5] * u.w[1] + J[2] * u.w[2]}};
+  return {Jw + cross(I.h, u.v), scale(u.v, I.m) - cross(I.h, u.w)};
+}
+// X^T I X of a constant inertia (m, h, J about the child's origin; M scalars), as to_parent
+// above with only J's six distinct entries formed.
+template <typename S, typename M>
+SPOTKIN_INLINE SymInertia<S> to_parent(const Pose<S>& X, M m, const M (&h)[3], const M (&J)[3][3]) noexcept {
+  SymInertia<S> o;
+  o.m = S(m);
+  const V3<S>& p = X.p;
+  V3<S> hr;
+  for (int r = 0; r < 3; ++r) hr[r] = X.R(r, 0) * h[0] + X.R(r, 1) * h[1] + X.R(r, 2) * h[2];
+  for (int r = 0; r < 3; ++r) o.h[r] = hr[r] + p[r] * m;
+  S RJ[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) RJ[r][c] = X.R(r, 0) * J[0][c] + X.R(r, 1) * J[1][c] + X.R(r, 2) * J[2][c];
+  constexpr int row[6] = {0, 1, 2, 0, 0, 1}, col[6] = {0, 1, 2, 1, 2, 2};
+  const S diagonal = S(M(2)) * dot(p, hr) + dot(p, p) * m;
+  for (int k = 0; k < 6; ++k) {
+    const int r = row[k], c = col[k];
+    S x = RJ[r][0] * X.R(c, 0) + RJ[r][1] * X.R(c, 1) + RJ[r][2] * X.R(c, 2);
+    x -= p[r] * hr[c] + hr[r] * p[c] + (p[r] * m) * p[c];
+    o.J[k] = k < 3 ? x + diagonal : x;
+  }
+  return o;
+}
+
 // A general symmetric spatial inertia (articulated-body inertia, RBDA ch. 7):
 // (n, f) = [[A, B], [B^T, C]] (w, v), A and C symmetric.
 template <typename S>
