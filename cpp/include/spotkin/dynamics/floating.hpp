@@ -78,12 +78,13 @@ struct FloatingBlock {
 
   SPOTKIN_INLINE void begin(const FloatingModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* v_rows,
                             const Rows<M>* a_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m,
-                            bool with_poses = true) noexcept {
+                            bool kinematics = true) noexcept {
     for (int i = 0; i < L; ++i) ok[i] = true;
     load(q_rows, b0, m, model.nq(), q.data(), ok);
     if (v_rows) load(*v_rows, b0, m, model.nv(), v.data(), ok);
     if (a_rows) load(*a_rows, b0, m, model.nv(), a.data(), ok);
     if (g_rows) load(*g_rows, b0, m, 3, g, ok);
+    if (!kinematics) return;  // the inputs only (the CRBA walks its chains itself)
     // R of the quaternion (x, y, z, w) / |q|: s = 2 / |q|^2.
     const P x = q[3], y = q[4], z = q[5], w = q[6];
     const P s = P(M(2)) / (x * x + y * y + z * z + w * w);
@@ -91,9 +92,8 @@ struct FloatingBlock {
     R(1, 0) = s * (x * y + z * w), R(1, 1) = P(M(1)) - s * (x * x + z * z), R(1, 2) = s * (y * z - x * w);
     R(2, 0) = s * (x * z - y * w), R(2, 1) = s * (y * z + x * w), R(2, 2) = P(M(1)) - s * (x * x + y * y);
     if (g_rows) g_body = mul_t(R, V3<P>{{g[0], g[1], g[2]}});
-    if (with_poses)
-      for (std::size_t k = 0; k < model.chains().size(); ++k)
-        model.chains()[k].poses(q.data() + 7 + model.offset(k), X.data() + model.offset(k));
+    for (std::size_t k = 0; k < model.chains().size(); ++k)
+      model.chains()[k].poses(q.data() + 7 + model.offset(k), X.data() + model.offset(k));
   }
   // The body's velocity and (gravity-shifted, RBDA section 5.3) acceleration as spatial vectors.
   SPOTKIN_INLINE Motion<P> body_velocity() const noexcept { return {{{v[3], v[4], v[5]}}, {{v[0], v[1], v[2]}}}; }
@@ -146,6 +146,7 @@ SPOTKIN_INLINE void floating_crba_blocks(const FloatingModel<M, L>& model, Rows<
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   std::vector<Motion<P>> S(static_cast<std::size_t>(model.joints()));
   std::vector<SymInertia<P>> I(static_cast<std::size_t>(model.joints()));
+  std::vector<P> trig(3 * static_cast<std::size_t>(model.joints()));  // angles, sines, cosines
   P* out = blk.out.data();
   for (int k = 0; k < width; ++k) out[k] = P(M(0));
   auto put = [&](int i, int j, const P& x) {  // A_ij = A_ji = x, j <= i
@@ -163,10 +164,12 @@ SPOTKIN_INLINE void floating_crba_blocks(const FloatingModel<M, L>& model, Rows<
     for (std::size_t k = 0; k < model.chains().size(); ++k) {
       const auto& chain = model.chains()[k];
       const int o = model.offset(k), n = chain.dof();
+      P *sines = trig.data() + model.joints(), *cosines = sines + model.joints();
+      chain.joint_trig(blk.q.data() + 7 + o, trig.data(), sines, cosines);
       Rigid<P> W;
       Pose<P> T;
       for (int j = 0; j < n; ++j) {
-        chain.advance(j, blk.q[std::size_t(7 + o + j)], W);
+        chain.advance(j, blk.q[std::size_t(7 + o + j)], sines[j], cosines[j], W);
         for (int r = 0; r < 3; ++r) {
           T.p[r] = W.p[r];
           for (int c = 0; c < 3; ++c) T.R(r, c) = W.R(r, c);

@@ -222,17 +222,24 @@ class ChainModel {
     return I;
   }
 
-  // T <- T X_j(q) (T = X_0(q) for j = 0): the chain walk of FK, with the joint's sparse forms.
-  SPOTKIN_INLINE void advance(int j, const P& q, Rigid<P>& T) const noexcept {
+  // sin and cos of every joint's rotation angle (theta + q, theta for a prismatic joint), in one
+  // vector_math pass over dof() L values. angle: dof() packs of scratch.
+  SPOTKIN_INLINE void joint_trig(const P* q, P* angle, P* s, P* c) const noexcept {
+    for (int j = 0; j < dof(); ++j) {
+      const Joint<P>& joint = joints_[static_cast<std::size_t>(j)];
+      angle[j] = body(j).revolute ? P(joint.theta + q[j]) : joint.theta;
+    }
+    vector_math::sincos(&angle[0].v[0], &s[0].v[0], &c[0].v[0], std::ptrdiff_t(dof()) * L);
+  }
+  // T <- T X_j(q) (T = X_0(q) for j = 0), given joint_trig's s and c: the chain walk of FK, with the
+  // joint's sparse forms.
+  SPOTKIN_INLINE void advance(int j, const P& q, const P& s, const P& c, Rigid<P>& T) const noexcept {
     const Joint<P>& joint = joints_[static_cast<std::size_t>(j)];
-    const bool revolute = body(j).revolute;
-    P s, c;
-    sincos(revolute ? P(joint.theta + q) : joint.theta, s, c);
     if (j == 0)
       T = joint.pre.X;
     else
       joint.pre.apply(T);
-    joint.apply_motion(T, c, s, revolute ? joint.r : P(joint.r + q));
+    joint.apply_motion(T, c, s, body(j).revolute ? joint.r : P(joint.r + q));
     joint.post.apply(T);
   }
 
@@ -287,8 +294,35 @@ SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width,
 // (2.6 kB per sample for an 18 x 18 mass matrix) is memory-bandwidth bound.
 constexpr std::size_t kStreamBytes = std::size_t(2) << 20;
 
-// to[0, count) = from[0, count) with non-temporal stores (16-byte ones once `to` is aligned).
-template <typename M>
+#if defined(__x86_64__)
+// One non-temporal store of `bytes` bytes from `from` to the aligned `to`. The wide ones carry their
+// instruction set: they are inlined into the clones of that level, the only ones that call them
+// (packs of 32 and 64 bytes run at AVX2 and AVX-512 only).
+template <int bytes>
+struct StreamStore;
+template <>
+struct StreamStore<16> {
+  static SPOTKIN_INLINE void put(void* to, const void* from) noexcept {
+    _mm_stream_pd(static_cast<double*>(to), _mm_loadu_pd(static_cast<const double*>(from)));
+  }
+};
+template <>
+struct StreamStore<32> {
+  __attribute__((target("avx"))) static inline void put(void* to, const void* from) noexcept {
+    _mm256_stream_pd(static_cast<double*>(to), _mm256_loadu_pd(static_cast<const double*>(from)));
+  }
+};
+template <>
+struct StreamStore<64> {
+  __attribute__((target("avx512f"))) static inline void put(void* to, const void* from) noexcept {
+    _mm512_stream_pd(static_cast<double*>(to), _mm512_loadu_pd(static_cast<const double*>(from)));
+  }
+};
+#endif
+
+// to[0, count) = from[0, count) with non-temporal stores, of a pack's width (the clone's register)
+// once `to` is aligned to it.
+template <typename M, int L>
 SPOTKIN_INLINE void stream_copy(const M* from, M* to, std::size_t count) noexcept {
 #if defined(__x86_64__)
   auto one = [&](std::size_t k) {
@@ -302,15 +336,10 @@ SPOTKIN_INLINE void stream_copy(const M* from, M* to, std::size_t count) noexcep
       _mm_stream_si32(reinterpret_cast<int*>(to + k), bits);
     }
   };
+  constexpr int kBytes = int(sizeof(M)) * L;
   std::size_t k = 0;
-  for (; k < count && (reinterpret_cast<std::uintptr_t>(to + k) & 15) != 0; ++k) one(k);
-  constexpr std::size_t kPer = 16 / sizeof(M);
-  for (; k + kPer <= count; k += kPer) {
-    if constexpr (sizeof(M) == 8)
-      _mm_stream_pd(reinterpret_cast<double*>(to + k), _mm_loadu_pd(reinterpret_cast<const double*>(from + k)));
-    else
-      _mm_stream_ps(reinterpret_cast<float*>(to + k), _mm_loadu_ps(reinterpret_cast<const float*>(from + k)));
-  }
+  for (; k < count && (reinterpret_cast<std::uintptr_t>(to + k) % kBytes) != 0; ++k) one(k);
+  for (; k + L <= count; k += L) StreamStore<kBytes>::put(to + k, from + k);
   for (; k < count; ++k) one(k);
 #else
   std::memcpy(to, from, sizeof(M) * count);
@@ -359,7 +388,7 @@ SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, in
     const std::size_t count = std::size_t(m) * std::size_t(width);
     if (rows.size() < count) rows.resize(count);
     store(in, width, 0, m, ok, rows.data(), false);
-    stream_copy(rows.data(), out + b0 * width, count);
+    stream_copy<M, L>(rows.data(), out + b0 * width, count);
     return;
   }
   int j0 = 0;
