@@ -175,15 +175,20 @@ SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip, cons
                                    const C* __restrict fz, C* __restrict x, C* __restrict y, C* __restrict z,
                                    C (*__restrict q0)[kBlock], C* __restrict exists, C* __restrict ok,
                                    std::ptrdiff_t m, C tol, C limit_tol) noexcept {
+  Leg::SlotStages<C, kBlock> st;  // two loops: Leg::SlotStages
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     const C dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
     const C px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
     const C py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
     const C pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
     x[i] = px, y[i] = py, z[i] = pz;
+    leg.slot_hip(i, py, pz, tol, st);
+  }
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    leg.slot_knee<Slot>(i, x[i], tol, st);
     C q[3];
-    const C finite = leg_batch::finite_mask(px, py, pz);
-    const C e = finite * leg.solve_slot<Slot>(px, py, pz, q, tol);
+    const C finite = leg_batch::finite_mask(x[i], y[i], z[i]);
+    const C e = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q);
     ok[i] = e * leg.limits().wrap_mask(q, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
