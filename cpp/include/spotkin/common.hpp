@@ -13,8 +13,13 @@
 // run-time dispatched clone of a loop gets its own vector code.
 #if defined(__GNUC__)
 #define SPOTKIN_INLINE inline __attribute__((always_inline))
+// For a lambda in a kernel: `[&](int i) SPOTKIN_LAMBDA_INLINE { ... }`. A lambda does not take
+// its enclosing function's target attribute: one too large for the inliner's heuristics would be
+// compiled (and called) at the baseline instruction set, with its packs passed through memory.
+#define SPOTKIN_LAMBDA_INLINE __attribute__((always_inline))
 #else
 #define SPOTKIN_INLINE inline
+#define SPOTKIN_LAMBDA_INLINE
 #endif
 
 // Run-time dispatched kernels: SPOTKIN_CLONES in isa.hpp. A vectorised kernel that must not

@@ -28,13 +28,14 @@ struct ChainBlock {
 
   // Loads q (poses computed), optional qd, qdd (or tau) and gravity.
   SPOTKIN_INLINE void begin(const ChainModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* qd_rows,
-                            const Rows<M>* qdd_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m) noexcept {
+                            const Rows<M>* qdd_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m,
+                            bool poses = true) noexcept {
     for (int i = 0; i < L; ++i) ok[i] = true;
     load(q_rows, b0, m, n, q.data(), ok);
     if (qd_rows) load(*qd_rows, b0, m, n, qd.data(), ok);
     if (qdd_rows) load(*qdd_rows, b0, m, n, qdd.data(), ok);
     if (g_rows) load(*g_rows, b0, m, 3, g, ok);
-    model.poses(q.data(), X.data());
+    if (poses) model.poses(q.data(), X.data());
   }
   SPOTKIN_INLINE Motion<P> root_acceleration() const noexcept {  // a_0 = -g (RBDA section 5.3)
     return {zero3<P>(), {{-g[0], -g[1], -g[2]}}};
@@ -60,22 +61,29 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   if (stream) stream_fence();
 }
 
-// A(q) per sample, in layout (row-major n x n, or its lower triangle: SymmetricLayout).
+// A(q) per sample, in layout (SymmetricLayout), written straight into it.
 template <typename M, int L>
 SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
                                std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int n = model.dof(), width = symmetric_width(n, layout);
-  ChainBlock<M, L> blk(n, n * n);
+  ChainBlock<M, L> blk(n, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
-  std::vector<RigidInertia<P>> Ic(static_cast<std::size_t>(n));
-  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
-    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
-    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
-    crba_chain(model, blk.X.data(), blk.out.data(), Ic.data());
-    to_layout(blk.out.data(), n, layout);
-    store(blk.out.data(), width, b0, m, blk.ok, A, stream);
-  }
+  std::vector<SymInertia<P>> Ic(static_cast<std::size_t>(n));
+  std::vector<P> trig(3 * static_cast<std::size_t>(n));  // angles, sines, cosines
+  P *sines = trig.data() + n, *cosines = sines + n;
+  layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
+    const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), n};
+    put.clear();
+    for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+      const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+      blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
+      model.joint_trig(blk.q.data(), trig.data(), sines, cosines);
+      crba_chain(model, blk.q.data(), sines, cosines, Ic.data(), put, [](int, const Force<P>&) SPOTKIN_LAMBDA_INLINE {},
+                 static_cast<SymInertia<P>*>(nullptr));
+      store(blk.out.data(), width, b0, m, blk.ok, A, stream);
+    }
+  });
   if (stream) stream_fence();
 }
 

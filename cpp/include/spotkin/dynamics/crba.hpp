@@ -6,28 +6,34 @@
 
 namespace spotkin::dynamics {
 
-// H (n x n, row-major lanes) of the chain. Ic: n composite inertias of workspace.
-// With root_inertia / root_force given (floating base), also the chain's
-// composite inertia and its columns' forces F_j = X^T Ic_j S_j, both carried to
-// the parent's coordinates.
-template <typename M, int L>
-SPOTKIN_INLINE void crba_chain(const ChainModel<M, L>& model, const Pose<Pack<M, L>>* X, Pack<M, L>* H,
-                               RigidInertia<Pack<M, L>>* Ic, RigidInertia<Pack<M, L>>* root_inertia = nullptr,
-                               Force<Pack<M, L>>* root_force = nullptr) noexcept {
-  using P = Pack<M, L>;
+// One chain's CRBA: put(i, j, A_ij) for j <= i (the chain's joint indices). q, sines, cosines: the
+// joints' values and joint_trig's; Ic: n composite inertias of workspace. Every transform goes
+// through the joint's pieces in their sparse forms (ChainModel::to_parent): for a URDF joint (a
+// translation, a rotation about +-e_k) about a third of a dense transform's operations.
+// On a floating body (root non-null), body_column(j, F) also receives joint j's column force
+// F_j = X^T Ic_j S_j in the root frame, and the chain's composite inertia there is added to *root.
+template <typename M, int L, typename Put, typename BodyColumn>
+SPOTKIN_INLINE void crba_chain(const ChainModel<M, L>& model, const Pack<M, L>* q, const Pack<M, L>* sines,
+                               const Pack<M, L>* cosines, SymInertia<Pack<M, L>>* Ic, Put&& put,
+                               BodyColumn&& body_column, SymInertia<Pack<M, L>>* root) noexcept {
   const int n = model.dof();
-  for (int j = 0; j < n; ++j) Ic[j] = model.inertia(j);
+  for (int j = 0; j < n; ++j) Ic[j] = symmetric(model.inertia(j));
   for (int j = n - 1; j >= 0; --j) {
-    Force<P> F = model.inertia_subspace(j, Ic[j]);  // F = Ic_i S_i, H_ii = S_i^T F
-    H[j * n + j] = model.project(j, F);
-    for (int k = j; k > 0; --k) {  // F = X^T F up the chain, H_ij = H_ji = S_j^T F
-      F = to_parent(X[k], F);
-      H[(k - 1) * n + j] = H[j * n + k - 1] = model.project(k - 1, F);
+    auto F = model.inertia_subspace(j, Ic[j]);  // F = Ic_j S_j, A_jj = S_j^T F
+    put(j, j, model.project(j, F));
+    for (int i = j; i > 0; --i) {  // F = X^T F up the chain, A_ij = S_i^T F
+      model.to_parent(i, q[i], sines[i], cosines[i], F);
+      put(j, i - 1, model.project(i - 1, F));
     }
-    if (root_force) root_force[j] = to_parent(X[0], F);
-    if (j > 0) add_to(Ic[j - 1], to_parent(X[j], Ic[j]));  // Ic_parent += X^T Ic_i X
+    if (root) {
+      model.to_parent(0, q[0], sines[0], cosines[0], F);
+      body_column(j, F);
+    }
+    if (j > 0 || root) {  // Ic_parent += X^T Ic_j X
+      model.to_parent(j, q[j], sines[j], cosines[j], Ic[j]);
+      add_to(j > 0 ? Ic[j - 1] : *root, Ic[j]);
+    }
   }
-  if (root_inertia) *root_inertia = to_parent(X[0], Ic[0]);
 }
 
 }  // namespace spotkin::dynamics

@@ -131,94 +131,48 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
   if (stream) stream_fence();
 }
 
-// A(q), (6 + n) x (6 + n) in layout (SymmetricLayout), with every quantity in the body frame (the
-// CRBA of RBDA Table 6.2 on a tree of depth one below the body, RBDA eq. 6.9-6.10 in one frame):
-// link j's pose T_j = X_0 ... X_j (the chain's FK walk), its motion subspace S_j^b = T_j S_j and
-// inertia I_j^b = T_j^T I_j T_j; the composite Ic_j sums I_i^b over j's subtree; F_j = Ic_j S_j^b
-// is joint j's column of the body rows, and A_ij = S_i^b . F_j for i an ancestor of j (or j).
-// No force is carried link by link, and the blocks between chains are never written (zero).
-template <SymmetricLayout layout, typename M, int L>
-SPOTKIN_INLINE void floating_crba_blocks(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                                         std::ptrdiff_t end) {
+// A(q), (6 + n) x (6 + n) in layout (SymmetricLayout): the chains' blocks by CRBA (RBDA Table 6.2,
+// crba_chain), their columns' forces and composite inertias carried to the body. Only the lower
+// entries are written per block; the blocks between chains stay zero.
+template <typename M, int L>
+SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
+                                        std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = symmetric_width(nv, layout);
   FloatingBlock<M, L> blk(model, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
-  std::vector<Motion<P>> S(static_cast<std::size_t>(model.joints()));
-  std::vector<SymInertia<P>> I(static_cast<std::size_t>(model.joints()));
+  std::vector<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
   std::vector<P> trig(3 * static_cast<std::size_t>(model.joints()));  // angles, sines, cosines
-  P* out = blk.out.data();
-  for (int k = 0; k < width; ++k) out[k] = P(M(0));
-  auto put = [&](int i, int j, const P& x) {  // A_ij = A_ji = x, j <= i
-    if constexpr (layout == SymmetricLayout::Packed) {
-      out[i * (i + 1) / 2 + j] = x;
-    } else {
-      out[i * nv + j] = x;
-      if constexpr (layout == SymmetricLayout::Full) out[j * nv + i] = x;
-    }
-  };
-  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
-    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
-    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
-    SymInertia<P> Ib = symmetric(model.body_inertia());
-    for (std::size_t k = 0; k < model.chains().size(); ++k) {
-      const auto& chain = model.chains()[k];
-      const int o = model.offset(k), n = chain.dof();
-      P *sines = trig.data() + model.joints(), *cosines = sines + model.joints();
-      chain.joint_trig(blk.q.data() + 7 + o, trig.data(), sines, cosines);
-      Rigid<P> W;
-      Pose<P> T;
-      for (int j = 0; j < n; ++j) {
-        chain.advance(j, blk.q[std::size_t(7 + o + j)], sines[j], cosines[j], W);
-        for (int r = 0; r < 3; ++r) {
-          T.p[r] = W.p[r];
-          for (int c = 0; c < 3; ++c) T.R(r, c) = W.R(r, c);
-        }
-        const BodyConstants<M>& b = chain.body(j);
-        Motion<P> s;
-        if (b.axis >= 0) {  // S = sign (e_axis, 0): w = sign R e_axis, v = p x w
-          axis_switch(b.axis, [&](auto K) {
-            for (int r = 0; r < 3; ++r) s.w[r] = b.sign > 0 ? T.R(r, K) : -T.R(r, K);
-          });
-          s.v = cross(T.p, s.w);
-        } else {
-          s = to_parent(T, chain.subspace(j));
-        }
-        S[std::size_t(o + j)] = s;
-        I[std::size_t(o + j)] = to_parent(T, b.m, b.h, b.J);
+  P *sines = trig.data() + model.joints(), *cosines = sines + model.joints();
+  layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
+    const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), nv};
+    put.clear();
+    for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+      const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+      blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
+      SymInertia<P> Ib = symmetric(model.body_inertia());
+      for (std::size_t k = 0; k < model.chains().size(); ++k) {
+        const auto& chain = model.chains()[k];
+        const int o = model.offset(k);
+        const P* qc = blk.q.data() + 7 + o;
+        chain.joint_trig(qc, trig.data(), sines, cosines);
+        crba_chain(
+            chain, qc, sines, cosines, Ic.data() + o, [&](int i, int j, const P& x) SPOTKIN_LAMBDA_INLINE { put(6 + o + i, 6 + o + j, x); },
+            [&](int j, const Force<P>& F) SPOTKIN_LAMBDA_INLINE {  // the body's rows: force, then moment
+              for (int r = 0; r < 3; ++r) put(6 + o + j, r, F.f[r]), put(6 + o + j, 3 + r, F.n[r]);
+            },
+            &Ib);
       }
-      SymInertia<P> Ic = I[std::size_t(o + n - 1)];
-      for (int j = n - 1; j >= 0; --j) {
-        if (j < n - 1) add_to(Ic, I[std::size_t(o + j)]);
-        const Force<P> F = apply(Ic, S[std::size_t(o + j)]);
-        const int row = 6 + o + j;
-        for (int r = 0; r < 3; ++r) put(row, r, F.f[r]), put(row, 3 + r, F.n[r]);
-        for (int i = 0; i <= j; ++i) put(row, 6 + o + i, dot(S[std::size_t(o + i)], F));
-      }
-      if (n > 0) add_to(Ib, Ic);
+      // the body block, linear first: [[m 1, -[h]x], [[h]x, J]]
+      const V3<P>& h = Ib.h;
+      for (int r = 0; r < 3; ++r) put(r, r, Ib.m);
+      put(3, 3, Ib.J[0]), put(4, 4, Ib.J[1]), put(5, 5, Ib.J[2]);
+      put(4, 3, Ib.J[3]), put(5, 3, Ib.J[4]), put(5, 4, Ib.J[5]);
+      put(3, 1, -h[2]), put(3, 2, h[1]), put(4, 0, h[2]), put(4, 2, -h[0]), put(5, 0, -h[1]), put(5, 1, h[0]);
+      store(blk.out.data(), width, b0, m, blk.ok, A, stream);
     }
-    // the body block, linear first: [[m 1, -[h]x], [[h]x, J]]
-    const V3<P>& h = Ib.h;
-    for (int r = 0; r < 3; ++r) put(r, r, Ib.m);
-    put(3, 3, Ib.J[0]), put(4, 4, Ib.J[1]), put(5, 5, Ib.J[2]);
-    put(4, 3, Ib.J[3]), put(5, 3, Ib.J[4]), put(5, 4, Ib.J[5]);
-    put(3, 1, -h[2]), put(3, 2, h[1]), put(4, 0, h[2]), put(4, 2, -h[0]), put(5, 0, -h[1]), put(5, 1, h[0]);
-    store(out, width, b0, m, blk.ok, A, stream);
-  }
+  });
   if (stream) stream_fence();
-}
-
-template <typename M, int L>
-SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                                        std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
-  switch (layout) {
-    case SymmetricLayout::Full:
-      return floating_crba_blocks<SymmetricLayout::Full>(model, q, A, begin, end);
-    case SymmetricLayout::Lower:
-      return floating_crba_blocks<SymmetricLayout::Lower>(model, q, A, begin, end);
-    case SymmetricLayout::Packed:
-      return floating_crba_blocks<SymmetricLayout::Packed>(model, q, A, begin, end);
-  }
 }
 
 // Solves the symmetric positive definite 6x6 system K x = b in place (LDL^T, no pivoting).

@@ -78,6 +78,7 @@ SPOTKIN_INLINE decltype(auto) axis_switch(int axis, F&& f) {
 template <typename M>
 struct BodyConstants {
   bool revolute = true;
+  bool no_shift = false;  // a revolute joint with no offset along its axis (r = 0)
   int axis = -1;  // S = (sign e_axis, 0) exactly (a URDF revolute joint about +-x, y or z): sparse products
   M sign = 1;
   M sw[3] = {0, 0, 0}, sv[3] = {0, 0, 0};  // motion subspace S (RBDA eq. 3.33) in the body frame
@@ -106,6 +107,7 @@ class ChainModel {
       }
       BodyConstants<M> b;
       b.revolute = joint.type == JointType::Revolute;
+      b.no_shift = b.revolute && joint.r == 0.0;
       // The motion about (along) u at the origin of the frame after pre . Motion,
       // seen from the body frame after post = (Rp, pp): w = Rp^T u, v = Rp^T (u x pp)
       // (revolute); w = 0, v = Rp^T u (prismatic).
@@ -228,16 +230,48 @@ class ChainModel {
     }
     vector_math::sincos(&angle[0].v[0], &s[0].v[0], &c[0].v[0], std::ptrdiff_t(dof()) * L);
   }
-  // T <- T X_j(q) (T = X_0(q) for j = 0), given joint_trig's s and c: the chain walk of FK, with the
-  // joint's sparse forms.
-  SPOTKIN_INLINE void advance(int j, const P& q, const P& s, const P& c, Rigid<P>& T) const noexcept {
+  // x <- X_j^T x for a SymInertia or a Force of body j, into body j-1's frame (the root frame for
+  // j = 0), piece by piece through X_j = pre . Rot(axis, theta + q) Trans(axis, shift) . post, each
+  // piece in its sparse form (spatial.hpp); s, c from joint_trig.
+  template <typename Q>
+  SPOTKIN_INLINE void to_parent(int j, const P& q, const P& s, const P& c, Q& x) const noexcept {
     const Joint<P>& joint = joints_[static_cast<std::size_t>(j)];
-    if (j == 0)
-      T = joint.pre.X;
-    else
-      joint.pre.apply(T);
-    joint.apply_motion(T, c, s, body(j).revolute ? joint.r : P(joint.r + q));
-    joint.post.apply(T);
+    placement_to_parent(joint.post, x);
+    const BodyConstants<M>& b = body(j);
+    if (joint.axis_kind == AxisKind::General) {  // Rodrigues: R = c 1 + s [u]x + (1 - c) u u^T
+      const P u[3] = {joint.axis[0], joint.axis[1], joint.axis[2]}, one_c = P(M(1)) - c;
+      M3<P> R;
+      for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) R(r, k) = one_c * u[r] * u[k] + (r == k ? c : P(M(0)));
+      R(0, 1) -= s * u[2], R(0, 2) += s * u[1], R(1, 0) += s * u[2];
+      R(1, 2) -= s * u[0], R(2, 0) -= s * u[1], R(2, 1) += s * u[0];
+      rotate(x, R);
+      if (!b.no_shift) {
+        const P shift = b.revolute ? joint.r : P(joint.r + q);
+        const P p[3] = {shift * u[0], shift * u[1], shift * u[2]};
+        translate(x, p);
+      }
+    } else {
+      axis_switch(static_cast<int>(joint.axis_kind), [&](auto K) {
+        rotate_about<decltype(K)::value>(x, c, joint.axis_sign * s);
+        if (!b.no_shift) translate_along<decltype(K)::value>(x, joint.axis_sign * (b.revolute ? joint.r : P(joint.r + q)));
+      });
+    }
+    placement_to_parent(joint.pre, x);
+  }
+  // I S for a SymInertia: (J e_k, e_k x h) sign for an axis joint.
+  SPOTKIN_INLINE Force<P> inertia_subspace(int j, const SymInertia<P>& I) const noexcept {
+    const BodyConstants<M>& b = body(j);
+    if (b.axis < 0) return apply(I, subspace(j));
+    Force<P> o = axis_switch(b.axis, [&](auto K) {
+      constexpr int k = decltype(K)::value, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      Force<P> r;
+      for (int i = 0; i < 3; ++i) r.n[i] = I.J[kSymIndex[i][k]];
+      r.f[k] = P(M(0)), r.f[k1] = -I.h[k2], r.f[k2] = I.h[k1];
+      return r;
+    });
+    if (b.sign < 0) o.n = scale(o.n, P(M(-1))), o.f = scale(o.f, P(M(-1)));
+    return o;
   }
 
   // X[j]: body j's pose in body j-1's frame (the root frame for j = 0), by the
@@ -259,6 +293,25 @@ class ChainModel {
   }
 
  private:
+  template <typename Q>
+  static SPOTKIN_INLINE void placement_to_parent(const Placement<P>& pl, Q& x) noexcept {
+    switch (pl.kind) {
+      case PlacementKind::Identity:
+        return;
+      case PlacementKind::XScrew:  // TransX(a) RotX(alpha)
+        rotate_about<0>(x, pl.cos_alpha, pl.sin_alpha);
+        translate_along<0>(x, pl.a);
+        return;
+      case PlacementKind::Translation:
+        translate(x, pl.X.p);
+        return;
+      case PlacementKind::General:
+        rotate(x, pl.X.R);
+        translate(x, pl.X.p);
+        return;
+    }
+  }
+
   std::vector<Joint<P>> joints_;
   std::vector<BodyConstants<M>> bodies_;
 };
@@ -295,17 +348,36 @@ constexpr int symmetric_width(int n, SymmetricLayout layout) noexcept {
   return layout == SymmetricLayout::Packed ? n * (n + 1) / 2 : n * n;
 }
 
-// A full row-major n x n block (in place) in layout: Lower zeroes the strict upper triangle,
-// Packed moves the lower triangle to the front (row i starts at i (i + 1) / 2 <= i n, so the
-// moves never overwrite an element still to be read).
-template <typename M, int L>
-SPOTKIN_INLINE void to_layout(Pack<M, L>* A, int n, SymmetricLayout layout) noexcept {
-  if (layout == SymmetricLayout::Lower) {
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) A[i * n + j] = Pack<M, L>(M(0));
-  } else if (layout == SymmetricLayout::Packed) {
-    for (int i = 1; i < n; ++i)
-      for (int j = 0; j <= i; ++j) A[i * (i + 1) / 2 + j] = A[i * n + j];
+// Writes A_ij = A_ji (j <= i) of a symmetric n x n block of lanes straight into its layout.
+// The entries never written (the strict upper triangle of Lower, the blocks between a floating
+// body's chains) are zeroed once by clear().
+template <SymmetricLayout layout, typename P>
+struct SymmetricWriter {
+  P* out;
+  int n;
+  SPOTKIN_INLINE void clear() const noexcept {
+    for (int k = 0; k < symmetric_width(n, layout); ++k) out[k] = P(typename LanesOf<P>::Scalar(0));
+  }
+  SPOTKIN_INLINE void operator()(int i, int j, const P& x) const noexcept {
+    if constexpr (layout == SymmetricLayout::Packed) {
+      out[i * (i + 1) / 2 + j] = x;
+    } else {
+      out[i * n + j] = x;
+      if constexpr (layout == SymmetricLayout::Full) out[j * n + i] = x;
+    }
+  }
+};
+
+// f(std::integral_constant<SymmetricLayout, layout>) for a run-time layout.
+template <typename F>
+SPOTKIN_INLINE void layout_switch(SymmetricLayout layout, F&& f) {
+  switch (layout) {
+    case SymmetricLayout::Full:
+      return f(std::integral_constant<SymmetricLayout, SymmetricLayout::Full>{});
+    case SymmetricLayout::Lower:
+      return f(std::integral_constant<SymmetricLayout, SymmetricLayout::Lower>{});
+    case SymmetricLayout::Packed:
+      return f(std::integral_constant<SymmetricLayout, SymmetricLayout::Packed>{});
   }
 }
 

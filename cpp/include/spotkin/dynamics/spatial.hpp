@@ -253,28 +253,97 @@ SPOTKIN_INLINE Force<S> apply(const SymInertia<S>& I, const Motion<S>& u) noexce
                   J[4] * u.w[0] + J[5] * u.w[1] + J[2] * u.w[2]}};
   return {Jw + cross(I.h, u.v), scale(u.v, I.m) - cross(I.h, u.w)};
 }
-// X^T I X of a constant inertia (m, h, J about the child's origin; M scalars), as to_parent
-// above with only J's six distinct entries formed.
-template <typename S, typename M>
-SPOTKIN_INLINE SymInertia<S> to_parent(const Pose<S>& X, M m, const M (&h)[3], const M (&J)[3][3]) noexcept {
-  SymInertia<S> o;
-  o.m = S(m);
-  const V3<S>& p = X.p;
-  V3<S> hr;
-  for (int r = 0; r < 3; ++r) hr[r] = X.R(r, 0) * h[0] + X.R(r, 1) * h[1] + X.R(r, 2) * h[2];
-  for (int r = 0; r < 3; ++r) o.h[r] = hr[r] + p[r] * m;
-  S RJ[3][3];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) RJ[r][c] = X.R(r, 0) * J[0][c] + X.R(r, 1) * J[1][c] + X.R(r, 2) * J[2][c];
+// One piece of a joint's transform at a time, child to parent (x_parent = R x_child + p), on a
+// SymInertia (X^T I X, RBDA eq. 2.66) or a Force (X^T f, eq. 2.25). Rotations about a coordinate
+// axis K and translations along it touch only the entries they change: the composite inertias and
+// forces of the floating CRBA go through a URDF joint (translation, rotation about +-e_k) for a
+// third of the dense transform's operations.
+constexpr int kSymIndex[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};  // J(r, c) in SymInertia::J
+
+// R = Rot_K(c, s): R e_I = c e_I + s e_J (I, J = K + 1, K + 2 cyclic).
+template <int K, typename S>
+SPOTKIN_INLINE void rotate_about(V3<S>& v, const S& c, const S& s) noexcept {
+  constexpr int I = (K + 1) % 3, J = (K + 2) % 3;
+  const S vi = v[I], vj = v[J];
+  v[I] = c * vi - s * vj, v[J] = s * vi + c * vj;
+}
+template <int K, typename S>
+SPOTKIN_INLINE void rotate_about(Force<S>& f, const S& c, const S& s) noexcept {
+  rotate_about<K>(f.n, c, s), rotate_about<K>(f.f, c, s);
+}
+// J' = R J R^T: J'_II = c^2 a - 2 cs d + s^2 b, J'_JJ = s^2 a + 2 cs d + c^2 b,
+// J'_IJ = cs (a - b) + (c^2 - s^2) d, J'_IK = c e - s f, J'_JK = s e + c f (a, b, d, e, f = J_II,
+// J_JJ, J_IJ, J_IK, J_JK); h' = R h.
+template <int K, typename S>
+SPOTKIN_INLINE void rotate_about(SymInertia<S>& X, const S& c, const S& s) noexcept {
+  constexpr int I = (K + 1) % 3, J = (K + 2) % 3;
+  S* j = X.J;
+  const S a = j[kSymIndex[I][I]], b = j[kSymIndex[J][J]], d = j[kSymIndex[I][J]];
+  const S e = j[kSymIndex[I][K]], f = j[kSymIndex[J][K]];
+  const S cc = c * c, ss = s * s, cs = c * s, cs_d2 = S(2) * cs * d;
+  j[kSymIndex[I][I]] = cc * a - cs_d2 + ss * b;
+  j[kSymIndex[J][J]] = ss * a + cs_d2 + cc * b;
+  j[kSymIndex[I][J]] = cs * (a - b) + (cc - ss) * d;
+  j[kSymIndex[I][K]] = c * e - s * f;
+  j[kSymIndex[J][K]] = s * e + c * f;
+  rotate_about<K>(X.h, c, s);
+}
+// Translation by p (R = 1): n' = n + p x f.
+template <typename S, typename V>
+SPOTKIN_INLINE void translate(Force<S>& f, const V& p) noexcept {
+  const V3<S> pp{{S(p[0]), S(p[1]), S(p[2])}};
+  f.n += cross(pp, f.f);
+}
+// h' = h + m p, J' = J - (p h^T + h p^T) - m p p^T + (2 p.h + m |p|^2) 1.
+template <typename S, typename V>
+SPOTKIN_INLINE void translate(SymInertia<S>& X, const V& p_in) noexcept {
+  const V3<S> p{{S(p_in[0]), S(p_in[1]), S(p_in[2])}};
+  const V3<S> h = X.h;
+  const S diagonal = S(2) * dot(p, h) + X.m * dot(p, p);
   constexpr int row[6] = {0, 1, 2, 0, 0, 1}, col[6] = {0, 1, 2, 1, 2, 2};
-  const S diagonal = S(M(2)) * dot(p, hr) + dot(p, p) * m;
   for (int k = 0; k < 6; ++k) {
     const int r = row[k], c = col[k];
-    S x = RJ[r][0] * X.R(c, 0) + RJ[r][1] * X.R(c, 1) + RJ[r][2] * X.R(c, 2);
-    x -= p[r] * hr[c] + hr[r] * p[c] + (p[r] * m) * p[c];
-    o.J[k] = k < 3 ? x + diagonal : x;
+    const S x = X.J[k] - (p[r] * h[c] + h[r] * p[c] + (X.m * p[r]) * p[c]);
+    X.J[k] = k < 3 ? x + diagonal : x;
   }
-  return o;
+  for (int r = 0; r < 3; ++r) X.h[r] = h[r] + X.m * p[r];
+}
+// Translation by d e_K: n' = n + d e_K x f, (e_K x f) = f_I e_J - f_J e_I.
+template <int K, typename S>
+SPOTKIN_INLINE void translate_along(Force<S>& f, const S& d) noexcept {
+  constexpr int I = (K + 1) % 3, J = (K + 2) % 3;
+  f.n[I] -= d * f.f[J], f.n[J] += d * f.f[I];
+}
+// translate() with p = d e_K: J'_II += 2 d h_K + m d^2 (and J'_JJ), J'_IK -= d h_I, J'_JK -= d h_J.
+template <int K, typename S>
+SPOTKIN_INLINE void translate_along(SymInertia<S>& X, const S& d) noexcept {
+  constexpr int I = (K + 1) % 3, J = (K + 2) % 3;
+  const S grow = S(2) * d * X.h[K] + X.m * d * d;
+  X.J[kSymIndex[I][I]] += grow, X.J[kSymIndex[J][J]] += grow;
+  X.J[kSymIndex[I][K]] -= d * X.h[I], X.J[kSymIndex[J][K]] -= d * X.h[J];
+  X.h[K] += X.m * d;
+}
+// A dense rotation R (row-major, any scalar type convertible to S).
+template <typename S, typename R3>
+SPOTKIN_INLINE void rotate(Force<S>& f, const R3& R) noexcept {
+  const Force<S> o = f;
+  for (int r = 0; r < 3; ++r) {
+    f.n[r] = S(R(r, 0)) * o.n[0] + S(R(r, 1)) * o.n[1] + S(R(r, 2)) * o.n[2];
+    f.f[r] = S(R(r, 0)) * o.f[0] + S(R(r, 1)) * o.f[1] + S(R(r, 2)) * o.f[2];
+  }
+}
+template <typename S, typename R3>
+SPOTKIN_INLINE void rotate(SymInertia<S>& X, const R3& R) noexcept {
+  S RJ[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      RJ[r][c] = S(R(r, 0)) * X.J[kSymIndex[0][c]] + S(R(r, 1)) * X.J[kSymIndex[1][c]] +
+                 S(R(r, 2)) * X.J[kSymIndex[2][c]];
+  constexpr int row[6] = {0, 1, 2, 0, 0, 1}, col[6] = {0, 1, 2, 1, 2, 2};
+  for (int k = 0; k < 6; ++k)
+    X.J[k] = RJ[row[k]][0] * S(R(col[k], 0)) + RJ[row[k]][1] * S(R(col[k], 1)) + RJ[row[k]][2] * S(R(col[k], 2));
+  const V3<S> h = X.h;
+  for (int r = 0; r < 3; ++r) X.h[r] = S(R(r, 0)) * h[0] + S(R(r, 1)) * h[1] + S(R(r, 2)) * h[2];
 }
 
 // A general symmetric spatial inertia (articulated-body inertia, RBDA ch. 7):
