@@ -475,9 +475,9 @@ int self_check(std::ptrdiff_t n) {
   }
 
   // Dynamics: enough samples that CRBA's output (36 float64 per sample) takes
-  // the non-temporal store path (dynamics/model.hpp kStreamBytes).
+  // the non-temporal store path (stream.hpp kStreamBytes).
   {
-    const std::ptrdiff_t nd = std::max<std::ptrdiff_t>(n, std::ptrdiff_t(dyn::kStreamBytes / (36 * sizeof(double))) + 64);
+    const std::ptrdiff_t nd = std::max<std::ptrdiff_t>(n, std::ptrdiff_t(spotkin::kStreamBytes / (36 * sizeof(double))) + 64);
     std::vector<double> qd(6 * nd), qv(6 * nd), qdd(6 * nd);
     for (std::ptrdiff_t k = 0; k < 6 * nd; ++k)
       qd[k] = std::uniform_real_distribution<double>(-3.0, 3.0)(rng), qv[k] = normal(rng), qdd[k] = normal(rng);

@@ -21,8 +21,8 @@ constexpr std::size_t kStreamBytes = std::size_t(2) << 20;
 
 #if defined(__x86_64__)
 // One non-temporal store of `bytes` bytes from `from` to the aligned `to`. The wide ones carry their
-// instruction set: they are inlined into the clones of that level, the only ones that call them
-// (packs of 32 and 64 bytes run at AVX2 and AVX-512 only).
+// instruction set (inlined into the clones of that level); stream_copy calls them only where
+// stream_width_ok says the level runs.
 template <int bytes>
 struct StreamStore;
 template <>
@@ -45,12 +45,27 @@ struct StreamStore<64> {
 };
 #endif
 
-// to[0, count) = from[0, count) with non-temporal stores, of a pack's width (the clone's register)
-// once `to` is aligned to it.
-template <typename M, int L>
-SPOTKIN_INLINE void stream_copy(const M* from, M* to, std::size_t count) noexcept {
 #if defined(__x86_64__)
-  auto one = [&](std::size_t k) {
+// Whether the stores `bytes` wide may run: in the clone builds, the level that runs packs of that
+// width (with_model), checked at run time too (a harness may run a wide model in a lower clone);
+// elsewhere, what the compiler was told the CPU has.
+template <int bytes>
+SPOTKIN_INLINE bool stream_width_ok() noexcept {
+#if SPOTKIN_HAS_ISA_CLONES
+  return bytes <= 16 || (bytes == 32 ? active_isa() >= Isa::Avx2 : active_isa() == Isa::Avx512);
+#elif defined(__AVX512F__)
+  return true;
+#elif defined(__AVX__)
+  return bytes <= 32;
+#else
+  return bytes <= 16;
+#endif
+}
+
+// stream_copy with stores `bytes` wide once `to` is aligned to them.
+template <int bytes, typename M>
+SPOTKIN_INLINE void stream_copy_by(const M* from, M* to, std::size_t count) noexcept {
+  auto one = [&](std::size_t k) SPOTKIN_LAMBDA_INLINE {
     if constexpr (sizeof(M) == 8) {
       long long bits;
       std::memcpy(&bits, from + k, 8);
@@ -61,11 +76,24 @@ SPOTKIN_INLINE void stream_copy(const M* from, M* to, std::size_t count) noexcep
       _mm_stream_si32(reinterpret_cast<int*>(to + k), bits);
     }
   };
-  constexpr int kBytes = int(sizeof(M)) * L;
+  constexpr std::size_t kPer = bytes / sizeof(M);
   std::size_t k = 0;
-  for (; k < count && (reinterpret_cast<std::uintptr_t>(to + k) % kBytes) != 0; ++k) one(k);
-  for (; k + L <= count; k += L) StreamStore<kBytes>::put(to + k, from + k);
+  for (; k < count && (reinterpret_cast<std::uintptr_t>(to + k) % bytes) != 0; ++k) one(k);
+  for (; k + kPer <= count; k += kPer) StreamStore<bytes>::put(to + k, from + k);
   for (; k < count; ++k) one(k);
+}
+#endif
+
+// to[0, count) = from[0, count) with non-temporal stores, a pack of L values wide (the clone's
+// register) where that width may run, else 16 bytes wide.
+template <typename M, int L>
+SPOTKIN_INLINE void stream_copy(const M* from, M* to, std::size_t count) noexcept {
+#if defined(__x86_64__)
+  constexpr int kBytes = int(sizeof(M)) * L;
+  if constexpr (kBytes == 32 || kBytes == 64) {
+    if (stream_width_ok<kBytes>()) return stream_copy_by<kBytes>(from, to, count);
+  }
+  stream_copy_by<16>(from, to, count);
 #else
   std::memcpy(to, from, sizeof(M) * count);
 #endif

@@ -70,15 +70,16 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
   ChainBlock<M, L> blk(n, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   std::vector<SymInertia<P>> Ic(static_cast<std::size_t>(n));
-  std::vector<P> trig(3 * static_cast<std::size_t>(n));  // angles, sines, cosines
-  P *sines = trig.data() + n, *cosines = sines + n;
+  std::vector<P> trig(2 * static_cast<std::size_t>(n));  // sines, cosines
+  std::vector<M> scratch(3 * static_cast<std::size_t>(n * L));
+  P *sines = trig.data(), *cosines = sines + n;
   layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
     const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), n};
     put.clear();
     for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
       const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
       blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
-      model.joint_trig(blk.q.data(), trig.data(), sines, cosines);
+      model.joint_trig(blk.q.data(), scratch.data(), sines, cosines);
       crba_chain(model, blk.q.data(), sines, cosines, Ic.data(), put, [](int, const Force<P>&) SPOTKIN_LAMBDA_INLINE {},
                  static_cast<SymInertia<P>*>(nullptr));
       store(blk.out.data(), width, b0, m, blk.ok, A, stream);

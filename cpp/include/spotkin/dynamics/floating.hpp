@@ -142,8 +142,9 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
   FloatingBlock<M, L> blk(model, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   std::vector<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
-  std::vector<P> trig(3 * static_cast<std::size_t>(model.joints()));  // angles, sines, cosines
-  P *sines = trig.data() + model.joints(), *cosines = sines + model.joints();
+  std::vector<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
+  std::vector<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
+  P *sines = trig.data(), *cosines = sines + model.joints();
   layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
     const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), nv};
     put.clear();
@@ -155,7 +156,7 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
         const auto& chain = model.chains()[k];
         const int o = model.offset(k);
         const P* qc = blk.q.data() + 7 + o;
-        chain.joint_trig(qc, trig.data(), sines, cosines);
+        chain.joint_trig(qc, scratch.data(), sines, cosines);
         crba_chain(
             chain, qc, sines, cosines, Ic.data() + o, [&](int i, int j, const P& x) SPOTKIN_LAMBDA_INLINE { put(6 + o + i, 6 + o + j, x); },
             [&](int j, const Force<P>& F) SPOTKIN_LAMBDA_INLINE {  // the body's rows: force, then moment

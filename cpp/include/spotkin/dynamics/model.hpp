@@ -222,13 +222,20 @@ class ChainModel {
   }
 
   // sin and cos of every joint's rotation angle (theta + q, theta for a prismatic joint), in one
-  // vector_math pass over dof() L values. angle: dof() packs of scratch.
-  SPOTKIN_INLINE void joint_trig(const P* q, P* angle, P* s, P* c) const noexcept {
-    for (int j = 0; j < dof(); ++j) {
+  // vector_math pass over dof() L values. scratch: 3 dof() L values.
+  SPOTKIN_INLINE void joint_trig(const P* q, M* scratch, P* s, P* c) const noexcept {
+    const int n = dof();
+    M *angles = scratch, *sines = scratch + n * L, *cosines = sines + n * L;
+    for (int j = 0; j < n; ++j) {
       const Joint<P>& joint = joints_[static_cast<std::size_t>(j)];
-      angle[j] = body(j).revolute ? P(joint.theta + q[j]) : joint.theta;
+      const P angle = body(j).revolute ? P(joint.theta + q[j]) : joint.theta;
+      std::memcpy(angles + j * L, &angle.v, sizeof angle.v);
     }
-    vector_math::sincos(&angle[0].v[0], &s[0].v[0], &c[0].v[0], std::ptrdiff_t(dof()) * L);
+    vector_math::sincos(angles, sines, cosines, std::ptrdiff_t(n) * L);
+    for (int j = 0; j < n; ++j) {
+      std::memcpy(&s[j].v, sines + j * L, sizeof s[j].v);
+      std::memcpy(&c[j].v, cosines + j * L, sizeof c[j].v);
+    }
   }
   // x <- X_j^T x for a SymInertia or a Force of body j, into body j-1's frame (the root frame for
   // j = 0), piece by piece through X_j = pre . Rot(axis, theta + q) Trans(axis, shift) . post, each
