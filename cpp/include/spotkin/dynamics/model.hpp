@@ -182,20 +182,6 @@ class ChainModel {
       return o;
     });
   }
-  // I S for a rigid inertia: (J e_k, -h x e_k) sign for an axis joint.
-  SPOTKIN_INLINE Force<P> inertia_subspace(int j, const RigidInertia<P>& I) const noexcept {
-    const BodyConstants<M>& b = body(j);
-    if (b.axis < 0) return apply(I, subspace(j));
-    Force<P> o = axis_switch(b.axis, [&](auto K) {
-      constexpr int k = decltype(K)::value, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-      Force<P> r;
-      for (int i = 0; i < 3; ++i) r.n[i] = I.J(i, k);
-      r.f[k] = P(M(0)), r.f[k1] = -I.h[k2], r.f[k2] = I.h[k1];
-      return r;
-    });
-    if (b.sign < 0) o.n = scale(o.n, P(M(-1))), o.f = scale(o.f, P(M(-1)));
-    return o;
-  }
   // IA S for an articulated inertia: (A e_k, B^T e_k) sign for an axis joint.
   SPOTKIN_INLINE Force<P> inertia_subspace(int j, const Inertia6<P>& I) const noexcept {
     const BodyConstants<M>& b = body(j);
