@@ -47,6 +47,7 @@
 #include "spotkin/diagnostics.hpp"
 #include "spotkin/dynamics/batch.hpp"
 #include "spotkin/leg.hpp"
+#include "spotkin/scratch.hpp"
 
 
 using namespace spotkin;
@@ -306,6 +307,35 @@ void check_dynamics(Checks& check, const char* label, const Chain<double>& chain
   A_out.assign(A.begin(), A.end());
 }
 
+// The kernels' per-thread scratch stack: nested arrays stay aligned, hold their values while
+// later ones are taken (across chunks, the first of which is 64 KiB), and a released
+// stack serves the same sizes again from the same memory.
+void check_scratch(Checks& check) {
+  using P = dynamics::Pack<double, 8>;
+  std::ptrdiff_t bad = 0, total = 0;
+  const void* first_address[2] = {nullptr, nullptr};
+  for (int round = 0; round < 2; ++round) {
+    ScratchArray<P> a(100, P(1.0));                 // 6.4 KB
+    ScratchArray<double> b(20000);                   // 160 KB: a second chunk
+    ScratchArray<P> c(3000, P(3.0));                // 192 KB: a third
+    {
+      ScratchArray<float> d(7, 4.0f);
+      total += 7;
+      for (float x : d) bad += x != 4.0f;
+    }
+    ScratchArray<P> e(5);  // value-initialised: zeros, where d was
+    for (const P* arr : {a.data(), c.data(), e.data()}) bad += reinterpret_cast<std::uintptr_t>(arr) % alignof(P) != 0;
+    for (std::size_t i = 0; i < a.size(); ++i) bad += a[i].v[7] != 1.0;
+    for (std::size_t i = 0; i < b.size(); ++i) bad += b[i] != 0.0;
+    for (std::size_t i = 0; i < c.size(); ++i) bad += c[i].v[0] != 3.0;
+    for (std::size_t i = 0; i < e.size(); ++i) bad += e[i].v[3] != 0.0;
+    total += 3 + a.size() + b.size() + c.size() + e.size();
+    first_address[round] = c.data();
+  }
+  check.count("scratch stack: nested arrays aligned, kept", total - bad, total, total);
+  check.count("scratch stack: reused after release", first_address[0] == first_address[1], 1, 1);
+}
+
 int self_check(std::ptrdiff_t n) {
   Checks check;
   std::mt19937_64 rng(1);
@@ -320,6 +350,7 @@ int self_check(std::ptrdiff_t n) {
 #endif
   );
 
+  check_scratch(check);
   check_elementary<double>(check, rng, "atan2 float64 vs libm", "sincos float64 vs libm", 1e-15);
   check_elementary<float>(check, rng, "atan2 float32 vs libm", "sincos float32 vs libm", 1e-6);
 

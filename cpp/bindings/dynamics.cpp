@@ -44,10 +44,9 @@ constexpr double kNsPerSample = 150.0;
 py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
                      });
                    });
@@ -56,10 +55,9 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
 py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
                      });
                    });
@@ -68,10 +66,9 @@ py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
 py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
                      });
                    });
@@ -81,10 +78,9 @@ py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_na
   const py::ssize_t n = d.dof();
   const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
   return run_batch({{q, "q", n, true, d.f64.angle_columns()}}, symmetric_shape(n, layout), kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        crba_k(model, rows[0], out, b, e, layout);
                      });
                    });
@@ -93,10 +89,9 @@ py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_na
 py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        coriolis_k(model, rows[0], rows[1], out, b, e);
                      });
                    });
@@ -105,10 +100,9 @@ py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
 py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g) {
   const py::ssize_t n = d.dof();
   return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
                      });
                    });

@@ -34,7 +34,7 @@ template <typename X>
 using NonDeduced = typename NonDeducedOf<X>::type;
 
 // Lane widths: one register of the level (AVX-512: 8 doubles, 16 floats; AVX2: 4, 8),
-// and 16-byte packs (2, 4) for SSE2, NEON and batches shorter than one register.
+// and 16-byte packs (2, 4) for SSE2 and NEON.
 constexpr int kLanes64 = 8;
 constexpr int kLanes32 = 16;
 constexpr int kMidLanes64 = 4;
@@ -43,25 +43,23 @@ constexpr int kSmallLanes64 = 2;
 constexpr int kSmallLanes32 = 4;
 
 // Calls f(model) with the model of `d` in precision T whose packs fill one register of the
-// active instruction-set level, or the 16-byte one when the whole batch is shorter than
-// that register (chosen on the whole batch, never a thread's chunk: a sample's bits do not
-// depend on the split).
+// active instruction-set level: 64 bytes at AVX-512, 32 at AVX2, 16 at the baseline (SSE2,
+// NEON). The choice depends on the level only, never on the batch: a batch shorter than
+// the lanes runs one partial block, and a sample's bits are the same alone, in any batch,
+// and in any thread's chunk.
 template <typename T, typename D, typename F>
-SPOTKIN_INLINE void with_model(const D& d, std::ptrdiff_t samples, F&& f) {
-  constexpr bool kFloat = std::is_same_v<T, float>;
-  const Isa isa = active_isa();
-  if (isa == Isa::Avx512 && samples >= (kFloat ? kLanes32 : kLanes64))
-    f(d.get(T{}));
-  else if (isa != Isa::Baseline && samples >= (kFloat ? kMidLanes32 : kMidLanes64))
-    f(d.mid(T{}));
-  else
-    f(d.small(T{}));
+SPOTKIN_INLINE void with_model(const D& d, F&& f) {
+  switch (active_isa()) {
+    case Isa::Avx512: return f(d.get(T{}));
+    case Isa::Avx2: return f(d.mid(T{}));
+    default: return f(d.small(T{}));
+  }
 }
 
 // SPOTKIN_LANE_CLONES((parameters), (arguments), body) defines template <T, L> `name`
 // for the dynamics kernels: a model of 64-byte packs runs the AVX-512 clone, of 32-byte
-// packs the AVX2 one (with_model picks them only at those levels), and of 16-byte packs
-// the active level's. No clone is compiled for a width its level does not use.
+// packs the AVX2 one, and of 16-byte packs the baseline one (with_model picks each at its
+// level only). One clone per width.
 #if SPOTKIN_HAS_ISA_CLONES
 #define SPOTKIN_LANE_CLONES(NAME, PARAMS, ARGS, ...)                                  \
   template <typename T, int L>                                                         \
@@ -78,11 +76,7 @@ SPOTKIN_INLINE void with_model(const D& d, std::ptrdiff_t samples, F&& f) {
     } else if constexpr (kBytes == 32) {                                               \
       NAME##_avx2 ARGS;                                                                \
     } else {                                                                           \
-      switch (active_isa()) {                                                          \
-        case Isa::Avx512: return NAME##_avx512 ARGS;                                   \
-        case Isa::Avx2: return NAME##_avx2 ARGS;                                       \
-        default: return NAME##_baseline ARGS;                                          \
-      }                                                                                \
+      NAME##_baseline ARGS;                                                            \
     }                                                                                  \
   }
 #else
@@ -208,7 +202,7 @@ py::object dispatch_args(const std::vector<BatchArg>& args, F&& f) {
   return f(double{}, arrs);
 }
 
-// Runs kernel(rows, out, begin, end, total) over the broadcast batch with the GIL released.
+// Runs kernel(rows, out, begin, end) over the broadcast batch with the GIL released.
 template <typename Kernel>
 py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, double ns_per_sample,
                      Kernel&& kernel) {
@@ -220,9 +214,7 @@ py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, d
     const std::vector<Rows<T>>& rows = p.rows;
     {
       ReleaseGilFor release(p.count);
-      const std::ptrdiff_t total = p.count;
-      parallel_for(p.count, min_chunk(ns_per_sample),
-                   [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e, total); });
+      parallel_for(p.count, min_chunk(ns_per_sample), [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e); });
     }
     return std::move(out);
   });

@@ -91,10 +91,9 @@ constexpr double kNsFloating = 400.0;
 py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        f_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
                      });
                    });
@@ -102,10 +101,9 @@ py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, 
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        f_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
                      });
                    });
@@ -113,10 +111,9 @@ py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle 
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        f_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
                      });
                    });
@@ -125,10 +122,9 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle lay
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
   return run_batch({{q, "q", nq, true, d.angles}}, symmetric_shape(nv, layout), kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        f_crba_k(model, rows[0], out, b, e, layout);
                      });
                    });
@@ -136,10 +132,9 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle lay
 py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        f_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
                      });
                    });
@@ -147,18 +142,17 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
 py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) { f_coriolis_k(model, rows[0], rows[1], out, b, e); });
+                     with_model<T>(d, [&](const auto& model) { f_coriolis_k(model, rows[0], rows[1], out, b, e); });
                    });
 }
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e,
-                       std::ptrdiff_t total) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, total, [&](const auto& model) {
+                     with_model<T>(d, [&](const auto& model) {
                        f_com_k(model, rows[0], out, jacobian, b, e);
                      });
                    });

@@ -28,8 +28,8 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
   remainder apart in the last bits: for them a chunk computes its samples as the whole call does, in
   full blocks (padded to multiples of :data:`ALIGNMENT`, the core's thread alignment), and the whole
   batch's last ``N mod 64`` samples come from one call on them (one small extra task). The dynamics
-  kernels choose their vector width on the batch's size (fewer samples than a vector: a narrow
-  model): a chunk shorter than a vector, of a batch that is not, runs padded to a whole vector.
+  kernels' vector width depends on the instruction-set level only, so any chunk of them computes
+  its samples as the whole call does.
 - **Checked at once.** Shapes, dtypes, broadcasting and options are checked when the function
   is called, with the in-memory call's ``ValueError``/``TypeError`` messages; NaN samples give
   NaN and ``INVALID_INPUT`` when computed, as everywhere.
@@ -75,7 +75,7 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
     ) from error
 
 from ._boundary import as_real, broadcast_lead, check_trailing
-from ._runtime import get_isa, get_num_threads, thread_limit
+from ._runtime import get_num_threads, thread_limit
 from .arm import SpotArm
 from .body import pose_format
 from .chain import Chain
@@ -165,21 +165,16 @@ class _Kernel:
         "cut",
         "dtypes",
         "method",
-        "minimum",
         "model",
         "options",
         "outputs",
         "tasks",
     )
 
-    def __init__(self, model, method, options, dtypes, cores=(), outputs=(), total=0, lanes=0) -> None:
+    def __init__(self, model, method, options, dtypes, cores=(), outputs=(), total=0) -> None:
         self.model, self.method, self.options, self.dtypes = model, method, options, dtypes
         self.cores, self.outputs = cores, outputs  # per-sample shapes of the inputs and outputs
         self.cut = total - total % ALIGNMENT if (_kind(model), method) in _BLOCKED else None
-        # a kernel whose vector width is chosen on the batch's size (dynamics: batches shorter than
-        # ``lanes`` run on narrow models, which may round apart): when the whole batch is that long,
-        # a shorter chunk runs padded to ``lanes`` samples, so it gets the whole call's width
-        self.minimum = lanes if lanes and total >= lanes else 0
         # the graph's chunks (set by _lazy): the threads of a call are the cores' share of one chunk, so
         # that the scheduler's threads, one chunk each, do not each start every core's worth
         self.tasks = 0
@@ -191,21 +186,7 @@ class _Kernel:
         return self.cut is not None
 
     def __call__(self, *blocks: np.ndarray) -> tuple:
-        blocks = _whole(blocks)
-        if self.minimum:
-            lead = np.broadcast_shapes(
-                *(b.shape[: b.ndim - len(core)] for b, core in zip(blocks, self.cores))
-            )
-            count = math.prod(lead)
-            if 0 < count < self.minimum:
-                take = np.minimum(np.arange(self.minimum), count - 1)  # the last sample repeated
-                flat = [
-                    np.broadcast_to(b, lead + core).reshape((count, *core))[take]
-                    for b, core in zip(blocks, self.cores)
-                ]
-                leaves = self._call(*flat)
-                return tuple(leaf[:count].reshape(lead + core) for leaf, core in zip(leaves, self.outputs))
-        return self._call(*blocks)
+        return self._call(*_whole(blocks))
 
     def _call(self, *blocks: np.ndarray) -> tuple:
         share = (
@@ -251,9 +232,7 @@ class _Kernel:
 
     @property
     def token(self) -> str:
-        return tokenize(
-            self._digest, self.method, sorted(self.options.items()), self.dtypes, self.cut, self.minimum
-        )
+        return tokenize(self._digest, self.method, sorted(self.options.items()), self.dtypes, self.cut)
 
     def __reduce__(self):
         state = (
@@ -263,7 +242,6 @@ class _Kernel:
             self.cores,
             self.outputs,
             self.cut,
-            self.minimum,
             self.tasks,
         )
         return (_rebuild_kernel, (self._digest, self._data, state))
@@ -306,7 +284,6 @@ def _rebuild_kernel(digest, data, state) -> _Kernel:
         kernel.cores,
         kernel.outputs,
         kernel.cut,
-        kernel.minimum,
         kernel.tasks,
     ) = state
     return kernel
@@ -378,12 +355,10 @@ def _plan(
     options: dict,
     fields: tuple,
     single: str | None,
-    lanes: int | Callable = 0,
 ) -> _Plan:
     """Checks a call of ``model.method`` on ``inputs`` [(name, value, core)] and plans it: a None
     ``seed`` or ``stance`` is left out (the method's default). ``single``: the field name of a
-    one-array result. ``lanes``: see :class:`_Kernel` (0: every sample's answer is its own), or a
-    function of the first output's dtype giving it."""
+    one-array result."""
     names, arrays, cores, leads = [], [], [], {}
     for name, value, core in inputs:
         if value is None and name in ("seed", "stance"):
@@ -406,8 +381,6 @@ def _plan(
         fields = getattr(type(result), "_fields", fields)
     else:
         record, fields = None, (single,)
-    if callable(lanes):
-        lanes = lanes(outputs[0][0])
     kernel = _Kernel(
         model,
         method,
@@ -416,7 +389,6 @@ def _plan(
         tuple(cores),
         tuple(core for _, core in outputs),
         math.prod(lead),
-        lanes,
     )
     return _Plan(
         kernel, tuple(names), tuple(arrays), tuple(cores), tuple(lead), tuple(fields), outputs, record
@@ -703,12 +675,6 @@ def ik_all(model, target, seed=None):
 
 _GRAVITY = (0.0, 0.0, -9.81)
 
-# The dynamics kernels' vector widths (cpp/bindings/dynamics_boundary.hpp, kLanes64 and kLanes32): a
-# batch shorter than this runs on a narrow model.
-# the dynamics kernels' lanes (float64, float32) at each instruction-set level: one register
-# (cpp/bindings/dynamics_boundary.hpp); 16-byte packs elsewhere
-_DYNAMICS_LANES = {"avx512": (8, 16), "avx2": (4, 8)}
-
 
 def _dynamics(model) -> tuple[str, int, int]:
     """(method prefix, nq, nv): a :class:`~spotkin.Chain`'s own methods (fixed base: q and its rates
@@ -724,15 +690,9 @@ def _dynamics(model) -> tuple[str, int, int]:
     )
 
 
-def _dynamics_lanes(dtype) -> int:
-    """The vector width of a whole in-memory call at the level in use (:func:`spotkin.get_isa`)."""
-    lanes64, lanes32 = _DYNAMICS_LANES.get(get_isa(), (2, 4))
-    return lanes32 if np.dtype(dtype) == np.float32 else lanes64
-
-
 def _plan_dynamics(model, method: str, inputs: Sequence, single: str) -> _Plan:
     prefix, _, _ = _dynamics(model)
-    return _plan(model, prefix + method, inputs, {}, (), single, _dynamics_lanes)
+    return _plan(model, prefix + method, inputs, {}, (), single)
 
 
 _NO_GRAVITY = object()  # a call without a gravity argument (A(q), C(q, qd))
@@ -861,7 +821,7 @@ def _plan_center_of_mass(robot, body_pose, q, seq="XYZ") -> _Plan:
     robot = _robot(robot)
     inputs = [("body_pose", body_pose, _BODY_POSE), ("q", q, _robot_q(robot, q))]
     # the floating base's kernels run in float64 (Robot.center_of_mass converts the result)
-    return _plan(robot, "center_of_mass", inputs, {"seq": seq}, (), "com", _dynamics_lanes(np.float64))
+    return _plan(robot, "center_of_mass", inputs, {"seq": seq}, (), "com")
 
 
 def center_of_mass(robot: Robot, body_pose, q, seq: str = "XYZ"):
@@ -879,7 +839,7 @@ def _plan_standing_torques(robot, body_pose, q, stance=None, gravity=_GRAVITY, s
     ]
     g = as_real(gravity, "gravity", np.float64)
     options = {"gravity": tuple(float(v) for v in g) if g.shape == (3,) else g, "seq": seq}
-    return _plan(robot, "standing_torques", inputs, options, (), None, _dynamics_lanes(np.float64))
+    return _plan(robot, "standing_torques", inputs, options, (), None)
 
 
 def standing_torques(robot: Robot, body_pose, q, stance=None, gravity=_GRAVITY, seq: str = "XYZ"):

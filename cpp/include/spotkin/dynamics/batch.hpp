@@ -5,12 +5,11 @@
 // a null qd / qdd is zero (G = RNEA(q, 0, 0), h = RNEA(q, qd, 0)).
 #pragma once
 
-#include <vector>
-
 #include "spotkin/dynamics/aba.hpp"
 #include "spotkin/dynamics/coriolis.hpp"
 #include "spotkin/dynamics/crba.hpp"
 #include "spotkin/dynamics/rnea.hpp"
+#include "spotkin/scratch.hpp"
 
 namespace spotkin::dynamics {
 
@@ -18,8 +17,8 @@ template <typename M, int L>
 struct ChainBlock {
   using P = Pack<M, L>;
   int n;
-  std::vector<P> q, qd, qdd, in, out;
-  std::vector<Pose<P>> X;
+  ScratchArray<P> q, qd, qdd, in, out;
+  ScratchArray<Pose<P>> X;
   P g[3];
   bool ok[L];
 
@@ -50,7 +49,7 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
   const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
-  std::vector<Force<P>> f(static_cast<std::size_t>(n));
+  ScratchArray<Force<P>> f(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, qd, qdd, &g, b0, m);
@@ -69,9 +68,9 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
   const int n = model.dof(), width = symmetric_width(n, layout);
   ChainBlock<M, L> blk(n, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
-  std::vector<SymInertia<P>> Ic(static_cast<std::size_t>(n));
-  std::vector<P> trig(2 * static_cast<std::size_t>(n));  // sines, cosines
-  std::vector<M> scratch(3 * static_cast<std::size_t>(n * L));
+  ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(n));
+  ScratchArray<P> trig(2 * static_cast<std::size_t>(n));  // sines, cosines
+  ScratchArray<M> scratch(3 * static_cast<std::size_t>(n * L));
   P *sines = trig.data(), *cosines = sines + n;
   layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
     const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), n};
@@ -96,7 +95,7 @@ SPOTKIN_INLINE void coriolis_batch(const ChainModel<M, L>& model, Rows<M> q, Row
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n * n);
   const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
-  std::vector<CoriolisWork<P>> w(static_cast<std::size_t>(n));
+  ScratchArray<CoriolisWork<P>> w(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, &qd, nullptr, nullptr, b0, m);
@@ -114,7 +113,7 @@ SPOTKIN_INLINE void aba_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> 
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
   const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
-  std::vector<AbaWork<P>> w(static_cast<std::size_t>(n));
+  ScratchArray<AbaWork<P>> w(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, &qd, &tau, &g, b0, m);  // tau in the qdd slot

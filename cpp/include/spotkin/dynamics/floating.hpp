@@ -15,6 +15,7 @@
 #include "spotkin/dynamics/coriolis.hpp"
 #include "spotkin/dynamics/crba.hpp"
 #include "spotkin/dynamics/rnea.hpp"
+#include "spotkin/scratch.hpp"
 
 namespace spotkin::dynamics {
 
@@ -64,8 +65,8 @@ class FloatingModel {
 template <typename M, int L>
 struct FloatingBlock {
   using P = Pack<M, L>;
-  std::vector<P> q, v, a, out;
-  std::vector<Pose<P>> X;
+  ScratchArray<P> q, v, a, out;
+  ScratchArray<Pose<P>> X;
   M3<P> R;
   V3<P> g_body;
   P g[3];
@@ -111,7 +112,7 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
   const bool stream = std::size_t(end - begin) * std::size_t(model.nv()) * sizeof(M) >= kStreamBytes;
-  std::vector<Force<P>> f(static_cast<std::size_t>(model.joints()));
+  ScratchArray<Force<P>> f(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, v, a, &g, b0, m);
@@ -141,9 +142,9 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
   const int nv = model.nv(), width = symmetric_width(nv, layout);
   FloatingBlock<M, L> blk(model, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
-  std::vector<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
-  std::vector<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
-  std::vector<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
+  ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
+  ScratchArray<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
+  ScratchArray<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
   P *sines = trig.data(), *cosines = sines + model.joints();
   layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
     const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), nv};
@@ -206,7 +207,7 @@ SPOTKIN_INLINE void floating_aba_batch(const FloatingModel<M, L>& model, Rows<M>
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
   const bool stream = std::size_t(end - begin) * std::size_t(model.nv()) * sizeof(M) >= kStreamBytes;
-  std::vector<AbaWork<P>> w(static_cast<std::size_t>(model.joints()));
+  ScratchArray<AbaWork<P>> w(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, &v, &tau, &g, b0, m);  // tau in the a slot
@@ -253,9 +254,9 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
   const int nv = model.nv(), width = jacobian ? 3 * nv : 3;
   FloatingBlock<M, L> blk(model, width);
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
-  std::vector<Motion<P>> S(static_cast<std::size_t>(model.joints()));
-  std::vector<P> ms(static_cast<std::size_t>(model.joints()));
-  std::vector<V3<P>> hs(static_cast<std::size_t>(model.joints()));
+  ScratchArray<Motion<P>> S(static_cast<std::size_t>(model.joints()));
+  ScratchArray<P> ms(static_cast<std::size_t>(model.joints()));
+  ScratchArray<V3<P>> hs(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
@@ -309,7 +310,7 @@ SPOTKIN_INLINE void floating_coriolis_batch(const FloatingModel<M, L>& model, Ro
   const int nv = model.nv();
   FloatingBlock<M, L> blk(model, nv * nv);
   const bool stream = std::size_t(end - begin) * std::size_t(nv * nv) * sizeof(M) >= kStreamBytes;
-  std::vector<CoriolisWork<P>> w(static_cast<std::size_t>(model.joints()));
+  ScratchArray<CoriolisWork<P>> w(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, &v, nullptr, nullptr, b0, m);
