@@ -27,13 +27,15 @@
 //   elbow slots coincide).
 #pragma once
 
-#include <Eigen/Dense>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "spotkin/common.hpp"
+#include "spotkin/dense.hpp"
 #include "spotkin/leg.hpp"  // JointLimits, circle_distance
 #include "spotkin/vector_math.hpp"
 
@@ -166,8 +168,7 @@ class Arm {
     out[0] = std::fabs(std::sin(q[4]));
     out[1] = std::fabs(std::sin(el0 - phi_));
     out[2] = std::fabs(cx);
-    const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> Jm(J);
-    out[3] = std::fabs(Jm.determinant());
+    out[3] = std::fabs(dense::determinant6(J));
   }
 
   // A pose as plain arrays: the vectorised kernels avoid Eigen, whose

@@ -12,11 +12,13 @@
 #include <string>
 #include <type_traits>
 
-#include <Eigen/SVD>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "spotkin/arm.hpp"
 #include "spotkin/chain.hpp"
 #include "spotkin/common.hpp"
+#include "spotkin/dense.hpp"
 #include "spotkin/vector_math.hpp"
 
 namespace spotkin::chain_ik {

@@ -21,7 +21,7 @@
 // root of q1, "+" then "-", and i5 that of q5; rank 2: increasing q1), b the elbow root.
 #pragma once
 
-#include <Eigen/SVD>
+#include <Eigen/LU>
 
 #include "spotkin/chain_ik/poe.hpp"
 
@@ -86,8 +86,9 @@ class Sp6 {
  public:
   Sp6() = default;
   Sp6(const Eigen::Matrix2d& A2, double rank_tolerance, double mirror) : A2_(A2), mirror_(mirror) {
-    Eigen::JacobiSVD<Eigen::Matrix2d> svd(A2_, Eigen::ComputeFullU);
-    const Eigen::Vector2d sv = svd.singularValues();
+    Eigen::Vector2d sv;
+    Eigen::Matrix2d U;
+    dense::svd_u2(A2_, sv, U);
     if (!(sv[0] > 0.0)) throw std::invalid_argument("degenerate geometry: an angle does not enter the equations");
     rank_ratio_ = sv[1] / sv[0];
     rank1_ = rank_ratio_ <= rank_tolerance;
@@ -95,7 +96,7 @@ class Sp6 {
     auto oriented = [](Eigen::Vector2d x) {
       return Eigen::Vector2d((std::fabs(x[0]) >= std::fabs(x[1]) ? x[0] : x[1]) < 0.0 ? -x : x);
     };
-    n_ = oriented(svd.matrixU().col(1)), m_ = oriented(svd.matrixU().col(0));
+    n_ = oriented(U.col(1)), m_ = oriented(U.col(0));
     ma_ = m_.transpose() * A2_;
     if (!rank1_) A2_inv_ = A2_.inverse();
   }

@@ -130,12 +130,13 @@ inline double meeting_error(const Poe& poe, int first, V3& point) {
     const M3 P = M3::Identity() - poe.h[j] * poe.h[j].transpose();
     A += P, b += P * poe.p[j];
   }
-  Eigen::JacobiSVD<M3> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  if (svd.singularValues()[2] <= 1e-12 * svd.singularValues()[0]) {
+  V3 sigma;
+  const V3 solution = dense::svd_solve3(A, b, &sigma);
+  if (sigma[2] <= 1e-12 * sigma[0]) {
     point = V3::Constant(std::numeric_limits<double>::quiet_NaN());
     return std::numeric_limits<double>::infinity();
   }
-  point = svd.solve(b);
+  point = solution;
   double worst = 0.0;
   for (int j = first; j < first + 3; ++j)
     worst = std::max(worst, ((M3::Identity() - poe.h[j] * poe.h[j].transpose()) * (point - poe.p[j])).norm());
@@ -233,11 +234,8 @@ inline double newton_polish(const Chain<double>& chain, double* q, const Rigid<d
     double e[6], trial[Poe::kMaxJoints];
     differential::pose_error(target, chain.forward(q), e);
     chain.jacobian(q, J.data(), 6, false);
-    Eigen::CompleteOrthogonalDecomposition<Mat> cod(J.rows(), J.cols());
-    cod.setThreshold(1e-9);
-    cod.compute(J);
-    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, Poe::kMaxJoints, 1> dq =
-        cod.solve(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(e));
+    double dq[Poe::kMaxJoints];
+    dense::cod_solve6(J.data(), n, e, 1e-9, dq);
     bool improved = false;
     for (double step = 1.0; step >= 1.0 / 16.0 && !improved; step *= 0.5) {
       for (int j = 0; j < n; ++j) trial[j] = q[j] + step * dq[j];

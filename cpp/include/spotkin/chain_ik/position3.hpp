@@ -511,7 +511,7 @@ class Position3 {
           const double x = std::cos(kPi<double> * k / 4.0);
           for (int j = 0; j < 5; ++j) V(k, j) = std::pow(x, j);
         }
-        return Eigen::Matrix<double, 5, 5>(V.inverse());
+        return dense::inverse5(V);
       }();
       Eigen::Matrix<double, 5, 1> vals;
       for (int k = 0; k < 5; ++k) vals[k] = P(JointValue{1, 0, s * std::cos(kPi<double> * k / 4.0)}, ra, rb);
@@ -594,8 +594,7 @@ class Position3 {
         if (std::fabs(det) > 1e-8 * norms) {
           delta = -(adj * r) / det;
         } else {
-          Eigen::JacobiSVD<M3> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
-          delta = -svd.solve(r);
+          delta = -dense::svd_solve3(J, r);
         }
         Candidate next = c;
         for (int j = 0; j < 3; ++j) advance(sig[j], delta[j], next.q[j]);
@@ -731,7 +730,7 @@ class Position3 {
       pb.point(q, &J);
       for (int j = 0; j < 3; ++j)
         if (sigma_[j] == 0) J.col(j) /= scale_;  // revolute columns carry a length
-      best = std::max(best, Eigen::JacobiSVD<M3>(J).singularValues()[2]);
+      best = std::max(best, dense::singular_values3(J)[2]);
     }
     if (!(best > Tolerance::rank))
       throw std::invalid_argument(
