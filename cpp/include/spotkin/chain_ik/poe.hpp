@@ -234,6 +234,7 @@ inline double newton_polish(const Chain<double>& chain, double* q, const Rigid<d
     double e[6], trial[Poe::kMaxJoints];
     differential::pose_error(target, chain.forward(q), e);
     chain.jacobian(q, J.data(), 6, false);
+    static_assert(Poe::kMaxJoints <= 7, "dense::cod_solve6 takes at most 7 columns");
     double dq[Poe::kMaxJoints];
     dense::cod_solve6(J.data(), n, e, 1e-9, dq);
     bool improved = false;
