@@ -656,3 +656,38 @@ def test_floating_base_with_general_axes_and_prismatic_joints(convention, rng):
     close(A[:, 6:9, 9:12], np.zeros((8, 3, 3)), 0)
     close(fb.mass_matrix(q, layout="lower"), np.tril(A), 0)
     close(dyn.unpack_symmetric(fb.mass_matrix(q, layout="packed")), A, 0)
+
+
+# ------------------------------------------------------------------ a sample's bits, alone or in any batch
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_sample_has_the_same_bits_alone_and_in_batches_of_any_size(dtype, rng):
+    """The kernels' vector width depends on the instruction-set level only (every_isa runs each
+    level): one sample, a batch shorter than the lanes and a long batch give a row the same bits."""
+    fx = _fixed("spot_arm")
+    q, qd, qdd = (x.astype(dtype) for x in fx.random(rng, (37,)))
+    fixed_calls = {
+        "rnea": lambda s: dyn.inverse_dynamics(fx.chain, q[s], qd[s], qdd[s], inertials=fx.inertials),
+        "crba": lambda s: dyn.mass_matrix(fx.chain, q[s], inertials=fx.inertials),
+        "crba packed": lambda s: dyn.mass_matrix(fx.chain, q[s], inertials=fx.inertials, layout="packed"),
+        "aba": lambda s: dyn.forward_dynamics(fx.chain, q[s], qd[s], qdd[s], inertials=fx.inertials),
+    }
+    base = sk.Robot.from_urdf(GO2).floating_base
+    quat = rng.normal(size=(37, 4))
+    fq = np.hstack([rng.normal(size=(37, 3)), quat / np.linalg.norm(quat, axis=1, keepdims=True)])
+    fq = np.hstack([fq, rng.uniform(-1, 1, (37, base.nq - 7))]).astype(dtype)
+    fv, fa = (rng.normal(size=(37, base.nv)).astype(dtype) for _ in range(2))
+    floating_calls = {
+        "floating rnea": lambda s: base.inverse_dynamics(fq[s], fv[s], fa[s]),
+        "floating crba": lambda s: base.mass_matrix(fq[s]),
+        "floating crba lower": lambda s: base.mass_matrix(fq[s], layout="lower"),
+        "floating aba": lambda s: base.forward_dynamics(fq[s], fv[s], fa[s]),
+    }
+    for name, call in {**fixed_calls, **floating_calls}.items():
+        whole = call(slice(None))
+        assert whole.dtype == dtype, name
+        for k in (0, 5, 36):
+            assert np.array_equal(call(k), whole[k]), (name, k)
+        for part in (slice(3, 4), slice(3, 6), slice(10, 17)):
+            assert np.array_equal(call(part), whole[part]), (name, part)
