@@ -644,8 +644,15 @@ def test_a_killed_worker_process_of_the_multiprocessing_scheduler(big, tmp_path)
 def cluster():
     distributed = pytest.importorskip("distributed")
     with (
+        # no dashboard, and the scheduler's HTTP server on a free port: the default, 8787, may be
+        # taken (another cluster on this machine), and distributed's warning would fail the test
         distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=50
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            scheduler_kwargs={"dashboard_address": ":0"},
+            silence_logs=50,
         ) as local,
         distributed.Client(local) as client,
     ):
