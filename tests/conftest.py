@@ -35,6 +35,26 @@ def every_isa(request):
         yield request.param
 
 
+@pytest.fixture(scope="module")
+def cluster():
+    """A local dask.distributed cluster (2 worker processes) and its client, for a test module."""
+    distributed = pytest.importorskip("distributed")
+    with (
+        # no dashboard, and the scheduler's HTTP server on a free port: the default, 8787, may be
+        # taken (another cluster on this machine), and distributed's warning would fail the test
+        distributed.LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            scheduler_kwargs={"dashboard_address": ":0"},
+            silence_logs=50,
+        ) as local,
+        distributed.Client(local) as client,
+    ):
+        yield local, client
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261122)

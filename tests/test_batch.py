@@ -640,25 +640,6 @@ def test_a_killed_worker_process_of_the_multiprocessing_scheduler(big, tmp_path)
     assert_output(out, dict(big["reference"]._asdict()))
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    distributed = pytest.importorskip("distributed")
-    with (
-        # no dashboard, and the scheduler's HTTP server on a free port: the default, 8787, may be
-        # taken (another cluster on this machine), and distributed's warning would fail the test
-        distributed.LocalCluster(
-            n_workers=2,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            scheduler_kwargs={"dashboard_address": ":0"},
-            silence_logs=50,
-        ) as local,
-        distributed.Client(local) as client,
-    ):
-        yield local, client
-
-
 def test_a_distributed_cluster_with_a_worker_killed_mid_run(big, tmp_path, cluster):
     """The same command against a scheduler address; a worker process killed mid-run is restarted by
     its nanny and its chunks are run again: the output is the in-memory result."""

@@ -478,25 +478,6 @@ def test_local_schedulers(scheduler):
         assert_same(result, want, scheduler)
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    distributed = pytest.importorskip("distributed")
-    with (
-        # no dashboard, and the scheduler's HTTP server on a free port: the default, 8787, may be
-        # taken (another cluster on this machine), and distributed's warning would fail the test
-        distributed.LocalCluster(
-            n_workers=2,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            scheduler_kwargs={"dashboard_address": ":0"},
-            silence_logs=40,
-        ) as local,
-        distributed.Client(local) as client,
-    ):
-        yield local, client
-
-
 def test_distributed_local_cluster(cluster):
     """Two worker processes: the models travel by pickle, the results are the in-memory ones."""
     _, client = cluster
