@@ -347,6 +347,7 @@ SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void,
   double c[S][6][L], s[S][6][L];
   bool refine_slot[S][L] = {};
   Arm::Pose targets[L];
+  bool shared = false;  // the lane solve's slots share q1 (by root 1) and q5, q6 (by roots 1 and 5)
   if (solver.lane_parallel() && m > Arm6::kShortBlock) {
     // every lane, a short block's padded with its last pose, so that a pose's answer does not
     // depend on its neighbours or on how a batch is split
@@ -367,8 +368,10 @@ SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void,
     solver.parallel().solve_lanes(R, t, out.input_ok, c, s, exists, fallback);
     for (int i = 0; i < L; ++i)
       for (int k = 0; k < S; ++k) out.exists[k][i] = exists[k][i];
+    shared = true;
     for (int i = 0; i < m; ++i) {
       if (fallback[i] == 0.0 || out.input_ok[i] == 0.0) continue;
+      shared = false;  // the lane's slots come from solve(): each angle on its own
       for (int r = 0; r < 3; ++r) {
         for (int col = 0; col < 3; ++col) targets[i].R[r][col] = TR[r][col][i];
         targets[i].p[r] = Tp[r][i];
@@ -398,12 +401,20 @@ SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void,
       }
     }
   }
-  for (int k = 0; k < S; ++k)  // the m lanes in use (a short block pays for its poses only); 0 where no slot
+  // the angles of the m lanes in use (a short block pays for its poses only), 0 where no slot.
+  // Slot k = 4 i1 + 2 i5 + i3 of the lane solve (Parallel234::solve_lanes): q1 is slot (k & 4)'s,
+  // q5 and q6 slot (k & 6)'s, so 34 of the 48 atan2 are distinct; a copy has the same bits
+  for (int k = 0; k < S; ++k)
+    for (int j = 0; j < 6; ++j) {
+      const int from = !shared ? k : j == 0 ? (k & 4) : j >= 4 ? (k & 6) : k;
+      if (from == k)
+        for (int i = 0; i < m; ++i) out.angle[k][j][i] = vector_math::atan2(s[k][j][i], c[k][j][i]);
+      else
+        for (int i = 0; i < m; ++i) out.angle[k][j][i] = out.angle[from][j][i];
+    }
+  for (int k = 0; k < S; ++k)
     for (int j = 0; j < 6; ++j)
-      for (int i = 0; i < m; ++i) {
-        const double angle = vector_math::atan2(s[k][j][i], c[k][j][i]);
-        out.angle[k][j][i] = out.exists[k][i] != 0.0 ? angle : 0.0;
-      }
+      for (int i = 0; i < m; ++i) out.angle[k][j][i] = out.exists[k][i] != 0.0 ? out.angle[k][j][i] : 0.0;
   for (int k = 0; k < S; ++k)
     for (int i = 0; i < m; ++i) out.exact[k][i] = 1.0;
   // Newton on the true chain for an idealised chain (a branch that does not converge there is
