@@ -60,30 +60,34 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   if (stream) stream_fence();
 }
 
-// A(q) per sample, in layout (SymmetricLayout), written straight into it.
+// A(q) per sample, in layout (SymmetricLayout): the lower triangle in a packed lane buffer
+// (SymmetricWriter), gathered into the layout as the rows are stored.
 template <typename M, int L>
 SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
                                std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int n = model.dof(), width = symmetric_width(n, layout);
-  ChainBlock<M, L> blk(n, width);
+  ChainBlock<M, L> blk(n, SymmetricWriter<P>::size(n));
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(n));
   ScratchArray<P> trig(2 * static_cast<std::size_t>(n));  // sines, cosines
   ScratchArray<M> scratch(3 * static_cast<std::size_t>(n * L));
+  ScratchArray<int> gather(static_cast<std::size_t>(n * n));
+  const int* index = symmetric_gather(n, layout, gather.data());
   P *sines = trig.data(), *cosines = sines + n;
-  layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
-    const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), n};
-    put.clear();
-    for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
-      const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
-      blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
-      model.joint_trig(blk.q.data(), scratch.data(), sines, cosines);
-      crba_chain(model, blk.q.data(), sines, cosines, Ic.data(), put, [](int, const Force<P>&) SPOTKIN_LAMBDA_INLINE {},
-                 static_cast<SymInertia<P>*>(nullptr));
+  const SymmetricWriter<P> put{blk.out.data(), n};
+  put.clear();
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
+    model.joint_trig(blk.q.data(), scratch.data(), sines, cosines);
+    crba_chain(model, blk.q.data(), sines, cosines, Ic.data(), put, [](int, const Force<P>&) SPOTKIN_LAMBDA_INLINE {},
+               static_cast<SymInertia<P>*>(nullptr));
+    if (index)
+      store<M, L, true>(blk.out.data(), width, b0, m, blk.ok, A, stream, index);
+    else
       store(blk.out.data(), width, b0, m, blk.ok, A, stream);
-    }
-  });
+  }
   if (stream) stream_fence();
 }
 

@@ -140,40 +140,43 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
                                         std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = symmetric_width(nv, layout);
-  FloatingBlock<M, L> blk(model, width);
+  FloatingBlock<M, L> blk(model, SymmetricWriter<P>::size(nv));
   const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
   ScratchArray<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
   ScratchArray<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
+  ScratchArray<int> gather(static_cast<std::size_t>(nv * nv));
+  const int* index = symmetric_gather(nv, layout, gather.data());
   P *sines = trig.data(), *cosines = sines + model.joints();
-  layout_switch(layout, [&](auto kind) SPOTKIN_LAMBDA_INLINE {
-    const SymmetricWriter<decltype(kind)::value, P> put{blk.out.data(), nv};
-    put.clear();
-    for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
-      const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
-      blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
-      SymInertia<P> Ib = symmetric(model.body_inertia());
-      for (std::size_t k = 0; k < model.chains().size(); ++k) {
-        const auto& chain = model.chains()[k];
-        const int o = model.offset(k);
-        const P* qc = blk.q.data() + 7 + o;
-        chain.joint_trig(qc, scratch.data(), sines, cosines);
-        crba_chain(
-            chain, qc, sines, cosines, Ic.data() + o, [&](int i, int j, const P& x) SPOTKIN_LAMBDA_INLINE { put(6 + o + i, 6 + o + j, x); },
-            [&](int j, const Force<P>& F) SPOTKIN_LAMBDA_INLINE {  // the body's rows: force, then moment
-              for (int r = 0; r < 3; ++r) put(6 + o + j, r, F.f[r]), put(6 + o + j, 3 + r, F.n[r]);
-            },
-            &Ib);
-      }
-      // the body block, linear first: [[m 1, -[h]x], [[h]x, J]]
-      const V3<P>& h = Ib.h;
-      for (int r = 0; r < 3; ++r) put(r, r, Ib.m);
-      put(3, 3, Ib.J[0]), put(4, 4, Ib.J[1]), put(5, 5, Ib.J[2]);
-      put(4, 3, Ib.J[3]), put(5, 3, Ib.J[4]), put(5, 4, Ib.J[5]);
-      put(3, 1, -h[2]), put(3, 2, h[1]), put(4, 0, h[2]), put(4, 2, -h[0]), put(5, 0, -h[1]), put(5, 1, h[0]);
-      store(blk.out.data(), width, b0, m, blk.ok, A, stream);
+  const SymmetricWriter<P> put{blk.out.data(), nv};
+  put.clear();
+  for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
+    const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
+    blk.begin(model, q, nullptr, nullptr, nullptr, b0, m, false);
+    SymInertia<P> Ib = symmetric(model.body_inertia());
+    for (std::size_t k = 0; k < model.chains().size(); ++k) {
+      const auto& chain = model.chains()[k];
+      const int o = model.offset(k);
+      const P* qc = blk.q.data() + 7 + o;
+      chain.joint_trig(qc, scratch.data(), sines, cosines);
+      crba_chain(
+          chain, qc, sines, cosines, Ic.data() + o, [&](int i, int j, const P& x) SPOTKIN_LAMBDA_INLINE { put(6 + o + i, 6 + o + j, x); },
+          [&](int j, const Force<P>& F) SPOTKIN_LAMBDA_INLINE {  // the body's rows: force, then moment
+            for (int r = 0; r < 3; ++r) put(6 + o + j, r, F.f[r]), put(6 + o + j, 3 + r, F.n[r]);
+          },
+          &Ib);
     }
-  });
+    // the body block, linear first: [[m 1, -[h]x], [[h]x, J]]
+    const V3<P>& h = Ib.h;
+    for (int r = 0; r < 3; ++r) put(r, r, Ib.m);
+    put(3, 3, Ib.J[0]), put(4, 4, Ib.J[1]), put(5, 5, Ib.J[2]);
+    put(4, 3, Ib.J[3]), put(5, 3, Ib.J[4]), put(5, 4, Ib.J[5]);
+    put(3, 1, -h[2]), put(3, 2, h[1]), put(4, 0, h[2]), put(4, 2, -h[0]), put(5, 0, -h[1]), put(5, 1, h[0]);
+    if (index)
+      store<M, L, true>(blk.out.data(), width, b0, m, blk.ok, A, stream, index);
+    else
+      store(blk.out.data(), width, b0, m, blk.ok, A, stream);
+  }
   if (stream) stream_fence();
 }
 

@@ -341,51 +341,46 @@ constexpr int symmetric_width(int n, SymmetricLayout layout) noexcept {
   return layout == SymmetricLayout::Packed ? n * (n + 1) / 2 : n * n;
 }
 
-// Writes A_ij = A_ji (j <= i) of a symmetric n x n block of lanes straight into its layout.
-// The entries never written (the strict upper triangle of Lower, the blocks between a floating
-// body's chains) are zeroed once by clear().
-template <SymmetricLayout layout, typename P>
+// Writes A_ij = A_ji (j <= i) of a symmetric n x n block of lanes into a packed lane buffer
+// (A_ij at i (i + 1) / 2 + j), and one zero entry after it: every layout is then a gather from
+// it (symmetric_gather, store's index), so that the kernel is compiled once for the three
+// layouts (compiled per layout, it cost the two dynamics units 40 s of compiler time). The
+// entries never written (the blocks between a floating body's chains) are zeroed once by clear().
+template <typename P>
 struct SymmetricWriter {
   P* out;
   int n;
+  static constexpr int size(int n) noexcept { return n * (n + 1) / 2 + 1; }  // the buffer, with its zero
   SPOTKIN_INLINE void clear() const noexcept {
-    for (int k = 0; k < symmetric_width(n, layout); ++k) out[k] = P(typename LanesOf<P>::Scalar(0));
+    for (int k = 0; k < size(n); ++k) out[k] = P(typename LanesOf<P>::Scalar(0));
   }
-  SPOTKIN_INLINE void operator()(int i, int j, const P& x) const noexcept {
-    if constexpr (layout == SymmetricLayout::Packed) {
-      out[i * (i + 1) / 2 + j] = x;
-    } else {
-      out[i * n + j] = x;
-      if constexpr (layout == SymmetricLayout::Full) out[j * n + i] = x;
-    }
-  }
+  SPOTKIN_INLINE void operator()(int i, int j, const P& x) const noexcept { out[i * (i + 1) / 2 + j] = x; }
 };
 
-// f(std::integral_constant<SymmetricLayout, layout>) for a run-time layout.
-template <typename F>
-SPOTKIN_INLINE void layout_switch(SymmetricLayout layout, F&& f) {
-  switch (layout) {
-    case SymmetricLayout::Full:
-      return f(std::integral_constant<SymmetricLayout, SymmetricLayout::Full>{});
-    case SymmetricLayout::Lower:
-      return f(std::integral_constant<SymmetricLayout, SymmetricLayout::Lower>{});
-    case SymmetricLayout::Packed:
-      return f(std::integral_constant<SymmetricLayout, SymmetricLayout::Packed>{});
-  }
+// index[k]: the entry of SymmetricWriter's buffer that is value k of a row in layout (A_ij of Full
+// at i n + j, the same or the zero entry for the upper triangle of Lower); null for Packed, the
+// buffer's own order.
+inline const int* symmetric_gather(int n, SymmetricLayout layout, int* index) noexcept {
+  if (layout == SymmetricLayout::Packed) return nullptr;
+  const int zero = n * (n + 1) / 2;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      index[i * n + j] = j <= i ? i * (i + 1) / 2 + j : layout == SymmetricLayout::Full ? j * (j + 1) / 2 + i : zero;
+  return index;
 }
 
-// Stores `width` lanes-values of samples b0 .. b0 + m - 1, row-major; a lane
+// Stores `width` lanes-values (in[index[k]] for value k with Gather) of samples b0 .. b0 + m - 1, row-major; a lane
 // whose inputs were not all finite gets NaN in its whole row. Groups of L
 // columns of L lanes are transposed in registers; with `stream`, rows go
 // through a small buffer and out with non-temporal stores (stream_fence after).
-template <typename M, int L>
+template <typename M, int L, bool Gather = false>
 SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
-                          bool stream = false) noexcept {
+                          bool stream = false, const int* index = nullptr) noexcept {
   if (stream) {  // the block's rows are contiguous in out: assemble them, then stream them out
     thread_local std::vector<M> rows;
     const std::size_t count = std::size_t(m) * std::size_t(width);
     if (rows.size() < count) rows.resize(count);
-    store(in, width, 0, m, ok, rows.data(), false);
+    store<M, L, Gather>(in, width, 0, m, ok, rows.data(), false, index);
     stream_copy<M, L>(rows.data(), out + b0 * width, count);
     return;
   }
@@ -393,7 +388,7 @@ SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, in
   if constexpr (L >= 2 && L <= 16) {  // groups of L columns: transposed in registers
     for (; j0 + L <= width; j0 += L) {
       typename Pack<M, L>::Vector r[L];
-      for (int k = 0; k < L; ++k) r[k] = in[j0 + k].v;
+      for (int k = 0; k < L; ++k) r[k] = in[Gather ? index[j0 + k] : j0 + k].v;
       transpose_lanes<M, L>(r);
       for (int i = 0; i < m; ++i)
         if (ok[i]) std::memcpy(out + (b0 + i) * width + j0, &r[i], sizeof r[i]);
@@ -405,7 +400,7 @@ SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, in
       for (int j = 0; j < width; ++j) row[j] = quiet_nan<M>();
       continue;
     }
-    for (int j = j0; j < width; ++j) row[j] = in[j].v[i];
+    for (int j = j0; j < width; ++j) row[j] = in[Gather ? index[j] : j].v[i];
   }
 }
 
