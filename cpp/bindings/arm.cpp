@@ -29,10 +29,15 @@ SPOTKIN_CLONES((template <typename T>), void, arm_ik_all_kernel, (const Arm& arm
                                             std::int8_t* status, std::ptrdiff_t n), (arm, poses, format, seed, q, valid, exists, status, n),
   arm_batch::ik_all(arm, poses, format, seed, q, valid, exists, status, n);
 )
-SPOTKIN_CLONES((template <typename T>), void, arm_ik_kernel, (const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
-                                        std::int8_t* status, std::ptrdiff_t n), (arm, poses, format, seed, q, status, n),
-  arm_batch::ik(arm, poses, format, seed, q, status, n);
-)
+// The nearest solution from every solution of the dispatched kernel above; only the choice is
+// compiled here (at the baseline level): one copy of the solver per level, not two.
+template <typename T>
+void arm_ik_kernel(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q, std::int8_t* status,
+                   std::ptrdiff_t n) {
+  arm_batch::ik(arm, poses, format, seed, q, status, n,
+                [&](const T* p, PoseFormat f, const T* s, T* q_all, std::uint8_t* valid, std::uint8_t* exists,
+                    std::int8_t* st, std::ptrdiff_t m) { arm_ik_all_kernel<T>(arm, p, f, s, q_all, valid, exists, st, m); });
+}
 
 py::object fk(const Arm& arm, py::handle q_obj) {
   return map_batch(q_obj, "q", 6, {4, 4}, kMinPerThread,

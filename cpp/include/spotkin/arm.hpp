@@ -497,17 +497,20 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
 }
 
 // The in-limit solution nearest to the seed (largest single-joint move on the
-// circle; ties to the lower slot), or the lowest valid slot without a seed.
-template <typename T>
+// circle; ties to the lower slot), or the lowest valid slot without a seed. Every solution
+// of a block comes from all(poses, format, seed, q_all, valid, exists, status, m), ik_all's
+// signature: the bindings pass their dispatched ik_all kernel, so that the solver is not
+// compiled a second time inside this one.
+template <typename T, typename All>
 SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
-                       std::int8_t* status, std::ptrdiff_t count) noexcept {
+                       std::int8_t* status, std::ptrdiff_t count, All&& all) noexcept {
   T q_all[kBlock * Arm::kSlots * 6];
   std::uint8_t valid[kBlock * Arm::kSlots], exists[kBlock * Arm::kSlots];
   std::int8_t st[kBlock];
   const std::ptrdiff_t stride = format == PoseFormat::Matrix ? 16 : 7;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    ik_all(arm, poses + stride * b0, format, seed ? seed + 6 * b0 : nullptr, q_all, valid, exists, st, m);
+    all(poses + stride * b0, format, seed ? seed + 6 * b0 : nullptr, q_all, valid, exists, st, m);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const std::ptrdiff_t t = b0 + i;
       T* qt = q + 6 * t;
@@ -528,6 +531,14 @@ SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const 
       for (int j = 0; j < 6; ++j) qt[j] = best >= 0 ? q_all[48 * i + 6 * best + j] : T(quiet_nan<double>());
     }
   }
+}
+
+template <typename T>
+SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
+                       std::int8_t* status, std::ptrdiff_t count) noexcept {
+  ik(arm, poses, format, seed, q, status, count,
+     [&](const T* p, PoseFormat f, const T* s, T* q_all, std::uint8_t* valid, std::uint8_t* exists, std::int8_t* st,
+         std::ptrdiff_t m) { ik_all(arm, p, f, s, q_all, valid, exists, st, m); });
 }
 
 }  // namespace arm_batch
