@@ -277,10 +277,9 @@ class FloatingBase:
     in the body frame, then the joint rates; ``a`` = dv/dt; ``tau`` (..., 6 + n) the force then
     moment on the body (body frame), then the joint torques. ``gravity`` is a world vector.
 
-    Results are bit-identical for any thread count and any chunking of a batch into calls of at
-    least one register of samples (8 float64 or 16 float32 on AVX-512, 4 or 8 on AVX2: see
-    :func:`spotkin.get_isa`); a shorter batch runs a narrow model that may differ in the last
-    bit. Pickles (rebuilt from its body, chains and inertials).
+    Results are bit-identical for any thread count and any chunking of a batch into calls, a
+    single sample included (each instruction-set level, :func:`spotkin.get_isa`, runs one
+    register width). Pickles (rebuilt from its body, chains and inertials).
     """
 
     __slots__ = ("_args", "_chains", "_core", "_mass")
