@@ -357,9 +357,9 @@ struct SymmetricWriter {
   SPOTKIN_INLINE void operator()(int i, int j, const P& x) const noexcept { out[i * (i + 1) / 2 + j] = x; }
 };
 
-// index[k]: the entry of SymmetricWriter's buffer that is value k of a row in layout (A_ij of Full
-// at i n + j, the same or the zero entry for the upper triangle of Lower); null for Packed, the
-// buffer's own order.
+// index[i n + j]: the entry of SymmetricWriter's buffer that a row in layout holds at i n + j:
+// A_ij, or its mirror A_ji above the diagonal, for Full; A_ij on and below the diagonal and the
+// zero entry above it for Lower. Null for Packed, whose rows are the buffer's own order.
 inline const int* symmetric_gather(int n, SymmetricLayout layout, int* index) noexcept {
   if (layout == SymmetricLayout::Packed) return nullptr;
   const int zero = n * (n + 1) / 2;
