@@ -531,14 +531,14 @@ def test_the_floating_base_pickles():
             )
 
 
-def test_the_narrow_model_s_last_bit_is_documented():
-    # floating-base results of batches of 1-7 and of 8+ may differ in the last bit: said where the
-    # thread-count guarantee is
+def test_the_chunking_guarantee_is_documented():
+    # one register width per level, whatever the batch's size: a sample's bits do not depend on
+    # the batch around it (tests/test_dynamics.py checks it); said where the thread-count
+    # guarantee is, and no longer the old narrow model's "may differ in the last bit"
     root = Path(__file__).resolve().parent.parent
     texts = [(root / name).read_text(encoding="utf-8") for name in ("README.md", "docs/dynamics.md")]
     texts.append(sk.dynamics.FloatingBase.__doc__)
     for text in texts:
         flat = " ".join(text.split())
-        assert "any chunking of a batch into calls of at least one register" in flat and "narrow" in flat, (
-            text[:80]
-        )
+        assert "any chunking of a batch into calls, a single sample included" in flat, text[:80]
+        assert "narrow model" not in flat, text[:80]
