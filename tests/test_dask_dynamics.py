@@ -90,8 +90,8 @@ def test_chain_dynamics_match_the_in_memory_calls(chain, dtype):
     which=st.sampled_from(["inverse_dynamics", "mass_matrix", "forward_dynamics", "coriolis_matrix"]),
 )
 def test_any_chunking_keeps_the_whole_calls_vector_width(n, chunk, dtype, which):
-    """Batches shorter than a vector block (8 float64, 16 float32) run on a narrow model that may round
-    apart: a short chunk of a long batch must still get the whole call's bits, and a short batch its own."""
+    """Chunks of any size, shorter than a vector block (8 float64, 16 float32 at AVX-512) too, give the
+    whole call's bits: each level runs one register width, a short chunk being one partial block."""
     q, qd, qdd = states(ARM, n, n, dtype)
     x, xd, xdd = (chunked(a, chunk) for a in (q, qd, qdd))
     args = {"mass_matrix": (q,), "coriolis_matrix": (q, qd)}.get(which, (q, qd, qdd))
