@@ -671,6 +671,7 @@ def test_a_sample_has_the_same_bits_alone_and_in_batches_of_any_size(dtype, rng)
         "rnea": lambda s: dyn.inverse_dynamics(fx.chain, q[s], qd[s], qdd[s], inertials=fx.inertials),
         "crba": lambda s: dyn.mass_matrix(fx.chain, q[s], inertials=fx.inertials),
         "crba packed": lambda s: dyn.mass_matrix(fx.chain, q[s], inertials=fx.inertials, layout="packed"),
+        "crba lower": lambda s: dyn.mass_matrix(fx.chain, q[s], inertials=fx.inertials, layout="lower"),
         "aba": lambda s: dyn.forward_dynamics(fx.chain, q[s], qd[s], qdd[s], inertials=fx.inertials),
     }
     base = sk.Robot.from_urdf(GO2).floating_base
@@ -682,6 +683,7 @@ def test_a_sample_has_the_same_bits_alone_and_in_batches_of_any_size(dtype, rng)
         "floating rnea": lambda s: base.inverse_dynamics(fq[s], fv[s], fa[s]),
         "floating crba": lambda s: base.mass_matrix(fq[s]),
         "floating crba lower": lambda s: base.mass_matrix(fq[s], layout="lower"),
+        "floating crba packed": lambda s: base.mass_matrix(fq[s], layout="packed"),
         "floating aba": lambda s: base.forward_dynamics(fq[s], fv[s], fa[s]),
     }
     for name, call in {**fixed_calls, **floating_calls}.items():

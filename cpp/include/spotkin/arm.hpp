@@ -533,14 +533,6 @@ SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const 
   }
 }
 
-template <typename T>
-SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
-                       std::int8_t* status, std::ptrdiff_t count) noexcept {
-  ik(arm, poses, format, seed, q, status, count,
-     [&](const T* p, PoseFormat f, const T* s, T* q_all, std::uint8_t* valid, std::uint8_t* exists, std::int8_t* st,
-         std::ptrdiff_t m) { ik_all(arm, p, f, s, q_all, valid, exists, st, m); });
-}
-
 }  // namespace arm_batch
 
 }  // namespace spotkin

@@ -83,10 +83,7 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
     model.joint_trig(blk.q.data(), scratch.data(), sines, cosines);
     crba_chain(model, blk.q.data(), sines, cosines, Ic.data(), put, [](int, const Force<P>&) SPOTKIN_LAMBDA_INLINE {},
                static_cast<SymInertia<P>*>(nullptr));
-    if (index)
-      store<M, L, true>(blk.out.data(), width, b0, m, blk.ok, A, stream, index);
-    else
-      store(blk.out.data(), width, b0, m, blk.ok, A, stream);
+    store_symmetric(blk.out.data(), width, b0, m, blk.ok, A, stream, index);
   }
   if (stream) stream_fence();
 }

@@ -172,10 +172,7 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
     put(3, 3, Ib.J[0]), put(4, 4, Ib.J[1]), put(5, 5, Ib.J[2]);
     put(4, 3, Ib.J[3]), put(5, 3, Ib.J[4]), put(5, 4, Ib.J[5]);
     put(3, 1, -h[2]), put(3, 2, h[1]), put(4, 0, h[2]), put(4, 2, -h[0]), put(5, 0, -h[1]), put(5, 1, h[0]);
-    if (index)
-      store<M, L, true>(blk.out.data(), width, b0, m, blk.ok, A, stream, index);
-    else
-      store(blk.out.data(), width, b0, m, blk.ok, A, stream);
+    store_symmetric(blk.out.data(), width, b0, m, blk.ok, A, stream, index);
   }
   if (stream) stream_fence();
 }

@@ -404,4 +404,15 @@ SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, in
   }
 }
 
+// store() of a SymmetricWriter buffer in its layout: gathered through index, or in the buffer's
+// own order (Packed, index null) without an indirection.
+template <typename M, int L>
+SPOTKIN_INLINE void store_symmetric(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
+                                    bool stream, const int* index) noexcept {
+  if (index)
+    store<M, L, true>(in, width, b0, m, ok, out, stream, index);
+  else
+    store(in, width, b0, m, ok, out, stream);
+}
+
 }  // namespace spotkin::dynamics
