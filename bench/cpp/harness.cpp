@@ -36,6 +36,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -336,6 +337,29 @@ void check_scratch(Checks& check) {
   check.count("scratch stack: reused after release", first_address[0] == first_address[1], 1, 1);
 }
 
+// remainder_two_pi against std::remainder, bit for bit: a dense sweep of (-5 pi, 5 pi), the
+// neighbours of every multiple of pi there, and the special values; float64 and float32.
+template <typename T>
+void check_remainder(Checks& check, const char* name) {
+  std::ptrdiff_t good = 0, total = 0;
+  const auto same = [&](T a) {
+    const T fast = remainder_two_pi(a), slow = std::remainder(a, T(2) * kPi<T>);
+    good += std::memcmp(&fast, &slow, sizeof(T)) == 0 || (std::isnan(fast) && std::isnan(slow));
+    ++total;
+  };
+  for (int i = -500000; i <= 500000; ++i) same(T(5e-5 * i) * kPi<T>);
+  for (int k = -4; k <= 4; ++k) {
+    T a = T(k) * kPi<T>;
+    for (int step = 0; step < 16; ++step) a = std::nextafter(a, T(-100));
+    for (int step = 0; step < 33; ++step, a = std::nextafter(a, T(100))) same(a), same(-a);
+  }
+  for (const T a : {T(0), -T(0), std::numeric_limits<T>::max(),
+                    std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity(), quiet_nan<T>(),
+                    std::numeric_limits<T>::denorm_min()})
+    same(a);
+  check.count(name, good, total, total);
+}
+
 int self_check(std::ptrdiff_t n) {
   Checks check;
   std::mt19937_64 rng(1);
@@ -351,6 +375,8 @@ int self_check(std::ptrdiff_t n) {
   );
 
   check_scratch(check);
+  check_remainder<double>(check, "remainder_two_pi = std::remainder, float64");
+  check_remainder<float>(check, "remainder_two_pi = std::remainder, float32");
   check_elementary<double>(check, rng, "atan2 float64 vs libm", "sincos float64 vs libm", 1e-15);
   check_elementary<float>(check, rng, "atan2 float32 vs libm", "sincos float32 vs libm", 1e-6);
 

@@ -458,8 +458,8 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const T* si = seed ? seed + 6 * (b0 + i) : nullptr;
       seed_ok[i] = !si || finite6(si) ? 1.0 : 0.0;
-      seed_sh0[i] = si && seed_ok[i] != 0.0 ? std::remainder(double(si[0]), 2.0 * kPi<double>) : 0.0;
-      seed_el1[i] = si && seed_ok[i] != 0.0 ? std::remainder(double(si[3]), 2.0 * kPi<double>) : 0.0;
+      seed_sh0[i] = si && seed_ok[i] != 0.0 ? remainder_two_pi(double(si[0])) : 0.0;
+      seed_el1[i] = si && seed_ok[i] != 0.0 ? remainder_two_pi(double(si[3])) : 0.0;
     }
     if (format == PoseFormat::Matrix) {
       solve_block<PoseFormat::Matrix>(arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, Leg::ratio_tolerance<T>());

@@ -85,12 +85,21 @@ constexpr Scalar quiet_nan() noexcept {
   return std::numeric_limits<Scalar>::quiet_NaN();
 }
 
+// std::remainder(a, 2 pi), bit for bit, in [-pi, pi]. For |a| < 3 pi, one
+// subtraction of 2 pi at most, which is exact there (Sterbenz: pi <= |a| <= 4 pi),
+// so the library call (tens of ns) is left for large angles, NaN and Inf.
+template <typename Scalar>
+SPOTKIN_INLINE Scalar remainder_two_pi(Scalar a) noexcept {
+  constexpr Scalar pi = kPi<Scalar>, two_pi = Scalar(2) * kPi<Scalar>;
+  if (!(std::fabs(a) < Scalar(3) * pi)) return std::remainder(a, two_pi);
+  return a > pi ? a - two_pi : (a < -pi ? -(-a - two_pi) : a);  // -(-a - 2 pi): -0 at -2 pi, as std::remainder
+}
+
 // Wrap an angle into (-pi, pi].
 template <typename Scalar>
-inline Scalar wrap_angle(Scalar a) noexcept {
-  const Scalar two_pi = Scalar(2) * kPi<Scalar>;
-  Scalar w = std::remainder(a, two_pi);  // in [-pi, pi]
-  return w <= -kPi<Scalar> ? w + two_pi : w;
+SPOTKIN_INLINE Scalar wrap_angle(Scalar a) noexcept {
+  const Scalar w = remainder_two_pi(a);  // in [-pi, pi]
+  return w <= -kPi<Scalar> ? w + Scalar(2) * kPi<Scalar> : w;
 }
 
 }  // namespace spotkin

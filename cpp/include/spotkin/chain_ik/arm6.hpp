@@ -428,7 +428,7 @@ SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void,
         const double residual = solver.polish(targets[i], q);
         out.exists[k][i] = residual <= Arm6::kAccept ? 1.0 : 0.0;
         out.exact[k][i] = residual < Arm6::kExact ? 1.0 : 0.0;
-        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = std::remainder(q[j], 2.0 * kPi<double>);
+        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = remainder_two_pi(q[j]);
       }
   // idealised chains: two starts polished to one solution keep the first slot
   for (int i = 0; i < m && idealised; ++i)
@@ -438,7 +438,7 @@ SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void,
         if (out.exists[o][i] == 0.0) continue;
         double gap = 0.0;
         for (int j = 0; j < 6; ++j)
-          gap = std::max(gap, std::fabs(std::remainder(out.angle[k][j][i] - out.angle[o][j][i], 2.0 * kPi<double>)));
+          gap = std::max(gap, std::fabs(remainder_two_pi(out.angle[k][j][i] - out.angle[o][j][i])));
         if (gap < Arm6::kSame) out.exists[k][i] = 0.0;
       }
     }
@@ -467,11 +467,11 @@ SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void,
           if (out.exists[o][i] == 0.0) continue;
           double gap = 0.0;
           for (int j = 0; j < 6; ++j)
-            gap = std::max(gap, std::fabs(std::remainder(x[j] - out.angle[o][j][i], 2.0 * kPi<double>)));
+            gap = std::max(gap, std::fabs(remainder_two_pi(x[j] - out.angle[o][j][i])));
           known = gap < Arm6::kSame;
         }
         if (known) continue;
-        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = std::remainder(x[j], 2.0 * kPi<double>);
+        for (int j = 0; j < 6; ++j) out.angle[k][j][i] = remainder_two_pi(x[j]);
         out.exists[k][i] = 1.0;
         out.exact[k][i] = residual < Arm6::kExact ? 1.0 : 0.0;
       }

@@ -180,10 +180,10 @@ class Sp6 {
         }
         if (!(std::fabs(f(t)) <= 1e-10 * scale)) continue;
       }
-      t = std::remainder(t, 2.0 * kPi<double>);
+      t = remainder_two_pi(t);
       bool duplicate = false;
       for (int o = 0; o < n; ++o)
-        duplicate |= std::fabs(std::remainder(t - t_found[o].first, 2.0 * kPi<double>)) < 1e-9;
+        duplicate |= std::fabs(remainder_two_pi(t - t_found[o].first)) < 1e-9;
       if (!duplicate) t_found[n++] = {t, !real};
     }
     std::sort(t_found, t_found + n);
