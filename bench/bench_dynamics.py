@@ -93,9 +93,17 @@ def _legs12_fixed():
     vs = [np.ascontiguousarray(v[:, 3 * k : 3 * k + 3]) for k in range(4)]
     as_ = [np.ascontiguousarray(a[:, 3 * k : 3 * k + 3]) for k in range(4)]
 
+    # float32 copies of the batch, split per leg too (test_rnea's float lanes)
+    q32, v32, a32 = (x.astype(np.float32) for x in (q, v, a))
+    legs32, vs32, as32 = (
+        [np.ascontiguousarray(x[:, 3 * k : 3 * k + 3]) for k in range(4)] for x in (q32, v32, a32)
+    )
+
     def rnea(q_, v_, a_, g):  # the per-leg inputs prepared above (the batch's columns per leg)
         if q_ is q:
             return [c.rnea(ql, vl, al, g) for c, ql, vl, al in zip(cores, legs, vs, as_)]
+        if q_ is q32:
+            return [c.rnea(ql, vl, al, g) for c, ql, vl, al in zip(cores, legs32, vs32, as32)]
         return np.concatenate(
             [
                 c.rnea(q_[..., 3 * k : 3 * k + 3], v_[..., 3 * k : 3 * k + 3], a_[..., 3 * k : 3 * k + 3], g)
@@ -112,6 +120,7 @@ def _legs12_fixed():
             out[..., 3 * k : 3 * k + 3, 3 * k : 3 * k + 3] = c.crba(q_[..., 3 * k : 3 * k + 3])
         return out
 
+    rnea.float32 = (q32, v32, a32)
     return model, rnea, crba, q, v, a, q
 
 
@@ -150,12 +159,18 @@ def test_agree_with_pinocchio(name):
 
 
 @pytest.mark.parametrize("name", sorted(WORKLOADS))
-@pytest.mark.parametrize("impl", ["spotkin-1thread", "ref:pin-parallel-1thread", "ref:pin-loop"])
+@pytest.mark.parametrize(
+    "impl", ["spotkin-1thread", "spotkin-f32-1thread", "ref:pin-parallel-1thread", "ref:pin-loop"]
+)
 def test_rnea(benchmark, name, impl):
     model, rnea, _, q, v, a, _ = workload(name)
     g = model.gravity.linear.copy()
     if impl == "spotkin-1thread":
         run(benchmark, f"rnea.{name} N={N}", impl, rnea, q, v, a, g)
+    elif impl == "spotkin-f32-1thread":  # float lanes (target: 1.8x the float64 throughput)
+        q32, v32, a32 = getattr(rnea, "float32", None) or (x.astype(np.float32) for x in (q, v, a))
+        g32 = g.astype(np.float32)
+        run(benchmark, f"rnea.{name} N={N}", impl, rnea, q32, v32, a32, g32)
     elif impl == "ref:pin-parallel-1thread":
         pool = pin.ModelPool(model, 1)
         qT, vT, aT = (np.asfortranarray(x.T) for x in (q, v, a))

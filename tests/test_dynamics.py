@@ -343,6 +343,37 @@ def test_noncontiguous_empty_and_nan_rows(rng):
     assert np.all(np.isnan(A[7])) and np.all(np.isfinite(np.delete(A, 7, axis=0)))
 
 
+@pytest.mark.parametrize("level", sk.available_isas())
+def test_float32_blocks_load_nan_rows_and_every_value(rng, level):
+    """float32 loads whole blocks of rows as vectors (8 lanes on AVX2, 16 on AVX-512, 4 on SSE2
+    and NEON): every value reaches its lane, the last row's tail included, and a NaN or an Inf
+    anywhere in a row gives that row NaN and no other."""
+    fx = _fixed("spot_arm")
+    kw = {"inertials": fx.inertials}
+    q, qd, qdd = (x.astype(np.float32) for x in fx.random(rng, (48,)))
+    arrays = {"q": q, "qd": qd, "qdd": qdd}
+    bad_at = [
+        ("q", 7, fx.n - 1, np.inf),
+        ("qd", 15, fx.n - 1, np.nan),
+        ("qdd", 8, 0, np.nan),
+        ("q", 47, 5, -np.inf),
+    ]
+    with sk.isa(level):
+        clean = dyn.inverse_dynamics(fx.chain, q, qd, qdd, **kw)
+        close(
+            clean, dyn.inverse_dynamics(fx.chain, *(x.astype(np.float64) for x in (q, qd, qdd)), **kw), 2e-4
+        )
+        for i in range(48):  # each row alone (loaded value by value): the same bits
+            assert np.array_equal(clean[i], dyn.inverse_dynamics(fx.chain, q[i], qd[i], qdd[i], **kw))
+        for name, i, j, value in bad_at:
+            arrays[name][i, j] = value
+        out = dyn.inverse_dynamics(fx.chain, q, qd, qdd, **kw)
+    bad_rows = sorted({i for _, i, _, _ in bad_at})
+    assert np.all(np.isnan(out[bad_rows]))
+    good = np.delete(np.arange(48), bad_rows)
+    assert np.array_equal(out[good], clean[good])
+
+
 def test_errors(rng):
     fx = _fixed("spot_arm")
     kw = {"inertials": fx.inertials}
