@@ -40,7 +40,7 @@ SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<double>& c, const double*
 )
 SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
                                           int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
-  chain_lanes::jacobian_batch(c, q, out, n, rows, in_tool_frame);
+  chain_lanes::jacobian_batch<kIsa == Isa::Avx512>(c, q, out, n, rows, in_tool_frame);
 )
 
 SPOTKIN_CLONES((), void, point_jacobian_kernel, (const Chain<double>& c, const double* q, double* out,
