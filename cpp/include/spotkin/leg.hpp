@@ -646,11 +646,12 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
   OpenTargets<C> open;
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   // Open targets gather across blocks (index: their place in the batch) and are
-  // solved once a block might overflow the list: a few per block would leave
-  // most lanes of the all-slot pass idle.
+  // solved when the list is full: a few per block would leave most lanes of the
+  // all-slot pass idle (settling before each block that might overflow the list
+  // solved every block's few: Spot's leg over its whole box, 8 % open, float32
+  // AVX-512: 6.4 -> 4.9 ns per target).
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    if (open.count + m > kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = C(p[3 * (b0 + i)]), y[i] = C(p[3 * (b0 + i) + 1]), z[i] = C(p[3 * (b0 + i) + 2]);
     }
@@ -671,6 +672,7 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
         status[t] = std::int8_t(Status::InvalidInput);
       } else {
         open.add(t, x[i], y[i], z[i]);
+        if (open.count == kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
       }
     }
   }
