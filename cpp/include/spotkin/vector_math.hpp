@@ -126,9 +126,19 @@ SPOTKIN_VM_INLINE void sincos_bounded(double x, double& s, double& c) noexcept {
 }
 
 // s[i], c[i] = sin(x[i]), cos(x[i]) for i < n.
+// Whether some |x[i]| > limit, or some x[i] is NaN: one vector compare and OR per register,
+// no branch per element.
+template <typename S>
+SPOTKIN_VM_INLINE bool any_beyond(const S* x, std::ptrdiff_t n, S limit) noexcept {
+  int beyond = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i) beyond |= !(std::fabs(x[i]) <= limit);
+  return beyond != 0;
+}
+
 SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noexcept {
   using namespace detail;
   for (std::ptrdiff_t i = 0; i < n; ++i) sincos_bounded(x[i], s[i], c[i]);
+  if (!any_beyond(x, n, kReducibleLimit)) return;  // a vector test first: the fix-up is rare
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     if (std::fabs(x[i]) > kReducibleLimit) {  // rare; also catches +-Inf (NaN either way)
       s[i] = std::sin(x[i]);
@@ -161,6 +171,7 @@ SPOTKIN_VM_INLINE void sincos_bounded(float x, float& s, float& c) noexcept {
 
 SPOTKIN_VM_INLINE void sincos(const float* x, float* s, float* c, std::ptrdiff_t n) noexcept {
   for (std::ptrdiff_t i = 0; i < n; ++i) sincos_bounded(x[i], s[i], c[i]);
+  if (!any_beyond(x, n, kReducibleLimitFloat)) return;
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     if (std::fabs(x[i]) > kReducibleLimitFloat) {  // rare; also catches +-Inf (NaN either way)
       s[i] = float(std::sin(double(x[i])));
