@@ -280,6 +280,16 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
       const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
       leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol, limit_tol);
       open.count = 0;
+      if (!seed && leg_batch::all_settled(ok, P.ok, m)) {  // the common case, without a branch per target
+        const std::ptrdiff_t c0 = col[0], c1 = col[1], c2 = col[2];
+        T* qt = q + w * b0;
+        std::int8_t* st = status + n * b0 + l;
+        for (std::ptrdiff_t i = 0; i < m; ++i, qt += w, st += n) {
+          qt[c0] = T(q0[0][i]), qt[c1] = T(q0[1][i]), qt[c2] = T(q0[2][i]);
+          *st = std::int8_t(Status::Ok);
+        }
+        continue;
+      }
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
         T* qt = q + w * t;

@@ -527,6 +527,15 @@ SPOTKIN_INLINE void unreachable_fallback(const Leg& leg, double x, double y, dou
   for (int j = 0; j < 3; ++j) q_out[j] = T(q[j]);
 }
 
+// Whether ok[i] and also[i] are nonzero for every i < m (the preferred slot valid for
+// every target of a block, and every pose valid): one vector test, no branch per target.
+template <typename C>
+SPOTKIN_INLINE bool all_settled(const C* ok, const C* also, std::ptrdiff_t m) noexcept {
+  int unsettled = 0;
+  for (std::ptrdiff_t i = 0; i < m; ++i) unsettled |= !(ok[i] != C(0) && also[i] != C(0));
+  return unsettled == 0;
+}
+
 // 1 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).
 template <typename C>
 SPOTKIN_INLINE C finite_mask(C x, C y, C z) noexcept {
