@@ -354,6 +354,36 @@ SPOTKIN_INLINE void load(const Rows<M>& in, std::ptrdiff_t b0, int m, int width,
       for (int i = 0; i < L; ++i) ok[i] = ok[i] && bad[i] == 0;
       return;
     }
+    if constexpr (L == 16) {  // AVX-512: rows of 4 to 7 (the arm's 6 in 16 lanes), two halves of
+      // 8 samples, each 8 x 8 transposed, then joined in registers
+      constexpr int H = L / 2;
+      if (m == L && in.stride == width && 2 * width >= H && width < H) {
+        using V = typename Pack<M, L>::Vector;
+        using HV = typename Pack<M, H>::Vector;
+        using Mask = decltype(V{} != V{});
+        const M* block = in.data + b0 * width;
+        HV lo[H], hi[H];
+        for (int i = 0; i < H; ++i) {
+          std::memcpy(&lo[i], block + i * width, sizeof(HV));
+          if ((H + i) * width + H <= L * width) {
+            std::memcpy(&hi[i], block + (H + i) * width, sizeof(HV));
+          } else {
+            hi[i] = HV{};
+            for (int k = 0; k < width; ++k) hi[i][k] = block[(H + i) * width + k];
+          }
+        }
+        transpose_lanes<M, H>(lo);
+        transpose_lanes<M, H>(hi);
+        Mask bad{};
+        for (int k = 0; k < width; ++k) {
+          const V v = __builtin_shufflevector(lo[k], hi[k], 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+          out[k].v = v;
+          bad |= (v - v) != V{};  // NaN for NaN and Inf
+        }
+        for (int i = 0; i < L; ++i) ok[i] = ok[i] && bad[i] == 0;
+        return;
+      }
+    }
   }
   for (int i = 0; i < L; ++i) {
     const M* row = in.data + (b0 + std::min(i, m - 1)) * in.stride;
@@ -407,6 +437,34 @@ inline const int* symmetric_gather(int n, SymmetricLayout layout, int* index) no
 // whose inputs were not all finite gets NaN in its whole row. Groups of L
 // columns of L lanes are transposed in registers; with `stream`, rows go
 // through a small buffer and out with non-temporal stores (stream_fence after).
+// store() of rows narrower than H (H <= L lanes, L / H groups of samples): see store().
+template <typename M, int L, int H, bool Gather>
+SPOTKIN_INLINE void store_narrow(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
+                                 const int* index) noexcept {
+  using HV = typename Pack<M, H>::Vector;
+  for (int g = 0; g * H < m; ++g) {
+    HV r[H];
+    for (int k = 0; k < H; ++k) {
+      if (k < width)
+        std::memcpy(&r[k], reinterpret_cast<const char*>(&in[Gather ? index[k] : k].v) + g * sizeof(HV), sizeof(HV));
+      else
+        r[k] = HV{};
+    }
+    transpose_lanes<M, H>(r);
+    const int end = std::min(m, (g + 1) * H);
+    for (int i = g * H; i < end; ++i) {
+      M* row = out + (b0 + i) * width;
+      if (!ok[i]) {
+        for (int j = 0; j < width; ++j) row[j] = quiet_nan<M>();
+      } else if (i + 1 < m) {
+        std::memcpy(row, &r[i - g * H], sizeof(HV));
+      } else {
+        for (int j = 0; j < width; ++j) row[j] = r[i - g * H][j];
+      }
+    }
+  }
+}
+
 template <typename M, int L, bool Gather = false>
 SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
                           bool stream = false, const int* index = nullptr) noexcept {
@@ -417,6 +475,19 @@ SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, in
     store<M, L, Gather>(in, width, 0, m, ok, rows.data(), false, index);
     stream_copy<M, L>(rows.data(), out + b0 * width, count);
     return;
+  }
+  if constexpr (L >= 8 && L <= 16) {
+    // Rows narrower than the lanes (the arm's 6 torques in 8 or 16 lanes): groups of H samples
+    // (H = L, or L / 2 for rows of at most L / 2), each column's H lanes transposed in
+    // registers with zero columns past the row, then stored H wide. A row's store runs into
+    // the next row's first values, which that row's own store then rewrites: the last row of
+    // the block is stored value by value. (Value by value, the stores were a fifth of the
+    // float32 arm RNEA at AVX-512.)
+    if (width < L && 2 * width > L / 2) {
+      if (2 * width <= L)
+        return store_narrow<M, L, L / 2, Gather>(in, width, b0, m, ok, out, index);
+      return store_narrow<M, L, L, Gather>(in, width, b0, m, ok, out, index);
+    }
   }
   int j0 = 0;
   if constexpr (L >= 2 && L <= 16) {  // groups of L columns: transposed in registers
