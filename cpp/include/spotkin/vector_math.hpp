@@ -125,7 +125,6 @@ SPOTKIN_VM_INLINE void sincos_bounded(double x, double& s, double& c) noexcept {
   c = q == 1.0 || q == 2.0 ? -cos_abs : cos_abs;     // negative in quadrants 1, 2
 }
 
-// s[i], c[i] = sin(x[i]), cos(x[i]) for i < n.
 // Whether some |x[i]| > limit, or some x[i] is NaN: one vector compare and OR per register,
 // no branch per element.
 template <typename S>
@@ -135,6 +134,7 @@ SPOTKIN_VM_INLINE bool any_beyond(const S* x, std::ptrdiff_t n, S limit) noexcep
   return beyond != 0;
 }
 
+// s[i], c[i] = sin(x[i]), cos(x[i]) for i < n.
 SPOTKIN_VM_INLINE void sincos(const double* x, double* s, double* c, std::ptrdiff_t n) noexcept {
   using namespace detail;
   for (std::ptrdiff_t i = 0; i < n; ++i) sincos_bounded(x[i], s[i], c[i]);

@@ -436,10 +436,6 @@ inline const int* symmetric_gather(int n, SymmetricLayout layout, int* index) no
   return index;
 }
 
-// Stores `width` lanes-values (in[index[k]] for value k with Gather) of samples b0 .. b0 + m - 1, row-major; a lane
-// whose inputs were not all finite gets NaN in its whole row. Groups of L
-// columns of L lanes are transposed in registers; with `stream`, rows go
-// through a small buffer and out with non-temporal stores (stream_fence after).
 // store() of rows narrower than H (H <= L lanes, L / H groups of samples): see store().
 template <typename M, int L, int H, bool Gather>
 SPOTKIN_INLINE void store_narrow(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
@@ -468,6 +464,10 @@ SPOTKIN_INLINE void store_narrow(const Pack<M, L>* in, int width, std::ptrdiff_t
   }
 }
 
+// Stores `width` lanes-values (in[index[k]] for value k with Gather) of samples b0 .. b0 + m - 1, row-major; a lane
+// whose inputs were not all finite gets NaN in its whole row. Groups of L
+// columns of L lanes are transposed in registers; with `stream`, rows go
+// through a small buffer and out with non-temporal stores (stream_fence after).
 template <typename M, int L, bool Gather = false>
 SPOTKIN_INLINE void store(const Pack<M, L>* in, int width, std::ptrdiff_t b0, int m, const bool* ok, M* out,
                           bool stream = false, const int* index = nullptr) noexcept {
