@@ -199,10 +199,10 @@ py::object dispatch_real(py::handle obj, const char* name, F&& f) {
 // sub-block holding such a value.
 constexpr std::ptrdiff_t kAngleBlock = 512;
 
-// How many of x[0, n) are NaN, Inf or beyond vector_math::kReducibleLimit: a
-// vectorised scan compiled per CPU level (defined in runtime.cpp).
-std::ptrdiff_t count_unusual(const double* x, std::ptrdiff_t n) noexcept;
-std::ptrdiff_t count_unusual(const float* x, std::ptrdiff_t n) noexcept;
+// Whether some of x[0, n) is NaN, Inf or beyond vector_math::kReducibleLimit
+// (vector_math::any_beyond): a vectorised scan compiled per CPU level (runtime.cpp).
+bool any_unusual(const double* x, std::ptrdiff_t n) noexcept;
+bool any_unusual(const float* x, std::ptrdiff_t n) noexcept;
   // a multiple of kChunkAlignment: same results for any split
 template <typename T, typename Kernel>
 void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t angle_columns, T* out,
@@ -213,7 +213,7 @@ void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t ang
     const std::ptrdiff_t m = std::min(kAngleBlock, n - b);
     const T* block = in + in_width * b;
     T* out_block = out + out_width * b;
-    if (count_unusual(block, m * in_width) == 0) {  // the common case: nothing huge, Inf or NaN
+    if (!any_unusual(block, m * in_width)) {  // the common case: nothing huge, Inf or NaN
       kernel(block, out_block, m);
       continue;
     }
@@ -244,13 +244,10 @@ py::array_t<T, py::array::c_style> reduce_seed_angles(py::array_t<T, py::array::
                                                       std::uint64_t angle_columns) {
   const T* data = seed.data();
   const py::ssize_t size = seed.size();
-  // the dispatched scan (vectorised at the CPU's level, float compared in float: the
-  // baseline-level scan in double was 5 % of the float32 arm RNEA on AVX-512); it also
-  // counts NaN and Inf, which the exact test below then passes over
-  if (count_unusual(data, size) == 0) return seed;
-  bool huge = false;
-  for (py::ssize_t k = 0; k < size; ++k) huge |= std::fabs(double(data[k])) > vector_math::kReducibleLimit;
-  if (!huge) return seed;
+  // the dispatched scan (vectorised at the CPU's level, float compared in float: a
+  // baseline-level scan in double was 5 % of the float32 arm RNEA on AVX-512); NaN and Inf
+  // also make the copy, which reduce_huge_angle leaves unchanged
+  if (!any_unusual(data, size)) return seed;
   py::array_t<T, py::array::c_style> copy(Shape(seed.shape(), seed.shape() + seed.ndim()));
   T* out = copy.mutable_data();
   for (py::ssize_t k = 0; k < size; ++k)

@@ -5,6 +5,7 @@
 #include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
+#include "spotkin/vector_math.hpp"
 
 namespace spotkin::bindings {
 
@@ -45,16 +46,11 @@ int thread_count_argument(py::handle n) {
 
 }  // namespace
 
-SPOTKIN_CLONES((), std::ptrdiff_t, count_unusual, (const double* x, std::ptrdiff_t n) noexcept, (x, n),
-  std::ptrdiff_t count = 0;
-  for (std::ptrdiff_t i = 0; i < n; ++i) count += !(std::fabs(x[i]) <= vector_math::kReducibleLimit);
-  return count;
+SPOTKIN_CLONES((), bool, any_unusual, (const double* x, std::ptrdiff_t n) noexcept, (x, n),
+  return vector_math::any_beyond(x, n, vector_math::kReducibleLimit);
 )
-SPOTKIN_CLONES((), std::ptrdiff_t, count_unusual, (const float* x, std::ptrdiff_t n) noexcept, (x, n),
-  constexpr float kLimit = float(vector_math::kReducibleLimit);
-  std::ptrdiff_t count = 0;
-  for (std::ptrdiff_t i = 0; i < n; ++i) count += !(std::fabs(x[i]) <= kLimit);
-  return count;
+SPOTKIN_CLONES((), bool, any_unusual, (const float* x, std::ptrdiff_t n) noexcept, (x, n),
+  return vector_math::any_beyond(x, n, float(vector_math::kReducibleLimit));
 )
 
 void bind_runtime(pybind11::module_& m) {
