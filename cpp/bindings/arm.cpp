@@ -1,52 +1,30 @@
 // Bindings for spotkin::Arm: batched FK, Jacobian, singularity measures and
 // closed-form IK with all 8 solutions.
-#include "spotkin/arm.hpp"
+#include "spotkin/kernels/arm.hpp"
 
 #include <pybind11/stl.h>
 
 #include <tuple>
 
 #include "bindings.hpp"
-#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
-namespace {
+namespace arm_glue {
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(20.0);  // FK ~20 ns; IK (~200 ns) uses kMinPerThreadIk
 constexpr std::ptrdiff_t kMinPerThreadIk = min_chunk(200.0);
 
-SPOTKIN_CLONES((template <typename T>), void, arm_fk_kernel, (const Arm& arm, const T* q, T* out, std::ptrdiff_t n), (arm, q, out, n),
-  arm_batch::fk(arm, q, out, n);
-)
-SPOTKIN_CLONES((template <typename T>), void, arm_jacobian_kernel, (const Arm& arm, const T* q, T* out, std::ptrdiff_t n), (arm, q, out, n),
-  arm_batch::jacobian(arm, q, out, n);
-)
-SPOTKIN_CLONES((template <typename T>), void, arm_ik_all_kernel, (const Arm& arm, const T* poses, PoseFormat format, const T* seed,
-                                            T* q, std::uint8_t* valid, std::uint8_t* exists,
-                                            std::int8_t* status, std::ptrdiff_t n), (arm, poses, format, seed, q, valid, exists, status, n),
-  arm_batch::ik_all(arm, poses, format, seed, q, valid, exists, status, n);
-)
-// The nearest solution from every solution of the dispatched kernel above; only the choice is
-// compiled here (at the baseline level): one copy of the solver per level, not two.
-template <typename T>
-void arm_ik_kernel(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q, std::int8_t* status,
-                   std::ptrdiff_t n) {
-  arm_batch::ik(arm, poses, format, seed, q, status, n,
-                [&](const T* p, PoseFormat f, const T* s, T* q_all, std::uint8_t* valid, std::uint8_t* exists,
-                    std::int8_t* st, std::ptrdiff_t m) { arm_ik_all_kernel<T>(arm, p, f, s, q_all, valid, exists, st, m); });
-}
-
 py::object fk(const Arm& arm, py::handle q_obj) {
   return map_batch(q_obj, "q", 6, {4, 4}, kMinPerThread,
-                   [&](const auto* q, auto* T, std::ptrdiff_t n) { arm_fk_kernel(arm, q, T, n); }, all_angles(6));
+                   [&](const auto* q, auto* T, std::ptrdiff_t n) { kernels::arm_fk(arm, q, T, n); }, all_angles(6));
 }
 
 py::object jacobian(const Arm& arm, py::handle q_obj) {
   return map_batch(q_obj, "q", 6, {6, 6}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) { arm_jacobian_kernel(arm, q, J, n); }, all_angles(6));
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) { kernels::arm_jacobian(arm, q, J, n); }, all_angles(6));
 }
 
 py::object singularity(const Arm& arm, py::handle q_obj) {
@@ -101,7 +79,7 @@ py::object ik_all(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        arm_ik_all_kernel<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 48 * b, vd + 8 * b,
+        kernels::arm_ik_all<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 48 * b, vd + 8 * b,
                              ed + 8 * b, std_ + b, e - b);
       });
     }
@@ -131,7 +109,7 @@ py::object ik(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        arm_ik_kernel<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 6 * b, std_ + b, e - b);
+        kernels::arm_ik<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 6 * b, std_ + b, e - b);
       });
     }
     if (single) return py::make_tuple(q, status_object(single_status));
@@ -164,9 +142,10 @@ Arm make_arm(std::array<double, 3> mount, double upper_arm, double forearm, doub
   return Arm(g, limits);
 }
 
-}  // namespace
+}  // namespace arm_glue
 
 void bind_arm(py::module_& m) {
+  using namespace arm_glue;
   py::class_<Arm>(m, "Arm")
       .def(py::init(&make_arm), py::arg("mount"), py::arg("upper_arm"), py::arg("forearm"),
            py::arg("forearm_offset"), py::arg("hand"), py::arg("tool"), py::arg("lower_limits"),

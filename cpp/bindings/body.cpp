@@ -1,5 +1,5 @@
 // Bindings for whole-body kinematics: batched body IK, FK and Jacobian.
-#include "spotkin/body.hpp"
+#include "spotkin/kernels/body.hpp"
 
 #include <pybind11/stl.h>
 
@@ -9,29 +9,14 @@
 #include <utility>
 
 #include "bindings.hpp"
-#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
-namespace {
+namespace body_glue {
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(55.0);  // body IK: ~55 ns per pose
-
-SPOTKIN_CLONES((template <typename T>), void, body_ik_kernel, (const Body& body, const T* poses, BodyPoseFormat format,
-                                         const EulerSequence& seq, const T* feet, bool feet_shared, const T* seed,
-                                         T* q, std::int8_t* status, std::ptrdiff_t n, bool nearest_fallback), (body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback),
-  body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback);
-)
-SPOTKIN_CLONES((template <typename T>), void, body_fk_kernel, (const Body& body, const T* poses, BodyPoseFormat format,
-                                         const EulerSequence& seq, const T* q, T* feet, std::ptrdiff_t n), (body, poses, format, seq, q, feet, n),
-  body_batch::fk(body, poses, format, seq, q, feet, n);
-)
-SPOTKIN_CLONES((template <typename T>), void, body_jacobian_kernel, (const Body& body, const T* poses, BodyPoseFormat format,
-                                               const EulerSequence& seq, const T* q, T* J, std::ptrdiff_t n), (body, poses, format, seq, q, J, n),
-  body_batch::jacobian(body, poses, format, seq, q, J, n);
-)
 
 std::ptrdiff_t pose_width(BodyPoseFormat format) {
   return format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
@@ -131,7 +116,7 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
         with_reduced_angles(pd + width * b, width, euler_columns(format), qd + w * b, w, e - b,
                             [&](const T* pose_block, T* out_block, std::ptrdiff_t m) {
                               const std::ptrdiff_t i = (out_block - qd) / w;
-                              body_ik_kernel<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 3 * n_legs * i,
+                              kernels::body_ik<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 3 * n_legs * i,
                                                 feet_shared, sd ? sd + w * i : nullptr, out_block, std_ + n_legs * i,
                                                 m, nearest_fallback);
                             });
@@ -183,7 +168,7 @@ py::object ik_one(const Body& body, py::handle pose_obj, py::handle feet_obj) {
   if (!usual) return ik(body, pose_obj, -1, 0 + 3 * 1 + 9 * 2, feet_obj, py::none(), true);
   py::object q = new_vector(py::detail::npy_api::NPY_DOUBLE_, w);
   py::object status = new_vector(py::detail::npy_api::NPY_BYTE_, n_legs);
-  body_ik_kernel<double>(body, pose, BodyPoseFormat::Euler, xyz, feet, true, nullptr,
+  kernels::body_ik<double>(body, pose, BodyPoseFormat::Euler, xyz, feet, true, nullptr,
                          reinterpret_cast<double*>(py::detail::array_proxy(q.ptr())->data),
                          reinterpret_cast<std::int8_t*>(py::detail::array_proxy(status.ptr())->data), 1, true);
   return body_ik_result(std::move(q), std::move(status));
@@ -220,9 +205,9 @@ py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code
           with_reduced_angles(pd + width * i, width, euler_columns(format), out_block, out_width, m,
                               [&](const T* pose_block, T* out_inner, std::ptrdiff_t k) {
             if constexpr (Jacobian) {
-              body_jacobian_kernel<T>(body, pose_block, format, seq, q_block, out_inner, k);
+              kernels::body_jacobian<T>(body, pose_block, format, seq, q_block, out_inner, k);
             } else {
-              body_fk_kernel<T>(body, pose_block, format, seq, q_block, out_inner, k);
+              kernels::body_fk<T>(body, pose_block, format, seq, q_block, out_inner, k);
             }
           });
         }, groups);
@@ -267,9 +252,10 @@ Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj, py::han
   return Body(std::move(leg_list), std::move(hip_list), std::move(column_list));
 }
 
-}  // namespace
+}  // namespace body_glue
 
 void bind_body(py::module_& m) {
+  using namespace body_glue;
   m.def(
       "_register_body_ik",
       [](py::object type) {

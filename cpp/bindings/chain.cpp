@@ -1,56 +1,23 @@
 // Bindings for spotkin::Chain: construction from DH tables or URDF joints, batched FK,
 // frames and Jacobians.
 #include "spotkin/chain.hpp"
-#include "spotkin/chain_lanes.hpp"
+#include "spotkin/kernels/chain.hpp"
 
 #include <type_traits>
 
 #include "spotkin/compatibility.hpp"
 #include "spotkin/differential.hpp"
-#include "spotkin/point_jacobian.hpp"
 
 #include "bindings.hpp"
-#include "dispatch.hpp"
 #include "chain_model.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
-namespace {
+namespace chain_glue {
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(40.0);  // 6-joint FK/Jacobian: ~40 ns
-
-// Batch kernels, one per operation and precision, cloned per CPU level.
-SPOTKIN_CLONES((), void, fk_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
-  chain_lanes::forward_batch(c, q, out, n);
-)
-SPOTKIN_CLONES((), void, fk_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n), (c, q, out, n),
-  chain_lanes::forward_batch(c, q, out, n);
-)
-SPOTKIN_CLONES((), void, frames_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n), (c, q, out, n),
-  chain_lanes::frames_batch(c, q, out, n);
-)
-SPOTKIN_CLONES((), void, frames_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n), (c, q, out, n),
-  chain_lanes::frames_batch(c, q, out, n);
-)
-SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n,
-                                          int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
-  chain_lanes::jacobian_batch(c, q, out, n, rows, in_tool_frame);
-)
-SPOTKIN_CLONES((), void, jacobian_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
-                                          int rows, bool in_tool_frame), (c, q, out, n, rows, in_tool_frame),
-  chain_lanes::jacobian_batch<kIsa == Isa::Avx512>(c, q, out, n, rows, in_tool_frame);
-)
-
-SPOTKIN_CLONES((), void, point_jacobian_kernel, (const Chain<double>& c, const double* q, double* out,
-                                                std::ptrdiff_t n, int rows, int point, int frame), (c, q, out, n, rows, point, frame),
-  point_jacobian_batch(c, q, out, n, rows, point, frame);
-)
-SPOTKIN_CLONES((), void, point_jacobian_kernel, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n,
-                                                int rows, int point, int frame), (c, q, out, n, rows, point, frame),
-  point_jacobian_batch(c, q, out, n, rows, point, frame);
-)
 
 // The chain in the precision of the batch's working dtype.
 template <typename T>
@@ -69,21 +36,21 @@ std::uint64_t revolute_columns(const ChainPair& chain) {
 
 py::object fk(const ChainPair& chain, py::handle q_obj) {
   return map_batch(q_obj, "q", chain.f64.dof(), {4, 4}, kMinPerThread, [&](const auto* q, auto* T, std::ptrdiff_t n) {
-    fk_kernel(in_precision(chain, q), q, T, n);
+    kernels::chain_fk(in_precision(chain, q), q, T, n);
   }, revolute_columns(chain));
 }
 
 py::object frames(const ChainPair& chain, py::handle q_obj) {
   const py::ssize_t n_frames = chain.f64.dof() + 2;
   return map_batch(q_obj, "q", chain.f64.dof(), {n_frames, 4, 4}, kMinPerThread / 4,
-                   [&](const auto* q, auto* F, std::ptrdiff_t n) { frames_kernel(in_precision(chain, q), q, F, n); },
+                   [&](const auto* q, auto* F, std::ptrdiff_t n) { kernels::chain_frames(in_precision(chain, q), q, F, n); },
                    revolute_columns(chain));
 }
 
 py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_tool_frame) {
   return map_batch(q_obj, "q", chain.f64.dof(), {rows, chain.f64.dof()}, kMinPerThread,
                    [&](const auto* q, auto* J, std::ptrdiff_t n) {
-                     jacobian_kernel(in_precision(chain, q), q, J, n, rows, in_tool_frame);
+                     kernels::chain_jacobian(in_precision(chain, q), q, J, n, rows, in_tool_frame);
                    },
                    revolute_columns(chain));
 }
@@ -100,7 +67,7 @@ py::object point_jacobian(const ChainPair& chain, py::handle q_obj, int rows, in
                           std::to_string(frame));
   return map_batch(q_obj, "q", n, {rows, n}, kMinPerThread,
                    [&](const auto* q, auto* J, std::ptrdiff_t count) {
-                     point_jacobian_kernel(in_precision(chain, q), q, J, count, rows, point, frame);
+                     kernels::chain_point_jacobian(in_precision(chain, q), q, J, count, rows, point, frame);
                    },
                    revolute_columns(chain));
 }
@@ -191,9 +158,10 @@ py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::ha
                         std::move(orientation_error), std::move(residual));
 }
 
-}  // namespace
+}  // namespace chain_glue
 
 void bind_chain(py::module_& m) {
+  using namespace chain_glue;
   py::enum_<Convention>(m, "Convention")
       .value("MODIFIED_DH", Convention::ModifiedDH)
       .value("CLASSIC_DH", Convention::ClassicDH);

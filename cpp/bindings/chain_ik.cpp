@@ -15,7 +15,7 @@
 
 namespace spotkin::bindings {
 
-namespace {
+namespace chain_ik_glue {
 
 using chain_ik::Limits;
 using chain_ik::Position3;
@@ -250,9 +250,10 @@ py::object ik_free(const FreeJointIK& ik, py::handle T_obj, py::handle value_obj
   });
 }
 
-}  // namespace
+}  // namespace chain_ik_glue
 
 void bind_chain_ik(py::module_& m) {
+  using namespace chain_ik_glue;
   py::class_<FreeJointIK>(m, "FreeJointIK")
       .def(py::init(&make_free_joint_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),
            py::arg("free_joint"), py::arg("angle_tolerance") = chain_ik::Tolerance::angle,

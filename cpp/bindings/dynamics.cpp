@@ -5,14 +5,12 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include "dispatch.hpp"
 #include "dynamics_boundary.hpp"
 #include "chain_model.hpp"
-#include "spotkin/dynamics/batch.hpp"
 
 namespace spotkin::bindings {
 
-namespace {
+namespace dynamics_glue {
 
 ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::handle com, py::handle inertia) {
   const auto links = inertials_from(mass, com, inertia, chain.f64.dof());
@@ -27,15 +25,6 @@ ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::h
   }
 }
 
-// The kernels, one clone per CPU level and precision.
-SPOTKIN_LANE_CLONES(rnea_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* qd, const NonDeduced<Rows<T>>* qdd, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, qdd, g, out, b, e),
-               dynamics::rnea_batch(m, q, qd, qdd, g, out, b, e);)
-SPOTKIN_LANE_CLONES(crba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, dynamics::SymmetricLayout layout), (m, q, out, b, e, layout),
-               dynamics::crba_batch(m, q, out, b, e, layout);)
-SPOTKIN_LANE_CLONES(coriolis_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, out, b, e),
-               dynamics::coriolis_batch(m, q, qd, out, b, e);)
-SPOTKIN_LANE_CLONES(aba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, qd, tau, g, out, b, e),
-               dynamics::aba_batch(m, q, qd, tau, g, out, b, e);)
 
 
 // Rough single-thread cost per sample of a 6-joint chain (for the thread split).
@@ -47,7 +36,7 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                       dynamics::rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
                      });
                    });
 }
@@ -58,7 +47,7 @@ py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
+                       dynamics::rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
                      });
                    });
 }
@@ -69,7 +58,7 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                       dynamics::rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
                      });
                    });
 }
@@ -81,7 +70,7 @@ py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_na
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       crba_k(model, rows[0], out, b, e, layout);
+                       dynamics::crba_k(model, rows[0], out, b, e, layout);
                      });
                    });
 }
@@ -92,7 +81,7 @@ py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       coriolis_k(model, rows[0], rows[1], out, b, e);
+                       dynamics::coriolis_k(model, rows[0], rows[1], out, b, e);
                      });
                    });
 }
@@ -103,14 +92,15 @@ py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::ha
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
+                       dynamics::aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
                      });
                    });
 }
 
-}  // namespace
+}  // namespace dynamics_glue
 
 void bind_dynamics(py::module_& m) {
+  using namespace dynamics_glue;
   py::class_<ChainDynamics>(m, "ChainDynamics")
       .def(py::init(&make_chain_dynamics), py::arg("chain"), py::arg("mass"), py::arg("com"), py::arg("inertia"))
       .def_property_readonly("dof", &ChainDynamics::dof)

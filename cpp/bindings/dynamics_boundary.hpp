@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "numpy_boundary.hpp"
+#include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/model.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -24,23 +25,12 @@ using dynamics::ChainModel;
 using dynamics::LinkInertial;
 using dynamics::Rows;
 
-// A parameter type left out of template argument deduction (std::type_identity_t in C++20):
-// the kernels deduce T and L from the model alone, so nullptr passes for an absent input.
-template <typename X>
-struct NonDeducedOf {
-  using type = X;
-};
-template <typename X>
-using NonDeduced = typename NonDeducedOf<X>::type;
-
-// Lane widths: one register of the level (AVX-512: 8 doubles, 16 floats; AVX2: 4, 8),
-// and 16-byte packs (2, 4) for SSE2 and NEON.
-constexpr int kLanes64 = 8;
-constexpr int kLanes32 = 16;
-constexpr int kMidLanes64 = 4;
-constexpr int kMidLanes32 = 8;
-constexpr int kSmallLanes64 = 2;
-constexpr int kSmallLanes32 = 4;
+using dynamics::kLanes32;
+using dynamics::kLanes64;
+using dynamics::kMidLanes32;
+using dynamics::kMidLanes64;
+using dynamics::kSmallLanes32;
+using dynamics::kSmallLanes64;
 
 // Calls f(model) with the model of `d` in precision T whose packs fill one register of the
 // active instruction-set level: 64 bytes at AVX-512, 32 at AVX2, 16 at the baseline (SSE2,
@@ -56,34 +46,6 @@ SPOTKIN_INLINE void with_model(const D& d, F&& f) {
   }
 }
 
-// SPOTKIN_LANE_CLONES((parameters), (arguments), body) defines template <T, L> `name`
-// for the dynamics kernels: a model of 64-byte packs runs the AVX-512 clone, of 32-byte
-// packs the AVX2 one, and of 16-byte packs the baseline one (with_model picks each at its
-// level only). One clone per width.
-#if SPOTKIN_HAS_ISA_CLONES
-#define SPOTKIN_LANE_CLONES(NAME, PARAMS, ARGS, ...)                                  \
-  template <typename T, int L>                                                         \
-  SPOTKIN_TARGET_AVX512 void NAME##_avx512 PARAMS { __VA_ARGS__ }                      \
-  template <typename T, int L>                                                         \
-  SPOTKIN_TARGET_AVX2 void NAME##_avx2 PARAMS { __VA_ARGS__ }                          \
-  template <typename T, int L>                                                         \
-  void NAME##_baseline PARAMS { __VA_ARGS__ }                                          \
-  template <typename T, int L>                                                         \
-  void NAME PARAMS {                                                                   \
-    constexpr std::size_t kBytes = sizeof(T) * L;                                      \
-    if constexpr (kBytes == 64) {                                                      \
-      NAME##_avx512 ARGS;                                                              \
-    } else if constexpr (kBytes == 32) {                                               \
-      NAME##_avx2 ARGS;                                                                \
-    } else {                                                                           \
-      NAME##_baseline ARGS;                                                            \
-    }                                                                                  \
-  }
-#else
-#define SPOTKIN_LANE_CLONES(NAME, PARAMS, ARGS, ...) \
-  template <typename T, int L>                       \
-  void NAME PARAMS { __VA_ARGS__ }
-#endif
 
 // ---------------------------------------------------------------- inertials
 

@@ -4,13 +4,11 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include "dispatch.hpp"
 #include "dynamics_boundary.hpp"
-#include "spotkin/dynamics/floating.hpp"
 
 namespace spotkin::bindings {
 
-namespace {
+namespace floating_glue {
 
 using dynamics::FloatingModel;
 
@@ -74,16 +72,6 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
   }
 }
 
-SPOTKIN_LANE_CLONES(f_rnea_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* v, const NonDeduced<Rows<T>>* a, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, a, g, out, b, e),
-               dynamics::floating_rnea_batch(m, q, v, a, g, out, b, e);)
-SPOTKIN_LANE_CLONES(f_crba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, dynamics::SymmetricLayout layout), (m, q, out, b, e, layout),
-               dynamics::floating_crba_batch(m, q, out, b, e, layout);)
-SPOTKIN_LANE_CLONES(f_aba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, tau, g, out, b, e),
-               dynamics::floating_aba_batch(m, q, v, tau, g, out, b, e);)
-SPOTKIN_LANE_CLONES(f_coriolis_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, out, b, e),
-               dynamics::floating_coriolis_batch(m, q, v, out, b, e);)
-SPOTKIN_LANE_CLONES(f_com_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, bool jacobian, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, jacobian, b, e),
-               dynamics::floating_com_batch(m, q, out, jacobian, b, e);)
 
 
 constexpr double kNsFloating = 400.0;
@@ -94,7 +82,7 @@ py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       f_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                       dynamics::floating_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
                      });
                    });
 }
@@ -104,7 +92,7 @@ py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       f_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
+                       dynamics::floating_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
                      });
                    });
 }
@@ -114,7 +102,7 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       f_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                       dynamics::floating_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
                      });
                    });
 }
@@ -125,7 +113,7 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle lay
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       f_crba_k(model, rows[0], out, b, e, layout);
+                       dynamics::floating_crba_k(model, rows[0], out, b, e, layout);
                      });
                    });
 }
@@ -135,7 +123,7 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       f_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
+                       dynamics::floating_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
                      });
                    });
 }
@@ -144,7 +132,7 @@ py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) { f_coriolis_k(model, rows[0], rows[1], out, b, e); });
+                     with_model<T>(d, [&](const auto& model) { dynamics::floating_coriolis_k(model, rows[0], rows[1], out, b, e); });
                    });
 }
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
@@ -153,14 +141,15 @@ py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) 
                    [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       f_com_k(model, rows[0], out, jacobian, b, e);
+                       dynamics::floating_com_k(model, rows[0], out, jacobian, b, e);
                      });
                    });
 }
 
-}  // namespace
+}  // namespace floating_glue
 
 void bind_floating_dynamics(py::module_& m) {
+  using namespace floating_glue;
   py::class_<FloatingDynamics>(m, "FloatingDynamics")
       .def(py::init(&make_floating), py::arg("body_mass"), py::arg("body_com"), py::arg("body_inertia"),
            py::arg("chains"))

@@ -1,6 +1,6 @@
 // Bindings for spotkin::Leg: batched FK, Jacobian, singularity measures and
 // closed-form IK (limit-aware choice, and every branch).
-#include "spotkin/leg.hpp"
+#include "spotkin/kernels/leg.hpp"
 
 #include <pybind11/stl.h>
 
@@ -8,39 +8,23 @@
 #include <tuple>
 
 #include "bindings.hpp"
-#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
-namespace {
+namespace leg_glue {
 
 constexpr std::ptrdiff_t kMinPerThread = min_chunk(25.0);  // leg IK: ~25 ns; FK ~7 ns pays less
 
-SPOTKIN_CLONES((template <typename T>), void, leg_fk_kernel, (const Leg& leg, const T* q, T* p, std::ptrdiff_t n), (leg, q, p, n),
-  leg_batch::fk(leg, q, p, n);
-)
-SPOTKIN_CLONES((template <typename T>), void, leg_jacobian_kernel, (const Leg& leg, const T* q, T* J, std::ptrdiff_t n), (leg, q, J, n),
-  leg_batch::jacobian(leg, q, J, n);
-)
-SPOTKIN_CLONES((template <typename T>), void, leg_ik_kernel, (const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
-                                          std::ptrdiff_t n, bool nearest_fallback), (leg, p, seed, q, status, n, nearest_fallback),
-  leg_batch::ik(leg, p, seed, q, status, n, nearest_fallback);
-)
-SPOTKIN_CLONES((template <typename T>), void, leg_ik_all_kernel, (const Leg& leg, const T* p, T* q, std::uint8_t* valid,
-                                              std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n), (leg, p, q, valid, exists, status, n),
-  leg_batch::ik_all(leg, p, q, valid, exists, status, n);
-)
-
 py::object fk(const Leg& leg, py::handle q_obj) {
   return map_batch(q_obj, "q", 3, {3}, kMinPerThread,
-                   [&](const auto* q, auto* p, std::ptrdiff_t n) { leg_fk_kernel(leg, q, p, n); }, all_angles(3));
+                   [&](const auto* q, auto* p, std::ptrdiff_t n) { kernels::leg_fk(leg, q, p, n); }, all_angles(3));
 }
 
 py::object jacobian(const Leg& leg, py::handle q_obj) {
   return map_batch(q_obj, "q", 3, {3, 3}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) { leg_jacobian_kernel(leg, q, J, n); }, all_angles(3));
+                   [&](const auto* q, auto* J, std::ptrdiff_t n) { kernels::leg_jacobian(leg, q, J, n); }, all_angles(3));
 }
 
 py::object singularity(const Leg& leg, py::handle q_obj) {
@@ -94,7 +78,7 @@ py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj, bool neares
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        leg_ik_kernel<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b,
+        kernels::leg_ik<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b,
                          nearest_fallback);
       });
     }
@@ -120,7 +104,7 @@ py::object ik_all(const Leg& leg, py::handle p_obj) {
     {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        leg_ik_all_kernel<T>(leg, pd + 3 * b, qd + 12 * b, vd + 4 * b, ed + 4 * b, sd + b, e - b);
+        kernels::leg_ik_all<T>(leg, pd + 3 * b, qd + 12 * b, vd + 4 * b, ed + 4 * b, sd + b, e - b);
       });
     }
     if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));
@@ -157,9 +141,10 @@ Leg make_leg(py::handle a, py::handle b, py::handle c, py::handle signs, py::han
   return Leg(g, limits, preferred_slot);
 }
 
-}  // namespace
+}  // namespace leg_glue
 
 void bind_leg(py::module_& m) {
+  using namespace leg_glue;
   py::class_<Leg>(m, "Leg")
       .def(py::init(&make_leg), py::arg("a"), py::arg("b"), py::arg("c"), py::arg("signs"),
            py::arg("lower_limits"), py::arg("upper_limits"), py::arg("preferred_slot") = -1)

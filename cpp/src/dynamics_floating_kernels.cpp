@@ -1,0 +1,40 @@
+// The floating base's dynamics kernels (spotkin/dynamics/kernels.hpp): one clone per lane
+// width, each at the instruction-set level whose registers the width fills, in float and
+// double.
+#include "spotkin/dynamics/kernels.hpp"
+
+#include "lane_clones.hpp"
+
+namespace spotkin::dynamics {
+
+SPOTKIN_LANE_CLONES(floating_rnea_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* v, const NonDeduced<Rows<T>>* a, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, a, g, out, b, e),
+               floating_rnea_batch(m, q, v, a, g, out, b, e);)
+SPOTKIN_LANE_CLONES(floating_crba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, SymmetricLayout layout), (m, q, out, b, e, layout),
+               floating_crba_batch(m, q, out, b, e, layout);)
+SPOTKIN_LANE_CLONES(floating_aba_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, tau, g, out, b, e),
+               floating_aba_batch(m, q, v, tau, g, out, b, e);)
+SPOTKIN_LANE_CLONES(floating_coriolis_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, T* out, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, v, out, b, e),
+               floating_coriolis_batch(m, q, v, out, b, e);)
+SPOTKIN_LANE_CLONES(floating_com_k, (const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, bool jacobian, std::ptrdiff_t b, std::ptrdiff_t e), (m, q, out, jacobian, b, e),
+               floating_com_batch(m, q, out, jacobian, b, e);)
+
+#define SPOTKIN_INSTANTIATE(T, L)                                                                                \
+  template void floating_rnea_k<T, L>(const FloatingModel<T, L>&, Rows<T>, const Rows<T>*, const Rows<T>*,       \
+                                      Rows<T>, T*, std::ptrdiff_t, std::ptrdiff_t);                              \
+  template void floating_crba_k<T, L>(const FloatingModel<T, L>&, Rows<T>, T*, std::ptrdiff_t, std::ptrdiff_t,   \
+                                      SymmetricLayout);                                                          \
+  template void floating_aba_k<T, L>(const FloatingModel<T, L>&, Rows<T>, Rows<T>, Rows<T>, Rows<T>, T*,         \
+                                     std::ptrdiff_t, std::ptrdiff_t);                                            \
+  template void floating_coriolis_k<T, L>(const FloatingModel<T, L>&, Rows<T>, Rows<T>, T*, std::ptrdiff_t,      \
+                                          std::ptrdiff_t);                                                       \
+  template void floating_com_k<T, L>(const FloatingModel<T, L>&, Rows<T>, T*, bool, std::ptrdiff_t,              \
+                                     std::ptrdiff_t);
+SPOTKIN_INSTANTIATE(double, kLanes64)
+SPOTKIN_INSTANTIATE(double, kMidLanes64)
+SPOTKIN_INSTANTIATE(double, kSmallLanes64)
+SPOTKIN_INSTANTIATE(float, kLanes32)
+SPOTKIN_INSTANTIATE(float, kMidLanes32)
+SPOTKIN_INSTANTIATE(float, kSmallLanes32)
+#undef SPOTKIN_INSTANTIATE
+
+}  // namespace spotkin::dynamics
