@@ -134,9 +134,16 @@ SPOTKIN_INLINE void axis_in(const LaneFrame<S, B>& T, const Joint<S>& joint, S (
       for (int i = 0; i < B; ++i) out[r][i] = T.R[r][0][i] * u0 + T.R[r][1][i] * u1 + T.R[r][2][i] * u2;
     return;
   }
+  // The sign in a local, and each row formed in a local then copied: a store through `out` may
+  // alias the joint and the frame, so GCC reloaded the sign at every lane and left the loop scalar
+  // (perf: a fifth of the float Jacobian at AVX-512).
   const int k = static_cast<int>(joint.axis_kind);
-  for (int r = 0; r < 3; ++r)
-    for (int i = 0; i < B; ++i) out[r][i] = joint.axis_sign * T.R[r][k][i];
+  const S sign = joint.axis_sign;
+  for (int r = 0; r < 3; ++r) {
+    S row[B];
+    for (int i = 0; i < B; ++i) row[i] = sign * T.R[r][k][i];
+    std::memcpy(out[r], row, sizeof row);
+  }
 }
 
 // out[i * width + e] = soa[e][i] for the block's m samples. float: groups of 8 columns of 8
