@@ -45,6 +45,7 @@
 #include "spotkin/arm.hpp"
 #include "spotkin/body.hpp"
 #include "spotkin/chain.hpp"
+#include "spotkin/kernels/chain.hpp"
 #include "spotkin/diagnostics.hpp"
 #include "spotkin/dynamics/batch.hpp"
 #include "spotkin/leg.hpp"
@@ -89,12 +90,14 @@ SPOTKIN_CLONES((__attribute__((noinline))), void, arm_ik_all, (const Arm& arm, c
 SPOTKIN_CLONES((__attribute__((noinline))), void, arm_fk, (const Arm& arm, const double* q, double* poses, std::ptrdiff_t n), (arm, q, poses, n),
   arm_batch::fk(arm, q, poses, n);
 )
-SPOTKIN_CLONES((__attribute__((noinline))), void, chain_fk, (const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n), (chain, q, out, n),
-  chain.forward_batch(q, out, n);
-)
-SPOTKIN_CLONES((__attribute__((noinline))), void, chain_jacobian, (const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n), (chain, q, out, n),
-  chain.jacobian_batch(q, out, n, 6, false);
-)
+// The chain's FK and Jacobian are the module's own kernels (cpp/src/chain_kernels.cpp, built
+// into the harness with the module's -ffp-contract=off), dispatched at the active level.
+void chain_fk(const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n) {
+  kernels::chain_fk(chain, q, out, n);
+}
+void chain_jacobian(const Chain<double>& chain, const double* q, double* out, std::ptrdiff_t n) {
+  kernels::chain_jacobian(chain, q, out, n, 6, false);
+}
 
 // The chain dynamics at the lane widths of the Python module (8 float64, 16
 // float32 lanes: dynamics_boundary.hpp) and at 2 float64 lanes (no in-register

@@ -8,9 +8,10 @@
 
 namespace spotkin::kernels {
 
+// At AVX-512 a double block's poses leave through 8 x 8 transposes (store_rows).
 SPOTKIN_CLONES((), void, chain_fk, (const Chain<double>& c, const double* q, double* out, std::ptrdiff_t n),
                (c, q, out, n),
-  chain_lanes::forward_batch(c, q, out, n);
+  chain_lanes::forward_batch<kIsa == Isa::Avx512>(c, q, out, n);
 )
 SPOTKIN_CLONES((), void, chain_fk, (const Chain<float>& c, const float* q, float* out, std::ptrdiff_t n),
                (c, q, out, n),

@@ -364,71 +364,6 @@ class Chain {
     write_jacobian(T * tool_, axis, origin, J, rows, in_tool_frame);
   }
 
-  // Batched versions over `count` samples (q row-major count x n). They work on
-  // blocks of kBlock samples: first every joint's sine and cosine for the whole
-  // block (vectorised), then the per-sample products.
-  static constexpr std::ptrdiff_t kBlock = 32;
-
-  SPOTKIN_INLINE void forward_batch(const Scalar* q, Scalar* out, std::ptrdiff_t count) const noexcept {
-    BlockTrig trig;
-    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
-      const std::ptrdiff_t m = std::min(kBlock, count - b0);
-      block_trig(q + b0 * dof(), m, trig);
-      for (std::ptrdiff_t i = 0; i < m; ++i) {
-        const Scalar* qi = q + (b0 + i) * dof();
-        Rigid<Scalar> T = base_;
-        for (std::size_t j = 0; j < joints_.size(); ++j) advance(T, j, qi[j], trig, i);
-        write_homogeneous(T * tool_, out + 16 * (b0 + i));
-      }
-    }
-  }
-
-  // (n + 2) frames per sample, as frames().
-  SPOTKIN_INLINE void frames_batch(const Scalar* q, Scalar* out, std::ptrdiff_t count) const noexcept {
-    BlockTrig trig;
-    const std::ptrdiff_t stride = 16 * (dof() + 2);
-    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
-      const std::ptrdiff_t m = std::min(kBlock, count - b0);
-      block_trig(q + b0 * dof(), m, trig);
-      for (std::ptrdiff_t i = 0; i < m; ++i) {
-        const Scalar* qi = q + (b0 + i) * dof();
-        Scalar* o = out + stride * (b0 + i);
-        Rigid<Scalar> T = base_;
-        write_homogeneous(T, o);
-        for (std::size_t j = 0; j < joints_.size(); ++j) {
-          advance(T, j, qi[j], trig, i);
-          write_homogeneous(T, o + 16 * (j + 1));
-        }
-        write_homogeneous(T * tool_, o + 16 * (joints_.size() + 1));
-      }
-    }
-  }
-
-  // rows x n Jacobian per sample, as jacobian().
-  SPOTKIN_INLINE void jacobian_batch(const Scalar* q, Scalar* out, std::ptrdiff_t count, int rows,
-                                     bool in_tool_frame) const noexcept {
-    BlockTrig trig;
-    const std::ptrdiff_t n = dof();
-    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
-      const std::ptrdiff_t m = std::min(kBlock, count - b0);
-      block_trig(q + b0 * n, m, trig);
-      for (std::ptrdiff_t i = 0; i < m; ++i) {
-        const Scalar* qi = q + (b0 + i) * n;
-        Vec3<Scalar> axis[kMaxJoints], origin[kMaxJoints];
-        Rigid<Scalar> T = base_;
-        for (std::size_t j = 0; j < joints_.size(); ++j) {
-          const Joint<Scalar>& joint = joints_[j];
-          joint.pre.apply(T);
-          axis[j] = joint.axis_in(T);
-          origin[j] = T.p;
-          joint.apply_motion(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, qi[j]));
-          joint.post.apply(T);
-        }
-        write_jacobian(T * tool_, axis, origin, out + rows * n * (b0 + i), rows, in_tool_frame);
-      }
-    }
-  }
-
  private:
   static void check_count(std::ptrdiff_t n) {
     if (n < 1 || n > kMaxJoints)
@@ -439,31 +374,6 @@ class Chain {
     for (const auto* T : {&base, &tool})
       if (!T->R.allFinite() || !T->p.allFinite())
         throw std::invalid_argument("base and tool transforms must be finite");
-  }
-
-  struct BlockTrig {
-    double angle[kBlock];
-    double s[kMaxJoints][kBlock];
-    double c[kMaxJoints][kBlock];
-  };
-
-  SPOTKIN_INLINE void block_trig(const Scalar* q, std::ptrdiff_t m, BlockTrig& trig) const noexcept {
-    const std::ptrdiff_t n = dof();
-    for (std::ptrdiff_t j = 0; j < n; ++j) {
-      const Joint<Scalar>& joint = joints_[static_cast<std::size_t>(j)];
-      const double revolute = joint.type == JointType::Revolute ? 1.0 : 0.0;
-      for (std::ptrdiff_t i = 0; i < m; ++i)
-        trig.angle[i] = double(joint.theta) + revolute * double(q[i * n + j]);
-      vector_math::sincos(trig.angle, trig.s[j], trig.c[j], m);
-    }
-  }
-
-  SPOTKIN_INLINE void advance(Rigid<Scalar>& T, std::size_t j, Scalar q, const BlockTrig& trig,
-                              std::ptrdiff_t i) const noexcept {
-    const Joint<Scalar>& joint = joints_[j];
-    joint.pre.apply(T);
-    joint.apply_motion(T, Scalar(trig.c[j][i]), Scalar(trig.s[j][i]), joint_r(joint, q));
-    joint.post.apply(T);
   }
 
   SPOTKIN_INLINE void write_jacobian(const Rigid<Scalar>& T, const Vec3<Scalar>* axis,

@@ -149,14 +149,15 @@ SPOTKIN_INLINE void axis_in(const LaneFrame<S, B>& T, const Joint<S>& joint, S (
 // out[i * width + e] = soa[e][i] for the block's m samples. float: groups of 8 columns of 8
 // lanes transposed in registers (dynamics::transpose_lanes, one AVX2 register each), then
 // stored whole, the columns left over one by one (scalar moves were a third of the float FK's
-// samples; the time gained was small, 22 -> 21 ns). double: element by element (staging the
+// samples; the time gained was small, 22 -> 21 ns). double: the same with 8 x 8 doubles where
+// Wide (the AVX-512 clones, one register each); element by element otherwise (staging the
 // rows for 4 x 4 transposes measured slower, 35 -> 47 ns per 6-joint FK on AVX2).
-template <typename S, int B>
+template <typename S, int B, bool Wide = false>
 SPOTKIN_INLINE void store_rows(const S (*soa)[B], int width, std::ptrdiff_t m, S* out) noexcept {
   constexpr int L = 8;
-  using V = typename dynamics::Pack<float, L>::Vector;
+  using V = typename dynamics::Pack<S, L>::Vector;
   int e0 = 0;
-  if constexpr (std::is_same_v<S, float> && B % L == 0)
+  if constexpr ((std::is_same_v<S, float> || Wide) && B % L == 0)
     for (; e0 + L <= width; e0 += L)
     for (int i0 = 0; i0 < B && i0 < m; i0 += L) {
       V r[L];
@@ -236,8 +237,9 @@ SPOTKIN_INLINE void walk(const Chain<S>& chain, const Placement<S>& tool, const 
   keep(n + 1);
 }
 
-// Base -> tool transforms of count samples (q row-major count x n) as 4 x 4 matrices.
-template <typename S, int B>
+// Base -> tool transforms of count samples (q row-major count x n) as 4 x 4 matrices. Wide:
+// double rows leave through 8 x 8 transposes too (store_rows; the AVX-512 clones).
+template <typename S, int B, bool Wide = false>
 SPOTKIN_INLINE void forward_blocks(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
   const int n = chain.dof();
   const Placement<S> tool = Placement<S>::rigid(chain.tool().template cast<double>());
@@ -250,12 +252,12 @@ SPOTKIN_INLINE void forward_blocks(const Chain<S>& chain, const S* q, S* out, st
     const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
     lanes.load(chain, q + b0 * n, m);
     walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, nullptr);
-    if constexpr (std::is_same_v<S, float>) {  // 16 columns of lanes, transposed in registers
+    if constexpr (std::is_same_v<S, float> || Wide) {  // 16 columns of lanes, transposed in registers
       for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c) std::memcpy(rows[4 * r + c], T.R[r][c], sizeof rows[0]);
         std::memcpy(rows[4 * r + 3], T.p[r], sizeof rows[0]);
       }
-      store_rows<S, B>(rows, 16, m, out + 16 * b0);
+      store_rows<S, B, Wide>(rows, 16, m, out + 16 * b0);
     } else {
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         S* o = out + 16 * (b0 + i);
@@ -358,10 +360,10 @@ SPOTKIN_INLINE void frames_blocks(const Chain<S>& chain, const S* q, S* out, std
 // samples (a single pose pays for 4 lanes, not 16). The translation unit is compiled without
 // fused multiply-adds (-ffp-contract=off, CMakeLists.txt), so the same equations give the same
 // bits lane by lane at either width (tested at every level: single calls equal a batch's rows).
-template <typename S>
+template <bool Wide = false, typename S>
 SPOTKIN_INLINE void forward_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
   if (count < kBlock) return forward_blocks<S, kSmallBlock>(chain, q, out, count);
-  forward_blocks<S, kBlock>(chain, q, out, count);
+  forward_blocks<S, kBlock, Wide>(chain, q, out, count);
 }
 template <typename S>
 SPOTKIN_INLINE void frames_batch(const Chain<S>& chain, const S* q, S* out, std::ptrdiff_t count) {
