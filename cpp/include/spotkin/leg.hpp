@@ -664,24 +664,33 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       x[i] = C(p[3 * (b0 + i)]), y[i] = C(p[3 * (b0 + i) + 1]), z[i] = C(p[3 * (b0 + i) + 2]);
     }
-    if (!seed) {
+    if (!seed) {  // two loops: GCC did not take the seed's test out of the loop on its own
       preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, pad_block(x, y, z, m), tol, limit_tol);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const std::ptrdiff_t t = b0 + i;
+        T* qt = q + 3 * t;
+        if (ok[i] != C(0)) {  // the common case: the preferred slot valid
+          qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
+          status[t] = std::int8_t(Status::Ok);
+        } else if (exists[i] < C(0)) {
+          qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
+          status[t] = std::int8_t(Status::InvalidInput);
+        } else {
+          open.add(t, x[i], y[i], z[i]);
+          if (open.count == kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
+        }
+      }
     } else {  // every target is chosen among all the slots
-      for (std::ptrdiff_t i = 0; i < m; ++i) exists[i] = finite_mask(x[i], y[i], z[i]) - C(1), ok[i] = C(0);
-    }
-    for (std::ptrdiff_t i = 0; i < m; ++i) {
-      const std::ptrdiff_t t = b0 + i;
-      T* qt = q + 3 * t;
-      const T* st = seed ? seed + 3 * t : nullptr;
-      if (ok[i] != C(0) && !st) {  // the common case: the preferred slot valid, no seed
-        qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
-        status[t] = std::int8_t(Status::Ok);
-      } else if (exists[i] < C(0) || (st && !finite3(st))) {
-        qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
-        status[t] = std::int8_t(Status::InvalidInput);
-      } else {
-        open.add(t, x[i], y[i], z[i]);
-        if (open.count == kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const std::ptrdiff_t t = b0 + i;
+        T* qt = q + 3 * t;
+        if (finite_mask(x[i], y[i], z[i]) == C(0) || !finite3(seed + 3 * t)) {
+          qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
+          status[t] = std::int8_t(Status::InvalidInput);
+        } else {
+          open.add(t, x[i], y[i], z[i]);
+          if (open.count == kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
+        }
       }
     }
   }
