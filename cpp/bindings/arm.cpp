@@ -80,7 +80,7 @@ py::object ik_all(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         kernels::arm_ik_all<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 48 * b, vd + 8 * b,
-                             ed + 8 * b, std_ + b, e - b);
+                               ed + 8 * b, std_ + b, e - b);
       });
     }
     if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));

@@ -117,8 +117,8 @@ py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequen
                             [&](const T* pose_block, T* out_block, std::ptrdiff_t m) {
                               const std::ptrdiff_t i = (out_block - qd) / w;
                               kernels::body_ik<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 3 * n_legs * i,
-                                                feet_shared, sd ? sd + w * i : nullptr, out_block, std_ + n_legs * i,
-                                                m, nearest_fallback);
+                                                  feet_shared, sd ? sd + w * i : nullptr, out_block, std_ + n_legs * i,
+                                                  m, nearest_fallback);
                             });
       });
     }
@@ -169,8 +169,8 @@ py::object ik_one(const Body& body, py::handle pose_obj, py::handle feet_obj) {
   py::object q = new_vector(py::detail::npy_api::NPY_DOUBLE_, w);
   py::object status = new_vector(py::detail::npy_api::NPY_BYTE_, n_legs);
   kernels::body_ik<double>(body, pose, BodyPoseFormat::Euler, xyz, feet, true, nullptr,
-                         reinterpret_cast<double*>(py::detail::array_proxy(q.ptr())->data),
-                         reinterpret_cast<std::int8_t*>(py::detail::array_proxy(status.ptr())->data), 1, true);
+                           reinterpret_cast<double*>(py::detail::array_proxy(q.ptr())->data),
+                           reinterpret_cast<std::int8_t*>(py::detail::array_proxy(status.ptr())->data), 1, true);
   return body_ik_result(std::move(q), std::move(status));
 }
 

@@ -79,7 +79,7 @@ py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj, bool neares
       ReleaseGilFor release(count(leading));
       parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
         kernels::leg_ik<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b,
-                         nearest_fallback);
+                           nearest_fallback);
       });
     }
     if (single) return py::make_tuple(q, status_object(single_status));

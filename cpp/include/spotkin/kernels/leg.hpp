@@ -1,7 +1,7 @@
 // The leg's batch kernels, each dispatched to the clone of the active instruction-set
 // level (SPOTKIN_CLONES, spotkin/isa.hpp). They are compiled in cpp/src/leg_kernels.cpp,
 // for float and double, apart from the bindings: a unit that includes pybind11 compiles
-// its internals again, and the bindings' glue builds in one unit.
+// its internals again, so the bindings' glue builds in few units (docs/build.md).
 #pragma once
 
 #include <cstddef>
