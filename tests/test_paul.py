@@ -90,6 +90,7 @@ def test_type3_inconsistent_and_dependent_systems():
 )
 # found by Hypothesis: a double root in ti whose B3 (a difference of squares) rounds past touching
 @example(ti=0.0, tj=0.0, W=1.0, X=0.0, Y=4.637349727702218e-07, negative=False)
+@example(ti=1.0, tj=2.1415926535897927, W=1.0, X=0.0, Y=1.0, negative=False)  # Z1 = Z2 = 0: a continuum
 def test_type6_recovers_the_pair(ti, tj, W, X, Y, negative):
     W = -W if negative else W
     Z1 = W * np.sin(tj) - X * np.cos(ti) - Y * np.sin(ti)
@@ -101,6 +102,12 @@ def test_type6_recovers_the_pair(ti, tj, W, X, Y, negative):
         assert abs(W * np.cos(b) - (X * np.sin(a) - Y * np.cos(a) + Z2)) < 1e-9
     if X * X + Y * Y < 1e-12:  # ti is (nearly) free: any reported ti solves the pair; tj must match
         assert np.nanmin(np.abs(wrap(roots_j - tj))) < 1e-5
+        return
+    # Z1 = Z2 = 0 (found by Hypothesis: ti = 1, tj = pi - 1, W = Y = 1, X = 0): the squared sum gives
+    # W^2 = X^2 + Y^2 for every ti, a continuum of pairs, each ti with its own tj. The reported
+    # pair (ti = 0, as type2 reports an identity) solves both equations (checked above); the
+    # generating one cannot be singled out.
+    if np.hypot(Z1, Z2) < 1e-10 * (abs(W) + abs(X) + abs(Y)):
         return
     distance = np.maximum(np.abs(wrap(roots_i - ti)), np.abs(wrap(roots_j - tj)))
     assert np.nanmin(distance) < 1e-5
