@@ -48,6 +48,7 @@
 #include "spotkin/kernels/chain.hpp"
 #include "spotkin/diagnostics.hpp"
 #include "spotkin/dynamics/batch.hpp"
+#include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/leg.hpp"
 #include "spotkin/scratch.hpp"
 
@@ -100,15 +101,10 @@ void chain_jacobian(const Chain<double>& chain, const double* q, double* out, st
 }
 
 // The chain dynamics at the lane widths of the Python module (8 float64, 16
-// float32 lanes: dynamics_boundary.hpp) and at 2 float64 lanes (no in-register
+// float32 lanes: spotkin/dynamics/kernels.hpp) and at 2 float64 lanes (no in-register
 // transpose), for the self-checks.
 namespace dyn = spotkin::dynamics;
-template <typename X>
-struct NonDeducedOf {
-  using type = X;
-};
-template <typename X>
-using NonDeduced = typename NonDeducedOf<X>::type;  // deduced from the model alone (nullptr passes)
+using dyn::NonDeduced;  // deduced from the model alone (nullptr passes)
 SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, rnea, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q,
                          const NonDeduced<dyn::Rows<M>>* qd, const NonDeduced<dyn::Rows<M>>* qdd,
                          NonDeduced<dyn::Rows<M>> g, M* out, std::ptrdiff_t n), (model, q, qd, qdd, g, out, n),

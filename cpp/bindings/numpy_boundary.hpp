@@ -197,13 +197,13 @@ py::object dispatch_real(py::handle obj, const char* name, F&& f) {
 //   in input part g makes output part g NaN, and only it.
 // The check is one pass over input in cache; the copy only happens in a
 // sub-block holding such a value.
-constexpr std::ptrdiff_t kAngleBlock = 512;
+constexpr std::ptrdiff_t kAngleBlock = 512;  // a multiple of kChunkAlignment: same results for any split
 
 // Whether some of x[0, n) is NaN, Inf or beyond vector_math::kReducibleLimit
 // (vector_math::any_beyond): a vectorised scan compiled per CPU level (runtime.cpp).
 bool any_unusual(const double* x, std::ptrdiff_t n) noexcept;
 bool any_unusual(const float* x, std::ptrdiff_t n) noexcept;
-  // a multiple of kChunkAlignment: same results for any split
+
 template <typename T, typename Kernel>
 void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t angle_columns, T* out,
                          std::ptrdiff_t out_width, std::ptrdiff_t n, Kernel&& kernel, std::ptrdiff_t groups = 1) {

@@ -29,12 +29,7 @@ SPOTKIN_LANE_CLONES(floating_com_k, (const FloatingModel<T, L>& m, NonDeduced<Ro
                                           std::ptrdiff_t);                                                       \
   template void floating_com_k<T, L>(const FloatingModel<T, L>&, Rows<T>, T*, bool, std::ptrdiff_t,              \
                                      std::ptrdiff_t);
-SPOTKIN_INSTANTIATE(double, kLanes64)
-SPOTKIN_INSTANTIATE(double, kMidLanes64)
-SPOTKIN_INSTANTIATE(double, kSmallLanes64)
-SPOTKIN_INSTANTIATE(float, kLanes32)
-SPOTKIN_INSTANTIATE(float, kMidLanes32)
-SPOTKIN_INSTANTIATE(float, kSmallLanes32)
+SPOTKIN_FOR_EACH_LANE_MODEL(SPOTKIN_INSTANTIATE)
 #undef SPOTKIN_INSTANTIATE
 
 }  // namespace spotkin::dynamics

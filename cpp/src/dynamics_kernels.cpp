@@ -25,12 +25,7 @@ SPOTKIN_LANE_CLONES(aba_k, (const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, No
   template void coriolis_k<T, L>(const ChainModel<T, L>&, Rows<T>, Rows<T>, T*, std::ptrdiff_t, std::ptrdiff_t);   \
   template void aba_k<T, L>(const ChainModel<T, L>&, Rows<T>, Rows<T>, Rows<T>, Rows<T>, T*, std::ptrdiff_t,       \
                             std::ptrdiff_t);
-SPOTKIN_INSTANTIATE(double, kLanes64)
-SPOTKIN_INSTANTIATE(double, kMidLanes64)
-SPOTKIN_INSTANTIATE(double, kSmallLanes64)
-SPOTKIN_INSTANTIATE(float, kLanes32)
-SPOTKIN_INSTANTIATE(float, kMidLanes32)
-SPOTKIN_INSTANTIATE(float, kSmallLanes32)
+SPOTKIN_FOR_EACH_LANE_MODEL(SPOTKIN_INSTANTIATE)
 #undef SPOTKIN_INSTANTIATE
 
 }  // namespace spotkin::dynamics

@@ -37,3 +37,13 @@
   template <typename T, int L>                       \
   void NAME PARAMS { __VA_ARGS__ }
 #endif
+
+// INSTANTIATE(T, L) for the six lane models: each precision at the three widths
+// (spotkin/dynamics/kernels.hpp).
+#define SPOTKIN_FOR_EACH_LANE_MODEL(INSTANTIATE) \
+  INSTANTIATE(double, kLanes64)                  \
+  INSTANTIATE(double, kMidLanes64)               \
+  INSTANTIATE(double, kSmallLanes64)             \
+  INSTANTIATE(float, kLanes32)                   \
+  INSTANTIATE(float, kMidLanes32)                \
+  INSTANTIATE(float, kSmallLanes32)
