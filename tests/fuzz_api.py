@@ -848,6 +848,96 @@ class Custom(Slot):
         return self.table[variant](ctx, rng, base)
 
 
+class OutSlot(Slot):
+    """``out=``: arrays the call writes its results into and returns (a control loop allocates
+    nothing). ``leaves``: the output spec, (kind, trailing) per result leaf, or a function of the
+    built arguments' values giving it. ``drivers``: the batch arguments whose dtypes decide the
+    working dtype (float32 only when every one is). Built after the other slots, from their
+    leading shapes and dtypes: ``valid`` passes the float and bool leaves (a status is left to the
+    call), ``valid_all`` every leaf of a batch; the other variants are each one documented
+    rejection."""
+
+    after = True
+
+    def __init__(self, *leaves, drivers=None, **kw):
+        super().__init__("out", optional=True, default="omit", **kw)
+        self.leaves = leaves[0] if len(leaves) == 1 and callable(leaves[0]) else leaves
+        self.drivers = drivers
+
+    def variants(self, exhaustive):
+        return [
+            "valid",
+            "valid_all",
+            "wrong_dtype",
+            "wrong_shape",
+            "readonly",
+            "strided",
+            "not_array",
+            "wrong_count",
+        ]
+
+    def build(self, variant, ctx, rng, base):
+        return Arg(OMIT)  # build_out makes it, once the other arguments are built
+
+    def _spec(self, args):
+        leaves = self.leaves(args) if callable(self.leaves) else self.leaves
+        return [Out(kind, tuple(trailing)) for kind, trailing in leaves]
+
+    def build_out(self, variant, args, entry) -> Arg:
+        if variant == "omit":
+            return Arg(OMIT)
+        batch = {n: a for n, a in args.items() if a.present}
+        try:
+            lead = tuple(np.broadcast_shapes(*(a.lead for a in batch.values()))) if batch else ()
+        except ValueError:
+            lead = ()
+        if math.prod(lead) > 1 << 20:  # a huge batch (its MemoryError is the case): no out= beside it
+            return Arg(OMIT)
+        names = [n for n in (self.drivers or [n for n in batch if entry.slot(n).dtype_driver]) if n in batch]
+        f32 = bool(names) and all(batch[n].f32 for n in names)
+        dtypes = {
+            "float": np.float32 if f32 else np.float64,
+            "f64": np.float64,
+            "flag": np.bool_,
+            "bool": np.bool_,
+        }
+        spec = self._spec(args)
+        arrays = [
+            np.zeros(lead + leaf.trailing, dtype=dtypes.get(leaf.kind, np.int8))
+            if (variant == "valid_all" and lead) or leaf.kind not in ("status", "stance")
+            else None
+            for leaf in spec
+        ]
+
+        def packed(values):
+            return values[0] if len(values) == 1 else tuple(values)
+
+        first = next(i for i, a in enumerate(arrays) if a is not None)
+        bad = list(arrays)
+        if variant in ("valid", "valid_all"):
+            return Arg(packed(arrays))
+        if variant == "wrong_dtype":
+            a = arrays[first]
+            bad[first] = a.astype(np.float64 if a.dtype == np.float32 else np.float32)
+            return Arg(packed(bad), REJECT, "type")
+        if variant == "wrong_shape":
+            bad[first] = np.zeros((2, *arrays[first].shape), arrays[first].dtype)
+            return Arg(packed(bad), REJECT, "shape")
+        if variant == "readonly":
+            bad[first].flags.writeable = False
+            return Arg(packed(bad), REJECT, "value")
+        if variant == "strided":
+            a = arrays[first]
+            bad[first] = np.zeros((*a.shape, 2), a.dtype)[..., 0]
+            return Arg(packed(bad), REJECT if not bad[first].flags.c_contiguous else ACCEPT, "value")
+        if variant == "not_array":
+            bad[first] = arrays[first].tolist()
+            return Arg(packed(bad), REJECT, "type")
+        if variant == "wrong_count":
+            return Arg((*arrays, None), REJECT, "value")
+        raise KeyError(variant)
+
+
 # ---- outputs ----------------------------------------------------------------------------------------
 
 
@@ -1522,7 +1612,7 @@ def _leg_entries():
             name=f"Leg.fk{tag}",
             covers="spotkin.Leg.fk",
             call=lambda c, leg=leg, **k: leg(c).fk(**k),
-            slots=[angle_slot("q", 3)],
+            slots=[angle_slot("q", 3), OutSlot(("float", (3,)))],
             baseline=leg_q,
             outputs=outs(("float", (3,))),
             check=finite_check,
@@ -1531,7 +1621,7 @@ def _leg_entries():
             name=f"Leg.jacobian{tag}",
             covers="spotkin.Leg.jacobian",
             call=lambda c, leg=leg, **k: leg(c).jacobian(**k),
-            slots=[angle_slot("q", 3)],
+            slots=[angle_slot("q", 3), OutSlot(("float", (3, 3)))],
             baseline=leg_q,
             outputs=outs(("float", (3, 3))),
             check=finite_check,
@@ -1540,7 +1630,7 @@ def _leg_entries():
             name=f"Leg.singularity{tag}",
             covers="spotkin.Leg.singularity",
             call=lambda c, leg=leg, **k: leg(c).singularity(**k),
-            slots=[angle_slot("q", 3)],
+            slots=[angle_slot("q", 3), OutSlot(("float", ()), ("float", ()))],
             baseline=leg_q,
             outputs=outs(("float", ()), ("float", ())),
             check=leg_singularity_check(leg),
@@ -1553,6 +1643,7 @@ def _leg_entries():
                 Batch("p", (3,)),
                 angle_slot("seed", 3, optional=True, default="omit"),
                 Choice("fallback", "nearest", ("nearest", "nan"), default="omit"),
+                OutSlot(("float", (3,)), ("status", ()), drivers=["p"]),
             ],
             baseline=leg_p,
             outputs=outs(("float", (3,)), ("status", ())),
@@ -1564,7 +1655,10 @@ def _leg_entries():
             name=f"Leg.ik_all{tag}",
             covers="spotkin.Leg.ik_all",
             call=lambda c, leg=leg, **k: leg(c).ik_all(**k),
-            slots=[Batch("p", (3,))],
+            slots=[
+                Batch("p", (3,)),
+                OutSlot(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("status", ())),
+            ],
             baseline=leg_p,
             outputs=outs(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("status", ())),
             check=lambda x, out, kw, c, leg=leg: solution_check(leg(c).fk, lambda x: x["p"], leg(c).limits)(
@@ -2336,6 +2430,11 @@ def _body_methods(spec, methods):
                 angle_slot("seed", 3 * ROBOT_LEGS[spec.key], optional=True, default="omit"),
                 seq_slot(),
                 Choice("fallback", "nearest", ("nearest", "nan"), default="omit"),
+                OutSlot(
+                    ("float", (3 * ROBOT_LEGS[spec.key],)),
+                    ("status", (ROBOT_LEGS[spec.key],)),
+                    drivers=["body_pose", "feet"],
+                ),
             ],
             baseline=base,
             outputs=outs(("float", (3 * ROBOT_LEGS[spec.key],)), ("status", (ROBOT_LEGS[spec.key],))),
@@ -2373,7 +2472,12 @@ def _body_methods(spec, methods):
             name=spec.name("body_fk"),
             covers=spec.covers("body_fk"),
             call=lambda c, **k: robot_of(c).body_fk(**k),
-            slots=[body_pose_slot(), angle_slot(qn, 3 * n), seq_slot()],
+            slots=[
+                body_pose_slot(),
+                angle_slot(qn, 3 * n),
+                seq_slot(),
+                OutSlot(("float", (n, 3)), drivers=["body_pose", qn]),
+            ],
             baseline=base,
             outputs=outs(("float", (n, 3))),
             nan_rule="check",
@@ -5129,7 +5233,28 @@ def _dynamics_entries():
             packed = kw.get("layout") == "packed"
             return [Out("float", (dof * (dof + 1) // 2,) if packed else (dof, dof))]
 
+        def out_of(trailing, dof=dof):
+            if trailing is not None:
+                return OutSlot(("float", trailing), drivers=["q", "qd", "qdd", "tau"])
+
+            def leaves(args, dof=dof):  # the mass matrix: its layout decides the shape
+                layout = args["layout"].value
+                packed = layout == "packed"
+                return [("float", (dof * (dof + 1) // 2,) if packed else (dof, dof))]
+
+            return OutSlot(leaves, drivers=["q"])
+
+        with_out = (
+            "inverse_dynamics",
+            "mass_matrix",
+            "gravity",
+            "nonlinear_effects",
+            "coriolis_matrix",
+            "forward_dynamics",
+        )
         for method, (slots, trailing, reference) in methods.items():
+            if method in with_out:
+                slots = [*slots, out_of(trailing)]
             register(
                 name=f"Chain.{method}[{key}]",
                 covers=f"spotkin.Chain.{method}",
@@ -5579,6 +5704,9 @@ def build_args(entry: Entry, case: dict, ctx) -> tuple[dict, str | None]:
     args = {}
     for slot in entry.slots:
         args[slot.name] = slot.build(plan.get(slot.name, slot.default), ctx, rng, base)
+    for slot in entry.slots:  # out=: from the other arguments' shapes and dtypes
+        if getattr(slot, "after", False):
+            args[slot.name] = slot.build_out(plan.get(slot.name, slot.default), args, entry)
     return args, override
 
 
@@ -5710,6 +5838,11 @@ def check_leaves(entry, leaves, spec, lead, want):
             raise Failure("output dtype", f"{where}: {dt}, expected an integer dtype")
 
 
+def _without_out(kw: dict) -> dict:
+    """The keywords of a call without its out= arrays (shaped for the whole batch)."""
+    return {k: v for k, v in kw.items() if k != "out"}
+
+
 def verify(entry: Entry, ctx, args: dict, kw: dict, result, expect: str) -> None:
     if entry.outputs is None:
         message = entry.probe(result, kw, ctx) if entry.probe else None
@@ -5735,7 +5868,7 @@ def verify(entry: Entry, ctx, args: dict, kw: dict, result, expect: str) -> None
         where = f"sample {j}" if lead else "the single sample"
         judge_sample(entry, ctx, x, out, kw, spec, f32, where)
         if lead:
-            single, error, _ = call_entry(entry, ctx, {**kw, **x})
+            single, error, _ = call_entry(entry, ctx, {**_without_out(kw), **x})
             if error is not None:
                 raise Failure("single call fails", f"{where} alone raises {type(error).__name__}: {error}")
             for i, (a, b) in enumerate(zip(out, flatten(single))):
@@ -5759,7 +5892,7 @@ def judge_sample(entry, ctx, x, out, kw, spec, f32, where):
         if replacement is not None:
             equivalent[name] = replacement
     if equivalent:
-        ref, error, _ = call_entry(entry, ctx, {**kw, **x, **equivalent})
+        ref, error, _ = call_entry(entry, ctx, {**_without_out(kw), **x, **equivalent})
         if error is None and all(close(a, b, f32) for a, b in zip(out, flatten(ref))):
             return
         if all(entry.slot(n).equiv_nan_ok for n in equivalent):
@@ -5844,6 +5977,11 @@ def run_case(case: dict, ctx) -> dict:
                 raise Failure("huge batch accepted", "no MemoryError")
             if entry.outputs is not None and any(a.expect == REJECT for a in args.values()):
                 return {"ok": True}  # a pair rule accepted a combination the samples cannot be cut from
+            if kw.get("out") is not None:  # out= arrays are filled and returned, not copied
+                given = kw["out"] if isinstance(kw["out"], tuple) else (kw["out"],)
+                for i, (array, leaf) in enumerate(zip(given, flatten(result))):
+                    if array is not None and leaf is not array:
+                        raise Failure("out= not returned", f"leaf {i}: {describe(leaf)} is not the out array")
             verify(entry, ctx, args, kw, result, expect)
         finally:
             if entry.after:

@@ -98,7 +98,8 @@ def register_entries(api) -> None:
         mem = memory[twin_name]
         rename = dict(rename or {})
         back = {old: new for new, old in rename.items()}
-        slots = [renamed(slot, back.get(slot.name, slot.name)) for slot in mem.slots]
+        # out= is for in-memory arrays: the Dask functions build their results lazily
+        slots = [renamed(slot, back.get(slot.name, slot.name)) for slot in mem.slots if slot.name != "out"]
         if change is not None:
             slots = change(slots)
         slots = [model, *slots, *extra]

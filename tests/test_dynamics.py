@@ -281,7 +281,7 @@ def test_leading_shapes_broadcast_like_numpy(rng):
     out = dyn.nonlinear_effects(fx.chain, q, qd, inertials=fx.inertials)
     assert out.shape == (4, 5, 3)
     close(out[2, 3], dyn.nonlinear_effects(fx.chain, q[2, 0], qd[0, 3], inertials=fx.inertials), 0)
-    with pytest.raises(ValueError, match=r"do not broadcast together: q \(4,\), qd \(5,\), gravity \(\)"):
+    with pytest.raises(ValueError, match=r"q \(4, 3\), qd \(5, 3\) and gravity \(3,\) do not broadcast"):
         dyn.nonlinear_effects(
             fx.chain, rng.normal(size=(4, 3)), rng.normal(size=(5, 3)), inertials=fx.inertials
         )

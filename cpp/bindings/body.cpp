@@ -9,29 +9,13 @@
 #include <utility>
 
 #include "bindings.hpp"
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
 namespace body_glue {
-
-constexpr std::ptrdiff_t kMinPerThread = min_chunk(55.0);  // body IK: ~55 ns per pose
-
-std::ptrdiff_t pose_width(BodyPoseFormat format) {
-  return format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
-}
-
-// body_pose (N, width) contiguous in T, already broadcast by the façade.
-struct Poses {
-  BodyPoseFormat format;
-  Shape leading;
-};
-
-Poses pose_shape(const py::array& arr, BodyPoseFormat format) {
-  const Shape trailing = format == BodyPoseFormat::Matrix ? Shape{4, 4} : Shape{pose_width(format)};
-  return {format, leading_shape(arr, "body_pose", trailing)};
-}
 
 // The Euler sequence packed in one int by the façade: axis[0] + 3 axis[1] + 9 axis[2],
 // plus 27 when the angles are applied in reverse order (extrinsic sequences).
@@ -42,17 +26,6 @@ EulerSequence make_sequence(int code) {
   const bool reversed = code >= 27;
   for (int k = 0; k < 3; ++k) seq.order[k] = reversed ? 2 - k : k;
   return seq;
-}
-
-// The format from the shape: (..., 6) Euler, (..., 4, 4) matrix, (..., 7) quaternion.
-BodyPoseFormat detect_format(const py::array& arr) {
-  const auto nd = arr.ndim();
-  if (nd >= 1 && arr.shape(nd - 1) == 6) return BodyPoseFormat::Euler;
-  if (nd >= 2 && arr.shape(nd - 1) == 4 && arr.shape(nd - 2) == 4) return BodyPoseFormat::Matrix;
-  if (nd >= 1 && arr.shape(nd - 1) == 7) return BodyPoseFormat::PositionQuaternion;
-  throw py::value_error(
-      "body_pose must have shape (..., 6) [x, y, z, a, b, c], (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw], got " +
-      format_shape(Shape(arr.shape(), arr.shape() + nd)));
 }
 
 // The Euler angles' columns of a body pose: reduced exactly when huge.
@@ -77,53 +50,44 @@ py::object body_ik_result(py::object q, py::object status) {
   return py::reinterpret_steal<py::object>(result);
 }
 
-// format_code -1: detect the format from body_pose's shape.
-py::object ik(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle feet_obj,
-              py::handle seed_obj, bool nearest_fallback) {
-  const EulerSequence seq = make_sequence(sequence);
-  return dispatch_promoted(pose_obj, "body_pose", {{feet_obj, "feet"}}, [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto format = format_code < 0 ? detect_format(arr) : static_cast<BodyPoseFormat>(format_code);
-    const Poses shape = pose_shape(arr, format);
-    auto poses = contiguous<T>(arr);
-    const py::ssize_t n_legs = body.n_legs(), w = body.width();
-    auto feet = contiguous<T>(as_real_array(feet_obj, "feet"));
-    const Shape feet_leading = leading_shape(feet, "feet", {n_legs, 3});
-    const bool feet_shared = feet_leading.empty();
-    if (!feet_shared && feet_leading != shape.leading)
-      throw py::value_error("feet " + format_shape(feet_leading) + " + (" + std::to_string(n_legs) +
-                            ", 3) must match body_pose's leading shape " + format_shape(shape.leading));
-    const bool has_seed = !seed_obj.is_none();
-    py::array_t<T, py::array::c_style> seed;
-    if (has_seed) {
-      seed = seed_angles<T>(as_real_array(seed_obj, "seed"), w, all_angles(int(w)));
-      if (leading_shape(seed, "seed", {w}) != shape.leading)
-        throw py::value_error("seed must have shape " + format_shape(shape.leading) + " + (" + std::to_string(w) +
-                              ",)");
-    }
-    auto q = new_array<T>(shape.leading, {w});
-    auto status = new_array<std::int8_t>(shape.leading, {n_legs});
-    const std::ptrdiff_t width = pose_width(format);
-    const T* pd = poses.data();
-    const T* fd = feet.data();
-    const T* sd = has_seed ? seed.data() : nullptr;
-    T* qd = q.mutable_data();
-    std::int8_t* std_ = status.mutable_data();
-    {
-      ReleaseGilFor release(count(shape.leading));
-      parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        // huge Euler angles are reduced exactly; pose_block is the first pose of out_block's samples
-        with_reduced_angles(pd + width * b, width, euler_columns(format), qd + w * b, w, e - b,
-                            [&](const T* pose_block, T* out_block, std::ptrdiff_t m) {
-                              const std::ptrdiff_t i = (out_block - qd) / w;
-                              kernels::body_ik<T>(body, pose_block, format, seq, feet_shared ? fd : fd + 3 * n_legs * i,
-                                                  feet_shared, sd ? sd + w * i : nullptr, out_block, std_ + n_legs * i,
-                                                  m, nearest_fallback);
-                            });
-      });
-    }
-    return body_ik_result(std::move(q), std::move(status));
-  });
+using binder::Arg;
+using binder::Kind;
+using binder::Op;
+using binder::Out;
+
+// body_pose: (..., 6) [x, y, z, a, b, c] (the Euler angles reduced exactly when huge), (..., 4, 4) or
+// (..., 7) [x, y, z, qx, qy, qz, qw]; Block::shape gives the BodyPoseFormat (the same order).
+Arg pose_arg(bool nan_rows) {
+  Arg pose = Arg("body_pose", {6}, euler_columns(BodyPoseFormat::Euler)).or_shape({4, 4}).or_shape({7});
+  return nan_rows ? pose.nan_rows() : pose;
+}
+
+template <typename B>
+BodyPoseFormat format_of(const B& b) {
+  return static_cast<BodyPoseFormat>(b.shape[0]);
+}
+
+struct Solve {
+  const Body& body;
+  EulerSequence seq;
+  bool nearest_fallback;
+};
+
+// body_pose, feet (..., n, 3) and seed None or (..., 3 n) broadcast -> (q (..., 3 n), status (..., n)).
+py::object ik(const Body& body, py::handle pose, int sequence, py::handle feet, py::handle seed,
+              bool nearest_fallback, py::handle out) {
+  const py::ssize_t n_legs = body.n_legs(), w = body.width();
+  const Op op({pose_arg(false), Arg("feet", {n_legs, 3}).rows_strided(),
+               Arg("seed", {w}, all_angles(int(w))).maybe_none().parameter()},
+              {Out("q", {w}), Out("status", {n_legs}, Kind::Status)}, 55.0, [](const void* c, const auto& b) {
+                const Solve& s = binder::context<Solve>(c);
+                // a shared stance is read with stride 0; the kernel reads either form
+                kernels::body_ik(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.stride[1] == 0, b.in[2], b.real(0),
+                                 b.status(1), b.m, s.nearest_fallback);
+              });
+  const Solve context{body, make_sequence(sequence), nearest_fallback};
+  py::tuple result = binder::call(op, &context, {pose, feet, seed}, out);
+  return body_ik_result(result[0], result[1]);
 }
 
 // The data of obj when it is a plain, aligned, C-contiguous native float64
@@ -165,7 +129,7 @@ py::object ik_one(const Body& body, py::handle pose_obj, py::handle feet_obj) {
   bool usual = pose && feet;
   for (int k = 0; usual && k < 6; ++k)
     usual = std::isfinite(pose[k]) && (k < 3 || std::fabs(pose[k]) <= vector_math::kReducibleLimit);
-  if (!usual) return ik(body, pose_obj, -1, 0 + 3 * 1 + 9 * 2, feet_obj, py::none(), true);
+  if (!usual) return ik(body, pose_obj, 0 + 3 * 1 + 9 * 2, feet_obj, py::none(), true, py::none());
   py::object q = new_vector(py::detail::npy_api::NPY_DOUBLE_, w);
   py::object status = new_vector(py::detail::npy_api::NPY_BYTE_, n_legs);
   kernels::body_ik<double>(body, pose, BodyPoseFormat::Euler, xyz, feet, true, nullptr,
@@ -174,47 +138,32 @@ py::object ik_one(const Body& body, py::handle pose_obj, py::handle feet_obj) {
   return body_ik_result(std::move(q), std::move(status));
 }
 
+struct Posed {
+  const Body& body;
+  EulerSequence seq;
+};
+
+// body_pose and q (..., 3 n) broadcast -> feet (..., n, 3), or the Jacobian (..., 3 n, 6 + 3 n). A leg's
+// non-finite joints make its foot (its Jacobian rows) NaN, and only them, when each leg's joints are its
+// own three columns of q; otherwise the whole sample.
 template <bool Jacobian>
-py::object fk_or_jacobian(const Body& body, py::handle pose_obj, int format_code, int sequence, py::handle q_obj) {
-  const auto format = static_cast<BodyPoseFormat>(format_code);
-  const EulerSequence seq = make_sequence(sequence);
-  return dispatch_promoted(pose_obj, "body_pose", {{q_obj, "q"}}, [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Poses shape = pose_shape(arr, format);
-    auto poses = contiguous<T>(arr);
-    const py::ssize_t n_legs = body.n_legs(), w = body.width();
-    auto q = contiguous<T>(as_real_array(q_obj, "q"));
-    if (leading_shape(q, "q", {w}) != shape.leading)
-      throw py::value_error("q must have shape " + format_shape(shape.leading) + " + (" + std::to_string(w) + ",)");
-    auto out = Jacobian ? new_array<T>(shape.leading, {w, 6 + w}) : new_array<T>(shape.leading, {n_legs, 3});
-    const std::ptrdiff_t width = pose_width(format);
-    const T* pd = poses.data();
-    const T* qd = q.data();
-    T* od = out.mutable_data();
-    // a leg's non-finite joints make its foot (its Jacobian rows) NaN, and only them, when each
-    // leg's joints are its own three columns of q; otherwise the whole sample
-    const std::ptrdiff_t groups = body.leg_contiguous() ? n_legs : 1;
-    {
-      ReleaseGilFor release(count(shape.leading));
-      const std::ptrdiff_t out_width = Jacobian ? w * (6 + w) : 3 * n_legs;
-      parallel_for(count(shape.leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        // huge joint and Euler angles are reduced exactly (with_reduced_angles, once per input)
-        with_reduced_angles(qd + w * b, w, all_angles(int(w)), od + out_width * b, out_width, e - b,
-                            [&](const T* q_block, T* out_block, std::ptrdiff_t m) {
-          const std::ptrdiff_t i = (out_block - od) / out_width;
-          with_reduced_angles(pd + width * i, width, euler_columns(format), out_block, out_width, m,
-                              [&](const T* pose_block, T* out_inner, std::ptrdiff_t k) {
-            if constexpr (Jacobian) {
-              kernels::body_jacobian<T>(body, pose_block, format, seq, q_block, out_inner, k);
-            } else {
-              kernels::body_fk<T>(body, pose_block, format, seq, q_block, out_inner, k);
-            }
-          });
-        }, groups);
-      });
-    }
-    return std::move(out);
-  });
+// q_name: the joints' name in the caller's signature (spotkin.Spot calls them q12), for the errors.
+py::object fk_or_jacobian(const Body& body, py::handle pose, int sequence, py::handle q, py::handle out,
+                          const std::string& q_name) {
+  const py::ssize_t n_legs = body.n_legs(), w = body.width();
+  const int groups = body.leg_contiguous() ? int(n_legs) : 1;
+  const Out result = Jacobian ? Out("J", {w, 6 + w}) : Out("feet", {n_legs, 3});
+  const Op op({pose_arg(true), Arg(q_name.c_str(), {w}, all_angles(int(w))).nan_rows(groups)}, {result}, 55.0,
+              [](const void* c, const auto& b) {
+                const Posed& s = binder::context<Posed>(c);
+                if constexpr (Jacobian) {
+                  kernels::body_jacobian(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.real(0), b.m);
+                } else {
+                  kernels::body_fk(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.real(0), b.m);
+                }
+              });
+  const Posed context{body, make_sequence(sequence)};
+  return binder::call(op, &context, {pose, q}, out);
 }
 
 // legs: sk.Leg cores; hips (n, 3); columns (n, 3) integers (None: leg l's
@@ -269,13 +218,13 @@ void bind_body(py::module_& m) {
   py::class_<Body>(m, "Body")
       .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"), py::arg("columns") = py::none())
       .def_property_readonly("n_legs", &Body::n_legs)
-      .def("ik", &ik, py::arg("body_pose"), py::arg("format"), py::arg("sequence"), py::arg("feet"),
-           py::arg("seed"), py::arg("nearest_fallback") = true)
+      .def("ik", &ik, py::arg("body_pose"), py::arg("sequence"), py::arg("feet"), py::arg("seed"),
+           py::arg("nearest_fallback") = true, py::kw_only(), py::arg("out") = py::none())
       .def("ik_one", &ik_one, py::arg("body_pose"), py::arg("feet"))
-      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
-           py::arg("q"))
-      .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("format"), py::arg("sequence"),
-           py::arg("q"));
+      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::kw_only(),
+           py::arg("out") = py::none(), py::arg("q_name") = "q")
+      .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
+           py::kw_only(), py::arg("out") = py::none(), py::arg("q_name") = "q");
 }
 
 }  // namespace spotkin::bindings

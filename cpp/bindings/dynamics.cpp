@@ -5,6 +5,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include "binder.hpp"
 #include "dynamics_boundary.hpp"
 #include "chain_model.hpp"
 
@@ -30,71 +31,95 @@ ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::h
 // Rough single-thread cost per sample of a 6-joint chain (for the thread split).
 constexpr double kNsPerSample = 150.0;
 
-py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g) {
-  const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {qdd, "qdd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
-                     });
-                   });
+using binder::Arg;
+using binder::Op;
+using binder::Out;
+
+// The batch arguments: q (its revolute columns are angles), the other joint vectors, gravity (a parameter).
+Arg joints(const ChainDynamics& d, const char* name) { return Arg(name, {d.dof()}).rows_strided(); }
+Arg positions(const ChainDynamics& d) { return Arg("q", {d.dof()}, d.f64.angle_columns()).rows_strided(); }
+Arg gravity_arg() { return Arg("gravity", {3}).parameter().rows_strided(); }
+
+template <typename T>
+dynamics::Rows<T> rows(const binder::Block<T>& b, int k) {
+  return {b.in[k], b.stride[k]};
 }
 
-py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g) {
-  const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
-                     });
-                   });
+// Calls f(model) with the model of the active instruction-set level, in the block's precision.
+template <typename B, typename F>
+void on_model(const void* c, const B& b, F&& f) {
+  using T = typename B::Scalar;
+  with_model<T>(binder::context<ChainDynamics>(c), f);
 }
 
-py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g) {
-  const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {g, "gravity", 3, false}}, {n}, kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
-                     });
-                   });
+py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g,
+                      py::handle out) {
+  const Op op({positions(d), joints(d, "qd"), joints(d, "qdd"), gravity_arg()}, {Out("tau", {d.dof()})},
+              kNsPerSample, [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  const auto qd = rows(b, 1), qdd = rows(b, 2);
+                  dynamics::rnea_k(model, rows(b, 0), &qd, &qdd, rows(b, 3), b.real(0), 0, b.m);
+                });
+              });
+  return binder::call(op, &d, {q, qd, qdd, g}, out);
 }
 
-py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_name) {
-  const py::ssize_t n = d.dof();
-  const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}}, symmetric_shape(n, layout), kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::crba_k(model, rows[0], out, b, e, layout);
-                     });
-                   });
+py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g, py::handle out) {
+  const Op op({positions(d), gravity_arg()}, {Out("tau", {d.dof()})}, kNsPerSample, [](const void* c, const auto& b) {
+    on_model(c, b, [&](const auto& model) {
+      dynamics::rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m);
+    });
+  });
+  return binder::call(op, &d, {q, g}, out);
 }
 
-py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd) {
-  const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}}, {n, n}, 2 * kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::coriolis_k(model, rows[0], rows[1], out, b, e);
-                     });
-                   });
+py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g, py::handle out) {
+  const Op op({positions(d), joints(d, "qd"), gravity_arg()}, {Out("h", {d.dof()})}, kNsPerSample,
+              [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  const auto qd = rows(b, 1);
+                  dynamics::rnea_k(model, rows(b, 0), &qd, nullptr, rows(b, 2), b.real(0), 0, b.m);
+                });
+              });
+  return binder::call(op, &d, {q, qd, g}, out);
 }
 
-py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g) {
-  const py::ssize_t n = d.dof();
-  return run_batch({{q, "q", n, true, d.f64.angle_columns()}, {qd, "qd", n}, {tau, "tau", n}, {g, "gravity", 3, false}}, {n}, 2 * kNsPerSample,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
-                     });
-                   });
+struct MassMatrix {
+  const ChainDynamics& d;
+  dynamics::SymmetricLayout layout;
+};
+
+py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
+  const MassMatrix context{d, symmetric_layout(layout_name)};
+  const Shape trailing = symmetric_shape(d.dof(), context.layout);
+  const binder::Trailing shape = trailing.size() == 1 ? binder::Trailing{trailing[0]} : binder::Trailing{trailing[0], trailing[1]};
+  const Op op({positions(d)}, {Out("A", shape)}, kNsPerSample, [](const void* c, const auto& b) {
+    using T = typename std::decay_t<decltype(b)>::Scalar;
+    const MassMatrix& mm = binder::context<MassMatrix>(c);
+    with_model<T>(mm.d, [&](const auto& model) { dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, mm.layout); });
+  });
+  return binder::call(op, &context, {q}, out);
+}
+
+py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd, py::handle out) {
+  const Op op({positions(d), joints(d, "qd")}, {Out("C", {d.dof(), d.dof()})}, 2 * kNsPerSample,
+              [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  dynamics::coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m);
+                });
+              });
+  return binder::call(op, &d, {q, qd}, out);
+}
+
+py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g,
+                     py::handle out) {
+  const Op op({positions(d), joints(d, "qd"), joints(d, "tau"), gravity_arg()}, {Out("qdd", {d.dof()})},
+              2 * kNsPerSample, [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  dynamics::aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m);
+                });
+              });
+  return binder::call(op, &d, {q, qd, tau, g}, out);
 }
 
 }  // namespace dynamics_glue
@@ -104,12 +129,16 @@ void bind_dynamics(py::module_& m) {
   py::class_<ChainDynamics>(m, "ChainDynamics")
       .def(py::init(&make_chain_dynamics), py::arg("chain"), py::arg("mass"), py::arg("com"), py::arg("inertia"))
       .def_property_readonly("dof", &ChainDynamics::dof)
-      .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"))
-      .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"))
-      .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"))
-      .def("crba", &chain_crba, py::arg("q"), py::arg("layout") = "full")
-      .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"))
-      .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"));
+      .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"), py::kw_only(), py::arg("out") = py::none())
+      .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("crba", &chain_crba, py::arg("q"), py::arg("layout") = "full", py::kw_only(), py::arg("out") = py::none())
+      .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"), py::kw_only(),
+           py::arg("out") = py::none());
   bind_floating_dynamics(m);
 }
 

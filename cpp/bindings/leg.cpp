@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "bindings.hpp"
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -15,101 +16,59 @@ namespace spotkin::bindings {
 
 namespace leg_glue {
 
-constexpr std::ptrdiff_t kMinPerThread = min_chunk(25.0);  // leg IK: ~25 ns; FK ~7 ns pays less
+using binder::Arg;
+using binder::Kind;
+using binder::Op;
+using binder::Out;
 
-py::object fk(const Leg& leg, py::handle q_obj) {
-  return map_batch(q_obj, "q", 3, {3}, kMinPerThread,
-                   [&](const auto* q, auto* p, std::ptrdiff_t n) { kernels::leg_fk(leg, q, p, n); }, all_angles(3));
+struct Solve {
+  const Leg& leg;
+  bool nearest_fallback;
+};
+
+py::object fk(const Leg& leg, py::handle q, py::handle out) {
+  static const Op op({Arg("q", {3}, all_angles(3)).nan_rows()}, {Out("p", {3})}, 25.0,
+                     [](const void* c, const auto& b) { kernels::leg_fk(binder::context<Leg>(c), b.in[0], b.real(0), b.m); });
+  return binder::call(op, &leg, {q}, out);
 }
 
-py::object jacobian(const Leg& leg, py::handle q_obj) {
-  return map_batch(q_obj, "q", 3, {3, 3}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) { kernels::leg_jacobian(leg, q, J, n); }, all_angles(3));
+py::object jacobian(const Leg& leg, py::handle q, py::handle out) {
+  static const Op op({Arg("q", {3}, all_angles(3)).nan_rows()}, {Out("J", {3, 3})}, 25.0,
+                     [](const void* c, const auto& b) {
+                       kernels::leg_jacobian(binder::context<Leg>(c), b.in[0], b.real(0), b.m);
+                     });
+  return binder::call(op, &leg, {q}, out);
 }
 
-py::object singularity(const Leg& leg, py::handle q_obj) {
-  return dispatch_real(q_obj, "q", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, "q", {3});
-    auto q = contiguous<T>(arr);
-    auto det = new_array<T>(leading, {});
-    auto sigma = new_array<T>(leading, {});
-    const T* qd = q.data();
-    T* dd = det.mutable_data();
-    T* sd = sigma.mutable_data();
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread / 8, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        with_reduced_angles(qd + 3 * b, 3, all_angles(3), dd + b, 1, e - b, [&](const T* qb, T* ob, std::ptrdiff_t m) {
-          const std::ptrdiff_t first = ob - dd;  // the sub-block's first sample
-          for (std::ptrdiff_t i = 0; i < m; ++i) leg.singularity(qb + 3 * i, dd + first + i, sd + first + i);
-        });
-      });
-    }
-    return py::make_tuple(det, sigma);
-  });
+py::object singularity(const Leg& leg, py::handle q, py::handle out) {
+  static const Op op({Arg("q", {3}, all_angles(3)).nan_rows()}, {Out("abs_det", {}), Out("sigma_min", {})}, 200.0,
+                     [](const void* c, const auto& b) {
+                       const Leg& l = binder::context<Leg>(c);
+                       for (std::ptrdiff_t i = 0; i < b.m; ++i) l.singularity(b.in[0] + 3 * i, b.real(0) + i, b.real(1) + i);
+                     });
+  return binder::call(op, &leg, {q}, out);
 }
 
-// p (..., 3), seed None or (..., 3) of the same shape -> (q (..., 3), status (...)).
-py::object ik(const Leg& leg, py::handle p_obj, py::handle seed_obj, bool nearest_fallback) {
-  return dispatch_real(p_obj, "p", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, "p", {3});
-    auto p = contiguous<T>(arr);
-    py::array_t<T, py::array::c_style> seed;  // default-constructed: an empty array, not null
-    const bool has_seed = !seed_obj.is_none();
-    if (has_seed) {
-      py::array seed_arr = as_real_array(seed_obj, "seed");
-      const Shape seed_leading = leading_shape(seed_arr, "seed", {3});
-      if (seed_leading != leading)
-        throw py::value_error("seed must have the shape of p, " + format_shape(leading) + " + (3,), got " +
-                              format_shape(seed_leading) + " + (3,); broadcast them first");
-      seed = seed_angles<T>(seed_arr, 3, all_angles(3));
-    }
-    const bool single = leading.empty();
-    auto q = new_array<T>(leading, {3});
-    std::int8_t single_status = 0;
-    py::array_t<std::int8_t> status;
-    if (!single) status = new_array<std::int8_t>(leading, {});
-    const T* pd = p.data();
-    const T* sd = has_seed ? seed.data() : nullptr;
-    T* qd = q.mutable_data();
-    std::int8_t* status_data = single ? &single_status : status.mutable_data();
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        kernels::leg_ik<T>(leg, pd + 3 * b, sd ? sd + 3 * b : nullptr, qd + 3 * b, status_data + b, e - b,
-                           nearest_fallback);
-      });
-    }
-    if (single) return py::make_tuple(q, status_object(single_status));
-    return py::make_tuple(q, status);
-  });
+// p (..., 3), seed None or (..., 3), broadcasting -> (q (..., 3), status (...)).
+py::object ik(const Leg& leg, py::handle p, py::handle seed, bool nearest_fallback, py::handle out) {
+  static const Op op({Arg("p", {3}), Arg("seed", {3}, all_angles(3)).maybe_none().parameter()},
+                     {Out("q", {3}), Out("status", {}, Kind::Status)}, 25.0, [](const void* c, const auto& b) {
+                       const Solve& s = binder::context<Solve>(c);
+                       kernels::leg_ik(s.leg, b.in[0], b.in[1], b.real(0), b.status(1), b.m, s.nearest_fallback);
+                     });
+  const Solve context{leg, nearest_fallback};
+  return binder::call(op, &context, {p, seed}, out);
 }
 
-py::object ik_all(const Leg& leg, py::handle p_obj) {
-  return dispatch_real(p_obj, "p", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, "p", {3});
-    auto p = contiguous<T>(arr);
-    auto q = new_array<T>(leading, {Leg::kSlots, 3});
-    auto valid = new_array<bool>(leading, {Leg::kSlots});
-    auto exists = new_array<bool>(leading, {Leg::kSlots});
-    auto status = new_array<std::int8_t>(leading, {});
-    const T* pd = p.data();
-    T* qd = q.mutable_data();
-    auto* vd = reinterpret_cast<std::uint8_t*>(valid.mutable_data());
-    auto* ed = reinterpret_cast<std::uint8_t*>(exists.mutable_data());
-    std::int8_t* sd = status.mutable_data();
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        kernels::leg_ik_all<T>(leg, pd + 3 * b, qd + 12 * b, vd + 4 * b, ed + 4 * b, sd + b, e - b);
-      });
-    }
-    if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));
-    return py::make_tuple(q, valid, exists, status);
-  });
+py::object ik_all(const Leg& leg, py::handle p, py::handle out) {
+  static const Op op({Arg("p", {3})},
+                     {Out("q", {Leg::kSlots, 3}), Out("valid", {Leg::kSlots}, Kind::Bool),
+                      Out("exists", {Leg::kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
+                     25.0, [](const void* c, const auto& b) {
+                       kernels::leg_ik_all(binder::context<Leg>(c), b.in[0], b.real(0), b.flags(1), b.flags(2),
+                                           b.status(3), b.m);
+                     });
+  return binder::call(op, &leg, {p}, out);
 }
 
 std::array<double, 3> vector3(py::handle obj, const char* name) {
@@ -151,11 +110,12 @@ void bind_leg(py::module_& m) {
       .def_property_readonly("preferred_slot", &Leg::preferred_slot)
       .def_property_readonly("max_reach", &Leg::max_reach)
       .def_property_readonly("min_reach", &Leg::min_reach)
-      .def("fk", &fk, py::arg("q"))
-      .def("jacobian", &jacobian, py::arg("q"))
-      .def("singularity", &singularity, py::arg("q"))
-      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true)
-      .def("ik_all", &ik_all, py::arg("p"))
+      .def("fk", &fk, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("jacobian", &jacobian, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("singularity", &singularity, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true, py::kw_only(),
+           py::arg("out") = py::none())
+      .def("ik_all", &ik_all, py::arg("p"), py::kw_only(), py::arg("out") = py::none())
       .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
         std::array<double, 3> out, q;
         leg.nearest_reachable(p.data(), out.data(), within_limits, q.data());

@@ -28,6 +28,7 @@ __all__ = [
     "broadcast_lead",
     "check_trailing",
     "fallback_is_nearest",
+    "into_out",
     "quiet_float_errors",
     "real_dtype",
     "rigid_transforms",
@@ -75,6 +76,25 @@ def as_real(value: ArrayLike, name: str, dtype=None) -> np.ndarray:
         with np.errstate(over="ignore"):  # longdouble beyond the range: Inf (then NaN or ValueError)
             return array.astype(target, copy=False)
     return array.astype(target, copy=False)
+
+
+def into_out(result: np.ndarray, out: np.ndarray | None) -> np.ndarray:
+    """``result`` written into the caller's ``out`` array and returned (``result`` itself when
+    ``out`` is None), with the C++ binder's checks: an ndarray (``TypeError``) of the result's
+    dtype (``TypeError``) and shape (``ValueError``), C-contiguous and writeable (``ValueError``).
+    For the results computed in Python (chains with mimic joints)."""
+    if out is None:
+        return result
+    if type(out) is not np.ndarray:
+        raise TypeError(f"out must be a NumPy array, got {_type_name(out)}")
+    if out.dtype != result.dtype:
+        raise TypeError(f"out must have dtype {result.dtype}, got {out.dtype}")
+    if out.shape != result.shape:
+        raise ValueError(f"out must have shape {result.shape}, got {out.shape}")
+    if not (out.flags.c_contiguous and out.flags.writeable):
+        raise ValueError("out must be a C-contiguous and writeable array")
+    out[...] = result
+    return out
 
 
 def rotation_tolerance(dtype) -> float:

@@ -74,17 +74,17 @@ class Chain:
 class Leg:
     def __init__(self, a: typing.Any, b: typing.Any, c: typing.Any, signs: typing.Any, lower_limits: typing.Any, upper_limits: typing.Any, preferred_slot: typing.SupportsInt | typing.SupportsIndex = -1) -> None:
         ...
-    def fk(self, q: typing.Any) -> typing.Any:
+    def fk(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def ik(self, p: typing.Any, seed: typing.Any = None, nearest_fallback: bool = True) -> typing.Any:
+    def ik(self, p: typing.Any, seed: typing.Any = None, nearest_fallback: bool = True, *, out: typing.Any = None) -> typing.Any:
         ...
-    def ik_all(self, p: typing.Any) -> typing.Any:
+    def ik_all(self, p: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def jacobian(self, q: typing.Any) -> typing.Any:
+    def jacobian(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
     def nearest_reachable(self, p: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], within_limits: bool = False) -> tuple[typing.Annotated[list[float], "FixedSize(3)"], typing.Annotated[list[float], "FixedSize(3)"]]:
         ...
-    def singularity(self, q: typing.Any) -> typing.Any:
+    def singularity(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def max_reach(self) -> float:
@@ -111,13 +111,13 @@ class Arm:
 class Body:
     def __init__(self, legs: collections.abc.Sequence[Leg], hip_positions: typing.Any, columns: typing.Any = None) -> None:
         ...
-    def fk(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any) -> typing.Any:
+    def fk(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, *, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
         ...
-    def ik(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, sequence: typing.SupportsInt | typing.SupportsIndex, feet: typing.Any, seed: typing.Any, nearest_fallback: bool = True) -> typing.Any:
+    def ik(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, feet: typing.Any, seed: typing.Any, nearest_fallback: bool = True, *, out: typing.Any = None) -> typing.Any:
         ...
     def ik_one(self, body_pose: typing.Any, feet: typing.Any) -> typing.Any:
         ...
-    def jacobian(self, body_pose: typing.Any, format: typing.SupportsInt | typing.SupportsIndex, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any) -> typing.Any:
+    def jacobian(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, *, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
         ...
     @property
     def n_legs(self) -> int:
@@ -185,17 +185,17 @@ class WaypointPath:
 class ChainDynamics:
     def __init__(self, chain: Chain, mass: typing.Any, com: typing.Any, inertia: typing.Any) -> None:
         ...
-    def aba(self, q: typing.Any, qd: typing.Any, tau: typing.Any, gravity: typing.Any) -> typing.Any:
+    def aba(self, q: typing.Any, qd: typing.Any, tau: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def coriolis_matrix(self, q: typing.Any, qd: typing.Any) -> typing.Any:
+    def coriolis_matrix(self, q: typing.Any, qd: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def crba(self, q: typing.Any, layout: typing.Any = 'full') -> typing.Any:
+    def crba(self, q: typing.Any, layout: typing.Any = 'full', *, out: typing.Any = None) -> typing.Any:
         ...
-    def gravity(self, q: typing.Any, gravity: typing.Any) -> typing.Any:
+    def gravity(self, q: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def nonlinear_effects(self, q: typing.Any, qd: typing.Any, gravity: typing.Any) -> typing.Any:
+    def nonlinear_effects(self, q: typing.Any, qd: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def rnea(self, q: typing.Any, qd: typing.Any, qdd: typing.Any, gravity: typing.Any) -> typing.Any:
+    def rnea(self, q: typing.Any, qd: typing.Any, qdd: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def dof(self) -> int:

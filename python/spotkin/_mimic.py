@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_finite, as_index, as_real, broadcast_lead
+from ._boundary import as_finite, as_index, as_real, broadcast_lead, into_out
 from .chain import Chain, ChainSolutions, IKDifferentialInfo, _limit_override, _scalar
 
 __all__ = ["MimicChain"]
@@ -265,37 +265,58 @@ class MimicChain(Chain):
     # -- dynamics (Lagrange's equations with q_full = M q + b) ----------------------------------------
 
     def inverse_dynamics(
-        self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        *,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """tau = M^T tau_full(M q + b, M qd, M qdd), (..., dof)."""
         full = self._full.inverse_dynamics(
             self.full_q(q), self._expand(qd, "qd", False), self._expand(qdd, "qdd", False), gravity
         )
-        return self._row(full)
+        return into_out(self._row(full), out)
 
-    def mass_matrix(self, q: ArrayLike, layout: str = "full") -> np.ndarray:
+    def mass_matrix(self, q: ArrayLike, layout: str = "full", *, out: np.ndarray | None = None) -> np.ndarray:
         """A = M^T A_full(M q + b) M, (..., dof, dof); ``layout`` as :meth:`Chain.mass_matrix`."""
         from .dynamics import _check_layout, _in_layout
 
         layout = _check_layout(layout)  # before the work
-        return _in_layout(self._square(self._full.mass_matrix(self.full_q(q))), layout)
+        return into_out(_in_layout(self._square(self._full.mass_matrix(self.full_q(q))), layout), out)
 
-    def gravity(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
+    def gravity(
+        self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81), *, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """G = M^T G_full(M q + b), (..., dof)."""
-        return self._row(self._full.gravity(self.full_q(q), gravity))
+        return into_out(self._row(self._full.gravity(self.full_q(q), gravity)), out)
 
     def nonlinear_effects(
-        self, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        *,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """h = M^T h_full(M q + b, M qd), (..., dof)."""
-        return self._row(self._full.nonlinear_effects(self.full_q(q), self._expand(qd, "qd", False), gravity))
+        full = self._full.nonlinear_effects(self.full_q(q), self._expand(qd, "qd", False), gravity)
+        return into_out(self._row(full), out)
 
-    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
+    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """C = M^T C_full(M q + b, M qd) M, (..., dof, dof): dA/dt - 2 C stays skew-symmetric."""
-        return self._square(self._full.coriolis_matrix(self.full_q(q), self._expand(qd, "qd", False)))
+        full = self._full.coriolis_matrix(self.full_q(q), self._expand(qd, "qd", False))
+        return into_out(self._square(full), out)
 
     def forward_dynamics(
-        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        tau: ArrayLike,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        *,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """qdd = A^-1 (tau - h), (..., dof), with :meth:`mass_matrix` and :meth:`nonlinear_effects`."""
         A = self.mass_matrix(q)
@@ -311,11 +332,11 @@ class MimicChain(Chain):
         rhs = np.broadcast_to(tau, (*lead, self.dof)).astype(np.float64) - np.broadcast_to(
             h, (*lead, self.dof)
         )
-        out = np.full((*lead, self.dof), np.nan)
+        qdd = np.full((*lead, self.dof), np.nan)
         finite = np.isfinite(A).all(axis=(-2, -1)) & np.isfinite(rhs).all(axis=-1)
         if finite.any():
-            out[finite] = np.linalg.solve(A[finite], rhs[finite][..., None])[..., 0]
-        return out.astype(dtype, copy=False)
+            qdd[finite] = np.linalg.solve(A[finite], rhs[finite][..., None])[..., 0]
+        return into_out(qdd.astype(dtype, copy=False), out)
 
     def center_of_mass(self, q: ArrayLike) -> np.ndarray:
         """The links' centre of mass (..., 3): the full chain's at ``M q + b``."""

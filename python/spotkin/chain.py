@@ -444,51 +444,72 @@ class Chain:
     # -- dynamics (spotkin.dynamics; the chain's inertials) --------------------------------------------
 
     def inverse_dynamics(
-        self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        qdd: ArrayLike,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        *,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Joint torques tau = A(q) qdd + C(q, qd) qd + G(q), (..., dof): recursive Newton–Euler.
 
         q, qd, qdd (..., dof) broadcast; ``gravity`` (3,) or (..., 3) in the frame before
-        :attr:`base` (m/s²). Needs :attr:`inertials`; conventions in :mod:`spotkin.dynamics`."""
+        :attr:`base` (m/s²). Needs :attr:`inertials`; conventions in :mod:`spotkin.dynamics`.
+        ``out``: an array of the result's shape and dtype to write into and return (every
+        dynamics method takes it)."""
         from . import dynamics
 
-        return dynamics.inverse_dynamics(self, q, qd, qdd, gravity)
+        return dynamics.inverse_dynamics(self, q, qd, qdd, gravity, out=out)
 
-    def mass_matrix(self, q: ArrayLike, layout: str = "full") -> np.ndarray:
+    def mass_matrix(self, q: ArrayLike, layout: str = "full", *, out: np.ndarray | None = None) -> np.ndarray:
         """The joint-space inertia matrix A(q), (..., dof, dof): composite-rigid-body algorithm.
         ``layout="lower"`` zeroes the strict upper triangle; ``"packed"`` gives the lower triangle
         row by row, (..., dof (dof + 1) / 2) (:func:`spotkin.dynamics.unpack_symmetric`)."""
         from . import dynamics
 
-        return dynamics.mass_matrix(self, q, layout=layout)
+        return dynamics.mass_matrix(self, q, layout=layout, out=out)
 
-    def gravity(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
+    def gravity(
+        self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81), *, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """The gravity torques G(q) = dU/dq, (..., dof)."""
         from . import dynamics
 
-        return dynamics.gravity(self, q, gravity)
+        return dynamics.gravity(self, q, gravity, out=out)
 
     def nonlinear_effects(
-        self, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        *,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """h = C(q, qd) qd + G(q), (..., dof)."""
         from . import dynamics
 
-        return dynamics.nonlinear_effects(self, q, qd, gravity)
+        return dynamics.nonlinear_effects(self, q, qd, gravity, out=out)
 
-    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
+    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """C(q, qd), (..., dof, dof), the form for which dA/dt - 2 C is skew-symmetric."""
         from . import dynamics
 
-        return dynamics.coriolis_matrix(self, q, qd)
+        return dynamics.coriolis_matrix(self, q, qd, out=out)
 
     def forward_dynamics(
-        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        tau: ArrayLike,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        *,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Joint accelerations qdd = A(q)^-1 (tau - C qd - G), (..., dof): articulated-body algorithm."""
         from . import dynamics
 
-        return dynamics.forward_dynamics(self, q, qd, tau, gravity)
+        return dynamics.forward_dynamics(self, q, qd, tau, gravity, out=out)
 
     def center_of_mass(self, q: ArrayLike) -> np.ndarray:
         """The links' centre of mass (..., 3) in the frame before :attr:`base` (needs :attr:`inertials`)."""

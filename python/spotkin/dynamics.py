@@ -120,16 +120,28 @@ def _core_of(chain, inertials) -> _core.ChainDynamics:
 
 
 def inverse_dynamics(
-    chain, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
+    chain,
+    q: ArrayLike,
+    qd: ArrayLike,
+    qdd: ArrayLike,
+    gravity: ArrayLike = GRAVITY,
+    *,
+    inertials=None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Joint torques tau = A(q) qdd + C(q, qd) qd + G(q), (..., n): recursive Newton-Euler."""
-    return _core_of(chain, inertials).rnea(q, qd, qdd, gravity)
+    """Joint torques tau = A(q) qdd + C(q, qd) qd + G(q), (..., n): recursive Newton-Euler.
+
+    ``out``: an array of the result's shape and dtype (C-contiguous, writeable) to write into
+    and return, as every function here takes: a control loop then allocates nothing."""
+    return _core_of(chain, inertials).rnea(q, qd, qdd, gravity, out=out)
 
 
-def mass_matrix(chain, q: ArrayLike, *, inertials=None, layout: str = "full") -> np.ndarray:
+def mass_matrix(
+    chain, q: ArrayLike, *, inertials=None, layout: str = "full", out: np.ndarray | None = None
+) -> np.ndarray:
     """The joint-space inertia matrix A(q), (..., n, n): composite-rigid-body algorithm.
     ``layout`` ``"lower"`` or ``"packed"`` (..., n (n + 1) / 2): see the module's notes."""
-    return _core_of(chain, inertials).crba(q, layout)
+    return _core_of(chain, inertials).crba(q, layout, out=out)
 
 
 def unpack_symmetric(packed: ArrayLike) -> np.ndarray:
@@ -172,28 +184,45 @@ def _in_layout(A: np.ndarray, layout: str) -> np.ndarray:
     return A
 
 
-def gravity(chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None) -> np.ndarray:
+def gravity(
+    chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None, out: np.ndarray | None = None
+) -> np.ndarray:
     """The gravity torques G(q), (..., n)."""
-    return _core_of(chain, inertials).gravity(q, gravity)
+    return _core_of(chain, inertials).gravity(q, gravity, out=out)
 
 
 def nonlinear_effects(
-    chain, q: ArrayLike, qd: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
+    chain,
+    q: ArrayLike,
+    qd: ArrayLike,
+    gravity: ArrayLike = GRAVITY,
+    *,
+    inertials=None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """h = C(q, qd) qd + G(q), (..., n)."""
-    return _core_of(chain, inertials).nonlinear_effects(q, qd, gravity)
+    return _core_of(chain, inertials).nonlinear_effects(q, qd, gravity, out=out)
 
 
-def coriolis_matrix(chain, q: ArrayLike, qd: ArrayLike, *, inertials=None) -> np.ndarray:
+def coriolis_matrix(
+    chain, q: ArrayLike, qd: ArrayLike, *, inertials=None, out: np.ndarray | None = None
+) -> np.ndarray:
     """C(q, qd), (..., n, n), with dA/dt - 2 C skew-symmetric."""
-    return _core_of(chain, inertials).coriolis_matrix(q, qd)
+    return _core_of(chain, inertials).coriolis_matrix(q, qd, out=out)
 
 
 def forward_dynamics(
-    chain, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None
+    chain,
+    q: ArrayLike,
+    qd: ArrayLike,
+    tau: ArrayLike,
+    gravity: ArrayLike = GRAVITY,
+    *,
+    inertials=None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Joint accelerations qdd = A^-1 (tau - C qd - G), (..., n): articulated-body algorithm."""
-    return _core_of(chain, inertials).aba(q, qd, tau, gravity)
+    return _core_of(chain, inertials).aba(q, qd, tau, gravity, out=out)
 
 
 def _carried(chain, inertials) -> FloatingBase:

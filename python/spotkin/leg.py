@@ -318,25 +318,37 @@ class Leg:
         return np.stack([vx, np.cos(t1) * vy - np.sin(t1) * vz, np.sin(t1) * vy + np.cos(t1) * vz], -1)
 
     # -- kinematics --------------------------------------------------------------------------------------
-    def fk(self, q: ArrayLike) -> np.ndarray:
-        """Foot-sphere centre in the leg frame: q (..., 3) as [hx, hy, kn] -> (..., 3)."""
-        return self._core.fk(q)
+    def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
+        """Foot-sphere centre in the leg frame: q (..., 3) as [hx, hy, kn] -> (..., 3).
 
-    def jacobian(self, q: ArrayLike) -> np.ndarray:
-        """d foot / d q in the leg frame: q (..., 3) -> (..., 3, 3)."""
-        return self._core.jacobian(q)
+        ``out``: an array of the result's shape and dtype (C-contiguous) to write into
+        and return, so that a control loop allocates nothing.
+        """
+        return self._core.fk(q, out=out)
 
-    def singularity(self, q: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    def jacobian(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
+        """d foot / d q in the leg frame: q (..., 3) -> (..., 3, 3); ``out`` as in :meth:`fk`."""
+        return self._core.jacobian(q, out=out)
+
+    def singularity(
+        self, q: ArrayLike, *, out: tuple[np.ndarray | None, np.ndarray | None] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(|det J|, smallest singular value of J), each (...,).
 
         Both vanish on the two singular sets: sin(kn + beta) = 0 (leg stretched
         or folded; beta = atan2(knee_offset, upper)), and the foot on the
         hip-roll boundary y^2 + z^2 = h1^2, where the two hip-roll branches merge.
+        ``out``: two arrays to write them into, as in :meth:`fk`.
         """
-        return self._core.singularity(q)
+        return self._core.singularity(q, out=out)
 
     def ik(
-        self, p: ArrayLike, seed: ArrayLike | None = None, fallback: str = "nearest"
+        self,
+        p: ArrayLike,
+        seed: ArrayLike | None = None,
+        fallback: str = "nearest",
+        *,
+        out: tuple[np.ndarray | None, np.ndarray | None] | None = None,
     ) -> tuple[np.ndarray, np.ndarray | Status]:
         """Joint angles placing the foot at p: p (..., 3) -> (q (..., 3), status (...,)).
 
@@ -355,16 +367,16 @@ class Leg:
         - ``JOINT_LIMIT``: branches exist, but none within the limits; q is NaN.
         - ``INVALID_INPUT``: NaN or Inf in p or seed; q is NaN.
 
-        ``seed`` (..., 3) must have the shape of p when given.
+        ``seed`` (..., 3) broadcasts with p over the leading dimensions.
+        ``out``: ``(q, status)`` arrays (float of p's dtype, int8) of the result's shapes to
+        write into, either may be None; they are returned.
         """
-        nearest = fallback_is_nearest(fallback)
-        if seed is None:
-            return self._core.ik(p, None, nearest)
-        return self._core.ik(*_broadcast_pair(p, seed, "p", "seed"), nearest)
+        return self._core.ik(p, seed, fallback_is_nearest(fallback), out=out)
 
-    def ik_all(self, p: ArrayLike) -> LegSolutions:
-        """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table."""
-        return LegSolutions(*self._core.ik_all(p))
+    def ik_all(self, p: ArrayLike, *, out: tuple | None = None) -> LegSolutions:
+        """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table.
+        ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None)."""
+        return LegSolutions(*self._core.ik_all(p, out=out))
 
     def nearest_reachable(self, p: ArrayLike, within_limits: bool = False) -> np.ndarray:
         """The foot position nearest to p (3,) that the leg reaches: (3,) float64.

@@ -31,7 +31,7 @@ from ._boundary import (
 )
 from ._status import Status
 from ._urdf_chain import chain_from_model
-from .body import body_transform, pose_format, sequence_code
+from .body import body_transform, sequence_code
 from .chain import Chain
 from .leg import Leg
 
@@ -799,6 +799,8 @@ class Robot:
         seed: ArrayLike | None = None,
         seq: str = "XYZ",
         fallback: str = "nearest",
+        *,
+        out: tuple[np.ndarray | None, np.ndarray | None] | None = None,
     ) -> BodyIK:
         """The leg joints placing the body at ``body_pose`` with the feet at ``feet``.
 
@@ -815,11 +817,13 @@ class Robot:
         UNREACHABLE legs' answer, as in :meth:`Leg.ik`: ``"nearest"`` (the in-limit
         configuration whose foot is nearest to the target) or ``"nan"``. Computed in float32
         when ``body_pose`` and ``feet`` both are float32, else float64; ``seed`` takes that
-        dtype.
+        dtype. ``out``: ``(q, status)`` arrays of the result's shapes and dtypes (either may be
+        None) to write into, so that a control loop allocates nothing.
         """
         n = len(self._legs)
         if (
             seed is None
+            and out is None
             and seq == "XYZ"
             and fallback == "nearest"
             and type(feet) is np.ndarray
@@ -828,36 +832,22 @@ class Robot:
             # the control-loop call, one shared stance: the core checks body_pose itself
             return self._body_core.ik_one(body_pose, feet)
         nearest = fallback_is_nearest(fallback)
-        pose = as_real(body_pose, "body_pose")
-        fmt, pose_lead = pose_format(pose)
-        code = sequence_code(seq)
-        feet = as_real(feet, "feet")
-        feet_lead = check_trailing(feet, "feet", (n, 3))
         if seed is not None:
             seed = self._leg_q(as_real(seed, "seed"), "seed")[0]  # a whole-body q: the arm's part unused
-            seed_lead = seed.shape[:-1]
-        # nothing to broadcast for a shared stance or one stance per pose, and one seed per pose
-        if (feet_lead and feet_lead != pose_lead) or (seed is not None and seed_lead != pose_lead):
-            leads = {"body_pose": (pose_lead, pose.shape), "feet": (feet_lead, feet.shape)}
-            if seed is not None:
-                leads["seed"] = (seed_lead, seed.shape)
-            lead = broadcast_lead(**leads)
-            if feet_lead and feet_lead != lead:  # a single stance is shared without copying
-                feet = feet.reshape(n, 3) if feet.size == 3 * n else np.broadcast_to(feet, (*lead, n, 3))
-            pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
-            if seed is not None:
-                seed = _broadcast_to_lead(seed, 1, lead)
-        return self._body_core.ik(pose, fmt, code, feet, seed, nearest)
+        return self._body_core.ik(body_pose, sequence_code(seq), feet, seed, nearest, out=out)
 
-    def body_fk(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+    def body_fk(
+        self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """(..., n, 3) world foot points: foot = t + R (hip + leg.fk(q_leg)). Leading dimensions broadcast.
         ``q`` holds the legs' joints (..., 3 n), or the legs' then the arm's, as every whole-body call
         takes it (the arm does not move the feet).
 
         float32 when ``body_pose`` and ``q`` both are float32, else float64. A leg with a
-        NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample."""
-        pose, q, fmt, code = self._pose_and_q(body_pose, q, seq)
-        return self._body_core.fk(pose, fmt, code, q)
+        NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample.
+        ``out``: an array of the result's shape and dtype to write into and return."""
+        q = self._leg_q(as_real(q, self._q_name), self._q_name)[0]
+        return self._body_core.fk(body_pose, sequence_code(seq), q, out=out, q_name=self._q_name)
 
     def body_jacobian(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
         """(..., 3 n, 6 + 3 n) d(feet world) / d(body twist [v; w], q).
@@ -869,8 +859,8 @@ class Robot:
         """
         q = as_real(q, self._q_name)
         width = q.shape[-1] if q.ndim else 0
-        pose, q, fmt, code = self._pose_and_q(body_pose, q, seq)
-        J = self._body_core.jacobian(pose, fmt, code, q)
+        q = self._leg_q(q, self._q_name)[0]
+        J = self._body_core.jacobian(body_pose, sequence_code(seq), q, q_name=self._q_name)
         if width == q.shape[-1]:
             return J
         out = np.zeros((*J.shape[:-1], 6 + width), dtype=J.dtype)
@@ -1067,18 +1057,6 @@ class Robot:
         if q.shape[-1] == widths[0]:
             return q, None
         return q[..., : widths[0]], q[..., widths[0] :]
-
-    def _pose_and_q(self, body_pose, q, seq):
-        pose = as_real(body_pose, "body_pose")
-        fmt, pose_lead = pose_format(pose)
-        code = sequence_code(seq)
-        q = self._leg_q(as_real(q, self._q_name), self._q_name)[0]
-        q_lead = q.shape[:-1]
-        if q_lead != pose_lead:
-            lead = broadcast_lead(body_pose=(pose_lead, pose.shape), **{self._q_name: (q_lead, q.shape)})
-            pose = _broadcast_to_lead(pose, pose.ndim - len(pose_lead), lead)
-            q = _broadcast_to_lead(q, 1, lead)
-        return pose, q, fmt, code
 
     def _world_from_body(self, body_pose, seq) -> tuple[np.ndarray, np.ndarray]:
         """(T, pose): world <- body transforms (..., 4, 4) in float64, NaN for every pose the

@@ -298,9 +298,9 @@ class Spot(Robot):
         return self._arm.ik(T_body, seed=seed)
 
     # The whole-body calls under Spot's argument names (q12: the 12 leg joints in SDK order).
-    def body_fk(self, body_pose, q12, seq: str = "XYZ") -> np.ndarray:
+    def body_fk(self, body_pose, q12, seq: str = "XYZ", *, out: np.ndarray | None = None) -> np.ndarray:
         """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)); see :meth:`Robot.body_fk`."""
-        return super().body_fk(body_pose, q12, seq)
+        return super().body_fk(body_pose, q12, seq, out=out)
 
     def body_jacobian(self, body_pose, q12, seq: str = "XYZ") -> np.ndarray:
         """(..., 12, 18) d(feet world) / d(body twist [v; w], q12); see :meth:`Robot.body_jacobian`."""

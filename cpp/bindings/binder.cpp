@@ -1,0 +1,429 @@
+// The engine of the one boundary (binder.hpp), compiled once for float and double.
+#include "binder.hpp"
+
+#include <pybind11/numpy.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "numpy_boundary.hpp"
+#include "spotkin/parallel.hpp"
+#include "spotkin/vector_math.hpp"
+
+namespace spotkin::bindings::binder {
+
+namespace {
+
+std::string describe(const Trailing& t) {
+  return format_shape(Shape(t.dim, t.dim + t.ndim), true);
+}
+
+// How argument k's rows are read: as they are (its leading shape is the batch's), one
+// row for every sample, or gathered through its broadcast strides.
+enum class Rows : std::uint8_t { Absent, Direct, Shared, Gathered };
+
+template <typename T>
+struct Argument {
+  Rows rows = Rows::Absent;
+  py::object array;  // C-contiguous in T (a py::object: a default py::array would be a new empty array)
+  const T* data = nullptr;
+  std::ptrdiff_t width = 0;
+  std::uint64_t angles = 0;
+  int shape = 0;
+  Shape leading;
+  std::vector<std::ptrdiff_t> row_step;  // Gathered: rows to step per batch dimension (0 where broadcast)
+};
+
+struct Output {
+  py::object array;  // null for a single sample's status
+  void* data = nullptr;
+  std::ptrdiff_t width = 0;
+  std::int8_t single_status = 0;  // a single sample's status, without an array
+  bool scalar = false;            // returned as a spotkin.Status
+  py::object result() const { return scalar ? status_object(single_status) : array; }
+};
+
+// NumPy's broadcast of the arguments' leading shapes; ValueError naming them.
+template <typename T>
+Shape broadcast(const Op& op, const Argument<T>* args) {
+  std::size_t nd = 0;
+  for (int k = 0; k < op.n_args; ++k)
+    if (args[k].rows != Rows::Absent) nd = std::max(nd, args[k].leading.size());
+  Shape out(nd, 1);
+  for (int k = 0; k < op.n_args; ++k) {
+    if (args[k].rows == Rows::Absent) continue;
+    const Shape& s = args[k].leading;
+    for (std::size_t d = 0; d < s.size(); ++d) {
+      py::ssize_t& o = out[nd - s.size() + d];
+      if (s[d] == o || s[d] == 1) continue;
+      if (o == 1) {
+        o = s[d];
+        continue;
+      }
+      // "a (5, 6) and b (3, 4, 3) do not broadcast over their leading dimensions", as the façade's
+      std::vector<std::string> named;
+      for (int j = 0; j < op.n_args; ++j) {
+        if (args[j].rows == Rows::Absent) continue;
+        Shape full = args[j].leading;
+        const Trailing& t = op.args[j].shapes[args[j].shape];
+        full.insert(full.end(), t.dim, t.dim + t.ndim);
+        named.push_back(std::string(op.args[j].name) + " " + format_shape(full));
+      }
+      std::string msg;
+      for (std::size_t j = 0; j < named.size(); ++j)
+        msg += (j == 0 ? "" : j + 1 == named.size() ? " and " : ", ") + named[j];
+      throw py::value_error(msg + " do not broadcast over their leading dimensions");
+    }
+  }
+  return out;
+}
+
+// Finds which accepted shape arr has; ValueError listing them otherwise.
+int match_shape(const Arg& spec, const py::array& arr, Shape& leading) {
+  const auto nd = static_cast<std::size_t>(arr.ndim());
+  const Shape shape(arr.shape(), arr.shape() + nd);
+  for (int s = 0; s < spec.n_shapes; ++s) {
+    const Trailing& t = spec.shapes[s];
+    bool ok = nd >= std::size_t(t.ndim);
+    for (int d = 0; ok && d < t.ndim; ++d) ok = shape[nd - std::size_t(t.ndim) + std::size_t(d)] == t.dim[d];
+    if (ok) {
+      leading.assign(shape.begin(), shape.end() - t.ndim);
+      return s;
+    }
+  }
+  std::string expected = describe(spec.shapes[0]);
+  for (int s = 1; s < spec.n_shapes; ++s) expected += (s + 1 == spec.n_shapes ? " or " : ", ") + describe(spec.shapes[s]);
+  throw py::value_error(std::string(spec.name) + " must have shape " + expected + ", got " + format_shape(shape));
+}
+
+const char* dtype_name(Kind kind, bool single) {
+  if (kind == Kind::Bool) return "bool";
+  if (kind == Kind::Status) return "int8";
+  return single ? "float32" : "float64";
+}
+
+// Checks a caller's out= array for output k; TypeError (dtype) or ValueError (shape, layout).
+template <typename T>
+py::array checked_out(py::handle obj, const Out& spec, int k, const Shape& shape) {
+  const std::string label = "out[" + std::to_string(k) + "] (" + spec.name + ")";
+  if (!py::isinstance<py::array>(obj) || is_masked_array(obj))
+    throw py::type_error(label + " must be a NumPy array, got " +
+                         std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  auto arr = py::reinterpret_borrow<py::array>(obj);
+  bool dtype_ok = false;
+  switch (spec.kind) {
+    case Kind::Real: dtype_ok = py::array_t<T>::check_(arr); break;
+    case Kind::Bool: dtype_ok = py::array_t<bool>::check_(arr); break;
+    case Kind::Status: dtype_ok = py::array_t<std::int8_t>::check_(arr); break;
+  }
+  if (!dtype_ok)
+    throw py::type_error(label + " must have dtype " + dtype_name(spec.kind, std::is_same_v<T, float>) + ", got " +
+                         std::string(py::str(arr.dtype())));
+  if (Shape(arr.shape(), arr.shape() + arr.ndim()) != shape)
+    throw py::value_error(label + " must have shape " + format_shape(shape) + ", got " +
+                          format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())));
+  constexpr int kNeeded = py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_ | py::detail::npy_api::NPY_ARRAY_ALIGNED_ |
+                          py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  if ((py::detail::array_proxy(arr.ptr())->flags & kNeeded) != kNeeded)
+    throw py::value_error(label + " must be a C-contiguous, aligned and writeable array");
+  return arr;
+}
+
+bool overlaps(const py::array& a, const void* data, std::size_t bytes) {
+  const auto* lo = static_cast<const char*>(a.data());
+  const auto* hi = lo + a.nbytes();
+  const auto* b = static_cast<const char*>(data);
+  return a.nbytes() > 0 && bytes > 0 && lo < b + bytes && b < hi;
+}
+
+// One thread's pass over samples [begin, end), block by block.
+template <typename T>
+void run_range(const Op& op, const void* context, Kernel<T> kernel, const Argument<T>* args, const Output* outs,
+               const Shape& leading, std::ptrdiff_t begin, std::ptrdiff_t end) {
+  Block<T> block;
+  for (int k = 0; k < op.n_args; ++k) block.shape[k] = args[k].shape;
+  // The common case: every argument read in place (its own rows, or one row for all read with
+  // stride 0) and nothing huge, NaN or Inf in the chunk: one kernel call over the whole chunk.
+  bool in_place = true;
+  for (int k = 0; in_place && k < op.n_args; ++k) {
+    const Argument<T>& a = args[k];
+    if (a.rows == Rows::Gathered || (a.rows == Rows::Shared && !op.args[k].strided)) in_place = false;
+    if (a.rows == Rows::Absent || (!a.angles && !op.args[k].nan_groups)) continue;
+    const std::ptrdiff_t rows = a.rows == Rows::Shared ? 1 : end - begin;
+    const T* first = a.rows == Rows::Shared ? a.data : a.data + a.width * begin;
+    if (in_place && any_unusual(first, rows * a.width)) in_place = false;
+  }
+  if (in_place) {
+    block.first = begin;
+    block.m = end - begin;
+    for (int k = 0; k < op.n_args; ++k) {
+      const Argument<T>& a = args[k];
+      const bool shared = a.rows == Rows::Shared;
+      block.in[k] = a.rows == Rows::Absent ? nullptr : shared ? a.data : a.data + a.width * begin;
+      block.stride[k] = shared || a.rows == Rows::Absent ? 0 : a.width;
+    }
+    for (int o = 0; o < op.n_outs; ++o) {
+      const std::size_t size = op.outs[o].kind == Kind::Real ? sizeof(T) : 1;
+      block.out[o] = static_cast<char*>(outs[o].data) + size * std::size_t(outs[o].width * begin);
+    }
+    kernel(context, block);
+    return;
+  }
+  // Otherwise block by block: gathered rows, and copies of the blocks with huge angles reduced.
+  std::vector<T> scratch[kMaxArgs];  // per argument, allocated when first needed
+  bool scratch_filled[kMaxArgs] = {};
+  for (std::ptrdiff_t first = begin; first < end; first += kAngleBlock) {
+    const std::ptrdiff_t m = std::min(kAngleBlock, end - first);
+    block.first = first;
+    block.m = m;
+    bool unusual[kMaxArgs] = {};
+    for (int k = 0; k < op.n_args; ++k) {
+      const Argument<T>& a = args[k];
+      const Arg& spec = op.args[k];
+      const std::ptrdiff_t w = a.width;
+      std::vector<T>& buffer = scratch[k];
+      switch (a.rows) {
+        case Rows::Absent:
+          block.in[k] = nullptr;
+          block.stride[k] = 0;
+          continue;
+        case Rows::Direct:
+          block.in[k] = a.data + w * first;
+          block.stride[k] = w;
+          break;
+        case Rows::Shared:
+          if (spec.strided) {
+            block.in[k] = a.data;
+            block.stride[k] = 0;
+          } else {  // the one row, repeated (filled once per thread; the scan below keeps it reduced)
+            if (!scratch_filled[k]) {
+              buffer.resize(std::size_t(w * kAngleBlock));
+              for (std::ptrdiff_t i = 0; i < kAngleBlock; ++i) std::copy(a.data, a.data + w, buffer.data() + w * i);
+              scratch_filled[k] = true;
+            }
+            block.in[k] = buffer.data();
+            block.stride[k] = w;
+          }
+          break;
+        case Rows::Gathered: {
+          buffer.resize(std::size_t(w * kAngleBlock));
+          const std::size_t nd = leading.size();
+          std::ptrdiff_t index[16] = {};  // the multi-index of sample `first` (NumPy allows at most 64 dims;
+          std::ptrdiff_t rest = first;    // broadcasting beyond 16 leading dims falls back in prepare)
+          for (std::size_t d = nd; d-- > 0;) {
+            index[d] = rest % leading[d];
+            rest /= leading[d];
+          }
+          std::ptrdiff_t row = 0;
+          for (std::size_t d = 0; d < nd; ++d) row += index[d] * a.row_step[d];
+          for (std::ptrdiff_t i = 0; i < m; ++i) {
+            std::copy(a.data + w * row, a.data + w * row + w, buffer.data() + w * i);
+            for (std::size_t d = nd; d-- > 0;) {  // the next multi-index, and its row
+              row += a.row_step[d];
+              if (++index[d] < leading[d]) break;
+              row -= a.row_step[d] * index[d];
+              index[d] = 0;
+            }
+          }
+          block.in[k] = buffer.data();
+          block.stride[k] = w;
+          break;
+        }
+      }
+      if (!a.angles && !spec.nan_groups) continue;
+      const std::ptrdiff_t rows = block.stride[k] == 0 ? 1 : m;
+      if (!any_unusual(block.in[k], rows * w)) continue;
+      unusual[k] = true;
+      if (!a.angles) continue;
+      if (block.in[k] != buffer.data()) {  // reduce in a copy, never in the caller's array
+        buffer.resize(std::size_t(w * std::max<std::ptrdiff_t>(rows, kAngleBlock)));
+        std::copy(block.in[k], block.in[k] + rows * w, buffer.data());
+        block.in[k] = buffer.data();
+      }
+      T* x = buffer.data();
+      for (std::ptrdiff_t i = 0; i < rows; ++i)
+        for (std::ptrdiff_t j = 0; j < w; ++j)
+          if ((a.angles >> j) & 1U) x[i * w + j] = T(vector_math::reduce_huge_angle(double(x[i * w + j])));
+    }
+    for (int o = 0; o < op.n_outs; ++o) {
+      const std::size_t size = op.outs[o].kind == Kind::Real ? sizeof(T) : 1;
+      block.out[o] = static_cast<char*>(outs[o].data) + size * std::size_t(outs[o].width * first);
+    }
+    kernel(context, block);
+    // NaN rows: a non-finite value in part g of an argument's row makes part g of each real output row NaN
+    for (int k = 0; k < op.n_args; ++k) {
+      const int groups = op.args[k].nan_groups;
+      if (!unusual[k] || !groups) continue;
+      const std::ptrdiff_t w = args[k].width, part = w / groups;
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const T* row = block.in[k] + block.stride[k] * i;
+        for (int g = 0; g < groups; ++g) {
+          bool finite = true;
+          for (std::ptrdiff_t j = 0; j < part; ++j) finite &= std::isfinite(double(row[g * part + j]));
+          if (finite) continue;
+          for (int o = 0; o < op.n_outs; ++o) {
+            if (op.outs[o].kind != Kind::Real) continue;
+            const std::ptrdiff_t ow = outs[o].width, opart = ow / groups;
+            T* out_row = block.real(o) + ow * i + opart * g;
+            std::fill(out_row, out_row + opart, T(quiet_nan<double>()));
+          }
+        }
+      }
+    }
+  }
+}
+
+template <typename T>
+py::object call_in(const Op& op, const void* context, const py::object* objects, const bool* present, py::handle out) {
+  Argument<T> args[kMaxArgs];
+  for (int k = 0; k < op.n_args; ++k) {
+    if (!present[k]) continue;  // an omitted optional argument
+    const Arg& spec = op.args[k];
+    Argument<T>& a = args[k];
+    const auto given = py::reinterpret_borrow<py::array>(objects[k]);
+    a.shape = match_shape(spec, given, a.leading);
+    a.width = spec.shapes[a.shape].size();
+    a.angles = spec.angles[a.shape];
+    // a float64 angle beside float32 arguments is reduced before it is narrowed (1e308 rad is an angle)
+    // a float64 angle beside float32 arguments is reduced before it is narrowed (1e308 rad is an angle)
+    auto working = std::is_same_v<T, float> && a.angles && !is_float32(given) ? seed_angles<T>(given, a.width, a.angles)
+                                                                             : contiguous<T>(given);
+    a.data = working.data();
+    a.array = std::move(working);
+    a.rows = Rows::Direct;
+  }
+  const Shape leading = broadcast(op, args);
+  const py::ssize_t n = count(leading);
+  for (int k = 0; k < op.n_args; ++k) {
+    Argument<T>& a = args[k];
+    if (a.rows == Rows::Absent || a.leading == leading) continue;
+    if (count(a.leading) == 1) {
+      a.rows = Rows::Shared;
+      continue;
+    }
+    if (leading.size() > 16) {  // beyond the gather's index: materialise the broadcast
+      Shape full = leading;
+      full.push_back(a.width);
+      py::tuple shape(full.size());
+      for (std::size_t d = 0; d < full.size(); ++d) shape[d] = py::int_(full[d]);
+      auto working = contiguous<T>(py::module_::import("numpy").attr("broadcast_to")(a.array, shape));
+      a.data = working.data();
+      a.array = std::move(working);
+      continue;
+    }
+    a.rows = Rows::Gathered;
+    a.row_step.assign(leading.size(), 0);
+    std::ptrdiff_t step = 1;
+    const std::size_t offset = leading.size() - a.leading.size();
+    for (std::size_t d = a.leading.size(); d-- > 0;) {
+      a.row_step[offset + d] = a.leading[d] == 1 ? 0 : step;
+      step *= a.leading[d];
+    }
+  }
+
+  // the outputs: the caller's (checked) or new ones
+  Output outs[kMaxOuts];
+  py::handle given[kMaxOuts];
+  if (!out.is_none()) {
+    if (py::isinstance<py::tuple>(out) || (op.n_outs > 1 && py::isinstance<py::list>(out))) {
+      auto seq = py::reinterpret_borrow<py::sequence>(out);
+      if (py::ssize_t(seq.size()) != op.n_outs)
+        throw py::value_error("out must hold " + std::to_string(op.n_outs) + " arrays (or None), got " +
+                              std::to_string(seq.size()));
+      for (int o = 0; o < op.n_outs; ++o) given[o] = seq[std::size_t(o)];
+    } else if (op.n_outs == 1) {
+      given[0] = out;
+    } else {
+      throw py::type_error("out must be a tuple of " + std::to_string(op.n_outs) + " arrays (or None)");
+    }
+  }
+  const bool single = leading.empty();
+  for (int o = 0; o < op.n_outs; ++o) {
+    const Out& spec = op.outs[o];
+    Shape shape = leading;
+    shape.insert(shape.end(), spec.shape.dim, spec.shape.dim + spec.shape.ndim);
+    Output& r = outs[o];
+    r.width = spec.shape.size();
+    if (given[o] && !given[o].is_none()) {
+      py::array checked = checked_out<T>(given[o], spec, o, shape);
+      r.data = checked.mutable_data();
+      r.array = checked;
+      for (int k = 0; k < op.n_args; ++k)  // an input that shares memory with an output is read from a copy
+        if (args[k].rows != Rows::Absent &&
+            overlaps(checked, args[k].data, sizeof(T) * std::size_t(count(args[k].leading) * args[k].width))) {
+          const auto source = py::reinterpret_borrow<py::array>(args[k].array);
+          py::array_t<T, py::array::c_style> copy(Shape(source.shape(), source.shape() + source.ndim()));
+          if (source.nbytes()) std::memcpy(copy.mutable_data(), source.data(), std::size_t(source.nbytes()));
+          args[k].data = copy.data();
+          args[k].array = std::move(copy);
+        }
+      continue;
+    }
+    if (spec.kind == Kind::Status && single && spec.shape.ndim == 0) {
+      r.data = &r.single_status;
+      r.scalar = true;
+      continue;
+    }
+    const Shape trailing(spec.shape.dim, spec.shape.dim + spec.shape.ndim);
+    py::array made = spec.kind == Kind::Real   ? py::array(new_array<T>(leading, trailing))
+                     : spec.kind == Kind::Bool ? py::array(new_array<bool>(leading, trailing))
+                                               : py::array(new_array<std::int8_t>(leading, trailing));
+    r.data = made.mutable_data();
+    r.array = std::move(made);
+  }
+
+  Kernel<T> kernel;
+  if constexpr (std::is_same_v<T, float>) {
+    kernel = op.f32;
+  } else {
+    kernel = op.f64;
+  }
+  const std::ptrdiff_t min_per_thread = min_chunk(op.ns_per_sample);
+  if (n < 2 * min_per_thread) {  // one thread would run it all: inline, no thread start
+    ReleaseGilFor release(n);
+    run_range<T>(op, context, kernel, args, outs, leading, 0, n);
+  } else {
+    ReleaseGilFor release(n);
+    parallel_for(n, min_per_thread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
+      run_range<T>(op, context, kernel, args, outs, leading, b, e);
+    });
+  }
+
+  if (op.n_outs == 1) return outs[0].result();
+  py::tuple result(op.n_outs);
+  for (int o = 0; o < op.n_outs; ++o)
+    result[std::size_t(o)] = outs[o].result();
+  return std::move(result);
+}
+
+}  // namespace
+
+py::object call(const Op& op, const void* context, std::initializer_list<py::handle> arg_list, py::handle out) {
+  py::object arrays[kMaxArgs];  // null until converted (a default py::array would be a new empty array)
+  bool present[kMaxArgs] = {};
+  bool single = false, any_primary = false;
+  int k = 0;
+  for (py::handle obj : arg_list) {
+    const Arg& spec = op.args[k];
+    if (obj.is_none() && spec.optional) {
+      ++k;
+      continue;
+    }
+    arrays[k] = as_real_array(obj, spec.name);
+    present[k] = true;
+    if (spec.primary) {
+      const bool f32 = is_float32(py::reinterpret_borrow<py::array>(arrays[k]));
+      single = any_primary ? single && f32 : f32;
+      any_primary = true;
+    }
+    ++k;
+  }
+  if (single) return call_in<float>(op, context, arrays, present, out);
+  return call_in<double>(op, context, arrays, present, out);
+}
+
+}  // namespace spotkin::bindings::binder

@@ -1,0 +1,149 @@
+// The one boundary between NumPy and the batch kernels.
+//
+// A binding declares an operation, Op: its batched arguments (name, the shape of
+// one sample, which columns are angles, whether it may be None), its outputs (name,
+// shape of one sample, real / bool / status), and one kernel for float and double.
+// binder::call does everything else, once for every binding:
+// - any array-like to an array of a real dtype, TypeError otherwise; float32 stays
+//   float32 when every primary argument is float32 (NumPy's promotion), other
+//   dtypes compute in float64;
+// - each argument's shape checked, ValueError naming it and its expected shape;
+// - NumPy broadcasting of the leading (batch) dimensions of every argument: one
+//   row shared by every sample is read with stride 0, or copied block by block into
+//   a small buffer for kernels that read contiguous rows; a partly broadcast
+//   argument is gathered block by block (never materialised whole);
+// - huge angles (beyond vector_math::kReducibleLimit) replaced by their exact
+//   remainder, in a copy of the block that holds them;
+// - NaN rows: a sample with a NaN or an Inf in an argument marked nan_rows gets NaN
+//   in its whole real output row (or in the matching part of it, by groups);
+// - outputs allocated, or written into the `out=` arrays the caller passes (exact
+//   dtype and shape, C-contiguous, writeable; an input that overlaps one is read
+//   from a copy);
+// - the GIL released over parallel_for for batches, threads split on fixed block
+//   boundaries (the same bits for any thread count); a single sample runs inline;
+// - a single sample (no leading dimensions) returns its status as a spotkin.Status.
+//
+// The engine (binder.cpp) is compiled once, for float and double; a binding adds
+// only its kernel's two instantiations.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+
+namespace spotkin::bindings::binder {
+
+namespace py = pybind11;
+
+constexpr int kMaxArgs = 6;
+constexpr int kMaxOuts = 4;
+constexpr int kMaxDims = 3;    // trailing dimensions of one sample
+constexpr int kMaxShapes = 3;  // accepted sample shapes of one argument (pose formats)
+
+// The shape of one sample: () to (a, b, c).
+struct Trailing {
+  int ndim = 0;
+  py::ssize_t dim[kMaxDims] = {};
+  Trailing() = default;
+  Trailing(std::initializer_list<py::ssize_t> dims) {
+    for (py::ssize_t d : dims) dim[ndim++] = d;
+  }
+  py::ssize_t size() const {
+    py::ssize_t n = 1;
+    for (int k = 0; k < ndim; ++k) n *= dim[k];
+    return n;
+  }
+};
+
+// A batched argument (..., *shape).
+struct Arg {
+  const char* name = "";
+  Trailing shapes[kMaxShapes];            // accepted sample shapes, tried in order (Block::shape says which)
+  std::uint64_t angles[kMaxShapes] = {};  // per shape: bit j set when column j is an angle
+  int n_shapes = 0;
+  bool optional = false;   // None is accepted: the kernel gets a null pointer
+  bool primary = true;     // takes part in the dtype choice (a parameter such as gravity does not)
+  bool strided = false;    // the kernel reads rows with Block::stride (0: one row for every sample)
+  int nan_groups = 0;      // 0: the kernel handles NaN itself; g: NaN rows by g equal parts (below)
+
+  Arg() = default;
+  Arg(const char* arg_name, Trailing shape, std::uint64_t angle_columns = 0) : name(arg_name) {
+    or_shape(shape, angle_columns);
+  }
+  Arg& or_shape(Trailing shape, std::uint64_t angle_columns = 0) {
+    shapes[n_shapes] = shape;
+    angles[n_shapes++] = angle_columns;
+    return *this;
+  }
+  Arg& maybe_none() { return optional = true, *this; }
+  Arg& parameter() { return primary = false, *this; }
+  Arg& rows_strided() { return strided = true, *this; }
+  // A NaN or Inf in part g of a sample's row (the row split in `groups` equal parts)
+  // makes part g of every real output row NaN (the legs of a body: one leg's joints).
+  Arg& nan_rows(int groups = 1) { return nan_groups = groups, *this; }
+};
+
+enum class Kind : std::uint8_t { Real, Bool, Status };
+
+struct Out {
+  const char* name = "";
+  Trailing shape;
+  Kind kind = Kind::Real;
+  Out() = default;
+  Out(const char* out_name, Trailing out_shape, Kind out_kind = Kind::Real)
+      : name(out_name), shape(out_shape), kind(out_kind) {}
+};
+
+// What a kernel sees: m samples, the first at index `first` of the batch. Argument k's
+// row i starts at in[k] + i * stride[k] (stride 0: one row for all; in[k] null: an
+// omitted optional argument); unless the argument is rows_strided, stride[k] is its
+// row width. Output k's row i starts at out<U>(k) + i * width.
+template <typename T>
+struct Block {
+  using Scalar = T;
+  std::ptrdiff_t first = 0;
+  std::ptrdiff_t m = 0;
+  const T* in[kMaxArgs] = {};
+  std::ptrdiff_t stride[kMaxArgs] = {};
+  int shape[kMaxArgs] = {};  // which of the argument's accepted shapes it has
+  void* out[kMaxOuts] = {};
+  T* real(int k) const { return static_cast<T*>(out[k]); }
+  std::uint8_t* flags(int k) const { return static_cast<std::uint8_t*>(out[k]); }
+  std::int8_t* status(int k) const { return static_cast<std::int8_t*>(out[k]); }
+};
+
+template <typename T>
+using Kernel = void (*)(const void* context, const Block<T>& block);
+
+struct Op {
+  Arg args[kMaxArgs];
+  Out outs[kMaxOuts];
+  int n_args = 0;
+  int n_outs = 0;
+  double ns_per_sample = 50.0;  // rough single-thread cost, for the thread split
+  Kernel<float> f32 = nullptr;
+  Kernel<double> f64 = nullptr;
+
+  // kernel: a captureless generic lambda [](const void* context, const auto& block) {...}
+  template <typename F>
+  Op(std::initializer_list<Arg> arg_list, std::initializer_list<Out> out_list, double ns, F kernel)
+      : ns_per_sample(ns), f32(kernel), f64(kernel) {
+    for (const Arg& a : arg_list) args[n_args++] = a;
+    for (const Out& o : out_list) outs[n_outs++] = o;
+  }
+};
+
+// Runs op on the arguments (n_args handles) with `context` passed to the kernel.
+// out: None, an array (one output) or a tuple / list with an array or None per output.
+// Returns the output, or a tuple of the outputs.
+py::object call(const Op& op, const void* context, std::initializer_list<py::handle> args, py::handle out);
+
+// The context object of a kernel.
+template <typename C>
+const C& context(const void* c) {
+  return *static_cast<const C*>(c);
+}
+
+}  // namespace spotkin::bindings::binder

@@ -1,0 +1,200 @@
+"""The one boundary (cpp/bindings/binder.hpp): out=, broadcasting without copies, NaN rows,
+aliasing, and bit-identical results for any thread count, on the calls that go through it
+(the legs' kinematics and IK, the fixed-base dynamics)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import spotkin as sk
+
+SPOT = sk.Spot()
+LEG = SPOT.leg("fl")
+RNG = np.random.default_rng(7)
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return sk.Robot.from_urdf(sk.robots.path("spot_with_arm")).arm
+
+
+def leg_q(shape):
+    lo, hi = LEG.limits[:, 0], LEG.limits[:, 1]
+    return lo + (hi - lo) * RNG.uniform(0.1, 0.9, (*shape, 3))
+
+
+def arm_q(arm, shape):
+    return RNG.uniform(-1, 1, (*shape, arm.dof))
+
+
+# ---- out= ------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("shape", [(), (1,), (5,), (3, 1, 2)])
+def test_out_is_filled_and_returned(shape, dtype):
+    q = leg_q(shape).astype(dtype)
+    want = LEG.fk(q)
+    out = np.full((*shape, 3), -7.0, dtype)
+    got = LEG.fk(q, out=out)
+    assert got is out
+    np.testing.assert_array_equal(out, want)
+    J = np.empty((*shape, 3, 3), dtype)
+    assert LEG.jacobian(q, out=J) is J
+    np.testing.assert_array_equal(J, LEG.jacobian(q))
+
+
+def test_ik_out_takes_a_tuple_with_none_entries():
+    q = leg_q((6,))
+    p = LEG.fk(q)
+    want_q, want_status = LEG.ik(p, q)
+    q_out = np.empty((6, 3))
+    got_q, got_status = LEG.ik(p, q, out=(q_out, None))
+    assert got_q is q_out
+    np.testing.assert_array_equal(got_q, want_q)
+    np.testing.assert_array_equal(got_status, want_status)
+    status_out = np.empty(6, np.int8)
+    _, got_status = LEG.ik(p, q, out=(None, status_out))
+    assert got_status is status_out
+    np.testing.assert_array_equal(status_out, want_status)
+    # a single target: its status is a Status unless an array is given for it
+    _, status1 = LEG.ik(p[0], out=(np.empty(3), None))
+    assert isinstance(status1, sk.Status)
+    s0 = np.empty((), np.int8)
+    _, status0 = LEG.ik(p[0], out=(None, s0))
+    assert status0 is s0 and int(s0) == int(status1)
+
+
+def test_ik_all_out(arm):
+    p = LEG.fk(leg_q((4,)))
+    outs = (np.empty((4, 4, 3)), np.empty((4, 4), bool), np.empty((4, 4), bool), np.empty(4, np.int8))
+    got = LEG.ik_all(p, out=outs)
+    want = LEG.ik_all(p)
+    for g, o, w in zip(got, outs, want):
+        assert g is o
+        np.testing.assert_array_equal(g, w)
+
+
+@pytest.mark.parametrize(
+    "out, error, match",
+    [
+        (np.empty((5, 3), np.float32), TypeError, r"out\[0\] \(p\) must have dtype float64, got float32"),
+        (np.empty((5, 4)), ValueError, r"out\[0\] \(p\) must have shape \(5, 3\), got \(5, 4\)"),
+        (np.empty((3, 5)).T, ValueError, r"C-contiguous"),
+        ([[0.0] * 3] * 5, TypeError, r"out\[0\] \(p\) must be a NumPy array, got list"),
+        (np.ma.zeros((5, 3)), TypeError, r"must be a NumPy array"),
+    ],
+)
+def test_out_errors_name_the_output(out, error, match):
+    with pytest.raises(error, match=match):
+        LEG.fk(leg_q((5,)), out=out)
+
+
+def test_out_must_be_writeable_and_counted():
+    out = np.empty((5, 3))
+    out.flags.writeable = False
+    with pytest.raises(ValueError, match="writeable"):
+        LEG.fk(leg_q((5,)), out=out)
+    with pytest.raises(ValueError, match="out must hold 2 arrays"):
+        LEG.ik(LEG.fk(leg_q((5,))), out=(np.empty((5, 3)),))
+    with pytest.raises(TypeError, match="out must be a tuple of 2 arrays"):
+        LEG.ik(LEG.fk(leg_q((5,))), out=np.empty((5, 3)))
+
+
+def test_out_may_alias_the_input():
+    """An input that shares memory with an output is read from a copy (as NumPy's ufuncs do)."""
+    q = leg_q((700,))  # more than one block of 512
+    want = LEG.fk(q)
+    got = LEG.fk(q, out=q)
+    assert got is q
+    np.testing.assert_array_equal(q, want)
+
+
+def test_dynamics_out(arm):
+    q, qd, qdd = (arm_q(arm, (9,)) for _ in range(3))
+    tau = np.empty((9, arm.dof))
+    assert arm.inverse_dynamics(q, qd, qdd, out=tau) is tau
+    np.testing.assert_array_equal(tau, arm.inverse_dynamics(q, qd, qdd))
+    n = arm.dof
+    packed = np.empty((9, n * (n + 1) // 2))
+    assert arm.mass_matrix(q, layout="packed", out=packed) is packed
+    np.testing.assert_array_equal(packed, arm.mass_matrix(q, layout="packed"))
+    with pytest.raises(ValueError, match=r"out\[0\] \(A\) must have shape \(9, 6, 6\)"):
+        arm.mass_matrix(q, out=packed)
+    g = np.empty(n, np.float32)
+    assert arm.gravity(q[0].astype(np.float32), out=g) is g
+
+
+# ---- broadcasting ------------------------------------------------------------------------------------
+
+
+def test_partial_broadcast_equals_the_explicit_one(arm):
+    """(3, 1) against (1, 4) leading shapes: gathered block by block, never materialised."""
+    q = arm_q(arm, (3, 1))
+    qd = arm_q(arm, (1, 4))
+    qdd = arm_q(arm, (4,))
+    got = arm.inverse_dynamics(q, qd, qdd)
+    full = [np.broadcast_to(x, (3, 4, arm.dof)).copy() for x in (q, qd, qdd)]
+    np.testing.assert_array_equal(got, arm.inverse_dynamics(*full))
+    assert got.shape == (3, 4, arm.dof)
+
+
+def test_seed_broadcasts_against_the_targets():
+    q = leg_q((4, 5))
+    p = LEG.fk(q)
+    seed = leg_q((5,))
+    got = LEG.ik(p, seed)
+    want = LEG.ik(p, np.broadcast_to(seed, (4, 5, 3)).copy())
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[1], want[1])
+    with pytest.raises(ValueError, match=r"p \(4, 5, 3\) and seed \(3, 3\) do not broadcast"):
+        LEG.ik(p, leg_q((3,)))
+
+
+@pytest.mark.parametrize("n", [1, 600, 5000])
+def test_shared_row_broadcasts_over_large_batches(arm, n):
+    """One seed or gravity for every sample (stride 0), across block and thread boundaries."""
+    q = arm_q(arm, (n,))
+    g = np.array([0.3, -0.2, -9.7])
+    np.testing.assert_array_equal(arm.gravity(q, g), arm.gravity(q, np.tile(g, (n, 1))))
+    p = LEG.fk(leg_q((n,)))
+    seed = leg_q(())
+    np.testing.assert_array_equal(LEG.ik(p, seed)[0], LEG.ik(p, np.tile(seed, (n, 1)))[0])
+
+
+# ---- NaN rows and huge angles --------------------------------------------------------------------------
+
+
+def test_nan_rows_and_huge_angles_in_a_shared_row():
+    p = LEG.fk(leg_q((700,)))
+    seed = leg_q(())
+    huge = seed + np.array([2e6 * np.pi, 0.0, 0.0])  # an exact multiple of 2 pi away (beyond the limit)
+    np.testing.assert_array_equal(LEG.ik(p, huge)[0], LEG.ik(p, seed)[0])
+    q = leg_q((700,))
+    q[3, 1] = np.nan
+    q[600, 2] = np.inf
+    p = LEG.fk(q)
+    assert np.isnan(p[3]).all() and np.isnan(p[600]).all()
+    assert np.isfinite(np.delete(p, [3, 600], axis=0)).all()
+
+
+# ---- threads --------------------------------------------------------------------------------------------
+
+
+def test_bit_identical_for_any_thread_count(arm):
+    q = arm_q(arm, (40, 1))
+    qd = arm_q(arm, (1, 500))
+    p = LEG.fk(leg_q((20_000,)))
+    seed = leg_q((20_000,))
+    threads = sk.get_num_threads()
+    try:
+        results = []
+        for t in (1, 2, 3):
+            sk.set_num_threads(t)
+            results.append((arm.nonlinear_effects(q, qd), LEG.ik(p, seed)[0], arm.mass_matrix(q[:, 0])))
+    finally:
+        sk.set_num_threads(threads)
+    for r in results[1:]:
+        for a, b in zip(results[0], r):
+            np.testing.assert_array_equal(a, b)
