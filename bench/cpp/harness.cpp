@@ -104,22 +104,27 @@ void chain_jacobian(const Chain<double>& chain, const double* q, double* out, st
 // float32 lanes: spotkin/dynamics/kernels.hpp) and at 2 float64 lanes (no in-register
 // transpose), for the self-checks.
 namespace dyn = spotkin::dynamics;
-using dyn::NonDeduced;  // deduced from the model alone (nullptr passes)
+using dyn::NonDeduced;
+// Whether a batch's output is large enough for streamed stores, as the module decides it.
+template <typename M>
+bool streamed(std::ptrdiff_t n, int width) {
+  return std::size_t(n) * std::size_t(width) * sizeof(M) >= spotkin::kStreamBytes;
+}  // deduced from the model alone (nullptr passes)
 SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, rnea, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q,
                          const NonDeduced<dyn::Rows<M>>* qd, const NonDeduced<dyn::Rows<M>>* qdd,
                          NonDeduced<dyn::Rows<M>> g, M* out, std::ptrdiff_t n), (model, q, qd, qdd, g, out, n),
-  dyn::rnea_batch(model, q, qd, qdd, g, out, 0, n);
+  dyn::rnea_batch(model, q, qd, qdd, g, out, 0, n, streamed<M>(n, model.dof()));
 )
 SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, crba, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q, M* out, std::ptrdiff_t n), (model, q, out, n),
-  dyn::crba_batch(model, q, out, 0, n);
+  dyn::crba_batch(model, q, out, 0, n, streamed<M>(n, model.dof() * model.dof()));
 )
 SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, coriolis, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q,
                              NonDeduced<dyn::Rows<M>> qd, M* out, std::ptrdiff_t n), (model, q, qd, out, n),
-  dyn::coriolis_batch(model, q, qd, out, 0, n);
+  dyn::coriolis_batch(model, q, qd, out, 0, n, streamed<M>(n, model.dof() * model.dof()));
 )
 SPOTKIN_CLONES((template <typename M, int L> __attribute__((noinline))), void, aba, (const dyn::ChainModel<M, L>& model, NonDeduced<dyn::Rows<M>> q, NonDeduced<dyn::Rows<M>> qd,
                         NonDeduced<dyn::Rows<M>> tau, NonDeduced<dyn::Rows<M>> g, M* out, std::ptrdiff_t n), (model, q, qd, tau, g, out, n),
-  dyn::aba_batch(model, q, qd, tau, g, out, 0, n);
+  dyn::aba_batch(model, q, qd, tau, g, out, 0, n, streamed<M>(n, model.dof()));
 )
 
 namespace d = spotkin::diagnostics;

@@ -109,6 +109,7 @@ struct Block {
   std::ptrdiff_t stride[kMaxArgs] = {};
   int shape[kMaxArgs] = {};  // which of the argument's accepted shapes it has
   void* out[kMaxOuts] = {};
+  bool stream = false;  // the call's outputs are large (spotkin/stream.hpp): store them streamed where the kernel can
   T* real(int k) const { return static_cast<T*>(out[k]); }
   std::uint8_t* flags(int k) const { return static_cast<std::uint8_t*>(out[k]); }
   std::int8_t* status(int k) const { return static_cast<std::int8_t*>(out[k]); }

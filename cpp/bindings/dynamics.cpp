@@ -58,7 +58,7 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
               kNsPerSample, [](const void* c, const auto& b) {
                 on_model(c, b, [&](const auto& model) {
                   const auto qd = rows(b, 1), qdd = rows(b, 2);
-                  dynamics::rnea_k(model, rows(b, 0), &qd, &qdd, rows(b, 3), b.real(0), 0, b.m);
+                  dynamics::rnea_k(model, rows(b, 0), &qd, &qdd, rows(b, 3), b.real(0), 0, b.m, b.stream);
                 });
               });
   return binder::call(op, &d, {q, qd, qdd, g}, out);
@@ -67,7 +67,7 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
 py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g, py::handle out) {
   const Op op({positions(d), gravity_arg()}, {Out("tau", {d.dof()})}, kNsPerSample, [](const void* c, const auto& b) {
     on_model(c, b, [&](const auto& model) {
-      dynamics::rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m);
+      dynamics::rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m, b.stream);
     });
   });
   return binder::call(op, &d, {q, g}, out);
@@ -78,7 +78,7 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
               [](const void* c, const auto& b) {
                 on_model(c, b, [&](const auto& model) {
                   const auto qd = rows(b, 1);
-                  dynamics::rnea_k(model, rows(b, 0), &qd, nullptr, rows(b, 2), b.real(0), 0, b.m);
+                  dynamics::rnea_k(model, rows(b, 0), &qd, nullptr, rows(b, 2), b.real(0), 0, b.m, b.stream);
                 });
               });
   return binder::call(op, &d, {q, qd, g}, out);
@@ -96,7 +96,7 @@ py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_na
   const Op op({positions(d)}, {Out("A", shape)}, kNsPerSample, [](const void* c, const auto& b) {
     using T = typename std::decay_t<decltype(b)>::Scalar;
     const MassMatrix& mm = binder::context<MassMatrix>(c);
-    with_model<T>(mm.d, [&](const auto& model) { dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, mm.layout); });
+    with_model<T>(mm.d, [&](const auto& model) { dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout); });
   });
   return binder::call(op, &context, {q}, out);
 }
@@ -105,7 +105,7 @@ py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd, p
   const Op op({positions(d), joints(d, "qd")}, {Out("C", {d.dof(), d.dof()})}, 2 * kNsPerSample,
               [](const void* c, const auto& b) {
                 on_model(c, b, [&](const auto& model) {
-                  dynamics::coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m);
+                  dynamics::coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m, b.stream);
                 });
               });
   return binder::call(op, &d, {q, qd}, out);
@@ -116,7 +116,7 @@ py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::ha
   const Op op({positions(d), joints(d, "qd"), joints(d, "tau"), gravity_arg()}, {Out("qdd", {d.dof()})},
               2 * kNsPerSample, [](const void* c, const auto& b) {
                 on_model(c, b, [&](const auto& model) {
-                  dynamics::aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m);
+                  dynamics::aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m, b.stream);
                 });
               });
   return binder::call(op, &d, {q, qd, tau, g}, out);

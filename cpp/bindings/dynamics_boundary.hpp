@@ -15,6 +15,7 @@
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/model.hpp"
 #include "spotkin/parallel.hpp"
+#include "spotkin/stream.hpp"
 
 // Hidden like pybind11's own types, which these helpers hold.
 #pragma GCC visibility push(hidden)
@@ -164,7 +165,8 @@ py::object dispatch_args(const std::vector<BatchArg>& args, F&& f) {
   return f(double{}, arrs);
 }
 
-// Runs kernel(rows, out, begin, end) over the broadcast batch with the GIL released.
+// Runs kernel(rows, out, begin, end, stream) over the broadcast batch with the GIL released;
+// stream: the whole output is large enough for streamed stores (spotkin/stream.hpp).
 template <typename Kernel>
 py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, double ns_per_sample,
                      Kernel&& kernel) {
@@ -174,9 +176,10 @@ py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, d
     auto out = new_array<T>(p.leading, trailing);
     T* od = out.mutable_data();
     const std::vector<Rows<T>>& rows = p.rows;
+    const bool stream = std::size_t(out.size()) * sizeof(T) >= kStreamBytes;
     {
       ReleaseGilFor release(p.count);
-      parallel_for(p.count, min_chunk(ns_per_sample), [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e); });
+      parallel_for(p.count, min_chunk(ns_per_sample), [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e, stream); });
     }
     return std::move(out);
   });

@@ -79,30 +79,30 @@ constexpr double kNsFloating = 400.0;
 py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e);
+                       dynamics::floating_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e, stream);
                      });
                    });
 }
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e);
+                       dynamics::floating_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e, stream);
                      });
                    });
 }
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e);
+                       dynamics::floating_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e, stream);
                      });
                    });
 }
@@ -110,38 +110,38 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle lay
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
   return run_batch({{q, "q", nq, true, d.angles}}, symmetric_shape(nv, layout), kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_crba_k(model, rows[0], out, b, e, layout);
+                       dynamics::floating_crba_k(model, rows[0], out, b, e, stream, layout);
                      });
                    });
 }
 py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e);
+                       dynamics::floating_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e, stream);
                      });
                    });
 }
 py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) { dynamics::floating_coriolis_k(model, rows[0], rows[1], out, b, e); });
+                     with_model<T>(d, [&](const auto& model) { dynamics::floating_coriolis_k(model, rows[0], rows[1], out, b, e, stream); });
                    });
 }
 py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
   const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
   return run_batch({{q, "q", nq, true, d.angles}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e) {
+                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
                      using T = std::remove_pointer_t<decltype(out)>;
                      with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_com_k(model, rows[0], out, jacobian, b, e);
+                       dynamics::floating_com_k(model, rows[0], out, jacobian, b, e, stream);
                      });
                    });
 }

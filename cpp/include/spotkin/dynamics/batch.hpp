@@ -44,11 +44,10 @@ struct ChainBlock {
 // tau = RNEA(q, qd, qdd, g); qd_rows / qdd_rows null for zeros.
 template <typename M, int L>
 SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const Rows<M>* qd, const Rows<M>* qdd,
-                               Rows<M> g, M* tau, std::ptrdiff_t begin, std::ptrdiff_t end) {
+                               Rows<M> g, M* tau, std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
-  const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
   ScratchArray<Force<P>> f(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -64,11 +63,10 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
 // (SymmetricWriter), gathered into the layout as the rows are stored.
 template <typename M, int L>
 SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                               std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
+                               std::ptrdiff_t end, bool stream, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int n = model.dof(), width = symmetric_width(n, layout);
   ChainBlock<M, L> blk(n, SymmetricWriter<P>::size(n));
-  const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(n));
   ScratchArray<P> trig(2 * static_cast<std::size_t>(n));  // sines, cosines
   ScratchArray<M> scratch(3 * static_cast<std::size_t>(n * L));
@@ -91,11 +89,10 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
 // C(q, qd), row-major n x n per sample.
 template <typename M, int L>
 SPOTKIN_INLINE void coriolis_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> qd, M* C,
-                                   std::ptrdiff_t begin, std::ptrdiff_t end) {
+                                   std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n * n);
-  const bool stream = std::size_t(end - begin) * std::size_t(n * n) * sizeof(M) >= kStreamBytes;
   ScratchArray<CoriolisWork<P>> w(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -109,11 +106,10 @@ SPOTKIN_INLINE void coriolis_batch(const ChainModel<M, L>& model, Rows<M> q, Row
 // qdd = ABA(q, qd, tau, g).
 template <typename M, int L>
 SPOTKIN_INLINE void aba_batch(const ChainModel<M, L>& model, Rows<M> q, Rows<M> qd, Rows<M> tau, Rows<M> g,
-                              M* qdd, std::ptrdiff_t begin, std::ptrdiff_t end) {
+                              M* qdd, std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
-  const bool stream = std::size_t(end - begin) * std::size_t(n) * sizeof(M) >= kStreamBytes;
   ScratchArray<AbaWork<P>> w(static_cast<std::size_t>(n));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));

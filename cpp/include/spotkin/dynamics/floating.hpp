@@ -108,10 +108,9 @@ struct FloatingBlock {
 template <typename M, int L>
 SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M> q, const Rows<M>* v,
                                         const Rows<M>* a, Rows<M> g, M* tau, std::ptrdiff_t begin,
-                                        std::ptrdiff_t end) {
+                                        std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
-  const bool stream = std::size_t(end - begin) * std::size_t(model.nv()) * sizeof(M) >= kStreamBytes;
   ScratchArray<Force<P>> f(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -137,11 +136,10 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
 // entries are written per block; the blocks between chains stay zero.
 template <typename M, int L>
 SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M> q, M* A, std::ptrdiff_t begin,
-                                        std::ptrdiff_t end, SymmetricLayout layout = SymmetricLayout::Full) {
+                                        std::ptrdiff_t end, bool stream, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = symmetric_width(nv, layout);
   FloatingBlock<M, L> blk(model, SymmetricWriter<P>::size(nv));
-  const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
   ScratchArray<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
   ScratchArray<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
@@ -203,10 +201,9 @@ SPOTKIN_INLINE void solve_spd6(P K[6][6], P b[6]) noexcept {
 // Table 7.1 with the floating-base step of section 9.3).
 template <typename M, int L>
 SPOTKIN_INLINE void floating_aba_batch(const FloatingModel<M, L>& model, Rows<M> q, Rows<M> v, Rows<M> tau,
-                                       Rows<M> g, M* a, std::ptrdiff_t begin, std::ptrdiff_t end) {
+                                       Rows<M> g, M* a, std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
-  const bool stream = std::size_t(end - begin) * std::size_t(model.nv()) * sizeof(M) >= kStreamBytes;
   ScratchArray<AbaWork<P>> w(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
@@ -249,11 +246,10 @@ SPOTKIN_INLINE void floating_aba_batch(const FloatingModel<M, L>& model, Rows<M>
 // first moment (body frame) of everything it moves. out: com then J, row-major.
 template <typename M, int L>
 SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M> q, M* out_rows, bool jacobian,
-                                       std::ptrdiff_t begin, std::ptrdiff_t end) {
+                                       std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = jacobian ? 3 * nv : 3;
   FloatingBlock<M, L> blk(model, width);
-  const bool stream = std::size_t(end - begin) * std::size_t(width) * sizeof(M) >= kStreamBytes;
   ScratchArray<Motion<P>> S(static_cast<std::size_t>(model.joints()));
   ScratchArray<P> ms(static_cast<std::size_t>(model.joints()));
   ScratchArray<V3<P>> hs(static_cast<std::size_t>(model.joints()));
@@ -305,11 +301,10 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
 // different chains share no subtree (their block is 0).
 template <typename M, int L>
 SPOTKIN_INLINE void floating_coriolis_batch(const FloatingModel<M, L>& model, Rows<M> q, Rows<M> v, M* C,
-                                            std::ptrdiff_t begin, std::ptrdiff_t end) {
+                                            std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   const int nv = model.nv();
   FloatingBlock<M, L> blk(model, nv * nv);
-  const bool stream = std::size_t(end - begin) * std::size_t(nv * nv) * sizeof(M) >= kStreamBytes;
   ScratchArray<CoriolisWork<P>> w(static_cast<std::size_t>(model.joints()));
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));

@@ -3,7 +3,9 @@
 // Each is instantiated for the three lane widths of each precision; a model whose packs
 // fill 64 bytes runs the AVX-512 clone, 32 bytes the AVX2 one and 16 bytes the baseline
 // one (SSE2, NEON), and the bindings pick the model of the active level (with_model in
-// cpp/bindings/dynamics_boundary.hpp). Rows [b, e) of the batch are computed.
+// cpp/bindings/dynamics_boundary.hpp). Rows [b, e) of the batch are computed; `stream` stores
+// them with non-temporal stores (spotkin/stream.hpp), which the caller decides from the whole
+// call's output, not from [b, e).
 #pragma once
 
 #include <cstddef>
@@ -34,33 +36,33 @@ using NonDeduced = typename NonDeducedOf<X>::type;
 // Fixed base (ChainModel). qd, qdd null: zero.
 template <typename T, int L>
 void rnea_k(const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* qd,
-            const NonDeduced<Rows<T>>* qdd, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e);
+            const NonDeduced<Rows<T>>* qdd, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream);
 template <typename T, int L>
-void crba_k(const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e,
+void crba_k(const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream,
             SymmetricLayout layout);
 template <typename T, int L>
 void coriolis_k(const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, T* out, std::ptrdiff_t b,
-                std::ptrdiff_t e);
+                std::ptrdiff_t e, bool stream);
 template <typename T, int L>
 void aba_k(const ChainModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> qd, NonDeduced<Rows<T>> tau,
-           NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e);
+           NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream);
 
 // Floating base (FloatingModel). v, a null: zero.
 template <typename T, int L>
 void floating_rnea_k(const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, const NonDeduced<Rows<T>>* v,
-                     const NonDeduced<Rows<T>>* a, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e);
+                     const NonDeduced<Rows<T>>* a, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream);
 template <typename T, int L>
-void floating_crba_k(const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e,
+void floating_crba_k(const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream,
                      SymmetricLayout layout);
 template <typename T, int L>
 void floating_aba_k(const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v,
-                    NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e);
+                    NonDeduced<Rows<T>> tau, NonDeduced<Rows<T>> g, T* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream);
 template <typename T, int L>
 void floating_coriolis_k(const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, NonDeduced<Rows<T>> v, T* out,
-                         std::ptrdiff_t b, std::ptrdiff_t e);
+                         std::ptrdiff_t b, std::ptrdiff_t e, bool stream);
 // The centre of mass (n, 3), or with `jacobian` its Jacobian (n, 3, nv).
 template <typename T, int L>
 void floating_com_k(const FloatingModel<T, L>& m, NonDeduced<Rows<T>> q, T* out, bool jacobian, std::ptrdiff_t b,
-                    std::ptrdiff_t e);
+                    std::ptrdiff_t e, bool stream);
 
 }  // namespace spotkin::dynamics
