@@ -5,8 +5,10 @@
 #include <pybind11/stl.h>
 
 #include <tuple>
+#include <type_traits>
 
 #include "bindings.hpp"
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -14,107 +16,65 @@ namespace spotkin::bindings {
 
 namespace arm_glue {
 
-constexpr std::ptrdiff_t kMinPerThread = min_chunk(20.0);  // FK ~20 ns; IK (~200 ns) uses kMinPerThreadIk
-constexpr std::ptrdiff_t kMinPerThreadIk = min_chunk(200.0);
+using binder::Arg;
+using binder::Kind;
+using binder::Op;
+using binder::Out;
 
-py::object fk(const Arm& arm, py::handle q_obj) {
-  return map_batch(q_obj, "q", 6, {4, 4}, kMinPerThread,
-                   [&](const auto* q, auto* T, std::ptrdiff_t n) { kernels::arm_fk(arm, q, T, n); }, all_angles(6));
+// The target T: (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw]; Block::shape gives the PoseFormat.
+Arg target_arg() { return Arg("T", {4, 4}).or_shape({7}); }
+Arg seed_arg() { return Arg("seed", {6}, all_angles(6)).maybe_none().parameter(); }
+
+template <typename B>
+PoseFormat format_of(const B& b) {
+  return b.shape[0] == 0 ? PoseFormat::Matrix : PoseFormat::PositionQuaternion;
 }
 
-py::object jacobian(const Arm& arm, py::handle q_obj) {
-  return map_batch(q_obj, "q", 6, {6, 6}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) { kernels::arm_jacobian(arm, q, J, n); }, all_angles(6));
+py::object fk(const Arm& arm, py::handle q, py::handle out) {
+  static const Op op({Arg("q", {6}, all_angles(6)).nan_rows()}, {Out("T", {4, 4})}, 20.0,
+                     [](const void* c, const auto& b) { kernels::arm_fk(binder::context<Arm>(c), b.in[0], b.real(0), b.m); });
+  return binder::call(op, &arm, {q}, out);
 }
 
-py::object singularity(const Arm& arm, py::handle q_obj) {
-  py::array arr = as_real_array(q_obj, "q");
-  const Shape leading = leading_shape(arr, "q", {6});
-  auto q = contiguous<double>(arr);
-  auto out = new_array<double>(leading, {4});
-  const double* qd = q.data();
-  double* od = out.mutable_data();
-  {
-    ReleaseGilFor release(count(leading));
-    parallel_for(count(leading), kMinPerThread / 8, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      with_reduced_angles(qd + 6 * b, 6, all_angles(6), od + 4 * b, 4, e - b, [&](const double* qb, double* ob, std::ptrdiff_t m) {
-        for (std::ptrdiff_t i = 0; i < m; ++i) arm.singularity(qb + 6 * i, ob + 4 * i);
-      });
-    });
-  }
-  return std::move(out);
+py::object jacobian(const Arm& arm, py::handle q, py::handle out) {
+  static const Op op({Arg("q", {6}, all_angles(6)).nan_rows()}, {Out("J", {6, 6})}, 20.0,
+                     [](const void* c, const auto& b) {
+                       kernels::arm_jacobian(binder::context<Arm>(c), b.in[0], b.real(0), b.m);
+                     });
+  return binder::call(op, &arm, {q}, out);
 }
 
-template <typename T>
-py::array_t<T, py::array::c_style> seed_array(py::handle seed_obj, const Shape& leading, bool& has_seed) {
-  has_seed = !seed_obj.is_none();
-  if (!has_seed) return {};
-  py::array seed_arr = as_real_array(seed_obj, "seed");
-  const Shape seed_leading = leading_shape(seed_arr, "seed", {6});
-  if (seed_leading != leading)
-    throw py::value_error("seed must have the leading shape of T, " + format_shape(leading) + ", got " +
-                          format_shape(seed_leading) + "; broadcast them first");
-  return seed_angles<T>(seed_arr, 6, all_angles(6));
+// (..., 4) float64: the singularity measures (Arm::singularity), computed in float64.
+py::object singularity(const Arm& arm, py::handle q) {
+  static const Op op = Op({Arg("q", {6}, all_angles(6)).nan_rows()}, {Out("measures", {4})}, 160.0,
+                          [](const void* c, const auto& b) {
+                            if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>) {
+                              const Arm& a = binder::context<Arm>(c);
+                              for (std::ptrdiff_t i = 0; i < b.m; ++i) a.singularity(b.in[0] + 6 * i, b.real(0) + 4 * i);
+                            }
+                          })
+                           .float64_only();
+  return binder::call(op, &arm, {q}, py::none());
 }
 
-py::object ik_all(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
-  return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto [format, leading] = pose_shape(arr, "T");
-    auto poses = contiguous<T>(arr);
-    bool has_seed = false;
-    auto seed = seed_array<T>(seed_obj, leading, has_seed);
-    auto q = new_array<T>(leading, {Arm::kSlots, 6});
-    auto valid = new_array<bool>(leading, {Arm::kSlots});
-    auto exists = new_array<bool>(leading, {Arm::kSlots});
-    auto status = new_array<std::int8_t>(leading, {});
-    const std::ptrdiff_t stride = format == PoseFormat::Matrix ? 16 : 7;
-    const T* pd = poses.data();
-    const T* sd = has_seed ? seed.data() : nullptr;
-    T* qd = q.mutable_data();
-    auto* vd = reinterpret_cast<std::uint8_t*>(valid.mutable_data());
-    auto* ed = reinterpret_cast<std::uint8_t*>(exists.mutable_data());
-    std::int8_t* std_ = status.mutable_data();
-    const PoseFormat fmt = format;
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        kernels::arm_ik_all<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 48 * b, vd + 8 * b,
-                               ed + 8 * b, std_ + b, e - b);
-      });
-    }
-    if (leading.empty()) return py::make_tuple(q, valid, exists, status_object(status.data()[0]));
-    return py::make_tuple(q, valid, exists, status);
-  });
+py::object ik_all(const Arm& arm, py::handle T, py::handle seed, py::handle out) {
+  static const Op op({target_arg(), seed_arg()},
+                     {Out("q", {Arm::kSlots, 6}), Out("valid", {Arm::kSlots}, Kind::Bool),
+                      Out("exists", {Arm::kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
+                     200.0, [](const void* c, const auto& b) {
+                       kernels::arm_ik_all(binder::context<Arm>(c), b.in[0], format_of(b), b.in[1], b.real(0),
+                                           b.flags(1), b.flags(2), b.status(3), b.m);
+                     });
+  return binder::call(op, &arm, {T, seed}, out);
 }
 
-py::object ik(const Arm& arm, py::handle T_obj, py::handle seed_obj) {
-  return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto [format, leading] = pose_shape(arr, "T");
-    auto poses = contiguous<T>(arr);
-    bool has_seed = false;
-    auto seed = seed_array<T>(seed_obj, leading, has_seed);
-    const bool single = leading.empty();
-    auto q = new_array<T>(leading, {6});
-    std::int8_t single_status = 0;
-    py::array_t<std::int8_t> status;
-    if (!single) status = new_array<std::int8_t>(leading, {});
-    const std::ptrdiff_t stride = format == PoseFormat::Matrix ? 16 : 7;
-    const T* pd = poses.data();
-    const T* sd = has_seed ? seed.data() : nullptr;
-    T* qd = q.mutable_data();
-    std::int8_t* std_ = single ? &single_status : status.mutable_data();
-    const PoseFormat fmt = format;
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), kMinPerThreadIk, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        kernels::arm_ik<T>(arm, pd + stride * b, fmt, sd ? sd + 6 * b : nullptr, qd + 6 * b, std_ + b, e - b);
-      });
-    }
-    if (single) return py::make_tuple(q, status_object(single_status));
-    return py::make_tuple(q, status);
-  });
+py::object ik(const Arm& arm, py::handle T, py::handle seed, py::handle out) {
+  static const Op op({target_arg(), seed_arg()}, {Out("q", {6}), Out("status", {}, Kind::Status)}, 200.0,
+                     [](const void* c, const auto& b) {
+                       kernels::arm_ik(binder::context<Arm>(c), b.in[0], format_of(b), b.in[1], b.real(0),
+                                       b.status(1), b.m);
+                     });
+  return binder::call(op, &arm, {T, seed}, out);
 }
 
 Arm make_arm(std::array<double, 3> mount, double upper_arm, double forearm, double forearm_offset, double hand,
@@ -150,11 +110,11 @@ void bind_arm(py::module_& m) {
       .def(py::init(&make_arm), py::arg("mount"), py::arg("upper_arm"), py::arg("forearm"),
            py::arg("forearm_offset"), py::arg("hand"), py::arg("tool"), py::arg("lower_limits"),
            py::arg("upper_limits"))
-      .def("fk", &fk, py::arg("q"))
-      .def("jacobian", &jacobian, py::arg("q"))
+      .def("fk", &fk, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("jacobian", &jacobian, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
       .def("singularity", &singularity, py::arg("q"))
-      .def("ik", &ik, py::arg("T"), py::arg("seed") = py::none())
-      .def("ik_all", &ik_all, py::arg("T"), py::arg("seed") = py::none());
+      .def("ik", &ik, py::arg("T"), py::arg("seed") = py::none(), py::kw_only(), py::arg("out") = py::none())
+      .def("ik_all", &ik_all, py::arg("T"), py::arg("seed") = py::none(), py::kw_only(), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -447,7 +447,7 @@ py::object call(const Op& op, const void* context, std::initializer_list<py::han
     }
     ++k;
   }
-  if (single) return call_in<float>(op, context, arrays, present, out);
+  if (single && op.float32) return call_in<float>(op, context, arrays, present, out);
   return call_in<double>(op, context, arrays, present, out);
 }
 

@@ -32,13 +32,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <stdexcept>
 
 namespace spotkin::bindings::binder {
 
 namespace py = pybind11;
 
 constexpr int kMaxArgs = 6;
-constexpr int kMaxOuts = 4;
+constexpr int kMaxOuts = 6;
 constexpr int kMaxDims = 3;    // trailing dimensions of one sample
 constexpr int kMaxShapes = 3;  // accepted sample shapes of one argument (pose formats)
 
@@ -73,6 +74,7 @@ struct Arg {
     or_shape(shape, angle_columns);
   }
   Arg& or_shape(Trailing shape, std::uint64_t angle_columns = 0) {
+    if (n_shapes == kMaxShapes) throw std::length_error("binder::Arg: raise kMaxShapes");
     shapes[n_shapes] = shape;
     angles[n_shapes++] = angle_columns;
     return *this;
@@ -126,14 +128,19 @@ struct Op {
   double ns_per_sample = 50.0;  // rough single-thread cost, for the thread split
   Kernel<float> f32 = nullptr;
   Kernel<double> f64 = nullptr;
+  bool float32 = true;  // false: computed in float64 whatever the dtype (float64_only)
 
   // kernel: a captureless generic lambda [](const void* context, const auto& block) {...}
   template <typename F>
   Op(std::initializer_list<Arg> arg_list, std::initializer_list<Out> out_list, double ns, F kernel)
       : ns_per_sample(ns), f32(kernel), f64(kernel) {
+    if (arg_list.size() > std::size_t(kMaxArgs) || out_list.size() > std::size_t(kMaxOuts))
+      throw std::length_error("binder::Op: raise kMaxArgs or kMaxOuts");  // a binding's mistake, never an input's
     for (const Arg& a : arg_list) args[n_args++] = a;
     for (const Out& o : out_list) outs[n_outs++] = o;
   }
+  // An operation whose kernel has no float32 form: float32 input is computed, and answered, in float64.
+  Op& float64_only() { return float32 = false, *this; }
 };
 
 // Runs op on the arguments (n_args handles) with `context` passed to the kernel.

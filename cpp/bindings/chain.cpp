@@ -10,20 +10,13 @@
 
 #include "bindings.hpp"
 #include "chain_model.hpp"
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
 
 namespace chain_glue {
-
-constexpr std::ptrdiff_t kMinPerThread = min_chunk(40.0);  // 6-joint FK/Jacobian: ~40 ns
-
-// The chain in the precision of the batch's working dtype.
-template <typename T>
-const Chain<std::remove_const_t<T>>& in_precision(const ChainPair& chain, T*) {
-  return chain.get(std::remove_const_t<T>{});
-}
 
 // The revolute joints' columns of q: huge angles are reduced exactly before the kernels.
 std::uint64_t revolute_columns(const ChainPair& chain) {
@@ -34,29 +27,51 @@ std::uint64_t revolute_columns(const ChainPair& chain) {
   return mask;
 }
 
-py::object fk(const ChainPair& chain, py::handle q_obj) {
-  return map_batch(q_obj, "q", chain.f64.dof(), {4, 4}, kMinPerThread, [&](const auto* q, auto* T, std::ptrdiff_t n) {
-    kernels::chain_fk(in_precision(chain, q), q, T, n);
-  }, revolute_columns(chain));
+using binder::Arg;
+using binder::Op;
+using binder::Out;
+
+// q (..., dof): the revolute joints' huge angles reduced exactly; a sample with NaN or Inf gets NaN.
+Arg joints_arg(const ChainPair& chain) { return Arg("q", {chain.f64.dof()}, revolute_columns(chain)).nan_rows(); }
+
+template <typename B>
+const auto& chain_of(const void* c, const B&) {
+  return binder::context<ChainPair>(c).get(typename B::Scalar{});
 }
 
-py::object frames(const ChainPair& chain, py::handle q_obj) {
+py::object fk(const ChainPair& chain, py::handle q, py::handle out) {
+  const Op op({joints_arg(chain)}, {Out("T", {4, 4})}, 40.0,
+              [](const void* c, const auto& b) { kernels::chain_fk(chain_of(c, b), b.in[0], b.real(0), b.m); });
+  return binder::call(op, &chain, {q}, out);
+}
+
+py::object frames(const ChainPair& chain, py::handle q, py::handle out) {
   const py::ssize_t n_frames = chain.f64.dof() + 2;
-  return map_batch(q_obj, "q", chain.f64.dof(), {n_frames, 4, 4}, kMinPerThread / 4,
-                   [&](const auto* q, auto* F, std::ptrdiff_t n) { kernels::chain_frames(in_precision(chain, q), q, F, n); },
-                   revolute_columns(chain));
+  const Op op({joints_arg(chain)}, {Out("frames", {n_frames, 4, 4})}, 160.0,
+              [](const void* c, const auto& b) { kernels::chain_frames(chain_of(c, b), b.in[0], b.real(0), b.m); });
+  return binder::call(op, &chain, {q}, out);
 }
 
-py::object jacobian(const ChainPair& chain, py::handle q_obj, int rows, bool in_tool_frame) {
-  return map_batch(q_obj, "q", chain.f64.dof(), {rows, chain.f64.dof()}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t n) {
-                     kernels::chain_jacobian(in_precision(chain, q), q, J, n, rows, in_tool_frame);
-                   },
-                   revolute_columns(chain));
+struct Jacobian {
+  const ChainPair& chain;
+  int rows;
+  bool in_tool_frame;
+  int point = 0;
+  int frame = 0;
+};
+
+py::object jacobian(const ChainPair& chain, py::handle q, int rows, bool in_tool_frame, py::handle out) {
+  const Op op({joints_arg(chain)}, {Out("J", {rows, chain.f64.dof()})}, 40.0, [](const void* c, const auto& b) {
+    const Jacobian& j = binder::context<Jacobian>(c);
+    kernels::chain_jacobian(j.chain.get(typename std::decay_t<decltype(b)>::Scalar{}), b.in[0], b.real(0), b.m,
+                            j.rows, j.in_tool_frame);
+  });
+  const Jacobian context{chain, rows, in_tool_frame};
+  return binder::call(op, &context, {q}, out);
 }
 
 // J_point(frame): point in [0, dof + 1], frame in [-1, dof + 1] (-1: the reference frame's axes).
-py::object point_jacobian(const ChainPair& chain, py::handle q_obj, int rows, int point, int frame) {
+py::object point_jacobian(const ChainPair& chain, py::handle q, int rows, int point, int frame, py::handle out) {
   const int n = chain.f64.dof();
   if (rows != 3 && rows != 6) throw py::value_error("rows must be 3 or 6");
   if (point < 0 || point > n + 1)
@@ -65,11 +80,13 @@ py::object point_jacobian(const ChainPair& chain, py::handle q_obj, int rows, in
   if (frame < -1 || frame > n + 1)
     throw py::value_error("frame must be a frame index in [0, " + std::to_string(n + 1) + "], got " +
                           std::to_string(frame));
-  return map_batch(q_obj, "q", n, {rows, n}, kMinPerThread,
-                   [&](const auto* q, auto* J, std::ptrdiff_t count) {
-                     kernels::chain_point_jacobian(in_precision(chain, q), q, J, count, rows, point, frame);
-                   },
-                   revolute_columns(chain));
+  const Op op({joints_arg(chain)}, {Out("J", {rows, n})}, 40.0, [](const void* c, const auto& b) {
+    const Jacobian& j = binder::context<Jacobian>(c);
+    kernels::chain_point_jacobian(j.chain.get(typename std::decay_t<decltype(b)>::Scalar{}), b.in[0], b.real(0),
+                                  b.m, j.rows, j.point, j.frame);
+  });
+  const Jacobian context{chain, rows, false, point, frame};
+  return binder::call(op, &context, {q}, out);
 }
 
 // The compatibility residual ||(I - J J^+) e|| of the final error e against the Jacobian at the
@@ -172,10 +189,12 @@ void bind_chain(py::module_& m) {
       .def_static("from_joints", &chain_from_joints, py::arg("placements"), py::arg("axes"), py::arg("types"),
                   py::arg("base") = py::none(), py::arg("tool") = py::none())
       .def_property_readonly("dof", [](const ChainPair& c) { return c.f64.dof(); })
-      .def("fk", &fk, py::arg("q"))
-      .def("frames", &frames, py::arg("q"))
-      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"))
-      .def("point_jacobian", &point_jacobian, py::arg("q"), py::arg("rows"), py::arg("point"), py::arg("frame"))
+      .def("fk", &fk, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("frames", &frames, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("point_jacobian", &point_jacobian, py::arg("q"), py::arg("rows"), py::arg("point"), py::arg("frame"),
+           py::kw_only(), py::arg("out") = py::none())
       .def("ik_differential", &ik_differential, py::arg("T_targets"), py::arg("q0"), py::arg("lower"),
            py::arg("upper"), py::arg("damping"), py::arg("position_tolerance"), py::arg("orientation_tolerance"),
            py::arg("max_step"), py::arg("max_iterations"), py::arg("rows"));

@@ -5,12 +5,14 @@
 #include "spotkin/chain_ik/free_joint.hpp"
 #include "spotkin/chain_ik/kernels.hpp"
 
+#include <algorithm>
 #include <memory>
 #include <optional>
 
 #include "bindings.hpp"
 #include "dispatch.hpp"
 #include "chain_model.hpp"
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 
 namespace spotkin::bindings {
@@ -81,122 +83,78 @@ ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle up
 }
 
 // About 200-300 ns per target on one core.
-constexpr std::ptrdiff_t kMinPerThread = min_chunk(250.0);
+constexpr double kNsPerTarget = 250.0;
 
+using binder::Arg;
+using binder::Kind;
+using binder::Op;
+using binder::Out;
 using chain_ik::arm6_kernel;
 using chain_ik::arm6_nearest_kernel;
 using chain_ik::position_kernel;
 using chain_ik::position_nearest_kernel;
 
-// The shared tail: (q, valid, exists, exact, status) arrays, filled on thread chunks
-// (exact is exists where the kernel has no exact output).
-template <typename T, typename Kernel>
-py::object solutions(const Shape& leading, py::ssize_t slots, py::ssize_t dof, std::ptrdiff_t in_width,
-                     const T* in, bool has_exact, Kernel&& kernel) {
-  auto q = new_array<T>(leading, {slots, dof});
-  auto valid = new_array<bool>(leading, {slots});
-  auto exists = new_array<bool>(leading, {slots});
-  auto exact = new_array<bool>(leading, {slots});
-  auto status = new_array<std::int8_t>(leading, {});
-  T* qd = q.mutable_data();
-  auto* vd = reinterpret_cast<std::uint8_t*>(valid.mutable_data());
-  auto* ed = reinterpret_cast<std::uint8_t*>(exists.mutable_data());
-  auto* xd = reinterpret_cast<std::uint8_t*>(exact.mutable_data());
-  std::int8_t* sd = status.mutable_data();
-  const std::ptrdiff_t n = count(leading);
-  {
-    ReleaseGilFor release(n);
-    parallel_for(n, kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      kernel(in + in_width * b, qd + slots * dof * b, vd + slots * b, ed + slots * b, xd + slots * b, sd + b, e - b);
-    });
-    if (!has_exact) std::copy(ed, ed + slots * n, xd);
-  }
-  if (leading.empty()) return py::make_tuple(q, valid, exists, exact, status_object(status.data()[0]));
-  return py::make_tuple(q, valid, exists, exact, status);
+// The target pose T: (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw]; Block::shape gives the PoseFormat.
+Arg pose_arg() { return Arg("T", {4, 4}).or_shape({7}); }
+
+template <typename B>
+PoseFormat format_of(const B& b, int k = 0) {
+  return b.shape[k] == 0 ? PoseFormat::Matrix : PoseFormat::PositionQuaternion;
 }
 
-// One solution per target: (q (..., dof), status (...)), filled on thread chunks.
-// seed None or (..., dof) with the targets' leading shape.
-template <typename T, typename Kernel>
-py::object nearest(const Shape& leading, py::ssize_t dof, std::ptrdiff_t in_width, const T* in,
-                   py::handle seed_obj, const char* target_name, std::uint64_t revolute_columns, Kernel&& kernel) {
-  py::array_t<T, py::array::c_style> seed;  // default-constructed: an empty array, not null
-  const bool has_seed = !seed_obj.is_none();
-  if (has_seed) {
-    py::array seed_arr = as_real_array(seed_obj, "seed");
-    const Shape seed_leading = leading_shape(seed_arr, "seed", {dof});
-    if (seed_leading != leading)
-      throw py::value_error("seed must have shape " + format_shape(leading) + " + (" + std::to_string(dof) +
-                            ",), the leading shape of " + target_name + ", got " + format_shape(seed_leading) +
-                            " + (" + std::to_string(dof) + ",)");
-    seed = seed_angles<T>(seed_arr, dof, revolute_columns);
+py::object ik_nearest(const ChainIK& ik, py::handle target, py::handle seed, py::handle out) {
+  if (ik.position) {
+    static const Op op({Arg("p", {3}), Arg("seed", {3}).maybe_none().parameter()},
+                       {Out("q", {3}), Out("status", {}, Kind::Status)}, kNsPerTarget, [](const void* c, const auto& b) {
+                         const ChainIK& k = binder::context<ChainIK>(c);
+                         position_nearest_kernel(*k.position, k.limits, b.in[0], b.in[1], b.real(0), b.status(1), b.m);
+                       });
+    Op with_angles = op;  // the seed's revolute columns are angles, reduced exactly when huge
+    with_angles.args[1].angles[0] = ik.revolute_columns;
+    return binder::call(with_angles, &ik, {target, seed}, out);
   }
-  auto q = new_array<T>(leading, {dof});
-  auto status = new_array<std::int8_t>(leading, {});
-  const T* sd = has_seed ? seed.data() : nullptr;
-  T* qd = q.mutable_data();
-  std::int8_t* st = status.mutable_data();
-  {
-    ReleaseGilFor release(count(leading));
-    parallel_for(count(leading), kMinPerThread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      kernel(in + in_width * b, sd ? sd + dof * b : nullptr, qd + dof * b, st + b, e - b);
-    });
-  }
-  if (leading.empty()) return py::make_tuple(q, status_object(status.data()[0]));
-  return py::make_tuple(q, status);
+  static const Op op({pose_arg(), Arg("seed", {6}).maybe_none().parameter()},
+                     {Out("q", {6}), Out("status", {}, Kind::Status)}, kNsPerTarget, [](const void* c, const auto& b) {
+                       const ChainIK& k = binder::context<ChainIK>(c);
+                       arm6_nearest_kernel(*k.arm, k.limits, b.in[0], format_of(b), b.in[1], b.real(0), b.status(1),
+                                           b.m);
+                     });
+  Op with_angles = op;
+  with_angles.args[1].angles[0] = ik.revolute_columns;
+  return binder::call(with_angles, &ik, {target, seed}, out);
 }
 
-py::object ik_nearest(const ChainIK& ik, py::handle target_obj, py::handle seed_obj) {
-  if (ik.position)
-    return dispatch_real(target_obj, "p", [&](auto tag, py::array arr) -> py::object {
-      using T = decltype(tag);
-      const Shape leading = leading_shape(arr, "p", {3});
-      auto p = contiguous<T>(arr);
-      return nearest<T>(leading, 3, 3, p.data(), seed_obj, "p", ik.revolute_columns, [&](const T* in, const T* sd, T* q, std::int8_t* st,
-                                                                    std::ptrdiff_t n) {
-        position_nearest_kernel<T>(*ik.position, ik.limits, in, sd, q, st, n);
-      });
-    });
-  return dispatch_real(target_obj, "T", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto [format, leading] = pose_shape(arr, "T");
-    auto poses = contiguous<T>(arr);
-    const PoseFormat fmt = format;
-    return nearest<T>(leading, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(), seed_obj, "T",
-                      ik.revolute_columns, [&](const T* in, const T* sd, T* q, std::int8_t* st, std::ptrdiff_t n) {
-                        arm6_nearest_kernel<T>(*ik.arm, ik.limits, in, fmt, sd, q, st, n);
-                      });
-  });
-}
-
-py::object ik_position(const ChainIK& ik, py::handle p_obj) {
+py::object ik_position(const ChainIK& ik, py::handle p, py::handle out) {
   if (!ik.position)
     throw py::value_error("ik_position needs a 3-joint chain; this " + ik.kind() +
                           " chain has 6 joints: use ik(T) for the full pose");
-  return dispatch_real(p_obj, "p", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, "p", {3});
-    auto p = contiguous<T>(arr);
-    return solutions<T>(leading, Position3::kSlots, 3, 3, p.data(), false,
-                        [&](const T* in, T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t*,
-                            std::int8_t* status, std::ptrdiff_t n) {
-                          position_kernel<T>(*ik.position, ik.limits, in, q, valid, exists, status, n);
-                        });
-  });
+  constexpr py::ssize_t kSlots = Position3::kSlots;
+  static const Op op({Arg("p", {3})},
+                     {Out("q", {kSlots, 3}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
+                      Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
+                     kNsPerTarget, [](const void* c, const auto& b) {
+                       const ChainIK& k = binder::context<ChainIK>(c);
+                       position_kernel(*k.position, k.limits, b.in[0], b.real(0), b.flags(1), b.flags(2), b.status(4),
+                                       b.m);
+                       std::copy(b.flags(2), b.flags(2) + kSlots * b.m, b.flags(3));  // closed form: exact where it exists
+                     });
+  return binder::call(op, &ik, {p}, out);
 }
 
-py::object ik_pose(const ChainIK& ik, py::handle T_obj) {
+py::object ik_pose(const ChainIK& ik, py::handle T, py::handle out) {
   if (!ik.arm)
     throw py::value_error("ik(T) needs a 6-joint chain; this chain has 3 joints (" +
                           ik.kind() + "): use ik_position(p)");
-  return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto [format, leading] = pose_shape(arr, "T");
-    auto poses = contiguous<T>(arr);
-    const PoseFormat fmt = format;
-    return solutions<T>(leading, Arm6::kSlots, 6, fmt == PoseFormat::Matrix ? 16 : 7, poses.data(), true,
-                        [&](const T* in, auto... out) { arm6_kernel<T>(*ik.arm, ik.limits, in, fmt, out...); });
-  });
+  constexpr py::ssize_t kSlots = Arm6::kSlots;
+  static const Op op({pose_arg()},
+                     {Out("q", {kSlots, 6}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
+                      Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
+                     kNsPerTarget, [](const void* c, const auto& b) {
+                       const ChainIK& k = binder::context<ChainIK>(c);
+                       arm6_kernel(*k.arm, k.limits, b.in[0], format_of(b), b.real(0), b.flags(1), b.flags(2),
+                                   b.flags(3), b.status(4), b.m);
+                     });
+  return binder::call(op, &ik, {T}, out);
 }
 
 // A 7R chain with one joint held (FreeJoint7) and the 7 joints' limits.
@@ -220,34 +178,24 @@ FreeJointIK make_free_joint_ik(const ChainPair& pair, py::handle lower_obj, py::
 }
 
 // The first or last joint held: one 6R solver for every value. A middle joint: each distinct value
-// costs its own 6R solver (cached across calls), then the 6R solve per pose.
-py::object ik_free(const FreeJointIK& ik, py::handle T_obj, py::handle value_obj) {
-  return dispatch_real(T_obj, "T", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const auto [format, leading] = pose_shape(arr, "T");
-    auto poses = contiguous<T>(arr);
-    py::array value_arr = as_real_array(value_obj, "free_value");
-    const Shape value_leading = leading_shape(value_arr, "free_value", {});
-    if (value_leading != leading)
-      throw py::value_error("free_value must have shape " + format_shape(leading) + ", the leading shape of T, got " +
-                            format_shape(value_leading));
-    auto values = contiguous<T>(value_arr);
-    const PoseFormat fmt = format;
-    const std::ptrdiff_t width = fmt == PoseFormat::Matrix ? 16 : 7;
-    const T* base = poses.data();
-    const T* value_data = values.data();
-    return solutions<T>(leading, chain_ik::FreeJoint7::kSlots, 7, width, base, true,
-                        [&](const T* in, T* q, std::uint8_t* valid, std::uint8_t* exists, std::uint8_t* exact,
-                            std::int8_t* status, std::ptrdiff_t n) {
-                          const T* v = value_data + (in - base) / width;
-                          if (fmt == PoseFormat::Matrix)
-                            chain_ik::ik_free_joint<PoseFormat::Matrix>(ik.solver, ik.lower, ik.upper, in, v, q, valid,
-                                                                        exists, exact, status, n);
-                          else
-                            chain_ik::ik_free_joint<PoseFormat::PositionQuaternion>(
-                                ik.solver, ik.lower, ik.upper, in, v, q, valid, exists, exact, status, n);
-                        });
-  });
+// costs its own 6R solver (cached across calls), then the 6R solve per pose. T and free_value broadcast.
+py::object ik_free(const FreeJointIK& ik, py::handle T, py::handle value, py::handle out) {
+  constexpr py::ssize_t kSlots = chain_ik::FreeJoint7::kSlots;
+  static const Op op({pose_arg(), Arg("free_value", {})},
+                     {Out("q", {kSlots, 7}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
+                      Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
+                     kNsPerTarget, [](const void* c, const auto& b) {
+                       const FreeJointIK& k = binder::context<FreeJointIK>(c);
+                       if (format_of(b) == PoseFormat::Matrix)
+                         chain_ik::ik_free_joint<PoseFormat::Matrix>(k.solver, k.lower, k.upper, b.in[0], b.in[1],
+                                                                     b.real(0), b.flags(1), b.flags(2), b.flags(3),
+                                                                     b.status(4), b.m);
+                       else
+                         chain_ik::ik_free_joint<PoseFormat::PositionQuaternion>(
+                             k.solver, k.lower, k.upper, b.in[0], b.in[1], b.real(0), b.flags(1), b.flags(2),
+                             b.flags(3), b.status(4), b.m);
+                     });
+  return binder::call(op, &ik, {T, value}, out);
 }
 
 }  // namespace chain_ik_glue
@@ -260,7 +208,7 @@ void bind_chain_ik(py::module_& m) {
            py::arg("distance_tolerance") = -1.0)
       .def_property_readonly("kind", [](const FreeJointIK& ik) { return ik.solver.kind(); })
       .def_property_readonly("cached_values", [](const FreeJointIK& ik) { return ik.solver.cached_values(); })
-      .def("ik", &ik_free, py::arg("T"), py::arg("free_value"));
+      .def("ik", &ik_free, py::arg("T"), py::arg("free_value"), py::kw_only(), py::arg("out") = py::none());
   py::class_<ChainIK>(m, "ChainIK")
       .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),
            py::arg("angle_tolerance") = chain_ik::Tolerance::angle, py::arg("distance_tolerance") = -1.0)
@@ -268,9 +216,10 @@ void bind_chain_ik(py::module_& m) {
       .def_property_readonly("idealised", &ChainIK::idealised)
       .def_property_readonly("geometry", &ChainIK::geometry)
       .def_property_readonly("position_kind", &ChainIK::position_kind)
-      .def("ik_position", &ik_position, py::arg("p"))
-      .def("ik", &ik_pose, py::arg("T"))
-      .def("ik_nearest", &ik_nearest, py::arg("target"), py::arg("seed") = py::none());
+      .def("ik_position", &ik_position, py::arg("p"), py::kw_only(), py::arg("out") = py::none())
+      .def("ik", &ik_pose, py::arg("T"), py::kw_only(), py::arg("out") = py::none())
+      .def("ik_nearest", &ik_nearest, py::arg("target"), py::arg("seed") = py::none(), py::kw_only(),
+           py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -238,19 +238,26 @@ class MimicChain(Chain):
 
     # -- kinematics ----------------------------------------------------------------------------------
 
-    def fk(self, q: ArrayLike) -> np.ndarray:
+    def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Base-to-tool transform: q (..., dof) -> (..., 4, 4), the full chain's at ``M q + b``."""
-        return self._full.fk(self.full_q(q))
+        return self._full.fk(self.full_q(q), out=out)
 
     def frames(self, q: ArrayLike) -> np.ndarray:
         """Every frame of :attr:`full_chain` (one per joint, mimic joints included): q (..., dof) ->
         (..., n_full + 2, 4, 4)."""
         return self._full.frames(self.full_q(q))
 
-    def jacobian(self, q: ArrayLike, frame: str | int = "base", *, point: str | int = "tool") -> np.ndarray:
+    def jacobian(
+        self,
+        q: ArrayLike,
+        frame: str | int = "base",
+        *,
+        point: str | int = "tool",
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
         """J_full(M q + b) M, (..., 6, dof): a variable's column sums the columns of the joints it drives,
         times their multipliers. ``frame`` and ``point`` index :attr:`full_chain`'s frames."""
-        return self._columns(self._full.jacobian(self.full_q(q), frame, point=point))
+        return into_out(self._columns(self._full.jacobian(self.full_q(q), frame, point=point)), out)
 
     def position_jacobian(
         self, q: ArrayLike, frame: str | int = "base", *, point: str | int = "tool"

@@ -191,44 +191,48 @@ class SpotArm:
         """(4, 4) hand -> tool transform."""
         return np.eye(4) if self._params[5] is None else self._params[5].copy()
 
-    def fk(self, q: ArrayLike) -> np.ndarray:
-        """Tool pose in the body frame: q (..., 6) -> (..., 4, 4)."""
-        return self._core.fk(q)
+    def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
+        """Tool pose in the body frame: q (..., 6) -> (..., 4, 4). ``out``: an array of the result's
+        shape and dtype to write into and return."""
+        return self._core.fk(q, out=out)
 
-    def jacobian(self, q: ArrayLike) -> np.ndarray:
-        """Geometric Jacobian [v; w] of the tool point in the body frame: (..., 6) -> (..., 6, 6)."""
-        return self._core.jacobian(q)
+    def jacobian(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
+        """Geometric Jacobian [v; w] of the tool point in the body frame: (..., 6) -> (..., 6, 6);
+        ``out`` as in :meth:`fk`."""
+        return self._core.jacobian(q, out=out)
 
     def singularity(self, q: ArrayLike) -> ArmSingularity:
         """Wrist, elbow and shoulder distances to the singular sets, and manipulability (float64)."""
         out = self._core.singularity(q)
         return ArmSingularity(out[..., 0], out[..., 1], out[..., 2], out[..., 3])
 
-    def ik_all(self, T: ArrayLike, seed: ArrayLike | None = None) -> ArmSolutions:
+    def ik_all(
+        self, T: ArrayLike, seed: ArrayLike | None = None, *, out: tuple | None = None
+    ) -> ArmSolutions:
         """Every solution for tool poses T (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw].
 
         ``seed`` (..., 6) only fixes the free angle in the singular cases (sh0 with the
         wrist centre on the sh0 axis, el1 with wr0 = 0). A pose whose rotation part is
         not a rotation (max |R^T R - I| > 1e-6, or det < 0), whose last row is not
         [0, 0, 0, 1], or with a non-unit quaternion, gets INVALID_INPUT: it is never
-        silently orthonormalised.
+        silently orthonormalised. The seed broadcasts with T over the leading dimensions.
+        ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None).
         """
-        if seed is None:
-            return ArmSolutions(*self._core.ik_all(T, None))
-        return ArmSolutions(*self._core.ik_all(*_broadcast_seed(T, seed)))
+        return ArmSolutions(*self._core.ik_all(T, seed, out=out))
 
-    def ik(self, T: ArrayLike, seed: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray | Status]:
+    def ik(
+        self, T: ArrayLike, seed: ArrayLike | None = None, *, out: tuple | None = None
+    ) -> tuple[np.ndarray, np.ndarray | Status]:
         """The in-limit solution nearest to ``seed``: (q (..., 6), status).
 
         Nearest means the smallest largest-single-joint move, measured on the circle
         (ties to the lower slot); without a seed, the lowest valid slot. Statuses:
         OK; UNREACHABLE (no solution: q is NaN); JOINT_LIMIT (solutions exist, none
         within the limits: q is NaN); INVALID_INPUT (NaN/Inf, a non-rotation, or a
-        NaN seed: q is NaN). A single pose gets an :class:`Status`, a batch an int8 array.
+        NaN seed: q is NaN). A single pose gets an :class:`Status`, a batch an int8 array. The seed
+        broadcasts with T; ``out``: ``(q, status)`` arrays to write into (either may be None).
         """
-        if seed is None:
-            return self._core.ik(T, None)
-        return self._core.ik(*_broadcast_seed(T, seed))
+        return self._core.ik(T, seed, out=out)
 
     def __reduce__(self):
         mount, upper_arm, forearm, forearm_offset, hand, tool, limits = self._params

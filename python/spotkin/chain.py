@@ -19,7 +19,6 @@ from . import _core
 from ._boundary import as_finite, as_index, as_real, broadcast_lead, quiet_float_errors, rigid_transforms
 from ._status import Status
 from .arm import _broadcast_seed
-from .leg import _broadcast_pair
 
 __all__ = ["Chain", "ChainSolutions", "IKDifferentialInfo"]
 
@@ -390,9 +389,10 @@ class Chain:
         chain._inertials = inertials
         return chain
 
-    def fk(self, q: ArrayLike) -> np.ndarray:
-        """Base-to-tool transform: q (..., dof) -> (..., 4, 4)."""
-        return self._core.fk(q)
+    def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
+        """Base-to-tool transform: q (..., dof) -> (..., 4, 4). ``out``: an array of the result's
+        shape and dtype to write into and return (a control loop then allocates nothing)."""
+        return self._core.fk(q, out=out)
 
     def frames(self, q: ArrayLike) -> np.ndarray:
         """Every frame in the base frame: q (..., dof) -> (..., dof + 2, 4, 4).
@@ -402,7 +402,14 @@ class Chain:
         """
         return self._core.frames(q)
 
-    def jacobian(self, q: ArrayLike, frame: str | int = "base", *, point: str | int = "tool") -> np.ndarray:
+    def jacobian(
+        self,
+        q: ArrayLike,
+        frame: str | int = "base",
+        *,
+        point: str | int = "tool",
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Geometric Jacobian [v; w]: q (..., dof) -> (..., 6, dof).
 
         By default of the tool point in the base frame: column j is [z_j x (p_tool - o_j); z_j] for a
@@ -421,8 +428,9 @@ class Chain:
         R_j frame j's rotation: the velocity of O_k and the angular velocity of frame k, both
         relative to the base, written in frame j's axes. ``point`` and ``frame`` must be integers in
         [0, dof + 1] or the strings above (``ValueError`` out of range, ``TypeError`` for another type).
+        ``out``: an array of the result's shape and dtype to write into and return.
         """
-        return self._point_jacobian(q, 6, frame, point)
+        return self._point_jacobian(q, 6, frame, point, out)
 
     def position_jacobian(
         self, q: ArrayLike, frame: str | int = "base", *, point: str | int = "tool"
@@ -430,15 +438,18 @@ class Chain:
         """Top three rows of :meth:`jacobian`, d p / d q of the point (..., 3, dof), in ``frame``'s axes."""
         return self._point_jacobian(q, 3, frame, point)
 
-    def _point_jacobian(self, q, rows: int, frame, point) -> np.ndarray:
+    def _point_jacobian(self, q, rows: int, frame, point, out=None) -> np.ndarray:
         if isinstance(point, str) and point == "tool" and isinstance(frame, str):
-            return self._core.jacobian(q, rows, _tool_frame(frame))  # the tool point: the fast kernel
+            return self._core.jacobian(
+                q, rows, _tool_frame(frame), out=out
+            )  # the tool point: the fast kernel
         last = self.dof + 1
         return self._core.point_jacobian(
             q,
             rows,
             _frame_index(point, "point", last, ("tool",)),
             _frame_index(frame, "frame", last, ("base", "tool")),
+            out=out,
         )
 
     # -- dynamics (spotkin.dynamics; the chain's inertials) --------------------------------------------
@@ -744,7 +755,7 @@ class Chain:
         core = self._free_core(free_joint)
         if free_value is None:
             raise ValueError("free_joint needs free_value (the value the joint is held at)")
-        return ChainSolutions(*core.ik(*_broadcast_free(T, free_value)))
+        return ChainSolutions(*core.ik(T, free_value))
 
     def _free_core(self, free_joint) -> _core.FreeJointIK:
         k = as_index(free_joint, "free_joint")
@@ -856,12 +867,6 @@ class Chain:
         """
         core = self._ik_core()
         try:
-            if seed is None:
-                return core.ik_nearest(target, None)
-            if self.dof == 3:
-                target, seed = _broadcast_pair(target, seed, "p", "seed")
-            else:
-                target, seed = _broadcast_seed(target, seed)
             return core.ik_nearest(target, seed)
         except (TypeError, ValueError) as error:  # the kernels call it p or T: name the argument
             message = str(error)
@@ -993,17 +998,6 @@ def _rebuild(rows, convention, base, tool, limits) -> Chain:
 
 def _rebuild_joints(placements, axes, types, base, tool, limits, names) -> Chain:
     return Chain.from_joints(placements, axes, types, base, tool, limits, names)
-
-
-def _broadcast_free(T: ArrayLike, free_value: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Pose targets (..., 4, 4) or (..., 7) and free values (...) broadcast over their leading
-    dimensions (the core checks the trailing ones)."""
-    T, value = as_real(T, "T"), as_real(free_value, "free_value")
-    trailing = 2 if T.shape[-2:] == (4, 4) else 1
-    if T.shape[:-trailing] == value.shape:
-        return T, value
-    lead = broadcast_lead(T=(T.shape[:-trailing], T.shape), free_value=(value.shape, value.shape))
-    return np.broadcast_to(T, (*lead, *T.shape[-trailing:])), np.broadcast_to(value, lead)
 
 
 def _rebuild_with_ik_tolerance(rebuild, args, tolerance) -> Chain:

@@ -52,7 +52,6 @@ from ._boundary import (
     as_index,
     as_real,
     as_scalar,
-    broadcast_lead,
     fallback_is_nearest,
     quiet_float_errors,
 )
@@ -81,15 +80,6 @@ class LegSolutions(NamedTuple):
     status: np.ndarray
     """(...,) int8 :class:`Status`: OK if any slot is valid, else JOINT_LIMIT,
     UNREACHABLE or INVALID_INPUT."""
-
-
-def _broadcast_pair(a: ArrayLike, b: ArrayLike, name_a: str, name_b: str) -> tuple[np.ndarray, np.ndarray]:
-    """Two batches (..., n) broadcast over their leading dimensions (the core checks n)."""
-    a, b = as_real(a, name_a), as_real(b, name_b)
-    if a.shape[:-1] == b.shape[:-1]:
-        return a, b  # nothing to broadcast (the common case: a few microseconds saved per call)
-    lead = broadcast_lead(**{name_a: (a.shape[:-1], a.shape), name_b: (b.shape[:-1], b.shape)})
-    return (np.broadcast_to(a, (*lead, *a.shape[-1:])), np.broadcast_to(b, (*lead, *b.shape[-1:])))
 
 
 def _vector3(value: ArrayLike, name: str) -> tuple[float, float, float]:
