@@ -198,3 +198,23 @@ def test_bit_identical_for_any_thread_count(arm):
     for r in results[1:]:
         for a, b in zip(results[0], r):
             np.testing.assert_array_equal(a, b)
+
+
+def test_floating_base_out_and_broadcast():
+    robot = sk.Robot.from_urdf(sk.robots.path("go2"))
+    fb = robot.floating_base if hasattr(robot, "floating_base") else None
+    if fb is None:
+        pytest.skip("no floating base on this robot")
+    q = np.zeros((5, fb.nq))
+    q[:, 6] = 1.0
+    q[:, 7:] = RNG.uniform(-0.5, 0.5, (5, fb.nq - 7))
+    A = np.empty((5, fb.nv, fb.nv))
+    assert fb.mass_matrix(q, out=A) is A
+    np.testing.assert_array_equal(A, fb.mass_matrix(q))
+    g = np.empty((5, fb.nv))
+    assert fb.gravity(q, out=g) is g
+    # one gravity vector per sample, broadcast against one configuration
+    gravities = np.array([[0.0, 0.0, -9.81], [0.0, 0.5, -9.7]])
+    tau = fb.gravity(q[0], gravities)
+    assert tau.shape == (2, fb.nv)
+    np.testing.assert_array_equal(tau[1], fb.gravity(q[0], gravities[1]))

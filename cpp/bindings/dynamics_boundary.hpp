@@ -1,6 +1,6 @@
-// The numpy boundary of the dynamics bindings (dynamics.cpp, dynamics_floating.cpp):
-// inertials, NumPy broadcasting of several batch arguments, the call with the GIL
-// released over parallel_for, and the fixed-base chain model shared by both.
+// What the dynamics bindings (dynamics.cpp, dynamics_floating.cpp) share: the model of the
+// active instruction-set level, inertials, the mass matrix's layouts, and the fixed-base chain
+// model. Their batches go through the binder (binder.hpp).
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -77,112 +77,6 @@ inline std::vector<LinkInertial> inertials_from(py::handle mass_obj, py::handle 
     }
   }
   return links;
-}
-
-// ---------------------------------------------------------------- broadcasting
-
-struct BatchArg {
-  py::handle obj;
-  const char* name;
-  py::ssize_t width;
-  bool primary = true;        // a parameter (gravity) does not decide the working dtype
-  std::uint64_t angles = 0;   // columns that are angles: reduced exactly when huge (reduce_seed_angles)
-};
-
-// NumPy's broadcast of the leading shapes; ValueError naming the arguments.
-inline Shape broadcast_leading(const std::vector<Shape>& shapes, const std::vector<BatchArg>& args) {
-  std::size_t nd = 0;
-  for (const auto& s : shapes) nd = std::max(nd, s.size());
-  Shape out(nd, 1);
-  for (std::size_t a = 0; a < shapes.size(); ++a) {
-    const Shape& s = shapes[a];
-    for (std::size_t k = 0; k < s.size(); ++k) {
-      py::ssize_t& o = out[nd - s.size() + k];
-      if (s[k] == o || s[k] == 1) continue;
-      if (o == 1) {
-        o = s[k];
-        continue;
-      }
-      std::string msg = "the leading (batch) dimensions of ";
-      for (std::size_t b = 0; b < args.size(); ++b) msg += (b ? ", " : "") + std::string(args[b].name);
-      msg += " do not broadcast together: ";
-      for (std::size_t b = 0; b < shapes.size(); ++b)
-        msg += (b ? ", " : "") + std::string(args[b].name) + " " + format_shape(shapes[b]);
-      throw py::value_error(msg);
-    }
-  }
-  return out;
-}
-
-// The working arrays of a call: every argument C-contiguous in T, with a row
-// stride (0 for one row shared by every sample).
-template <typename T>
-struct Prepared {
-  Shape leading;
-  py::ssize_t count = 0;
-  std::vector<py::array_t<T, py::array::c_style>> arrays;
-  std::vector<Rows<T>> rows;
-};
-
-template <typename T>
-Prepared<T> prepare(const std::vector<py::array>& arrs, const std::vector<BatchArg>& args) {
-  std::vector<Shape> shapes;
-  for (std::size_t a = 0; a < args.size(); ++a) shapes.push_back(leading_shape(arrs[a], args[a].name, {args[a].width}));
-  Prepared<T> p;
-  p.leading = broadcast_leading(shapes, args);
-  p.count = count(p.leading);
-  for (std::size_t a = 0; a < args.size(); ++a) {
-    py::array arr = arrs[a];
-    py::ssize_t stride = args[a].width;
-    if (count(shapes[a]) == 1 && p.count != 1) {
-      stride = 0;
-    } else if (shapes[a] != p.leading) {
-      Shape full = p.leading;
-      full.push_back(args[a].width);
-      py::tuple shape(full.size());
-      for (std::size_t k = 0; k < full.size(); ++k) shape[k] = py::int_(full[k]);
-      arr = py::module_::import("numpy").attr("broadcast_to")(arr, shape);
-    }
-    auto working = contiguous<T>(arr);
-    // a joint angle beyond kReducibleLimit gives the result of its exact remainder, as in the kinematics
-    if (args[a].angles) working = reduce_seed_angles(std::move(working), args[a].width, args[a].angles);
-    p.arrays.push_back(std::move(working));
-    p.rows.push_back(Rows<T>{p.arrays.back().data(), stride});
-  }
-  return p;
-}
-
-// Converts every argument; float32 when all the primary ones are.
-template <typename F>
-py::object dispatch_args(const std::vector<BatchArg>& args, F&& f) {
-  std::vector<py::array> arrs;
-  bool single = true;
-  for (const auto& a : args) {
-    arrs.push_back(as_real_array(a.obj, a.name));
-    if (a.primary) single = single && is_float32(arrs.back());
-  }
-  if (single) return f(float{}, arrs);
-  return f(double{}, arrs);
-}
-
-// Runs kernel(rows, out, begin, end, stream) over the broadcast batch with the GIL released;
-// stream: the whole output is large enough for streamed stores (spotkin/stream.hpp).
-template <typename Kernel>
-py::object run_batch(const std::vector<BatchArg>& args, const Shape& trailing, double ns_per_sample,
-                     Kernel&& kernel) {
-  return dispatch_args(args, [&](auto tag, const std::vector<py::array>& arrs) -> py::object {
-    using T = decltype(tag);
-    Prepared<T> p = prepare<T>(arrs, args);
-    auto out = new_array<T>(p.leading, trailing);
-    T* od = out.mutable_data();
-    const std::vector<Rows<T>>& rows = p.rows;
-    const bool stream = std::size_t(out.size()) * sizeof(T) >= kStreamBytes;
-    {
-      ReleaseGilFor release(p.count);
-      parallel_for(p.count, min_chunk(ns_per_sample), [&](std::ptrdiff_t b, std::ptrdiff_t e) { kernel(rows, od, b, e, stream); });
-    }
-    return std::move(out);
-  });
 }
 
 // The mass matrix's layout argument ("full", "lower" or "packed") and its output's trailing shape.

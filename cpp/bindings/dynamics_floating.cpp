@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include "binder.hpp"
 #include "dynamics_boundary.hpp"
 
 namespace spotkin::bindings {
@@ -76,74 +77,108 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
 
 constexpr double kNsFloating = 400.0;
 
-py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {a, "a", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_rnea_k(model, rows[0], &rows[1], &rows[2], rows[3], out, b, e, stream);
-                     });
-                   });
+using binder::Arg;
+using binder::Op;
+using binder::Out;
+
+// q (..., nq) = [x, y, z, qx, qy, qz, qw, joints]: the revolute joints' huge angles reduced exactly.
+Arg positions(const FloatingDynamics& d) { return Arg("q", {d.f64.nq()}, d.angles).rows_strided(); }
+Arg rates(const FloatingDynamics& d, const char* name) { return Arg(name, {d.f64.nv()}).rows_strided(); }
+Arg gravity_arg() { return Arg("gravity", {3}).parameter().rows_strided(); }
+
+template <typename T>
+dynamics::Rows<T> rows(const binder::Block<T>& b, int k) {
+  return {b.in[k], b.stride[k]};
 }
-py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_rnea_k(model, rows[0], nullptr, nullptr, rows[1], out, b, e, stream);
-                     });
-                   });
+
+// Calls f(model) with the floating model of the active instruction-set level, in the block's precision.
+template <typename B, typename F>
+void on_model(const void* c, const B& b, F&& f) {
+  with_model<typename B::Scalar>(binder::context<FloatingDynamics>(c), f);
 }
-py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {g, "gravity", 3, false}}, {nv}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_rnea_k(model, rows[0], &rows[1], nullptr, rows[2], out, b, e, stream);
-                     });
-                   });
+
+py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g,
+                         py::handle out) {
+  const Op op({positions(d), rates(d, "v"), rates(d, "a"), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating,
+              [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  const auto v = rows(b, 1), acc = rows(b, 2);
+                  dynamics::floating_rnea_k(model, rows(b, 0), &v, &acc, rows(b, 3), b.real(0), 0, b.m, b.stream);
+                });
+              });
+  return binder::call(op, &d, {q, v, a, g}, out);
 }
-py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle layout_name) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  const dynamics::SymmetricLayout layout = symmetric_layout(layout_name);
-  return run_batch({{q, "q", nq, true, d.angles}}, symmetric_shape(nv, layout), kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_crba_k(model, rows[0], out, b, e, stream, layout);
-                     });
-                   });
+
+py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g, py::handle out) {
+  const Op op({positions(d), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating, [](const void* c, const auto& b) {
+    on_model(c, b, [&](const auto& model) {
+      dynamics::floating_rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m, b.stream);
+    });
+  });
+  return binder::call(op, &d, {q, g}, out);
 }
-py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}, {tau, "tau", nv}, {g, "gravity", 3, false}}, {nv}, 2 * kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_aba_k(model, rows[0], rows[1], rows[2], rows[3], out, b, e, stream);
-                     });
-                   });
+
+py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g, py::handle out) {
+  const Op op({positions(d), rates(d, "v"), gravity_arg()}, {Out("h", {d.f64.nv()})}, kNsFloating,
+              [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  const auto v = rows(b, 1);
+                  dynamics::floating_rnea_k(model, rows(b, 0), &v, nullptr, rows(b, 2), b.real(0), 0, b.m, b.stream);
+                });
+              });
+  return binder::call(op, &d, {q, v, g}, out);
 }
-py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}, {v, "v", nv}}, {nv, nv}, 3 * kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) { dynamics::floating_coriolis_k(model, rows[0], rows[1], out, b, e, stream); });
-                   });
+
+struct MassMatrix {
+  const FloatingDynamics& d;
+  dynamics::SymmetricLayout layout;
+};
+
+py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
+  const MassMatrix context{d, symmetric_layout(layout_name)};
+  const Shape trailing = symmetric_shape(d.f64.nv(), context.layout);
+  const binder::Trailing shape =
+      trailing.size() == 1 ? binder::Trailing{trailing[0]} : binder::Trailing{trailing[0], trailing[1]};
+  const Op op({positions(d)}, {Out("A", shape)}, kNsFloating, [](const void* c, const auto& b) {
+    const MassMatrix& mm = binder::context<MassMatrix>(c);
+    with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
+      dynamics::floating_crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
+    });
+  });
+  return binder::call(op, &context, {q}, out);
 }
-py::object floating_com(const FloatingDynamics& d, py::handle q, bool jacobian) {
-  const py::ssize_t nq = d.f64.nq(), nv = d.f64.nv();
-  return run_batch({{q, "q", nq, true, d.angles}}, jacobian ? Shape{3, nv} : Shape{3}, kNsFloating,
-                   [&](const auto& rows, auto* out, std::ptrdiff_t b, std::ptrdiff_t e, bool stream) {
-                     using T = std::remove_pointer_t<decltype(out)>;
-                     with_model<T>(d, [&](const auto& model) {
-                       dynamics::floating_com_k(model, rows[0], out, jacobian, b, e, stream);
-                     });
-                   });
+
+py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g,
+                        py::handle out) {
+  const Op op({positions(d), rates(d, "v"), rates(d, "tau"), gravity_arg()}, {Out("a", {d.f64.nv()})},
+              2 * kNsFloating, [](const void* c, const auto& b) {
+                on_model(c, b, [&](const auto& model) {
+                  dynamics::floating_aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m,
+                                           b.stream);
+                });
+              });
+  return binder::call(op, &d, {q, v, tau, g}, out);
+}
+
+py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v, py::handle out) {
+  const py::ssize_t nv = d.f64.nv();
+  const Op op({positions(d), rates(d, "v")}, {Out("C", {nv, nv})}, 3 * kNsFloating, [](const void* c, const auto& b) {
+    on_model(c, b, [&](const auto& model) {
+      dynamics::floating_coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m, b.stream);
+    });
+  });
+  return binder::call(op, &d, {q, v}, out);
+}
+
+template <bool Jacobian>
+py::object floating_com(const FloatingDynamics& d, py::handle q, py::handle out) {
+  const Out result = Jacobian ? Out("J_com", {3, d.f64.nv()}) : Out("com", {3});
+  const Op op({positions(d)}, {result}, kNsFloating, [](const void* c, const auto& b) {
+    on_model(c, b, [&](const auto& model) {
+      dynamics::floating_com_k(model, rows(b, 0), b.real(0), Jacobian, 0, b.m, b.stream);
+    });
+  });
+  return binder::call(op, &d, {q}, out);
 }
 
 }  // namespace floating_glue
@@ -155,15 +190,19 @@ void bind_floating_dynamics(py::module_& m) {
            py::arg("chains"))
       .def_property_readonly("nq", [](const FloatingDynamics& d) { return d.f64.nq(); })
       .def_property_readonly("nv", [](const FloatingDynamics& d) { return d.f64.nv(); })
-      .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"))
-      .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"))
-      .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"))
-      .def("crba", &floating_crba, py::arg("q"), py::arg("layout") = "full")
-      .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"))
-      .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"))
-      .def("com", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, false); }, py::arg("q"))
-      .def("com_jacobian", [](const FloatingDynamics& d, py::handle q) { return floating_com(d, q, true); },
-           py::arg("q"));
+      .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"), py::kw_only(), py::arg("out") = py::none())
+      .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("crba", &floating_crba, py::arg("q"), py::arg("layout") = "full", py::kw_only(),
+           py::arg("out") = py::none())
+      .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"), py::kw_only(),
+           py::arg("out") = py::none())
+      .def("com", &floating_com<false>, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("com_jacobian", &floating_com<true>, py::arg("q"), py::kw_only(), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -1,11 +1,14 @@
-// Binding of the standing statics (spotkin/dynamics/statics.hpp). The façade
-// (Robot.standing_torques) broadcasts and flattens the batch; here every array has
-// the same leading count N and is checked by shape.
+// Binding of the standing statics (spotkin/dynamics/statics.hpp), through the binder: every
+// per-sample array broadcasts over the leading dimensions.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
+#include <limits>
 #include <string>
+#include <type_traits>
 
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/dynamics/statics.hpp"
 #include "spotkin/parallel.hpp"
@@ -14,67 +17,65 @@ namespace spotkin::bindings {
 
 namespace {
 
-py::array_t<double, py::array::c_style> checked(py::handle obj, const char* name, const Shape& shape) {
-  py::array arr = as_real_array(obj, name);
-  const Shape got(arr.shape(), arr.shape() + arr.ndim());
-  if (got != shape) throw py::value_error(std::string(name) + " must have shape " + format_shape(shape) + ", got " + format_shape(got));
-  return contiguous<double>(arr);
-}
+using binder::Arg;
+using binder::Kind;
+using binder::Op;
+using binder::Out;
 
-py::tuple standing_torques(py::handle com_obj, double mass, py::handle feet_obj, py::handle jacobians_obj,
-                           py::handle leg_gravity_obj, py::handle stance_obj, py::handle gravity_obj) {
-  py::array com_arr = as_real_array(com_obj, "com");
-  if (com_arr.ndim() != 2 || com_arr.shape(1) != 3)
-    throw py::value_error("com must have shape (N, 3), got " +
-                          format_shape(Shape(com_arr.shape(), com_arr.shape() + com_arr.ndim())));
-  const py::ssize_t n = com_arr.shape(0);
-  py::array feet_arr = as_real_array(feet_obj, "feet");
-  if (feet_arr.ndim() != 3 || feet_arr.shape(0) != n || feet_arr.shape(2) != 3)
-    throw py::value_error("feet must have shape (N, legs, 3)");
-  const py::ssize_t legs = feet_arr.shape(1);
+struct Standing {
+  double mass;
+  int legs;
+};
+
+// Per sample: com (3), feet (legs, 3), foot Jacobians (legs, 3, 3), the legs' gravity torques
+// (3 legs), the stance mask (legs: 0 or 1) and gravity (3), broadcast; float64.
+py::tuple standing_torques(py::handle com, double mass, py::handle feet, py::handle jacobians, py::handle leg_gravity,
+                           py::handle stance, py::handle gravity) {
+  py::array feet_arr = as_real_array(feet, "feet");
+  if (feet_arr.ndim() < 2 || feet_arr.shape(feet_arr.ndim() - 1) != 3)
+    throw py::value_error("feet must have shape (..., legs, 3), got " +
+                          format_shape(Shape(feet_arr.shape(), feet_arr.shape() + feet_arr.ndim())));
+  const py::ssize_t legs = feet_arr.shape(feet_arr.ndim() - 2);
   if (legs < 1 || legs > dynamics::kMaxFeet)
     throw py::value_error("standing torques take 1 to " + std::to_string(dynamics::kMaxFeet) + " legs, got " +
                           std::to_string(legs));
   if (!(mass >= 0.0) || !std::isfinite(mass)) throw py::value_error("mass must be finite and non-negative");
-  auto com = contiguous<double>(com_arr);
-  auto feet = contiguous<double>(feet_arr);
-  auto jacobians = checked(jacobians_obj, "foot_jacobians", {n, legs, 3, 3});
-  auto leg_gravity = checked(leg_gravity_obj, "leg_gravity", {n, 3 * legs});
-  auto stance = checked(stance_obj, "stance", {n, legs});
-  auto gravity = checked(gravity_obj, "gravity", {n, 3});  // per sample (the body frame's)
-  auto tau = new_array<double>({n}, {3 * legs});
-  auto forces = new_array<double>({n}, {legs, 3});
-  auto status = new_array<std::int8_t>({n}, {});
-  auto margin = new_array<double>({n}, {});
-  const double *c = com.data(), *p = feet.data(), *J = jacobians.data(), *G = leg_gravity.data(), *s = stance.data(),
-               *g = gravity.data();
-  double *t = tau.mutable_data(), *f = forces.mutable_data(), *mg = margin.mutable_data();
-  std::int8_t* st = status.mutable_data();
-  const int L = static_cast<int>(legs);
-  {
-    ReleaseGilFor release(n);
-    parallel_for(n, min_chunk(2000.0), [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      for (std::ptrdiff_t i = b; i < e; ++i) {
-        std::uint8_t on[dynamics::kMaxFeet];
-        bool stance_ok = true;
-        for (int l = 0; l < L; ++l) {
-          const double v = s[L * i + l];
-          on[l] = v != 0.0;
-          stance_ok = stance_ok && (v == 0.0 || v == 1.0);
-        }
-        if (!stance_ok) {  // a NaN in the mask: invalid, as any non-finite input
-          for (int j = 0; j < 3 * L; ++j) t[3 * L * i + j] = std::numeric_limits<double>::quiet_NaN();
-          for (int j = 0; j < 3 * L; ++j) f[3 * L * i + j] = std::numeric_limits<double>::quiet_NaN();
-          st[i] = static_cast<std::int8_t>(dynamics::Stance::InvalidInput);
-          mg[i] = std::numeric_limits<double>::quiet_NaN();
-          continue;
-        }
-        dynamics::standing_sample(L, c + 3 * i, mass, p + 3 * L * i, J + 9 * L * i, G + 3 * L * i, on, g + 3 * i,
-                                  t + 3 * L * i, f + 3 * L * i, st + i, mg + i);
-      }
-    });
-  }
-  return py::make_tuple(tau, forces, status, margin);
+  const Op op = Op({Arg("com", {3}), Arg("feet", {legs, 3}), Arg("foot_jacobians", {legs, 3, 3}),
+                    Arg("leg_gravity", {3 * legs}), Arg("stance", {legs}), Arg("gravity", {3})},
+                   {Out("tau", {3 * legs}), Out("forces", {legs, 3}), Out("status", {}, Kind::Status),
+                    Out("margin", {})},
+                   2000.0, [](const void* c, const auto& b) {
+                     if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>) {
+                       const Standing& s = binder::context<Standing>(c);
+                       const int L = s.legs;
+                       for (std::ptrdiff_t i = 0; i < b.m; ++i) {
+                         double* t = b.real(0) + 3 * L * i;
+                         double* f = b.real(1) + 3 * L * i;
+                         std::int8_t* st = b.status(2) + i;
+                         double* mg = b.real(3) + i;
+                         std::uint8_t on[dynamics::kMaxFeet];
+                         bool stance_ok = true;
+                         for (int l = 0; l < L; ++l) {
+                           const double v = b.in[4][L * i + l];
+                           on[l] = v != 0.0;
+                           stance_ok = stance_ok && (v == 0.0 || v == 1.0);
+                         }
+                         if (!stance_ok) {  // a NaN in the mask: invalid, as any non-finite input
+                           std::fill(t, t + 3 * L, std::numeric_limits<double>::quiet_NaN());
+                           std::fill(f, f + 3 * L, std::numeric_limits<double>::quiet_NaN());
+                           *st = static_cast<std::int8_t>(dynamics::Stance::InvalidInput);
+                           *mg = std::numeric_limits<double>::quiet_NaN();
+                           continue;
+                         }
+                         dynamics::standing_sample(L, b.in[0] + 3 * i, s.mass, b.in[1] + 3 * L * i,
+                                                   b.in[2] + 9 * L * i, b.in[3] + 3 * L * i, on, b.in[5] + 3 * i, t,
+                                                   f, st, mg);
+                       }
+                     }
+                   })
+                   .float64_only();
+  const Standing context{mass, int(legs)};
+  return binder::call(op, &context, {com, feet, jacobians, leg_gravity, stance, gravity}, py::none());
 }
 
 }  // namespace

@@ -203,21 +203,21 @@ class ChainDynamics:
 class FloatingDynamics:
     def __init__(self, body_mass: typing.Any, body_com: typing.Any, body_inertia: typing.Any, chains: collections.abc.Sequence) -> None:
         ...
-    def aba(self, q: typing.Any, v: typing.Any, tau: typing.Any, gravity: typing.Any) -> typing.Any:
+    def aba(self, q: typing.Any, v: typing.Any, tau: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def com(self, q: typing.Any) -> typing.Any:
+    def com(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def com_jacobian(self, q: typing.Any) -> typing.Any:
+    def com_jacobian(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def coriolis_matrix(self, q: typing.Any, v: typing.Any) -> typing.Any:
+    def coriolis_matrix(self, q: typing.Any, v: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def crba(self, q: typing.Any, layout: typing.Any = 'full') -> typing.Any:
+    def crba(self, q: typing.Any, layout: typing.Any = 'full', *, out: typing.Any = None) -> typing.Any:
         ...
-    def gravity(self, q: typing.Any, gravity: typing.Any) -> typing.Any:
+    def gravity(self, q: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def nonlinear_effects(self, q: typing.Any, v: typing.Any, gravity: typing.Any) -> typing.Any:
+    def nonlinear_effects(self, q: typing.Any, v: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
-    def rnea(self, q: typing.Any, v: typing.Any, a: typing.Any, gravity: typing.Any) -> typing.Any:
+    def rnea(self, q: typing.Any, v: typing.Any, a: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def nq(self) -> int:

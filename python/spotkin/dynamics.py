@@ -308,7 +308,8 @@ class FloatingBase:
 
     Results are bit-identical for any thread count and any chunking of a batch into calls, a
     single sample included (each instruction-set level, :func:`spotkin.get_isa`, runs one
-    register width). Pickles (rebuilt from its body, chains and inertials).
+    register width). Pickles (rebuilt from its body, chains and inertials). Every batched
+    method takes ``out=``, an array of its result's shape and dtype to write into and return.
     """
 
     __slots__ = ("_args", "_chains", "_core", "_mass")
@@ -339,37 +340,37 @@ class FloatingBase:
     def nv(self) -> int:
         return self._core.nv
 
-    def inverse_dynamics(self, q, v, a, gravity=GRAVITY) -> np.ndarray:
+    def inverse_dynamics(self, q, v, a, gravity=GRAVITY, *, out=None) -> np.ndarray:
         """Generalised forces tau = A(q) a + h(q, v), (..., 6 + n)."""
-        return self._core.rnea(q, v, a, gravity)
+        return self._core.rnea(q, v, a, gravity, out=out)
 
-    def mass_matrix(self, q, layout: str = "full") -> np.ndarray:
+    def mass_matrix(self, q, layout: str = "full", *, out=None) -> np.ndarray:
         """A(q), (..., 6 + n, 6 + n); invariant to the body's pose. ``layout`` ``"lower"`` or
         ``"packed"`` (..., m) with m = (6 + n) (7 + n) / 2, as :func:`mass_matrix`."""
-        return self._core.crba(q, layout)
+        return self._core.crba(q, layout, out=out)
 
-    def gravity(self, q, gravity=GRAVITY) -> np.ndarray:
-        return self._core.gravity(q, gravity)
+    def gravity(self, q, gravity=GRAVITY, *, out=None) -> np.ndarray:
+        return self._core.gravity(q, gravity, out=out)
 
-    def nonlinear_effects(self, q, v, gravity=GRAVITY) -> np.ndarray:
-        return self._core.nonlinear_effects(q, v, gravity)
+    def nonlinear_effects(self, q, v, gravity=GRAVITY, *, out=None) -> np.ndarray:
+        return self._core.nonlinear_effects(q, v, gravity, out=out)
 
-    def coriolis_matrix(self, q, v) -> np.ndarray:
+    def coriolis_matrix(self, q, v, *, out=None) -> np.ndarray:
         """C(q, v), (..., 6 + n, 6 + n), with dA/dt - 2 C skew-symmetric (as Pinocchio's
         ``computeCoriolisMatrix`` for its free-flyer: the body's velocity in the body frame)."""
-        return self._core.coriolis_matrix(q, v)
+        return self._core.coriolis_matrix(q, v, out=out)
 
-    def forward_dynamics(self, q, v, tau, gravity=GRAVITY) -> np.ndarray:
+    def forward_dynamics(self, q, v, tau, gravity=GRAVITY, *, out=None) -> np.ndarray:
         """a = A^-1 (tau - h), (..., 6 + n): articulated-body algorithm."""
-        return self._core.aba(q, v, tau, gravity)
+        return self._core.aba(q, v, tau, gravity, out=out)
 
-    def center_of_mass(self, q) -> np.ndarray:
+    def center_of_mass(self, q, *, out=None) -> np.ndarray:
         """The whole system's centre of mass in the world, (..., 3)."""
-        return self._core.com(q)
+        return self._core.com(q, out=out)
 
-    def center_of_mass_jacobian(self, q) -> np.ndarray:
+    def center_of_mass_jacobian(self, q, *, out=None) -> np.ndarray:
         """(..., 3, 6 + n): d com / dt = J v."""
-        return self._core.com_jacobian(q)
+        return self._core.com_jacobian(q, out=out)
 
     @property
     def mass(self) -> float:
