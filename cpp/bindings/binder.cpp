@@ -86,24 +86,31 @@ Shape broadcast(const Op& op, const Argument<T>* args) {
 // Finds which accepted shape arr has; ValueError listing them otherwise.
 int match_shape(const Arg& spec, const py::array& arr, Shape& leading) {
   const auto nd = static_cast<std::size_t>(arr.ndim());
-  const Shape shape(arr.shape(), arr.shape() + nd);
+  const py::ssize_t* shape = arr.shape();  // read in place: no vector for a call's usual shapes
   for (int s = 0; s < spec.n_shapes; ++s) {
     const Trailing& t = spec.shapes[s];
     bool ok = nd >= std::size_t(t.ndim);
     for (int d = 0; ok && d < t.ndim; ++d) ok = shape[nd - std::size_t(t.ndim) + std::size_t(d)] == t.dim[d];
     if (ok) {
-      leading.assign(shape.begin(), shape.end() - t.ndim);
+      leading.assign(shape, shape + nd - std::size_t(t.ndim));
       return s;
     }
   }
   std::string expected = describe(spec.shapes[0]);
   for (int s = 1; s < spec.n_shapes; ++s) expected += (s + 1 == spec.n_shapes ? " or " : ", ") + describe(spec.shapes[s]);
-  throw py::value_error(std::string(spec.name) + " must have shape " + expected + ", got " + format_shape(shape));
+  throw py::value_error(std::string(spec.name) + " must have shape " + expected + ", got " +
+                        format_shape(Shape(shape, shape + nd)));
+}
+
+template <typename T>
+std::size_t element_size(Kind kind) {
+  return kind == Kind::Real ? sizeof(T) : kind == Kind::Index ? sizeof(std::int64_t) : 1;
 }
 
 const char* dtype_name(Kind kind, bool single) {
   if (kind == Kind::Bool) return "bool";
   if (kind == Kind::Status) return "int8";
+  if (kind == Kind::Index) return "int64";
   return single ? "float32" : "float64";
 }
 
@@ -120,6 +127,7 @@ py::array checked_out(py::handle obj, const Out& spec, int k, const Shape& shape
     case Kind::Real: dtype_ok = py::array_t<T>::check_(arr); break;
     case Kind::Bool: dtype_ok = py::array_t<bool>::check_(arr); break;
     case Kind::Status: dtype_ok = py::array_t<std::int8_t>::check_(arr); break;
+    case Kind::Index: dtype_ok = py::array_t<std::int64_t>::check_(arr); break;
   }
   if (!dtype_ok)
     throw py::type_error(label + " must have dtype " + dtype_name(spec.kind, std::is_same_v<T, float>) + ", got " +
@@ -132,6 +140,42 @@ py::array checked_out(py::handle obj, const Out& spec, int k, const Shape& shape
   if ((py::detail::array_proxy(arr.ptr())->flags & kNeeded) != kNeeded)
     throw py::value_error(label + " must be a C-contiguous, aligned and writeable array");
   return arr;
+}
+
+// A new C-contiguous output (leading + the sample's shape) of the output's dtype. A small one is made
+// directly (no shape vectors: a single sample's call makes several); a large one comes from the
+// buffer cache (cached_array).
+template <typename T>
+py::array new_output(const Out& spec, const Shape& leading) {
+  using api = py::detail::npy_api;
+  const std::size_t nd = leading.size() + std::size_t(spec.shape.ndim);
+  const std::size_t item = element_size<T>(spec.kind);
+  std::size_t bytes = item;
+  for (py::ssize_t d : leading) bytes *= std::size_t(d);
+  for (int d = 0; d < spec.shape.ndim; ++d) bytes *= std::size_t(spec.shape.dim[d]);
+  if (bytes >= BufferCache::kMinBytes || nd > 32) {
+    Shape trailing(spec.shape.dim, spec.shape.dim + spec.shape.ndim);
+    switch (spec.kind) {
+      case Kind::Real: return new_array<T>(leading, trailing);
+      case Kind::Bool: return new_array<bool>(leading, trailing);
+      case Kind::Index: return new_array<std::int64_t>(leading, trailing);
+      case Kind::Status: break;
+    }
+    return new_array<std::int8_t>(leading, trailing);
+  }
+  Py_intptr_t dims[32];
+  std::size_t k = 0;
+  for (py::ssize_t d : leading) dims[k++] = d;
+  for (int d = 0; d < spec.shape.ndim; ++d) dims[k++] = spec.shape.dim[d];
+  const int type = spec.kind == Kind::Real    ? (std::is_same_v<T, float> ? api::NPY_FLOAT_ : api::NPY_DOUBLE_)
+                   : spec.kind == Kind::Bool  ? api::NPY_BOOL_
+                   : spec.kind == Kind::Index ? api::NPY_INT64_
+                                              : api::NPY_INT8_;
+  auto& numpy = api::get();
+  PyObject* made = numpy.PyArray_NewFromDescr_(numpy.PyArray_Type_, numpy.PyArray_DescrFromType_(type), int(nd), dims,
+                                               nullptr, nullptr, 0, nullptr);
+  if (!made) throw py::error_already_set();
+  return py::reinterpret_steal<py::array>(made);
 }
 
 bool overlaps(const py::array& a, const void* data, std::size_t bytes) {
@@ -167,7 +211,7 @@ void run_span(const Op& op, const void* context, Kernel<T> kernel, const Argumen
       block.stride[k] = shared || a.rows == Rows::Absent ? 0 : a.width;
     }
     for (int o = 0; o < op.n_outs; ++o) {
-      const std::size_t size = op.outs[o].kind == Kind::Real ? sizeof(T) : 1;
+      const std::size_t size = element_size<T>(op.outs[o].kind);
       block.out[o] = static_cast<char*>(outs[o].data) + size * std::size_t(outs[o].width * begin);
     }
     kernel(context, block);
@@ -250,7 +294,7 @@ void run_span(const Op& op, const void* context, Kernel<T> kernel, const Argumen
           if ((a.angles >> j) & 1U) x[i * w + j] = T(vector_math::reduce_huge_angle(double(x[i * w + j])));
     }
     for (int o = 0; o < op.n_outs; ++o) {
-      const std::size_t size = op.outs[o].kind == Kind::Real ? sizeof(T) : 1;
+      const std::size_t size = element_size<T>(op.outs[o].kind);
       block.out[o] = static_cast<char*>(outs[o].data) + size * std::size_t(outs[o].width * first);
     }
     kernel(context, block);
@@ -365,11 +409,11 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
   const bool single = leading.empty();
   for (int o = 0; o < op.n_outs; ++o) {
     const Out& spec = op.outs[o];
-    Shape shape = leading;
-    shape.insert(shape.end(), spec.shape.dim, spec.shape.dim + spec.shape.ndim);
     Output& r = outs[o];
     r.width = spec.shape.size();
     if (given[o] && !given[o].is_none()) {
+      Shape shape = leading;
+      shape.insert(shape.end(), spec.shape.dim, spec.shape.dim + spec.shape.ndim);
       py::array checked = checked_out<T>(given[o], spec, o, shape);
       r.data = checked.mutable_data();
       r.array = checked;
@@ -389,10 +433,7 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
       r.scalar = true;
       continue;
     }
-    const Shape trailing(spec.shape.dim, spec.shape.dim + spec.shape.ndim);
-    py::array made = spec.kind == Kind::Real   ? py::array(new_array<T>(leading, trailing))
-                     : spec.kind == Kind::Bool ? py::array(new_array<bool>(leading, trailing))
-                                               : py::array(new_array<std::int8_t>(leading, trailing));
+    py::array made = new_output<T>(spec, leading);
     r.data = made.mutable_data();
     r.array = std::move(made);
   }
@@ -405,7 +446,7 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
   }
   std::size_t out_bytes = 0;  // the whole call's
   for (int o = 0; o < op.n_outs; ++o)
-    out_bytes += std::size_t(n * outs[o].width) * (op.outs[o].kind == Kind::Real ? sizeof(T) : 1);
+    out_bytes += std::size_t(n * outs[o].width) * element_size<T>(op.outs[o].kind);
   const bool stream = out_bytes >= kStreamBytes;
   const std::ptrdiff_t min_per_thread = min_chunk(op.ns_per_sample);
   if (n < 2 * min_per_thread) {  // one thread would run it all: inline, no thread start

@@ -87,7 +87,8 @@ struct Arg {
   Arg& nan_rows(int groups = 1) { return nan_groups = groups, *this; }
 };
 
-enum class Kind : std::uint8_t { Real, Bool, Status };
+// Real: the working dtype (float32 or float64); Bool; Status: int8 spotkin.Status codes; Index: int64.
+enum class Kind : std::uint8_t { Real, Bool, Status, Index };
 
 struct Out {
   const char* name = "";
@@ -101,7 +102,7 @@ struct Out {
 // What a kernel sees: m samples, the first at index `first` of the batch. Argument k's
 // row i starts at in[k] + i * stride[k] (stride 0: one row for all; in[k] null: an
 // omitted optional argument); unless the argument is rows_strided, stride[k] is its
-// row width. Output k's row i starts at out<U>(k) + i * width.
+// row width. Output k's row i starts at real(k), flags(k), status(k) or index(k), plus i * width.
 template <typename T>
 struct Block {
   using Scalar = T;
@@ -115,6 +116,7 @@ struct Block {
   T* real(int k) const { return static_cast<T*>(out[k]); }
   std::uint8_t* flags(int k) const { return static_cast<std::uint8_t*>(out[k]); }
   std::int8_t* status(int k) const { return static_cast<std::int8_t*>(out[k]); }
+  std::int64_t* index(int k) const { return static_cast<std::int64_t*>(out[k]); }
 };
 
 template <typename T>

@@ -2,13 +2,16 @@
 // Cartesian waypoint path, each sampled in batches over time with the GIL released.
 #include "spotkin/trajectory.hpp"
 
+#include <array>
 #include <cmath>
+#include <type_traits>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "bindings.hpp"
 #include "dispatch.hpp"
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -18,8 +21,8 @@ namespace {
 
 namespace tj = spotkin::trajectory;
 
-constexpr std::ptrdiff_t kMinPerThreadJoint = min_chunk(10.0);  // ~10 ns per 6-axis sample
-constexpr std::ptrdiff_t kMinPerThreadPath = min_chunk(60.0);   // two quaternion exps per sample
+constexpr double kNsPerJointSample = 10.0;  // a 6-axis sample
+constexpr double kNsPerPathSample = 60.0;   // two quaternion exps per sample
 
 // The path sampler compiled per CPU level (its sin/cos loop vectorises).
 SPOTKIN_CLONES((template <typename T>), void, sample_path_kernel, (const tj::WaypointPath& path, tj::PoseForm form, const T* t, T* pose,
@@ -56,16 +59,6 @@ void require_positive(const std::vector<double>& v, const char* name) {
   for (double x : v)
     if (!(x > 0.0) || !std::isfinite(x))
       throw py::value_error(std::string(name) + " must be positive and finite, got " + std::to_string(x));
-}
-
-// t (...) of any real dtype -> a tuple of new arrays, kernel(t, outputs..., count) on thread chunks.
-template <typename Body>
-py::object map_times(py::handle t_obj, Body&& body) {
-  return dispatch_real(t_obj, "t", [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    auto t = contiguous<T>(arr);
-    return body(tag, shape_of(arr), t.data());
-  });
 }
 
 class PointToPointCore {
@@ -109,37 +102,46 @@ class PointToPointCore {
         }
       }
     }
+    keep_params();
   }
 
-  py::object sample(py::handle t_obj) const {
-    return map_times(t_obj, [&](auto tag, const Shape& leading, const auto* td) -> py::object {
-      using T = decltype(tag);
-      const auto n = static_cast<py::ssize_t>(q0_.size());
-      auto q = new_array<T>(leading, {n});
-      auto qd = new_array<T>(leading, {n});
-      auto qdd = new_array<T>(leading, {n});
-      std::vector<T> params[5];
-      for (auto [i, src] : {std::pair{0, &q0_}, {1, &qf_}, {2, &accel_}, {3, &cruise_}, {4, &ramp_}})
-        params[i].assign(src->begin(), src->end());
-      const tj::PointToPoint<T> traj{profile_,           static_cast<int>(n), static_cast<T>(duration_),
-                                     params[0].data(),   params[1].data(),    params[2].data(),
-                                     params[3].data(),   params[4].data()};
-      T* qp = q.mutable_data();
-      T* qdp = qd.mutable_data();
-      T* qddp = qdd.mutable_data();
-      {
-        ReleaseGilFor release(count(leading));
-        parallel_for(count(leading), kMinPerThreadJoint, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-          tj::sample(traj, td + b, qp + n * b, qdp + n * b, qddp + n * b, e - b);
-        });
-      }
-      return py::make_tuple(q, qd, qdd);
-    });
+  void keep_params() {
+    int k = 0;
+    for (const auto* src : {&q0_, &qf_, &accel_, &cruise_, &ramp_}) {
+      params64_[k] = *src;
+      params32_[k++].assign(src->begin(), src->end());
+    }
   }
+
+  // t (...) -> (q, qd, qdd), each (..., n), in t's precision.
+  py::object sample(py::handle t, py::handle out) const {
+    const auto n = static_cast<py::ssize_t>(q0_.size());
+    const binder::Op op({binder::Arg("t", {})}, {binder::Out("q", {n}), binder::Out("qd", {n}), binder::Out("qdd", {n})},
+                        kNsPerJointSample, [](const void* c, const auto& b) {
+                          // through a member function: inlined into the lambda, the loop measured 18 % slower
+                          binder::context<PointToPointCore>(c).sample_block(b.in[0], b.real(0), b.real(1), b.real(2),
+                                                                            b.m);
+                        });
+    return binder::call(op, this, {t}, out);
+  }
+
+  template <typename T>
+  void sample_block(const T* t, T* q, T* qd, T* qdd, std::ptrdiff_t count) const {
+    const auto& p = params(T{});
+    const tj::PointToPoint<T> traj{profile_,    static_cast<int>(q0_.size()), T(duration_), p[0].data(),
+                                   p[1].data(), p[2].data(),                  p[3].data(),  p[4].data()};
+    tj::sample(traj, t, q, qd, qdd, count);
+  }
+
+  // q0, qf, accel, cruise, ramp in each precision (built once).
+  const std::array<std::vector<double>, 5>& params(double) const { return params64_; }
+  const std::array<std::vector<float>, 5>& params(float) const { return params32_; }
 
   double duration_;
   tj::Profile profile_;
   std::vector<double> q0_, qf_, vmax_, amax_, axis_durations_, accel_, cruise_, ramp_;
+  std::array<std::vector<double>, 5> params64_;
+  std::array<std::vector<float>, 5> params32_;
 };
 
 py::array_t<double> to_array(const std::vector<double>& v) {
@@ -179,7 +181,7 @@ class WaypointPathCore {
     duration_ = times_.back() + 0.5 * blends_.back();
   }
 
-  py::object sample(py::handle t_obj, int form, bool with_twist) const {
+  py::object sample(py::handle t, int form, bool with_twist) const {
     if (form != 0 && form != 1) throw py::value_error("form must be 0 (matrix) or 1 (quaternion)");
     const tj::WaypointPath path{static_cast<std::ptrdiff_t>(times_.size()),
                                 times_.data(),
@@ -192,25 +194,19 @@ class WaypointPathCore {
                                 axes_.data(),
                                 rates_.data(),
                                 duration_};
-    const auto pose_form = static_cast<tj::PoseForm>(form);
-    return map_times(t_obj, [&](auto tag, const Shape& leading, const auto* td) -> py::object {
-      using T = decltype(tag);
-      const Shape trailing = form == 0 ? Shape{4, 4} : Shape{7};
-      const std::ptrdiff_t width = form == 0 ? 16 : 7;
-      auto pose = new_array<T>(leading, trailing);
-      py::array_t<T> twist;
-      if (with_twist) twist = new_array<T>(leading, {6});
-      T* pd = pose.mutable_data();
-      T* wd = with_twist ? twist.mutable_data() : nullptr;
-      {
-        ReleaseGilFor release(count(leading));
-        parallel_for(count(leading), kMinPerThreadPath, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-          sample_path_kernel<T>(path, pose_form, td + b, pd + width * b, wd ? wd + 6 * b : nullptr, e - b);
-        });
-      }
-      if (with_twist) return py::make_tuple(pose, twist);
-      return std::move(pose);
-    });
+    struct Sampling {
+      const tj::WaypointPath& path;
+      tj::PoseForm form;
+    };
+    const Sampling context{path, static_cast<tj::PoseForm>(form)};
+    const binder::Out pose = form == 0 ? binder::Out("pose", {4, 4}) : binder::Out("pose", {7});
+    auto kernel = [](const void* c, const auto& b) {
+      const Sampling& s = binder::context<Sampling>(c);
+      sample_path_kernel(s.path, s.form, b.in[0], b.real(0), b.out[1] ? b.real(1) : nullptr, b.m);
+    };
+    if (!with_twist) return binder::call(binder::Op({binder::Arg("t", {})}, {pose}, kNsPerPathSample, kernel), &context, {t}, py::none());
+    return binder::call(binder::Op({binder::Arg("t", {})}, {pose, binder::Out("twist", {6})}, kNsPerPathSample, kernel),
+                        &context, {t}, py::none());
   }
 
   double duration_;
@@ -238,7 +234,7 @@ void bind_trajectory(py::module_& m) {
       .def_property_readonly("acceleration", [](const PointToPointCore& p) { return to_array(p.accel_); })
       .def_property_readonly("cruise_velocity", [](const PointToPointCore& p) { return to_array(p.cruise_); })
       .def_property_readonly("ramp_time", [](const PointToPointCore& p) { return to_array(p.ramp_); })
-      .def("sample", &PointToPointCore::sample, py::arg("t"));
+      .def("sample", &PointToPointCore::sample, py::arg("t"), py::kw_only(), py::arg("out") = py::none());
 
   py::class_<WaypointPathCore>(m, "WaypointPath")
       .def(py::init<py::handle, py::handle, py::handle, py::handle, py::handle, py::handle>(), py::arg("times"),

@@ -157,7 +157,7 @@ class ChainIK:
 class PointToPoint:
     def __init__(self, q0: typing.Any, qf: typing.Any, vmax: typing.Any, amax: typing.Any, profile: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-    def sample(self, t: typing.Any) -> typing.Any:
+    def sample(self, t: typing.Any, *, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def acceleration(self) -> numpy.typing.NDArray[numpy.float64]:
@@ -255,9 +255,9 @@ def _vector_sincos(x: typing.Any) -> typing.Any:
     """
 def available_isas() -> tuple:
     ...
-def compatible(J: typing.Any, dx: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> tuple:
+def compatible(J: typing.Any, dx: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> typing.Any:
     ...
-def dls(J: typing.Any, dx: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, nullspace: typing.Any = None) -> typing.Any:
+def dls(J: typing.Any, dx: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, nullspace: typing.Any = None, *, out: typing.Any = None) -> typing.Any:
     ...
 def get_isa() -> str:
     ...
