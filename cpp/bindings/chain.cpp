@@ -104,20 +104,27 @@ double final_residual(const Chain<double>& chain, const double* T_target, const 
   return differential::compatibility<double>(J, e, rows, chain.dof(), -1.0).residual;
 }
 
-// Closed-loop differential IK (spotkin::differential::ik_differential), always
-// in float64: targets (..., K, 4, 4) and q0 (..., dof) with equal leading shapes.
-py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::handle q0_obj, py::handle lower_obj,
-                          py::handle upper_obj, double damping, double position_tolerance,
-                          double orientation_tolerance, double max_step, int max_iterations, int rows) {
+// Closed-loop differential IK (spotkin::differential::ik_differential), in float64: paths of
+// targets (..., K, 4, 4) and starts q0 (..., dof), broadcast -> (q (..., K, dof), converged,
+// iterations (int64), position_error, orientation_error, residual, each (..., K)).
+struct DifferentialIk {
+  const ChainPair& chain;
+  const double* lower;
+  const double* upper;
+  differential::IkOptions options;
+  int targets;  // K
+};
+
+py::object ik_differential(const ChainPair& chain, py::handle targets, py::handle q0, py::handle lower_obj,
+                           py::handle upper_obj, double damping, double position_tolerance,
+                           double orientation_tolerance, double max_step, int max_iterations, int rows) {
   const int n = chain.f64.dof();
-  py::array targets_arr = as_real_array(targets_obj, "T_targets");
-  const Shape t_lead = leading_shape(targets_arr, "T_targets", {4, 4});
-  if (t_lead.empty()) throw py::value_error("T_targets must have shape (..., K, 4, 4)");
-  const Shape lead(t_lead.begin(), t_lead.end() - 1);
-  const py::ssize_t K = t_lead.back();
-  py::array q0_arr = as_real_array(q0_obj, "q0");
-  if (leading_shape(q0_arr, "q0", {n}) != lead)
-    throw py::value_error("q0 must have shape " + format_shape(lead) + " + (" + std::to_string(n) + ",)");
+  py::array targets_arr = as_real_array(targets, "T_targets");
+  if (targets_arr.ndim() < 3 || targets_arr.shape(targets_arr.ndim() - 1) != 4 ||
+      targets_arr.shape(targets_arr.ndim() - 2) != 4)
+    throw py::value_error("T_targets must have shape (..., K, 4, 4), got " +
+                          format_shape(Shape(targets_arr.shape(), targets_arr.shape() + targets_arr.ndim())));
+  const py::ssize_t K = targets_arr.shape(targets_arr.ndim() - 3);
   auto lower = contiguous<double>(as_real_array(lower_obj, "lower"));
   auto upper = contiguous<double>(as_real_array(upper_obj, "upper"));
   if (lower.size() != n || upper.size() != n) throw py::value_error("lower and upper must have shape (dof,)");
@@ -127,52 +134,41 @@ py::tuple ik_differential(const ChainPair& chain, py::handle targets_obj, py::ha
   if (!(max_step > 0.0)) throw py::value_error("max_step must be > 0");
   if (max_iterations < 0) throw py::value_error("max_iter must be >= 0");
   if (rows != 3 && rows != 6) throw py::value_error("rows must be 3 or 6");
-  auto targets = contiguous<double>(targets_arr);
-  auto q0 = reduce_seed_angles(contiguous<double>(q0_arr), n, revolute_columns(chain));
-  const py::ssize_t N = count(lead);
-  auto q_path = new_array<double>(t_lead, {n});
-  py::array_t<bool> converged(t_lead);
-  py::array_t<std::int32_t> iterations(t_lead);
-  py::array_t<double> position_error(t_lead), orientation_error(t_lead), residual(t_lead);
-  std::vector<differential::IkResult> results(static_cast<std::size_t>(N * K));
-  differential::IkOptions options;
-  options.damping = damping;
-  options.position_tolerance = position_tolerance;
-  options.orientation_tolerance = orientation_tolerance;
-  options.max_step = max_step;
-  options.max_iterations = max_iterations;
-  options.rows = rows;
-  const double* td = targets.data();
-  const double* qd = q0.data();
-  const double* lo = lower.data();
-  const double* up = upper.data();
-  double* out = q_path.mutable_data();
-  differential::IkResult* res = results.data();
-  double* rd = residual.mutable_data();
-  {
-    ReleaseGilFor release(N * 64);
-    parallel_for(N, 4, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-      for (std::ptrdiff_t i = b; i < e; ++i)
-      {
-        differential::ik_differential(chain.f64, lo, up, td + 16 * K * i, K, qd + n * i, options,
-                                      out + K * n * i, res + K * i);
-        for (std::ptrdiff_t k = 0; k < K; ++k)
-          rd[K * i + k] = final_residual(chain.f64, td + 16 * (K * i + k), out + n * (K * i + k), rows);
-      }
-    });
-  }
-  bool* cd = converged.mutable_data();
-  std::int32_t* id = iterations.mutable_data();
-  double* pd = position_error.mutable_data();
-  double* od = orientation_error.mutable_data();
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    cd[i] = results[i].converged;
-    id[i] = results[i].iterations;
-    pd[i] = results[i].position_error;
-    od[i] = results[i].orientation_error;
-  }
-  return py::make_tuple(std::move(q_path), std::move(converged), std::move(iterations), std::move(position_error),
-                        std::move(orientation_error), std::move(residual));
+  DifferentialIk context{chain, lower.data(), upper.data(), {}, int(K)};
+  context.options.damping = damping;
+  context.options.position_tolerance = position_tolerance;
+  context.options.orientation_tolerance = orientation_tolerance;
+  context.options.max_step = max_step;
+  context.options.max_iterations = max_iterations;
+  context.options.rows = rows;
+  const Op op = Op({Arg("T_targets", {K, 4, 4}), Arg("q0", {n}, revolute_columns(chain))},
+                   {Out("q", {K, n}), Out("converged", {K}, binder::Kind::Bool),
+                    Out("iterations", {K}, binder::Kind::Index), Out("position_error", {K}),
+                    Out("orientation_error", {K}), Out("residual", {K})},
+                   50000.0, [](const void* c, const auto& b) {
+                     if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>) {
+                       const DifferentialIk& d = binder::context<DifferentialIk>(c);
+                       const Chain<double>& ch = d.chain.f64;
+                       const int dof = ch.dof(), K = d.targets;
+                       std::vector<differential::IkResult> results(static_cast<std::size_t>(K));
+                       for (std::ptrdiff_t i = 0; i < b.m; ++i) {
+                         const double* path = b.in[0] + 16 * K * i;
+                         double* q = b.real(0) + K * dof * i;
+                         differential::ik_differential(ch, d.lower, d.upper, path, K, b.in[1] + dof * i, d.options, q,
+                                                       results.data());
+                         for (int k = 0; k < K; ++k) {
+                           const std::ptrdiff_t at = K * i + k;
+                           b.flags(1)[at] = results[std::size_t(k)].converged;
+                           b.index(2)[at] = results[std::size_t(k)].iterations;
+                           b.real(3)[at] = results[std::size_t(k)].position_error;
+                           b.real(4)[at] = results[std::size_t(k)].orientation_error;
+                           b.real(5)[at] = final_residual(ch, path + 16 * k, q + dof * k, d.options.rows);
+                         }
+                       }
+                     }
+                   })
+                   .float64_only();
+  return binder::call(op, &context, {targets, q0}, py::none());
 }
 
 }  // namespace chain_glue

@@ -1,9 +1,7 @@
-// The numpy boundary: argument checking, dtype dispatch, batch shapes.
-//
-// Inputs arrive as any array-like. float32 stays float32; every other real
-// dtype is computed in float64. A batch argument has shape (..., *trailing);
-// it is viewed as a row-major (N, prod(trailing)) block, copied only when it
-// is not already C-contiguous in the working dtype.
+// The array checks and conversions under the binder (binder.hpp) and the bindings' model
+// parameters: any array-like to a real array (TypeError otherwise), float32 detection, a
+// C-contiguous view in the working dtype (copied only when needed), huge angles reduced in
+// seeds, new outputs, the GIL release, spotkin.Status objects, rigid transforms.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -123,19 +121,6 @@ py::array_t<T, py::array::c_style> contiguous(const py::array& arr) {
   return py::array_t<T, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(arr));
 }
 
-// Checks that arr has shape (..., *trailing) and returns the leading shape.
-inline Shape leading_shape(const py::array& arr, const char* name, const Shape& trailing) {
-  const auto nd = static_cast<std::size_t>(arr.ndim());
-  Shape shape(arr.shape(), arr.shape() + nd);
-  bool ok = nd >= trailing.size();
-  for (std::size_t i = 0; ok && i < trailing.size(); ++i)
-    ok = shape[nd - trailing.size() + i] == trailing[i];
-  if (!ok)
-    throw py::value_error(std::string(name) + " must have shape " +
-                          format_shape(trailing, true) + ", got " + format_shape(shape));
-  return Shape(shape.begin(), shape.end() - static_cast<std::ptrdiff_t>(trailing.size()));
-}
-
 inline py::ssize_t count(const Shape& leading) {
   py::ssize_t n = 1;
   for (auto d : leading) n *= d;
@@ -177,64 +162,13 @@ inline py::object status_object(std::int8_t code) {
   return members[py::int_(code)];
 }
 
-// Calls f(T{}, arr) with T = float for float32 input, double otherwise.
-template <typename F>
-py::object dispatch_real(py::handle obj, const char* name, F&& f) {
-  py::array arr = as_real_array(obj, name);
-  if (is_float32(arr)) return f(float{}, arr);
-  return f(double{}, arr);
-}
-
-// Calls kernel(in, out, n) on [0, n) in sub-blocks of kAngleBlock samples, and
-// makes two guarantees the kernels alone do not:
-// - a huge angle (bit j of angle_columns: column j is an angle; beyond
-//   vector_math::kReducibleLimit) gives the result of its exact remainder: the
-//   kernel sees a copy with it reduced (vector_math::reduce_huge_angle);
-// - a sample with NaN or Inf anywhere in its input gets NaN in its whole output
-//   row (out_width values), never a partly finite row (x of leg.fk does not
-//   depend on hx, say). With `groups` > 1 the row is split in that many equal
-//   parts of input and of output (the four legs of the body): a non-finite value
-//   in input part g makes output part g NaN, and only it.
-// The check is one pass over input in cache; the copy only happens in a
-// sub-block holding such a value.
+// The binder's block: huge angles are reduced, and NaN rows written, block by block (binder.cpp).
 constexpr std::ptrdiff_t kAngleBlock = 512;  // a multiple of kChunkAlignment: same results for any split
 
 // Whether some of x[0, n) is NaN, Inf or beyond vector_math::kReducibleLimit
 // (vector_math::any_beyond): a vectorised scan compiled per CPU level (runtime.cpp).
 bool any_unusual(const double* x, std::ptrdiff_t n) noexcept;
 bool any_unusual(const float* x, std::ptrdiff_t n) noexcept;
-
-template <typename T, typename Kernel>
-void with_reduced_angles(const T* in, std::ptrdiff_t in_width, std::uint64_t angle_columns, T* out,
-                         std::ptrdiff_t out_width, std::ptrdiff_t n, Kernel&& kernel, std::ptrdiff_t groups = 1) {
-  const std::ptrdiff_t in_part = in_width / groups, out_part = out_width / groups;
-  std::vector<T> reduced;
-  for (std::ptrdiff_t b = 0; b < n; b += kAngleBlock) {
-    const std::ptrdiff_t m = std::min(kAngleBlock, n - b);
-    const T* block = in + in_width * b;
-    T* out_block = out + out_width * b;
-    if (!any_unusual(block, m * in_width)) {  // the common case: nothing huge, Inf or NaN
-      kernel(block, out_block, m);
-      continue;
-    }
-    reduced.assign(block, block + m * in_width);
-    for (std::ptrdiff_t i = 0; i < m; ++i)
-      for (std::ptrdiff_t j = 0; j < in_width; ++j)
-        if ((angle_columns >> j) & 1U) {
-          T& x = reduced[std::size_t(i * in_width + j)];
-          x = T(vector_math::reduce_huge_angle(double(x)));
-        }
-    kernel(reduced.data(), out_block, m);
-    for (std::ptrdiff_t i = 0; i < m; ++i)
-      for (std::ptrdiff_t g = 0; g < groups; ++g) {
-        bool finite = true;
-        for (std::ptrdiff_t j = 0; j < in_part; ++j)
-          finite &= std::isfinite(double(block[i * in_width + g * in_part + j]));
-        T* part = out_block + out_width * i + out_part * g;
-        if (!finite) std::fill(part, part + out_part, T(quiet_nan<double>()));
-      }
-  }
-}
 
 // A seed (or start) array with its huge angles (columns in angle_columns) reduced
 // exactly, as with_reduced_angles does for kernel inputs; the same array when it
@@ -269,59 +203,6 @@ py::array_t<T, py::array::c_style> seed_angles(const py::array& seed, std::ptrdi
 
 // Every column of a width-n joint vector is an angle.
 constexpr std::uint64_t all_angles(int n) { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
-
-// dispatch_real with NumPy's promotion over several primary inputs: float32 only
-// when obj and every one of `others` is float32 (a float64 foot beside a float32
-// pose is not narrowed: 1e308 m stays a far target, not an Inf).
-template <typename F>
-py::object dispatch_promoted(py::handle obj, const char* name,
-                             std::initializer_list<std::pair<py::handle, const char*>> others, F&& f) {
-  py::array arr = as_real_array(obj, name);
-  bool single = is_float32(arr);
-  for (const auto& [other, other_name] : others)
-    if (single) single = is_float32(as_real_array(other, other_name));
-  if (single) return f(float{}, arr);
-  return f(double{}, arr);
-}
-
-// The common binding: a batch obj (..., in_width) mapped to a new (..., *trailing)
-// array by kernel(first_input, first_output, count), called on thread chunks with
-// the GIL released; float32 stays float32, other real dtypes run in float64.
-// Columns in angle_columns are angles, reduced exactly when huge; a non-finite input
-// sample gives a NaN output row (with_reduced_angles).
-template <typename Kernel>
-py::object map_batch(py::handle obj, const char* name, py::ssize_t in_width, const Shape& trailing,
-                     std::ptrdiff_t min_per_thread, Kernel&& kernel, std::uint64_t angle_columns = 0) {
-  return dispatch_real(obj, name, [&](auto tag, py::array arr) -> py::object {
-    using T = decltype(tag);
-    const Shape leading = leading_shape(arr, name, {in_width});
-    auto in = contiguous<T>(arr);
-    auto out = new_array<T>(leading, trailing);
-    py::ssize_t out_width = 1;
-    for (auto d : trailing) out_width *= d;
-    const T* id = in.data();
-    T* od = out.mutable_data();
-    {
-      ReleaseGilFor release(count(leading));
-      parallel_for(count(leading), min_per_thread, [&](std::ptrdiff_t b, std::ptrdiff_t e) {
-        with_reduced_angles(id + in_width * b, in_width, angle_columns, od + out_width * b, out_width, e - b,
-                            kernel);
-      });
-    }
-    return std::move(out);
-  });
-}
-
-// The pose batch: (..., 4, 4) matrices or (..., 7) [x y z qx qy qz qw].
-inline std::pair<PoseFormat, Shape> pose_shape(const py::array& arr, const char* name) {
-  const auto nd = static_cast<std::size_t>(arr.ndim());
-  Shape shape(arr.shape(), arr.shape() + nd);
-  if (nd >= 2 && shape[nd - 1] == 4 && shape[nd - 2] == 4)
-    return {PoseFormat::Matrix, Shape(shape.begin(), shape.end() - 2)};
-  if (nd >= 1 && shape[nd - 1] == 7) return {PoseFormat::PositionQuaternion, Shape(shape.begin(), shape.end() - 1)};
-  throw py::value_error(std::string(name) + " must have shape (..., 4, 4) or (..., 7) as [x, y, z, qx, qy, qz, qw], got " +
-                        format_shape(shape));
-}
 
 // Reads a (4, 4) rigid transform given as any array-like (a model parameter:
 // a base, a tool). It must be finite, with last row [0, 0, 0, 1] and a rotation

@@ -933,11 +933,6 @@ class Chain:
         # a single target per sample when T_targets has no more leading dimensions than q0
         single = targets.ndim - 2 <= q0_arr.ndim - 1
         path = targets[..., None, :, :] if single else targets
-        lead = broadcast_lead(
-            T_targets=(path.shape[:-3], targets.shape), q0=(q0_arr.shape[:-1], q0_arr.shape)
-        )
-        path = np.broadcast_to(path, (*lead, *path.shape[-3:]))
-        start = np.broadcast_to(q0_arr, (*lead, self.dof))
         damping = as_finite(damping, "damping", 0.0, strict=True)
         max_step = as_finite(max_step, "max_step", 0.0, strict=True)
         position_tolerance = as_finite(position_tolerance, "position_tolerance")
@@ -948,7 +943,7 @@ class Chain:
         q_path, converged, iterations, position_error, orientation_error, residual = (
             self._core.ik_differential(
                 path,
-                start,
+                q0_arr,
                 self._limits[0],
                 self._limits[1],
                 float(damping),
@@ -961,6 +956,7 @@ class Chain:
         )
         if targets.dtype == np.float32 and q0_arr.dtype == np.float32:
             q_path = q_path.astype(np.float32)
+        iterations = iterations.astype(np.int32)  # (..., K) step counts, at most max_iter < 2**31
         info = IKDifferentialInfo(converged, iterations, position_error, orientation_error, residual)
         if single:
             q_path = q_path[..., 0, :]
