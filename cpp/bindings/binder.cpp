@@ -185,7 +185,6 @@ bool overlaps(const py::array& a, const void* data, std::size_t bytes) {
   return a.nbytes() > 0 && bytes > 0 && lo < b + bytes && b < hi;
 }
 
-// One thread's pass over samples [begin, end), block by block.
 // One span of a thread's samples. The common case: every argument read in place (its own rows, or
 // one row for all read with stride 0) and nothing huge, NaN or Inf in the span: one kernel call.
 template <typename T>
@@ -256,8 +255,8 @@ void run_span(const Op& op, const void* context, Kernel<T> kernel, const Argumen
         case Rows::Gathered: {
           buffer.resize(std::size_t(w * kAngleBlock));
           const std::size_t nd = leading.size();
-          std::ptrdiff_t index[16] = {};  // the multi-index of sample `first` (NumPy allows at most 64 dims;
-          std::ptrdiff_t rest = first;    // broadcasting beyond 16 leading dims falls back in prepare)
+          std::ptrdiff_t index[16] = {};  // the multi-index of sample `first` (more than 16 leading
+          std::ptrdiff_t rest = first;    // dimensions: call_in materialises the broadcast instead)
           for (std::size_t d = nd; d-- > 0;) {
             index[d] = rest % leading[d];
             rest /= leading[d];
