@@ -47,7 +47,7 @@ dynamics::Rows<T> rows(const binder::Block<T>& b, int k) {
 
 // Calls f(model) with the model of the active instruction-set level, in the block's precision.
 template <typename B, typename F>
-void on_model(const void* c, const B& b, F&& f) {
+void on_model(const void* c, const B&, F&& f) {
   using T = typename B::Scalar;
   with_model<T>(binder::context<ChainDynamics>(c), f);
 }
@@ -84,10 +84,12 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
   return binder::call(op, &d, {q, qd, g}, out);
 }
 
+namespace {  // internal: it holds a reference to a hidden type (GCC's -Wattributes)
 struct MassMatrix {
   const ChainDynamics& d;
   dynamics::SymmetricLayout layout;
 };
+}  // namespace
 
 py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
   const MassMatrix context{d, symmetric_layout(layout_name)};

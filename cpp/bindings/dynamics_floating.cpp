@@ -93,7 +93,7 @@ dynamics::Rows<T> rows(const binder::Block<T>& b, int k) {
 
 // Calls f(model) with the floating model of the active instruction-set level, in the block's precision.
 template <typename B, typename F>
-void on_model(const void* c, const B& b, F&& f) {
+void on_model(const void* c, const B&, F&& f) {
   with_model<typename B::Scalar>(binder::context<FloatingDynamics>(c), f);
 }
 
@@ -129,10 +129,12 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
   return binder::call(op, &d, {q, v, g}, out);
 }
 
+namespace {  // internal: it holds a reference to a hidden type (GCC's -Wattributes)
 struct MassMatrix {
   const FloatingDynamics& d;
   dynamics::SymmetricLayout layout;
 };
+}  // namespace
 
 py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
   const MassMatrix context{d, symmetric_layout(layout_name)};
