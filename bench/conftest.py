@@ -77,10 +77,29 @@ def cpu_model() -> str:
     return platform.processor() or platform.machine()
 
 
+def numpy_level() -> str:
+    """The widest x86 level NumPy dispatches its own loops to (NPY_DISABLE_CPU_FEATURES lowers it):
+    a baseline at a forced spotkin level is only like for like when NumPy runs at that level too."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__ as features
+    except ImportError:  # NumPy 1.x
+        try:
+            from numpy.core._multiarray_umath import __cpu_features__ as features
+        except ImportError:
+            return "unknown"
+    if features.get("AVX512_SKX"):
+        return "AVX-512"
+    if features.get("AVX2"):
+        return "AVX2"
+    return "baseline" if features else "unknown"
+
+
 def level_line() -> str:
-    """The instruction-set level in use, those the CPU has, and the CPU (SPOTKIN_ISA forces a level)."""
+    """The instruction-set level in use, those the CPU has, NumPy's level, and the CPU (SPOTKIN_ISA
+    forces a level)."""
     return (
-        f"spotkin kernels: {sk.get_isa()} (CPU levels: {', '.join(sk.available_isas())}); CPU: {cpu_model()}"
+        f"spotkin kernels: {sk.get_isa()} (CPU levels: {', '.join(sk.available_isas())}); "
+        f"NumPy: {numpy_level()}; CPU: {cpu_model()}"
     )
 
 
