@@ -21,14 +21,8 @@ using binder::Kind;
 using binder::Op;
 using binder::Out;
 
-// The target T: (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw]; Block::shape gives the PoseFormat.
-Arg target_arg() { return Arg("T", {4, 4}).or_shape({7}); }
 Arg seed_arg() { return Arg("seed", {6}, all_angles(6)).maybe_none().parameter(); }
 
-template <typename B>
-PoseFormat format_of(const B& b) {
-  return b.shape[0] == 0 ? PoseFormat::Matrix : PoseFormat::PositionQuaternion;
-}
 
 py::object fk(const Arm& arm, py::handle q, py::handle out) {
   static const Op op({Arg("q", {6}, all_angles(6)).nan_rows()}, {Out("T", {4, 4})}, 20.0,
@@ -58,20 +52,20 @@ py::object singularity(const Arm& arm, py::handle q) {
 }
 
 py::object ik_all(const Arm& arm, py::handle T, py::handle seed, py::handle out) {
-  static const Op op({target_arg(), seed_arg()},
+  static const Op op({pose_target_arg(), seed_arg()},
                      {Out("q", {Arm::kSlots, 6}), Out("valid", {Arm::kSlots}, Kind::Bool),
                       Out("exists", {Arm::kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      200.0, [](const void* c, const auto& b) {
-                       kernels::arm_ik_all(binder::context<Arm>(c), b.in[0], format_of(b), b.in[1], b.real(0),
+                       kernels::arm_ik_all(binder::context<Arm>(c), b.in[0], pose_format(b), b.in[1], b.real(0),
                                            b.flags(1), b.flags(2), b.status(3), b.m);
                      });
   return binder::call(op, &arm, {T, seed}, out);
 }
 
 py::object ik(const Arm& arm, py::handle T, py::handle seed, py::handle out) {
-  static const Op op({target_arg(), seed_arg()}, {Out("q", {6}), Out("status", {}, Kind::Status)}, 200.0,
+  static const Op op({pose_target_arg(), seed_arg()}, {Out("q", {6}), Out("status", {}, Kind::Status)}, 200.0,
                      [](const void* c, const auto& b) {
-                       kernels::arm_ik(binder::context<Arm>(c), b.in[0], format_of(b), b.in[1], b.real(0),
+                       kernels::arm_ik(binder::context<Arm>(c), b.in[0], pose_format(b), b.in[1], b.real(0),
                                        b.status(1), b.m);
                      });
   return binder::call(op, &arm, {T, seed}, out);

@@ -94,13 +94,7 @@ using chain_ik::arm6_nearest_kernel;
 using chain_ik::position_kernel;
 using chain_ik::position_nearest_kernel;
 
-// The target pose T: (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw]; Block::shape gives the PoseFormat.
-Arg pose_arg() { return Arg("T", {4, 4}).or_shape({7}); }
 
-template <typename B>
-PoseFormat format_of(const B& b, int k = 0) {
-  return b.shape[k] == 0 ? PoseFormat::Matrix : PoseFormat::PositionQuaternion;
-}
 
 py::object ik_nearest(const ChainIK& ik, py::handle target, py::handle seed, py::handle out) {
   if (ik.position) {
@@ -113,10 +107,10 @@ py::object ik_nearest(const ChainIK& ik, py::handle target, py::handle seed, py:
     with_angles.args[1].angles[0] = ik.revolute_columns;
     return binder::call(with_angles, &ik, {target, seed}, out);
   }
-  static const Op op({pose_arg(), Arg("seed", {6}).maybe_none().parameter()},
+  static const Op op({pose_target_arg(), Arg("seed", {6}).maybe_none().parameter()},
                      {Out("q", {6}), Out("status", {}, Kind::Status)}, kNsPerTarget, [](const void* c, const auto& b) {
                        const ChainIK& k = binder::context<ChainIK>(c);
-                       arm6_nearest_kernel(*k.arm, k.limits, b.in[0], format_of(b), b.in[1], b.real(0), b.status(1),
+                       arm6_nearest_kernel(*k.arm, k.limits, b.in[0], pose_format(b), b.in[1], b.real(0), b.status(1),
                                            b.m);
                      });
   Op with_angles = op;
@@ -146,12 +140,12 @@ py::object ik_pose(const ChainIK& ik, py::handle T, py::handle out) {
     throw py::value_error("ik(T) needs a 6-joint chain; this chain has 3 joints (" +
                           ik.kind() + "): use ik_position(p)");
   constexpr py::ssize_t kSlots = Arm6::kSlots;
-  static const Op op({pose_arg()},
+  static const Op op({pose_target_arg()},
                      {Out("q", {kSlots, 6}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
                       Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      kNsPerTarget, [](const void* c, const auto& b) {
                        const ChainIK& k = binder::context<ChainIK>(c);
-                       arm6_kernel(*k.arm, k.limits, b.in[0], format_of(b), b.real(0), b.flags(1), b.flags(2),
+                       arm6_kernel(*k.arm, k.limits, b.in[0], pose_format(b), b.real(0), b.flags(1), b.flags(2),
                                    b.flags(3), b.status(4), b.m);
                      });
   return binder::call(op, &ik, {T}, out);
@@ -181,12 +175,12 @@ FreeJointIK make_free_joint_ik(const ChainPair& pair, py::handle lower_obj, py::
 // costs its own 6R solver (cached across calls), then the 6R solve per pose. T and free_value broadcast.
 py::object ik_free(const FreeJointIK& ik, py::handle T, py::handle value, py::handle out) {
   constexpr py::ssize_t kSlots = chain_ik::FreeJoint7::kSlots;
-  static const Op op({pose_arg(), Arg("free_value", {})},
+  static const Op op({pose_target_arg(), Arg("free_value", {})},
                      {Out("q", {kSlots, 7}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
                       Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      kNsPerTarget, [](const void* c, const auto& b) {
                        const FreeJointIK& k = binder::context<FreeJointIK>(c);
-                       if (format_of(b) == PoseFormat::Matrix)
+                       if (pose_format(b) == PoseFormat::Matrix)
                          chain_ik::ik_free_joint<PoseFormat::Matrix>(k.solver, k.lower, k.upper, b.in[0], b.in[1],
                                                                      b.real(0), b.flags(1), b.flags(2), b.flags(3),
                                                                      b.status(4), b.m);

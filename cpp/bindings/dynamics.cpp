@@ -38,25 +38,13 @@ using binder::Out;
 // The batch arguments: q (its revolute columns are angles), the other joint vectors, gravity (a parameter).
 Arg joints(const ChainDynamics& d, const char* name) { return Arg(name, {d.dof()}).rows_strided(); }
 Arg positions(const ChainDynamics& d) { return Arg("q", {d.dof()}, d.f64.angle_columns()).rows_strided(); }
-Arg gravity_arg() { return Arg("gravity", {3}).parameter().rows_strided(); }
 
-template <typename T>
-dynamics::Rows<T> rows(const binder::Block<T>& b, int k) {
-  return {b.in[k], b.stride[k]};
-}
-
-// Calls f(model) with the model of the active instruction-set level, in the block's precision.
-template <typename B, typename F>
-void on_model(const void* c, const B&, F&& f) {
-  using T = typename B::Scalar;
-  with_model<T>(binder::context<ChainDynamics>(c), f);
-}
 
 py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g,
                       py::handle out) {
   const Op op({positions(d), joints(d, "qd"), joints(d, "qdd"), gravity_arg()}, {Out("tau", {d.dof()})},
               kNsPerSample, [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   const auto qd = rows(b, 1), qdd = rows(b, 2);
                   dynamics::rnea_k(model, rows(b, 0), &qd, &qdd, rows(b, 3), b.real(0), 0, b.m, b.stream);
                 });
@@ -66,7 +54,7 @@ py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::h
 
 py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g, py::handle out) {
   const Op op({positions(d), gravity_arg()}, {Out("tau", {d.dof()})}, kNsPerSample, [](const void* c, const auto& b) {
-    on_model(c, b, [&](const auto& model) {
+    on_model<ChainDynamics>(c, b, [&](const auto& model) {
       dynamics::rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m, b.stream);
     });
   });
@@ -76,7 +64,7 @@ py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g, py:
 py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g, py::handle out) {
   const Op op({positions(d), joints(d, "qd"), gravity_arg()}, {Out("h", {d.dof()})}, kNsPerSample,
               [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   const auto qd = rows(b, 1);
                   dynamics::rnea_k(model, rows(b, 0), &qd, nullptr, rows(b, 2), b.real(0), 0, b.m, b.stream);
                 });
@@ -84,29 +72,23 @@ py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, 
   return binder::call(op, &d, {q, qd, g}, out);
 }
 
-namespace {  // internal: it holds a reference to a hidden type (GCC's -Wattributes)
-struct MassMatrix {
-  const ChainDynamics& d;
-  dynamics::SymmetricLayout layout;
-};
-}  // namespace
 
 py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
-  const MassMatrix context{d, symmetric_layout(layout_name)};
-  const Shape trailing = symmetric_shape(d.dof(), context.layout);
-  const binder::Trailing shape = trailing.size() == 1 ? binder::Trailing{trailing[0]} : binder::Trailing{trailing[0], trailing[1]};
-  const Op op({positions(d)}, {Out("A", shape)}, kNsPerSample, [](const void* c, const auto& b) {
-    using T = typename std::decay_t<decltype(b)>::Scalar;
-    const MassMatrix& mm = binder::context<MassMatrix>(c);
-    with_model<T>(mm.d, [&](const auto& model) { dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout); });
-  });
+  const MassMatrix<ChainDynamics> context{d, symmetric_layout(layout_name)};
+  const Op op({positions(d)}, {Out("A", symmetric_shape(d.dof(), context.layout))}, kNsPerSample,
+              [](const void* c, const auto& b) {
+                const auto& mm = binder::context<MassMatrix<ChainDynamics>>(c);
+                with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
+                  dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
+                });
+              });
   return binder::call(op, &context, {q}, out);
 }
 
 py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd, py::handle out) {
   const Op op({positions(d), joints(d, "qd")}, {Out("C", {d.dof(), d.dof()})}, 2 * kNsPerSample,
               [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   dynamics::coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m, b.stream);
                 });
               });
@@ -117,7 +99,7 @@ py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::ha
                      py::handle out) {
   const Op op({positions(d), joints(d, "qd"), joints(d, "tau"), gravity_arg()}, {Out("qdd", {d.dof()})},
               2 * kNsPerSample, [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   dynamics::aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m, b.stream);
                 });
               });

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "binder.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/model.hpp"
@@ -90,10 +91,35 @@ inline dynamics::SymmetricLayout symmetric_layout(py::handle layout) {
   if (name == "packed") return dynamics::SymmetricLayout::Packed;
   throw py::value_error("layout must be 'full', 'lower' or 'packed', got '" + name + "'");
 }
-inline Shape symmetric_shape(py::ssize_t n, dynamics::SymmetricLayout layout) {
+inline binder::Trailing symmetric_shape(py::ssize_t n, dynamics::SymmetricLayout layout) {
   if (layout == dynamics::SymmetricLayout::Packed) return {n * (n + 1) / 2};
   return {n, n};
 }
+
+// ---------------------------------------------------------------- the binder's side
+
+// Gravity (3,): a parameter (it does not decide the dtype), read with a row stride (0: shared).
+inline binder::Arg gravity_arg() { return binder::Arg("gravity", {3}).parameter().rows_strided(); }
+
+// Argument k of a block as the dynamics kernels read it.
+template <typename T>
+Rows<T> rows(const binder::Block<T>& b, int k) {
+  return {b.in[k], b.stride[k]};
+}
+
+// Calls f(model) with the model (of Dynamics, the kernel's context) of the active level, in the
+// block's precision.
+template <typename Dynamics, typename B, typename F>
+void on_model(const void* context, const B&, F&& f) {
+  with_model<typename B::Scalar>(binder::context<Dynamics>(context), f);
+}
+
+// The mass matrix's context: the model and the output layout.
+template <typename Dynamics>
+struct MassMatrix {
+  const Dynamics& d;
+  dynamics::SymmetricLayout layout;
+};
 
 // ---------------------------------------------------------------- fixed base
 

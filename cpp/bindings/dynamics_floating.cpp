@@ -84,24 +84,13 @@ using binder::Out;
 // q (..., nq) = [x, y, z, qx, qy, qz, qw, joints]: the revolute joints' huge angles reduced exactly.
 Arg positions(const FloatingDynamics& d) { return Arg("q", {d.f64.nq()}, d.angles).rows_strided(); }
 Arg rates(const FloatingDynamics& d, const char* name) { return Arg(name, {d.f64.nv()}).rows_strided(); }
-Arg gravity_arg() { return Arg("gravity", {3}).parameter().rows_strided(); }
 
-template <typename T>
-dynamics::Rows<T> rows(const binder::Block<T>& b, int k) {
-  return {b.in[k], b.stride[k]};
-}
-
-// Calls f(model) with the floating model of the active instruction-set level, in the block's precision.
-template <typename B, typename F>
-void on_model(const void* c, const B&, F&& f) {
-  with_model<typename B::Scalar>(binder::context<FloatingDynamics>(c), f);
-}
 
 py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g,
                          py::handle out) {
   const Op op({positions(d), rates(d, "v"), rates(d, "a"), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating,
               [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<FloatingDynamics>(c, b, [&](const auto& model) {
                   const auto v = rows(b, 1), acc = rows(b, 2);
                   dynamics::floating_rnea_k(model, rows(b, 0), &v, &acc, rows(b, 3), b.real(0), 0, b.m, b.stream);
                 });
@@ -111,7 +100,7 @@ py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, 
 
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g, py::handle out) {
   const Op op({positions(d), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating, [](const void* c, const auto& b) {
-    on_model(c, b, [&](const auto& model) {
+    on_model<FloatingDynamics>(c, b, [&](const auto& model) {
       dynamics::floating_rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m, b.stream);
     });
   });
@@ -121,7 +110,7 @@ py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle 
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g, py::handle out) {
   const Op op({positions(d), rates(d, "v"), gravity_arg()}, {Out("h", {d.f64.nv()})}, kNsFloating,
               [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<FloatingDynamics>(c, b, [&](const auto& model) {
                   const auto v = rows(b, 1);
                   dynamics::floating_rnea_k(model, rows(b, 0), &v, nullptr, rows(b, 2), b.real(0), 0, b.m, b.stream);
                 });
@@ -129,20 +118,12 @@ py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handl
   return binder::call(op, &d, {q, v, g}, out);
 }
 
-namespace {  // internal: it holds a reference to a hidden type (GCC's -Wattributes)
-struct MassMatrix {
-  const FloatingDynamics& d;
-  dynamics::SymmetricLayout layout;
-};
-}  // namespace
 
 py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
-  const MassMatrix context{d, symmetric_layout(layout_name)};
-  const Shape trailing = symmetric_shape(d.f64.nv(), context.layout);
-  const binder::Trailing shape =
-      trailing.size() == 1 ? binder::Trailing{trailing[0]} : binder::Trailing{trailing[0], trailing[1]};
-  const Op op({positions(d)}, {Out("A", shape)}, kNsFloating, [](const void* c, const auto& b) {
-    const MassMatrix& mm = binder::context<MassMatrix>(c);
+  const MassMatrix<FloatingDynamics> context{d, symmetric_layout(layout_name)};
+  const Op op({positions(d)}, {Out("A", symmetric_shape(d.f64.nv(), context.layout))}, kNsFloating,
+              [](const void* c, const auto& b) {
+    const auto& mm = binder::context<MassMatrix<FloatingDynamics>>(c);
     with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
       dynamics::floating_crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
     });
@@ -154,7 +135,7 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
                         py::handle out) {
   const Op op({positions(d), rates(d, "v"), rates(d, "tau"), gravity_arg()}, {Out("a", {d.f64.nv()})},
               2 * kNsFloating, [](const void* c, const auto& b) {
-                on_model(c, b, [&](const auto& model) {
+                on_model<FloatingDynamics>(c, b, [&](const auto& model) {
                   dynamics::floating_aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m,
                                            b.stream);
                 });
@@ -165,7 +146,7 @@ py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, p
 py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v, py::handle out) {
   const py::ssize_t nv = d.f64.nv();
   const Op op({positions(d), rates(d, "v")}, {Out("C", {nv, nv})}, 3 * kNsFloating, [](const void* c, const auto& b) {
-    on_model(c, b, [&](const auto& model) {
+    on_model<FloatingDynamics>(c, b, [&](const auto& model) {
       dynamics::floating_coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m, b.stream);
     });
   });
@@ -176,7 +157,7 @@ template <bool Jacobian>
 py::object floating_com(const FloatingDynamics& d, py::handle q, py::handle out) {
   const Out result = Jacobian ? Out("J_com", {3, d.f64.nv()}) : Out("com", {3});
   const Op op({positions(d)}, {result}, kNsFloating, [](const void* c, const auto& b) {
-    on_model(c, b, [&](const auto& model) {
+    on_model<FloatingDynamics>(c, b, [&](const auto& model) {
       dynamics::floating_com_k(model, rows(b, 0), b.real(0), Jacobian, 0, b.m, b.stream);
     });
   });

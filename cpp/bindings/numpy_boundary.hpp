@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "binder.hpp"
 #include "buffer_cache.hpp"
 #include "spotkin/arm.hpp"
 #include "spotkin/parallel.hpp"
@@ -199,6 +200,14 @@ py::array_t<T, py::array::c_style> seed_angles(const py::array& seed, std::ptrdi
     if (!is_float32(seed)) return contiguous<float>(seed_angles<double>(seed, width, angle_columns));
   }
   return reduce_seed_angles(contiguous<T>(seed), width, angle_columns);
+}
+
+// A pose target T: (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw] (the arm's and the 6R / 7R
+// solvers'), and the format of a block's argument k (Block::shape: which of the two it has).
+inline binder::Arg pose_target_arg() { return binder::Arg("T", {4, 4}).or_shape({7}); }
+template <typename B>
+PoseFormat pose_format(const B& b, int k = 0) {
+  return b.shape[k] == 0 ? PoseFormat::Matrix : PoseFormat::PositionQuaternion;
 }
 
 // Every column of a width-n joint vector is an angle.
