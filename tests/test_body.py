@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 import spotkin as sk
 from conftest import BATCH_SHAPES
+from spotkin.reference import body as ref_body
 from spotkin.reference import leg as ref_leg
 
 # the reference cross-checks run at every instruction-set level the CPU has (tests/conftest.py)
@@ -334,3 +335,55 @@ def test_threads_bit_identical_and_concurrent_callers(rng):
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda c: SPOT.body_ik(c, FEET).q, chunks))
     np.testing.assert_array_equal(np.concatenate(results), one.q)
+
+
+# ------------------------------------------------------------------ body_transform against the reference
+
+
+def _pose_samples(rng):
+    """Euler poses (a huge angle), rigid matrices, unit quaternions, and invalid ones of each form."""
+    euler = np.hstack([rng.normal(size=(20, 3)), rng.uniform(-4, 4, (20, 3))])
+    euler[3, 4] = 1e7  # a huge angle: reduced exactly
+    euler[4, 0] = np.nan
+    quat = rng.normal(size=(12, 4))
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    quats = np.hstack([rng.normal(size=(12, 3)), quat])
+    quats[1, 3:] *= 1 + 5e-7  # within 1e-6 of unit norm: accepted, not renormalised
+    quats[2, 3:] *= 1 + 5e-6  # beyond: invalid
+    quats[3, 6] = np.inf
+    mats = np.tile(np.eye(4), (10, 1, 1))
+    mats[:, :3, :3] = Rotation.random(10, random_state=1).as_matrix()
+    mats[:, :3, 3] = rng.normal(size=(10, 3))
+    mats[1, :3, :3] *= -1  # det -1
+    mats[2, 3, 0] = 1e-8  # last row off by more than 1e-9
+    mats[3, 0, 0] += 2e-6  # not orthonormal to 1e-6
+    mats[4, 3, 0] = 5e-10  # within 1e-9: returned as given
+    return euler, quats, mats
+
+
+@pytest.mark.parametrize("seq", ["XYZ", "xyz", "ZYX", "zxz", "YXY"])
+def test_body_transform_matches_the_reference_in_every_form(seq, rng):
+    for poses in _pose_samples(rng):
+        T = sk.body_transform(poses, seq)
+        assert T.shape == (*poses.shape[: -2 if poses.ndim == 3 else -1], 4, 4) and T.dtype == np.float64
+        for pose, got in zip(poses, T):
+            want = ref_body.body_transform(pose, seq)
+            assert np.isnan(got).all() == np.isnan(want).all(), (pose, got, want)
+            np.testing.assert_allclose(got, want, atol=1e-14, rtol=0)
+            assert np.array_equal(sk.body_transform(pose, seq), got, equal_nan=True)  # one sample: same bits
+
+
+def test_body_transform_broadcasts_writes_out_and_keeps_float64_for_float32(rng):
+    euler, _, _ = _pose_samples(rng)
+    poses = euler[5:11].reshape(3, 1, 2, 6)
+    out = np.empty((3, 1, 2, 4, 4))
+    assert sk.body_transform(poses, out=out) is out
+    np.testing.assert_array_equal(out, sk.body_transform(euler[5:11]).reshape(3, 1, 2, 4, 4))
+    assert sk.body_transform(poses.astype(np.float32)).dtype == np.float64
+    assert sk.body_transform(np.empty((0, 6))).shape == (0, 4, 4)
+    strided = np.asfortranarray(euler[5:11])
+    np.testing.assert_array_equal(sk.body_transform(strided), sk.body_transform(euler[5:11]))
+    with pytest.raises(ValueError, match="body_pose"):
+        sk.body_transform(np.zeros(5))
+    with pytest.raises(TypeError, match="out"):
+        sk.body_transform(euler[5], out=np.empty((4, 4), np.float32))

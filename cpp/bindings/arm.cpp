@@ -104,11 +104,11 @@ void bind_arm(py::module_& m) {
       .def(py::init(&make_arm), py::arg("mount"), py::arg("upper_arm"), py::arg("forearm"),
            py::arg("forearm_offset"), py::arg("hand"), py::arg("tool"), py::arg("lower_limits"),
            py::arg("upper_limits"))
-      .def("fk", &fk, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("jacobian", &jacobian, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
+      .def("fk", &fk, py::arg("q"), py::arg("out") = py::none())
+      .def("jacobian", &jacobian, py::arg("q"), py::arg("out") = py::none())
       .def("singularity", &singularity, py::arg("q"))
-      .def("ik", &ik, py::arg("T"), py::arg("seed") = py::none(), py::kw_only(), py::arg("out") = py::none())
-      .def("ik_all", &ik_all, py::arg("T"), py::arg("seed") = py::none(), py::kw_only(), py::arg("out") = py::none());
+      .def("ik", &ik, py::arg("T"), py::arg("seed") = py::none(), py::arg("out") = py::none())
+      .def("ik_all", &ik_all, py::arg("T"), py::arg("seed") = py::none(), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -109,7 +110,7 @@ std::size_t element_size(Kind kind) {
 
 const char* dtype_name(Kind kind, bool single) {
   if (kind == Kind::Bool) return "bool";
-  if (kind == Kind::Status) return "int8";
+  if (kind == Kind::Status || kind == Kind::Code) return "int8";
   if (kind == Kind::Index) return "int64";
   return single ? "float32" : "float64";
 }
@@ -117,28 +118,32 @@ const char* dtype_name(Kind kind, bool single) {
 // Checks a caller's out= array for output k; TypeError (dtype) or ValueError (shape, layout).
 template <typename T>
 py::array checked_out(py::handle obj, const Out& spec, int k, const Shape& shape) {
-  const std::string label = "out[" + std::to_string(k) + "] (" + spec.name + ")";
+  const auto label = [&] {
+    return "out[" + std::to_string(k) + "] (" + spec.name + ")";
+  };  // for errors only
   if (!py::isinstance<py::array>(obj) || is_masked_array(obj))
-    throw py::type_error(label + " must be a NumPy array, got " +
+    throw py::type_error(label() + " must be a NumPy array, got " +
                          std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
   auto arr = py::reinterpret_borrow<py::array>(obj);
   bool dtype_ok = false;
   switch (spec.kind) {
     case Kind::Real: dtype_ok = py::array_t<T>::check_(arr); break;
     case Kind::Bool: dtype_ok = py::array_t<bool>::check_(arr); break;
-    case Kind::Status: dtype_ok = py::array_t<std::int8_t>::check_(arr); break;
+    case Kind::Status:
+    case Kind::Code: dtype_ok = py::array_t<std::int8_t>::check_(arr); break;
     case Kind::Index: dtype_ok = py::array_t<std::int64_t>::check_(arr); break;
   }
   if (!dtype_ok)
-    throw py::type_error(label + " must have dtype " + dtype_name(spec.kind, std::is_same_v<T, float>) + ", got " +
+    throw py::type_error(label() + " must have dtype " +
+                         dtype_name(spec.kind, std::is_same_v<T, float>) + ", got " +
                          std::string(py::str(arr.dtype())));
   if (Shape(arr.shape(), arr.shape() + arr.ndim()) != shape)
-    throw py::value_error(label + " must have shape " + format_shape(shape) + ", got " +
+    throw py::value_error(label() + " must have shape " + format_shape(shape) + ", got " +
                           format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())));
   constexpr int kNeeded = py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_ | py::detail::npy_api::NPY_ARRAY_ALIGNED_ |
                           py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   if ((py::detail::array_proxy(arr.ptr())->flags & kNeeded) != kNeeded)
-    throw py::value_error(label + " must be a C-contiguous, aligned and writeable array");
+    throw py::value_error(label() + " must be a C-contiguous, aligned and writeable array");
   return arr;
 }
 
@@ -159,7 +164,8 @@ py::array new_output(const Out& spec, const Shape& leading) {
       case Kind::Real: return new_array<T>(leading, trailing);
       case Kind::Bool: return new_array<bool>(leading, trailing);
       case Kind::Index: return new_array<std::int64_t>(leading, trailing);
-      case Kind::Status: break;
+      case Kind::Status:
+      case Kind::Code: break;
     }
     return new_array<std::int8_t>(leading, trailing);
   }
@@ -465,9 +471,171 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
   return std::move(result);
 }
 
+// The single-sample fast path (issue: a control loop's call). Every argument one sample with
+// no leading dimension: an ndarray already in the working dtype, C-contiguous and aligned,
+// or a short tuple / list of Python floats and ints (float64, as NumPy reads it); nothing
+// NaN, Inf or huge where the op scans; out= None or exactly right with no overlap. Then the
+// kernel runs inline on the caller's memory: no conversion, no shape vectors, no threads,
+// no scans of spans. Anything else returns a null object and takes the general path, which
+// gives the same bits (a single sample is one block there too).
+constexpr int kSeqMax = 16;  // a tuple / list argument's longest width on the fast path
+
+enum class Given : std::uint8_t { None, F64, F32, Seq, Other };
+
+Given classify(py::handle obj) {
+  using api = py::detail::npy_api;
+  PyObject* o = obj.ptr();
+  if (o == Py_None) return Given::None;
+  if (Py_TYPE(o) == reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) {
+    const auto* a = py::detail::array_proxy(o);
+    const auto* d = py::detail::array_descriptor_proxy(a->descr);
+    constexpr int kNeeded = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_ALIGNED_;
+    if ((a->flags & kNeeded) != kNeeded || d->byteorder == '>') return Given::Other;
+    return d->type_num == api::NPY_DOUBLE_  ? Given::F64
+           : d->type_num == api::NPY_FLOAT_ ? Given::F32
+                                            : Given::Other;
+  }
+  if (PyTuple_CheckExact(o) || PyList_CheckExact(o)) return Given::Seq;
+  return Given::Other;
+}
+
+template <typename T>
+py::object call_single(const Op& op, const void* context, const py::handle* objs,
+                       const Given* kinds, py::handle out) {
+  Block<T> block;
+  T seq_rows[kMaxArgs][kSeqMax];
+  std::ptrdiff_t widths[kMaxArgs] = {};
+  for (int k = 0; k < op.n_args; ++k) {
+    const Arg& spec = op.args[k];
+    PyObject* o = objs[k].ptr();
+    if (kinds[k] == Given::None) {
+      if (!spec.optional) return {};
+      continue;
+    }
+    int s = 0;
+    if (kinds[k] == Given::Seq) {  // a flat sequence of Python numbers: shape (len,)
+      const Py_ssize_t len = PySequence_Fast_GET_SIZE(o);
+      while (s < spec.n_shapes && !(spec.shapes[s].ndim == 1 && spec.shapes[s].dim[0] == len)) ++s;
+      if (s == spec.n_shapes || len > kSeqMax) return {};
+      PyObject** items = PySequence_Fast_ITEMS(o);
+      for (Py_ssize_t j = 0; j < len; ++j) {
+        double v;
+        if (PyFloat_CheckExact(items[j])) {
+          v = PyFloat_AS_DOUBLE(items[j]);
+        } else if (PyLong_CheckExact(items[j])) {
+          v = PyLong_AsDouble(items[j]);
+          if (v == -1.0 && PyErr_Occurred()) return PyErr_Clear(), py::object();
+        } else {
+          return {};
+        }
+        if (std::is_same_v<T, float> &&
+            !(std::fabs(v) <= double(std::numeric_limits<float>::max())))
+          return {};
+        seq_rows[k][j] = T(v);
+      }
+      block.in[k] = seq_rows[k];
+    } else {
+      const auto* a = py::detail::array_proxy(o);
+      for (; s < spec.n_shapes; ++s) {
+        const Trailing& t = spec.shapes[s];
+        bool ok = a->nd == t.ndim;
+        for (int d = 0; ok && d < t.ndim; ++d) ok = a->dimensions[d] == t.dim[d];
+        if (ok) break;
+      }
+      if (s == spec.n_shapes) return {};  // a batch, or a wrong shape: the general path says which
+      block.in[k] = reinterpret_cast<const T*>(a->data);
+    }
+    block.shape[k] = s;
+    widths[k] = spec.shapes[s].size();
+    block.stride[k] = widths[k];
+    if (spec.angles[s] ||
+        spec.nan_groups) {  // the scan of run_span: NaN, Inf or huge goes the general way
+      const double limit = std::is_same_v<T, float> ? double(float(vector_math::kReducibleLimit))
+                                                    : vector_math::kReducibleLimit;
+      for (std::ptrdiff_t j = 0; j < widths[k]; ++j)
+        if (!(std::fabs(double(block.in[k][j])) <= limit)) return {};
+    }
+  }
+
+  Output outs[kMaxOuts];
+  py::handle given[kMaxOuts];
+  if (!out.is_none()) {
+    if (PyTuple_CheckExact(out.ptr()) && PyTuple_GET_SIZE(out.ptr()) == op.n_outs) {
+      for (int o = 0; o < op.n_outs; ++o) given[o] = PyTuple_GET_ITEM(out.ptr(), o);
+    } else if (op.n_outs == 1 && classify(out) != Given::Seq) {  // an array (checked below), not a sequence
+      given[0] = out;
+    } else {
+      return {};
+    }
+  }
+  static const Shape kNoLeading;
+  for (int o = 0; o < op.n_outs; ++o) {
+    const Out& spec = op.outs[o];
+    Output& r = outs[o];
+    r.width = spec.shape.size();
+    if (given[o] && !given[o].is_none()) {
+      Shape shape(spec.shape.dim, spec.shape.dim + spec.shape.ndim);
+      py::array checked = checked_out<T>(given[o], spec, o, shape);
+      for (int k = 0; k < op.n_args; ++k)
+        if (block.in[k] && overlaps(checked, block.in[k], sizeof(T) * std::size_t(widths[k])))
+          return {};
+      r.data = checked.mutable_data();
+      r.array = std::move(checked);
+      continue;
+    }
+    if (spec.kind == Kind::Status && spec.shape.ndim == 0) {
+      r.data = &r.single_status;
+      r.scalar = true;
+      continue;
+    }
+    py::array made = new_output<T>(spec, kNoLeading);
+    r.data = made.mutable_data();
+    r.array = std::move(made);
+  }
+  block.first = 0;
+  block.m = 1;
+  for (int o = 0; o < op.n_outs; ++o) block.out[o] = outs[o].data;
+  if constexpr (std::is_same_v<T, float>) {
+    op.f32(context, block);
+  } else {
+    op.f64(context, block);
+  }
+  if (op.n_outs == 1) return outs[0].result();
+  PyObject* result = PyTuple_New(op.n_outs);
+  if (!result) throw py::error_already_set();
+  for (int o = 0; o < op.n_outs; ++o) PyTuple_SET_ITEM(result, o, outs[o].result().release().ptr());
+  return py::reinterpret_steal<py::object>(result);
+}
+
 }  // namespace
 
 py::object call(const Op& op, const void* context, std::initializer_list<py::handle> arg_list, py::handle out) {
+  {  // one sample, as a control loop passes it
+    Given kinds[kMaxArgs];
+    bool any32 = false, all32 = true, fast = true, f32_array = false, f64_array = false;
+    int k = 0;
+    for (py::handle obj : arg_list) {
+      kinds[k] = classify(obj);
+      fast &= kinds[k] != Given::Other;
+      f32_array |= kinds[k] == Given::F32;
+      f64_array |= kinds[k] == Given::F64;
+      if (op.args[k].primary && kinds[k] != Given::None) {
+        any32 |= kinds[k] == Given::F32;
+        all32 &= kinds[k] == Given::F32;
+      }
+      ++k;
+    }
+    // every array already in the working dtype (a parameter of the other one: the general path's casts)
+    if (fast) {
+      py::object result;
+      if (any32 && all32 && op.float32 && !f64_array) {
+        result = call_single<float>(op, context, arg_list.begin(), kinds, out);
+      } else if (!f32_array) {
+        result = call_single<double>(op, context, arg_list.begin(), kinds, out);
+      }
+      if (result) return result;
+    }
+  }
   py::object arrays[kMaxArgs];  // null until converted (a default py::array would be a new empty array)
   bool present[kMaxArgs] = {};
   bool single = false, any_primary = false;

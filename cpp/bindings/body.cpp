@@ -6,6 +6,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "bindings.hpp"
@@ -17,16 +18,7 @@ namespace spotkin::bindings {
 
 namespace body_glue {
 
-// The Euler sequence packed in one int by the façade: axis[0] + 3 axis[1] + 9 axis[2],
-// plus 27 when the angles are applied in reverse order (extrinsic sequences).
-EulerSequence make_sequence(int code) {
-  if (code < 0 || code >= 54) throw py::value_error("invalid Euler sequence code " + std::to_string(code));
-  EulerSequence seq;
-  seq.axis[0] = code % 3, seq.axis[1] = code / 3 % 3, seq.axis[2] = code / 9 % 3;
-  const bool reversed = code >= 27;
-  for (int k = 0; k < 3; ++k) seq.order[k] = reversed ? 2 - k : k;
-  return seq;
-}
+EulerSequence make_sequence(int code) { return EulerSequence::from_code(code); }
 
 // The Euler angles' columns of a body pose: reduced exactly when huge.
 std::uint64_t euler_columns(BodyPoseFormat format) {
@@ -77,16 +69,22 @@ struct Solve {
 py::object ik(const Body& body, py::handle pose, int sequence, py::handle feet, py::handle seed,
               bool nearest_fallback, py::handle out) {
   const py::ssize_t n_legs = body.n_legs(), w = body.width();
-  const Op op({pose_arg(false), Arg("feet", {n_legs, 3}).rows_strided(),
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({pose_arg(false), Arg("feet", {n_legs, 3}).rows_strided(),
                Arg("seed", {w}, all_angles(int(w))).maybe_none().parameter()},
-              {Out("q", {w}), Out("status", {n_legs}, Kind::Status)}, 55.0, [](const void* c, const auto& b) {
+              {Out("q", {w}), Out("status", {n_legs}, Kind::Status)}, 55.0,
+              [](const void* c, const auto& b) {
                 const Solve& s = binder::context<Solve>(c);
                 // a shared stance is read with stride 0; the kernel reads either form
-                kernels::body_ik(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.stride[1] == 0, b.in[2], b.real(0),
-                                 b.status(1), b.m, s.nearest_fallback);
+                kernels::body_ik(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.stride[1] == 0,
+                                 b.in[2], b.real(0), b.status(1), b.m, s.nearest_fallback);
               });
+  };
   const Solve context{body, make_sequence(sequence), nearest_fallback};
-  py::tuple result = binder::call(op, &context, {pose, feet, seed}, out);
+  py::tuple result =
+      ops.with({std::uint64_t(n_legs), std::uint64_t(w), 0}, make,
+               [&](const Op& op) { return binder::call(op, &context, {pose, feet, seed}, out); });
   return body_ik_result(result[0], result[1]);
 }
 
@@ -153,17 +151,40 @@ py::object fk_or_jacobian(const Body& body, py::handle pose, int sequence, py::h
   const py::ssize_t n_legs = body.n_legs(), w = body.width();
   const int groups = body.leg_contiguous() ? int(n_legs) : 1;
   const Out result = Jacobian ? Out("J", {w, 6 + w}) : Out("feet", {n_legs, 3});
-  const Op op({pose_arg(true), Arg(q_name.c_str(), {w}, all_angles(int(w))).nan_rows(groups)}, {result}, 55.0,
-              [](const void* c, const auto& b) {
+  static const char* const q12 =
+      "q12";  // the joints' name in a cached op: a literal, never the caller's string
+  const char* const q_label = q_name == q12 ? q12 : "q";
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({pose_arg(true), Arg(q_label, {w}, all_angles(int(w))).nan_rows(groups)}, {result},
+              55.0, [](const void* c, const auto& b) {
                 const Posed& s = binder::context<Posed>(c);
                 if constexpr (Jacobian) {
-                  kernels::body_jacobian(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.real(0), b.m);
+                  kernels::body_jacobian(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.real(0),
+                                         b.m);
                 } else {
                   kernels::body_fk(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.real(0), b.m);
                 }
               });
+  };
   const Posed context{body, make_sequence(sequence)};
-  return binder::call(op, &context, {pose, q}, out);
+  return ops.with({std::uint64_t(n_legs), std::uint64_t(w),
+                   std::uint64_t(groups) | (std::uint64_t(q_label == q12) << 32)},
+                  make, [&](const Op& op) { return binder::call(op, &context, {pose, q}, out); });
+}
+
+// body_pose (any form) -> the world <- body transforms (..., 4, 4), float64; NaN for an invalid pose.
+py::object transform(py::handle pose, int sequence, py::handle out) {
+  static const Op op =
+      Op({pose_arg(false)}, {Out("T", {4, 4})}, 30.0, [](const void* c, const auto& b) {
+        if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>) {  // float64_only
+          const EulerSequence& seq = binder::context<EulerSequence>(c);
+          for (std::ptrdiff_t i = 0; i < b.m; ++i)
+            body_batch::pose_transform(b.in[0] + b.stride[0] * i, format_of(b), seq, b.real(0) + 16 * i);
+        }
+      }).float64_only();
+  const EulerSequence seq = make_sequence(sequence);
+  return binder::call(op, &seq, {pose}, out);
 }
 
 // legs: sk.Leg cores; hips (n, 3); columns (n, 3) integers (None: leg l's
@@ -215,16 +236,16 @@ void bind_body(py::module_& m) {
         slot = type.release().ptr();
       },
       py::arg("type"));
+  m.def("body_transform", &transform, py::arg("body_pose"), py::arg("sequence"), py::arg("out") = py::none());
   py::class_<Body>(m, "Body")
       .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"), py::arg("columns") = py::none())
       .def_property_readonly("n_legs", &Body::n_legs)
       .def("ik", &ik, py::arg("body_pose"), py::arg("sequence"), py::arg("feet"), py::arg("seed"),
-           py::arg("nearest_fallback") = true, py::kw_only(), py::arg("out") = py::none())
+           py::arg("nearest_fallback") = true, py::arg("out") = py::none())
       .def("ik_one", &ik_one, py::arg("body_pose"), py::arg("feet"))
-      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::kw_only(),
-           py::arg("out") = py::none(), py::arg("q_name") = "q")
+      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::arg("out") = py::none(), py::arg("q_name") = "q")
       .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
-           py::kw_only(), py::arg("out") = py::none(), py::arg("q_name") = "q");
+           py::arg("out") = py::none(), py::arg("q_name") = "q");
 }
 
 }  // namespace spotkin::bindings

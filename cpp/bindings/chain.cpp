@@ -39,17 +39,33 @@ const auto& chain_of(const void* c, const B&) {
   return binder::context<ChainPair>(c).get(typename B::Scalar{});
 }
 
+// The key of a chain's cached ops (binder::OpCache): its dof, its angle columns and `extra`.
+binder::OpCache::Key key_of(const ChainPair& chain, std::uint64_t extra = 0) {
+  return {std::uint64_t(chain.f64.dof()), revolute_columns(chain), extra};
+}
+
 py::object fk(const ChainPair& chain, py::handle q, py::handle out) {
-  const Op op({joints_arg(chain)}, {Out("T", {4, 4})}, 40.0,
-              [](const void* c, const auto& b) { kernels::chain_fk(chain_of(c, b), b.in[0], b.real(0), b.m); });
-  return binder::call(op, &chain, {q}, out);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({joints_arg(chain)}, {Out("T", {4, 4})}, 40.0, [](const void* c, const auto& b) {
+      kernels::chain_fk(chain_of(c, b), b.in[0], b.real(0), b.m);
+    });
+  };
+  return ops.with(key_of(chain), make,
+                  [&](const Op& op) { return binder::call(op, &chain, {q}, out); });
 }
 
 py::object frames(const ChainPair& chain, py::handle q, py::handle out) {
   const py::ssize_t n_frames = chain.f64.dof() + 2;
-  const Op op({joints_arg(chain)}, {Out("frames", {n_frames, 4, 4})}, 160.0,
-              [](const void* c, const auto& b) { kernels::chain_frames(chain_of(c, b), b.in[0], b.real(0), b.m); });
-  return binder::call(op, &chain, {q}, out);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({joints_arg(chain)}, {Out("frames", {n_frames, 4, 4})}, 160.0,
+              [](const void* c, const auto& b) {
+                kernels::chain_frames(chain_of(c, b), b.in[0], b.real(0), b.m);
+              });
+  };
+  return ops.with(key_of(chain), make,
+                  [&](const Op& op) { return binder::call(op, &chain, {q}, out); });
 }
 
 struct Jacobian {
@@ -61,13 +77,18 @@ struct Jacobian {
 };
 
 py::object jacobian(const ChainPair& chain, py::handle q, int rows, bool in_tool_frame, py::handle out) {
-  const Op op({joints_arg(chain)}, {Out("J", {rows, chain.f64.dof()})}, 40.0, [](const void* c, const auto& b) {
-    const Jacobian& j = binder::context<Jacobian>(c);
-    kernels::chain_jacobian(j.chain.get(typename std::decay_t<decltype(b)>::Scalar{}), b.in[0], b.real(0), b.m,
-                            j.rows, j.in_tool_frame);
-  });
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({joints_arg(chain)}, {Out("J", {rows, chain.f64.dof()})}, 40.0,
+              [](const void* c, const auto& b) {
+                const Jacobian& j = binder::context<Jacobian>(c);
+                kernels::chain_jacobian(j.chain.get(typename std::decay_t<decltype(b)>::Scalar{}),
+                                        b.in[0], b.real(0), b.m, j.rows, j.in_tool_frame);
+              });
+  };
   const Jacobian context{chain, rows, in_tool_frame};
-  return binder::call(op, &context, {q}, out);
+  return ops.with(key_of(chain, std::uint64_t(rows)), make,
+                  [&](const Op& op) { return binder::call(op, &context, {q}, out); });
 }
 
 // J_point(frame): point in [0, dof + 1], frame in [-1, dof + 1] (-1: the reference frame's axes).
@@ -80,13 +101,17 @@ py::object point_jacobian(const ChainPair& chain, py::handle q, int rows, int po
   if (frame < -1 || frame > n + 1)
     throw py::value_error("frame must be a frame index in [0, " + std::to_string(n + 1) + "], got " +
                           std::to_string(frame));
-  const Op op({joints_arg(chain)}, {Out("J", {rows, n})}, 40.0, [](const void* c, const auto& b) {
-    const Jacobian& j = binder::context<Jacobian>(c);
-    kernels::chain_point_jacobian(j.chain.get(typename std::decay_t<decltype(b)>::Scalar{}), b.in[0], b.real(0),
-                                  b.m, j.rows, j.point, j.frame);
-  });
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({joints_arg(chain)}, {Out("J", {rows, n})}, 40.0, [](const void* c, const auto& b) {
+      const Jacobian& j = binder::context<Jacobian>(c);
+      kernels::chain_point_jacobian(j.chain.get(typename std::decay_t<decltype(b)>::Scalar{}),
+                                    b.in[0], b.real(0), b.m, j.rows, j.point, j.frame);
+    });
+  };
   const Jacobian context{chain, rows, false, point, frame};
-  return binder::call(op, &context, {q}, out);
+  return ops.with(key_of(chain, std::uint64_t(rows)), make,
+                  [&](const Op& op) { return binder::call(op, &context, {q}, out); });
 }
 
 // The compatibility residual ||(I - J J^+) e|| of the final error e against the Jacobian at the
@@ -185,12 +210,11 @@ void bind_chain(py::module_& m) {
       .def_static("from_joints", &chain_from_joints, py::arg("placements"), py::arg("axes"), py::arg("types"),
                   py::arg("base") = py::none(), py::arg("tool") = py::none())
       .def_property_readonly("dof", [](const ChainPair& c) { return c.f64.dof(); })
-      .def("fk", &fk, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("frames", &frames, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"), py::kw_only(),
-           py::arg("out") = py::none())
+      .def("fk", &fk, py::arg("q"), py::arg("out") = py::none())
+      .def("frames", &frames, py::arg("q"), py::arg("out") = py::none())
+      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"), py::arg("out") = py::none())
       .def("point_jacobian", &point_jacobian, py::arg("q"), py::arg("rows"), py::arg("point"), py::arg("frame"),
-           py::kw_only(), py::arg("out") = py::none())
+           py::arg("out") = py::none())
       .def("ik_differential", &ik_differential, py::arg("T_targets"), py::arg("q0"), py::arg("lower"),
            py::arg("upper"), py::arg("damping"), py::arg("position_tolerance"), py::arg("orientation_tolerance"),
            py::arg("max_step"), py::arg("max_iterations"), py::arg("rows"));

@@ -202,7 +202,7 @@ void bind_chain_ik(py::module_& m) {
            py::arg("distance_tolerance") = -1.0)
       .def_property_readonly("kind", [](const FreeJointIK& ik) { return ik.solver.kind(); })
       .def_property_readonly("cached_values", [](const FreeJointIK& ik) { return ik.solver.cached_values(); })
-      .def("ik", &ik_free, py::arg("T"), py::arg("free_value"), py::kw_only(), py::arg("out") = py::none());
+      .def("ik", &ik_free, py::arg("T"), py::arg("free_value"), py::arg("out") = py::none());
   py::class_<ChainIK>(m, "ChainIK")
       .def(py::init(&make_chain_ik), py::arg("chain"), py::arg("lower"), py::arg("upper"),
            py::arg("angle_tolerance") = chain_ik::Tolerance::angle, py::arg("distance_tolerance") = -1.0)
@@ -210,10 +210,9 @@ void bind_chain_ik(py::module_& m) {
       .def_property_readonly("idealised", &ChainIK::idealised)
       .def_property_readonly("geometry", &ChainIK::geometry)
       .def_property_readonly("position_kind", &ChainIK::position_kind)
-      .def("ik_position", &ik_position, py::arg("p"), py::kw_only(), py::arg("out") = py::none())
-      .def("ik", &ik_pose, py::arg("T"), py::kw_only(), py::arg("out") = py::none())
-      .def("ik_nearest", &ik_nearest, py::arg("target"), py::arg("seed") = py::none(), py::kw_only(),
-           py::arg("out") = py::none());
+      .def("ik_position", &ik_position, py::arg("p"), py::arg("out") = py::none())
+      .def("ik", &ik_pose, py::arg("T"), py::arg("out") = py::none())
+      .def("ik_nearest", &ik_nearest, py::arg("target"), py::arg("seed") = py::none(), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

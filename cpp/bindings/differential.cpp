@@ -200,7 +200,7 @@ struct RankOp {
 
 void bind_differential(py::module_& m) {
   m.def("dls", &dls, py::arg("J"), py::arg("dx"), py::arg("damping"), py::arg("nullspace") = py::none(),
-        py::kw_only(), py::arg("out") = py::none());
+        py::arg("out") = py::none());
   m.def("compatible", &compatible, py::arg("J"), py::arg("dx"), py::arg("tol") = -1.0);
   m.def("pinv", [](py::handle J) { return map_matrices(J, false, PinvOp{}); }, py::arg("J"));
   m.def("nullspace_projector", [](py::handle J) { return map_matrices(J, false, ProjectorOp{}); },

@@ -42,68 +42,98 @@ Arg positions(const ChainDynamics& d) { return Arg("q", {d.dof()}, d.f64.angle_c
 
 py::object chain_rnea(const ChainDynamics& d, py::handle q, py::handle qd, py::handle qdd, py::handle g,
                       py::handle out) {
-  const Op op({positions(d), joints(d, "qd"), joints(d, "qdd"), gravity_arg()}, {Out("tau", {d.dof()})},
-              kNsPerSample, [](const void* c, const auto& b) {
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), joints(d, "qd"), joints(d, "qdd"), gravity_arg()},
+              {Out("tau", {d.dof()})}, kNsPerSample, [](const void* c, const auto& b) {
                 on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   const auto qd = rows(b, 1), qdd = rows(b, 2);
-                  dynamics::rnea_k(model, rows(b, 0), &qd, &qdd, rows(b, 3), b.real(0), 0, b.m, b.stream);
+                  dynamics::rnea_k(model, rows(b, 0), &qd, &qdd, rows(b, 3), b.real(0), 0, b.m,
+                                   b.stream);
                 });
               });
-  return binder::call(op, &d, {q, qd, qdd, g}, out);
+  };
+  return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, qd, qdd, g}, out); });
 }
 
 py::object chain_gravity(const ChainDynamics& d, py::handle q, py::handle g, py::handle out) {
-  const Op op({positions(d), gravity_arg()}, {Out("tau", {d.dof()})}, kNsPerSample, [](const void* c, const auto& b) {
-    on_model<ChainDynamics>(c, b, [&](const auto& model) {
-      dynamics::rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m, b.stream);
-    });
-  });
-  return binder::call(op, &d, {q, g}, out);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), gravity_arg()}, {Out("tau", {d.dof()})}, kNsPerSample,
+              [](const void* c, const auto& b) {
+                on_model<ChainDynamics>(c, b, [&](const auto& model) {
+                  dynamics::rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0,
+                                   b.m, b.stream);
+                });
+              });
+  };
+  return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, g}, out); });
 }
 
 py::object chain_nonlinear(const ChainDynamics& d, py::handle q, py::handle qd, py::handle g, py::handle out) {
-  const Op op({positions(d), joints(d, "qd"), gravity_arg()}, {Out("h", {d.dof()})}, kNsPerSample,
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), joints(d, "qd"), gravity_arg()}, {Out("h", {d.dof()})}, kNsPerSample,
               [](const void* c, const auto& b) {
                 on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   const auto qd = rows(b, 1);
-                  dynamics::rnea_k(model, rows(b, 0), &qd, nullptr, rows(b, 2), b.real(0), 0, b.m, b.stream);
+                  dynamics::rnea_k(model, rows(b, 0), &qd, nullptr, rows(b, 2), b.real(0), 0, b.m,
+                                   b.stream);
                 });
               });
-  return binder::call(op, &d, {q, qd, g}, out);
+  };
+  return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, qd, g}, out); });
 }
 
 
 py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
   const MassMatrix<ChainDynamics> context{d, symmetric_layout(layout_name)};
-  const Op op({positions(d)}, {Out("A", symmetric_shape(d.dof(), context.layout))}, kNsPerSample,
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d)}, {Out("A", symmetric_shape(d.dof(), context.layout))}, kNsPerSample,
               [](const void* c, const auto& b) {
                 const auto& mm = binder::context<MassMatrix<ChainDynamics>>(c);
-                with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
-                  dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
-                });
+                with_model<typename std::decay_t<decltype(b)>::Scalar>(
+                    mm.d, [&](const auto& model) {
+                      dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
+                    });
               });
-  return binder::call(op, &context, {q}, out);
+  };
+  return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), std::uint64_t(context.layout)},
+                  make, [&](const Op& op) { return binder::call(op, &context, {q}, out); });
 }
 
 py::object chain_coriolis(const ChainDynamics& d, py::handle q, py::handle qd, py::handle out) {
-  const Op op({positions(d), joints(d, "qd")}, {Out("C", {d.dof(), d.dof()})}, 2 * kNsPerSample,
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), joints(d, "qd")}, {Out("C", {d.dof(), d.dof()})}, 2 * kNsPerSample,
               [](const void* c, const auto& b) {
                 on_model<ChainDynamics>(c, b, [&](const auto& model) {
                   dynamics::coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m, b.stream);
                 });
               });
-  return binder::call(op, &d, {q, qd}, out);
+  };
+  return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, qd}, out); });
 }
 
 py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::handle tau, py::handle g,
                      py::handle out) {
-  const Op op({positions(d), joints(d, "qd"), joints(d, "tau"), gravity_arg()}, {Out("qdd", {d.dof()})},
-              2 * kNsPerSample, [](const void* c, const auto& b) {
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), joints(d, "qd"), joints(d, "tau"), gravity_arg()},
+              {Out("qdd", {d.dof()})}, 2 * kNsPerSample, [](const void* c, const auto& b) {
                 on_model<ChainDynamics>(c, b, [&](const auto& model) {
-                  dynamics::aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m, b.stream);
+                  dynamics::aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0),
+                                  0, b.m, b.stream);
                 });
               });
-  return binder::call(op, &d, {q, qd, tau, g}, out);
+  };
+  return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, qd, tau, g}, out); });
 }
 
 }  // namespace dynamics_glue
@@ -113,16 +143,12 @@ void bind_dynamics(py::module_& m) {
   py::class_<ChainDynamics>(m, "ChainDynamics")
       .def(py::init(&make_chain_dynamics), py::arg("chain"), py::arg("mass"), py::arg("com"), py::arg("inertia"))
       .def_property_readonly("dof", &ChainDynamics::dof)
-      .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"), py::kw_only(), py::arg("out") = py::none())
-      .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("crba", &chain_crba, py::arg("q"), py::arg("layout") = "full", py::kw_only(), py::arg("out") = py::none())
-      .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"), py::kw_only(),
-           py::arg("out") = py::none());
+      .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("crba", &chain_crba, py::arg("q"), py::arg("layout") = "full", py::arg("out") = py::none())
+      .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"), py::arg("out") = py::none())
+      .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"), py::arg("out") = py::none());
   bind_floating_dynamics(m);
 }
 

@@ -13,6 +13,7 @@
 
 #include "binder.hpp"
 #include "numpy_boundary.hpp"
+#include "spotkin/dynamics/floating.hpp"
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/model.hpp"
 #include "spotkin/parallel.hpp"
@@ -137,6 +138,26 @@ struct ChainDynamics {
   const ChainModel<double, kSmallLanes64>& small(double) const { return f64_small; }
   const ChainModel<float, kSmallLanes32>& small(float) const { return f32_small; }
   int dof() const { return f64.dof(); }
+};
+
+// ---------------------------------------------------------------- floating base
+
+using dynamics::FloatingModel;
+
+struct FloatingDynamics {
+  FloatingModel<double, kLanes64> f64;
+  FloatingModel<float, kLanes32> f32;
+  FloatingModel<double, kMidLanes64> f64_mid;
+  FloatingModel<float, kMidLanes32> f32_mid;
+  FloatingModel<double, kSmallLanes64> f64_small;
+  FloatingModel<float, kSmallLanes32> f32_small;
+  const FloatingModel<double, kLanes64>& get(double) const { return f64; }
+  const FloatingModel<float, kLanes32>& get(float) const { return f32; }
+  const FloatingModel<double, kMidLanes64>& mid(double) const { return f64_mid; }
+  const FloatingModel<float, kMidLanes32>& mid(float) const { return f32_mid; }
+  const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
+  const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
+  std::uint64_t angles = 0;  // the q columns that are joint angles (7 + each revolute joint's index)
 };
 
 void bind_floating_dynamics(py::module_& m);  // dynamics_floating.cpp

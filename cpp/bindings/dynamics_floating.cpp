@@ -11,26 +11,6 @@ namespace spotkin::bindings {
 
 namespace floating_glue {
 
-using dynamics::FloatingModel;
-
-// ---------------------------------------------------------------- floating base
-
-struct FloatingDynamics {
-  FloatingModel<double, kLanes64> f64;
-  FloatingModel<float, kLanes32> f32;
-  FloatingModel<double, kMidLanes64> f64_mid;
-  FloatingModel<float, kMidLanes32> f32_mid;
-  FloatingModel<double, kSmallLanes64> f64_small;
-  FloatingModel<float, kSmallLanes32> f32_small;
-  const FloatingModel<double, kLanes64>& get(double) const { return f64; }
-  const FloatingModel<float, kLanes32>& get(float) const { return f32; }
-  const FloatingModel<double, kMidLanes64>& mid(double) const { return f64_mid; }
-  const FloatingModel<float, kMidLanes32>& mid(float) const { return f32_mid; }
-  const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
-  const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
-  std::uint64_t angles = 0;  // the q columns that are joint angles (7 + each revolute joint's index)
-};
-
 FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inertia, const py::sequence& chain_list) {
   std::vector<ChainDynamics> chains;
   for (py::handle c : chain_list) {
@@ -88,80 +68,115 @@ Arg rates(const FloatingDynamics& d, const char* name) { return Arg(name, {d.f64
 
 py::object floating_rnea(const FloatingDynamics& d, py::handle q, py::handle v, py::handle a, py::handle g,
                          py::handle out) {
-  const Op op({positions(d), rates(d, "v"), rates(d, "a"), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating,
-              [](const void* c, const auto& b) {
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), rates(d, "v"), rates(d, "a"), gravity_arg()},
+              {Out("tau", {d.f64.nv()})}, kNsFloating, [](const void* c, const auto& b) {
                 on_model<FloatingDynamics>(c, b, [&](const auto& model) {
                   const auto v = rows(b, 1), acc = rows(b, 2);
-                  dynamics::floating_rnea_k(model, rows(b, 0), &v, &acc, rows(b, 3), b.real(0), 0, b.m, b.stream);
+                  dynamics::floating_rnea_k(model, rows(b, 0), &v, &acc, rows(b, 3), b.real(0), 0,
+                                            b.m, b.stream);
                 });
               });
-  return binder::call(op, &d, {q, v, a, g}, out);
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, v, a, g}, out); });
 }
 
 py::object floating_gravity(const FloatingDynamics& d, py::handle q, py::handle g, py::handle out) {
-  const Op op({positions(d), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating, [](const void* c, const auto& b) {
-    on_model<FloatingDynamics>(c, b, [&](const auto& model) {
-      dynamics::floating_rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1), b.real(0), 0, b.m, b.stream);
-    });
-  });
-  return binder::call(op, &d, {q, g}, out);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), gravity_arg()}, {Out("tau", {d.f64.nv()})}, kNsFloating,
+              [](const void* c, const auto& b) {
+                on_model<FloatingDynamics>(c, b, [&](const auto& model) {
+                  dynamics::floating_rnea_k(model, rows(b, 0), nullptr, nullptr, rows(b, 1),
+                                            b.real(0), 0, b.m, b.stream);
+                });
+              });
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, g}, out); });
 }
 
 py::object floating_nonlinear(const FloatingDynamics& d, py::handle q, py::handle v, py::handle g, py::handle out) {
-  const Op op({positions(d), rates(d, "v"), gravity_arg()}, {Out("h", {d.f64.nv()})}, kNsFloating,
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), rates(d, "v"), gravity_arg()}, {Out("h", {d.f64.nv()})}, kNsFloating,
               [](const void* c, const auto& b) {
                 on_model<FloatingDynamics>(c, b, [&](const auto& model) {
                   const auto v = rows(b, 1);
-                  dynamics::floating_rnea_k(model, rows(b, 0), &v, nullptr, rows(b, 2), b.real(0), 0, b.m, b.stream);
+                  dynamics::floating_rnea_k(model, rows(b, 0), &v, nullptr, rows(b, 2), b.real(0),
+                                            0, b.m, b.stream);
                 });
               });
-  return binder::call(op, &d, {q, v, g}, out);
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, v, g}, out); });
 }
 
 
 py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle layout_name, py::handle out) {
   const MassMatrix<FloatingDynamics> context{d, symmetric_layout(layout_name)};
-  const Op op({positions(d)}, {Out("A", symmetric_shape(d.f64.nv(), context.layout))}, kNsFloating,
-              [](const void* c, const auto& b) {
-    const auto& mm = binder::context<MassMatrix<FloatingDynamics>>(c);
-    with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
-      dynamics::floating_crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
-    });
-  });
-  return binder::call(op, &context, {q}, out);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op(
+        {positions(d)}, {Out("A", symmetric_shape(d.f64.nv(), context.layout))}, kNsFloating,
+        [](const void* c, const auto& b) {
+          const auto& mm = binder::context<MassMatrix<FloatingDynamics>>(c);
+          with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
+            dynamics::floating_crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
+          });
+        });
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, std::uint64_t(context.layout)}, make,
+                  [&](const Op& op) { return binder::call(op, &context, {q}, out); });
 }
 
 py::object floating_aba(const FloatingDynamics& d, py::handle q, py::handle v, py::handle tau, py::handle g,
                         py::handle out) {
-  const Op op({positions(d), rates(d, "v"), rates(d, "tau"), gravity_arg()}, {Out("a", {d.f64.nv()})},
-              2 * kNsFloating, [](const void* c, const auto& b) {
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), rates(d, "v"), rates(d, "tau"), gravity_arg()},
+              {Out("a", {d.f64.nv()})}, 2 * kNsFloating, [](const void* c, const auto& b) {
                 on_model<FloatingDynamics>(c, b, [&](const auto& model) {
-                  dynamics::floating_aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3), b.real(0), 0, b.m,
-                                           b.stream);
+                  dynamics::floating_aba_k(model, rows(b, 0), rows(b, 1), rows(b, 2), rows(b, 3),
+                                           b.real(0), 0, b.m, b.stream);
                 });
               });
-  return binder::call(op, &d, {q, v, tau, g}, out);
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, v, tau, g}, out); });
 }
 
 py::object floating_coriolis(const FloatingDynamics& d, py::handle q, py::handle v, py::handle out) {
   const py::ssize_t nv = d.f64.nv();
-  const Op op({positions(d), rates(d, "v")}, {Out("C", {nv, nv})}, 3 * kNsFloating, [](const void* c, const auto& b) {
-    on_model<FloatingDynamics>(c, b, [&](const auto& model) {
-      dynamics::floating_coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m, b.stream);
-    });
-  });
-  return binder::call(op, &d, {q, v}, out);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d), rates(d, "v")}, {Out("C", {nv, nv})}, 3 * kNsFloating,
+              [](const void* c, const auto& b) {
+                on_model<FloatingDynamics>(c, b, [&](const auto& model) {
+                  dynamics::floating_coriolis_k(model, rows(b, 0), rows(b, 1), b.real(0), 0, b.m,
+                                                b.stream);
+                });
+              });
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q, v}, out); });
 }
 
 template <bool Jacobian>
 py::object floating_com(const FloatingDynamics& d, py::handle q, py::handle out) {
   const Out result = Jacobian ? Out("J_com", {3, d.f64.nv()}) : Out("com", {3});
-  const Op op({positions(d)}, {result}, kNsFloating, [](const void* c, const auto& b) {
-    on_model<FloatingDynamics>(c, b, [&](const auto& model) {
-      dynamics::floating_com_k(model, rows(b, 0), b.real(0), Jacobian, 0, b.m, b.stream);
+  static binder::OpCache ops;
+  const auto make = [&] {
+    return Op({positions(d)}, {result}, kNsFloating, [](const void* c, const auto& b) {
+      on_model<FloatingDynamics>(c, b, [&](const auto& model) {
+        dynamics::floating_com_k(model, rows(b, 0), b.real(0), Jacobian, 0, b.m, b.stream);
+      });
     });
-  });
-  return binder::call(op, &d, {q}, out);
+  };
+  return ops.with({std::uint64_t(d.f64.nq()), d.angles, 0}, make,
+                  [&](const Op& op) { return binder::call(op, &d, {q}, out); });
 }
 
 }  // namespace floating_glue
@@ -173,19 +188,14 @@ void bind_floating_dynamics(py::module_& m) {
            py::arg("chains"))
       .def_property_readonly("nq", [](const FloatingDynamics& d) { return d.f64.nq(); })
       .def_property_readonly("nv", [](const FloatingDynamics& d) { return d.f64.nv(); })
-      .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"), py::kw_only(), py::arg("out") = py::none())
-      .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("crba", &floating_crba, py::arg("q"), py::arg("layout") = "full", py::kw_only(),
-           py::arg("out") = py::none())
-      .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"), py::kw_only(),
-           py::arg("out") = py::none())
-      .def("com", &floating_com<false>, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("com_jacobian", &floating_com<true>, py::arg("q"), py::kw_only(), py::arg("out") = py::none());
+      .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("crba", &floating_crba, py::arg("q"), py::arg("layout") = "full", py::arg("out") = py::none())
+      .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"), py::arg("out") = py::none())
+      .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"), py::arg("out") = py::none())
+      .def("com", &floating_com<false>, py::arg("q"), py::arg("out") = py::none())
+      .def("com_jacobian", &floating_com<true>, py::arg("q"), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -110,12 +110,11 @@ void bind_leg(py::module_& m) {
       .def_property_readonly("preferred_slot", &Leg::preferred_slot)
       .def_property_readonly("max_reach", &Leg::max_reach)
       .def_property_readonly("min_reach", &Leg::min_reach)
-      .def("fk", &fk, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("jacobian", &jacobian, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("singularity", &singularity, py::arg("q"), py::kw_only(), py::arg("out") = py::none())
-      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true, py::kw_only(),
-           py::arg("out") = py::none())
-      .def("ik_all", &ik_all, py::arg("p"), py::kw_only(), py::arg("out") = py::none())
+      .def("fk", &fk, py::arg("q"), py::arg("out") = py::none())
+      .def("jacobian", &jacobian, py::arg("q"), py::arg("out") = py::none())
+      .def("singularity", &singularity, py::arg("q"), py::arg("out") = py::none())
+      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true, py::arg("out") = py::none())
+      .def("ik_all", &ik_all, py::arg("p"), py::arg("out") = py::none())
       .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
         std::array<double, 3> out, q;
         leg.nearest_reachable(p.data(), out.data(), within_limits, q.data());

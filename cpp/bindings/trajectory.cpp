@@ -234,7 +234,7 @@ void bind_trajectory(py::module_& m) {
       .def_property_readonly("acceleration", [](const PointToPointCore& p) { return to_array(p.accel_); })
       .def_property_readonly("cruise_velocity", [](const PointToPointCore& p) { return to_array(p.cruise_); })
       .def_property_readonly("ramp_time", [](const PointToPointCore& p) { return to_array(p.ramp_); })
-      .def("sample", &PointToPointCore::sample, py::arg("t"), py::kw_only(), py::arg("out") = py::none());
+      .def("sample", &PointToPointCore::sample, py::arg("t"), py::arg("out") = py::none());
 
   py::class_<WaypointPathCore>(m, "WaypointPath")
       .def(py::init<py::handle, py::handle, py::handle, py::handle, py::handle, py::handle>(), py::arg("times"),

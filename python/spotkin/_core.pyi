@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'WaypointPath', 'available_isas', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'standing_torques', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'standing_torques', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -58,15 +58,15 @@ class Chain:
         ...
     def __init__(self, convention: Convention, rows: typing.Any, base: typing.Any = None, tool: typing.Any = None) -> None:
         ...
-    def fk(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def fk(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def frames(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def frames(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     def ik_differential(self, T_targets: typing.Any, q0: typing.Any, lower: typing.Any, upper: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, position_tolerance: typing.SupportsFloat | typing.SupportsIndex, orientation_tolerance: typing.SupportsFloat | typing.SupportsIndex, max_step: typing.SupportsFloat | typing.SupportsIndex, max_iterations: typing.SupportsInt | typing.SupportsIndex, rows: typing.SupportsInt | typing.SupportsIndex) -> typing.Any:
         ...
-    def jacobian(self, q: typing.Any, rows: typing.SupportsInt | typing.SupportsIndex, in_tool_frame: bool, *, out: typing.Any = None) -> typing.Any:
+    def jacobian(self, q: typing.Any, rows: typing.SupportsInt | typing.SupportsIndex, in_tool_frame: bool, out: typing.Any = None) -> typing.Any:
         ...
-    def point_jacobian(self, q: typing.Any, rows: typing.SupportsInt | typing.SupportsIndex, point: typing.SupportsInt | typing.SupportsIndex, frame: typing.SupportsInt | typing.SupportsIndex, *, out: typing.Any = None) -> typing.Any:
+    def point_jacobian(self, q: typing.Any, rows: typing.SupportsInt | typing.SupportsIndex, point: typing.SupportsInt | typing.SupportsIndex, frame: typing.SupportsInt | typing.SupportsIndex, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def dof(self) -> int:
@@ -74,17 +74,17 @@ class Chain:
 class Leg:
     def __init__(self, a: typing.Any, b: typing.Any, c: typing.Any, signs: typing.Any, lower_limits: typing.Any, upper_limits: typing.Any, preferred_slot: typing.SupportsInt | typing.SupportsIndex = -1) -> None:
         ...
-    def fk(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def fk(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def ik(self, p: typing.Any, seed: typing.Any = None, nearest_fallback: bool = True, *, out: typing.Any = None) -> typing.Any:
+    def ik(self, p: typing.Any, seed: typing.Any = None, nearest_fallback: bool = True, out: typing.Any = None) -> typing.Any:
         ...
-    def ik_all(self, p: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def ik_all(self, p: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def jacobian(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def jacobian(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     def nearest_reachable(self, p: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], within_limits: bool = False) -> tuple[typing.Annotated[list[float], "FixedSize(3)"], typing.Annotated[list[float], "FixedSize(3)"]]:
         ...
-    def singularity(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def singularity(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def max_reach(self) -> float:
@@ -98,26 +98,26 @@ class Leg:
 class Arm:
     def __init__(self, mount: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], upper_arm: typing.SupportsFloat | typing.SupportsIndex, forearm: typing.SupportsFloat | typing.SupportsIndex, forearm_offset: typing.SupportsFloat | typing.SupportsIndex, hand: typing.SupportsFloat | typing.SupportsIndex, tool: typing.Any, lower_limits: typing.Any, upper_limits: typing.Any) -> None:
         ...
-    def fk(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def fk(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def ik(self, T: typing.Any, seed: typing.Any = None, *, out: typing.Any = None) -> typing.Any:
+    def ik(self, T: typing.Any, seed: typing.Any = None, out: typing.Any = None) -> typing.Any:
         ...
-    def ik_all(self, T: typing.Any, seed: typing.Any = None, *, out: typing.Any = None) -> typing.Any:
+    def ik_all(self, T: typing.Any, seed: typing.Any = None, out: typing.Any = None) -> typing.Any:
         ...
-    def jacobian(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def jacobian(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     def singularity(self, q: typing.Any) -> typing.Any:
         ...
 class Body:
     def __init__(self, legs: collections.abc.Sequence[Leg], hip_positions: typing.Any, columns: typing.Any = None) -> None:
         ...
-    def fk(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, *, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
+    def fk(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
         ...
-    def ik(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, feet: typing.Any, seed: typing.Any, nearest_fallback: bool = True, *, out: typing.Any = None) -> typing.Any:
+    def ik(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, feet: typing.Any, seed: typing.Any, nearest_fallback: bool = True, out: typing.Any = None) -> typing.Any:
         ...
     def ik_one(self, body_pose: typing.Any, feet: typing.Any) -> typing.Any:
         ...
-    def jacobian(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, *, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
+    def jacobian(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
         ...
     @property
     def n_legs(self) -> int:
@@ -125,7 +125,7 @@ class Body:
 class FreeJointIK:
     def __init__(self, chain: Chain, lower: typing.Any, upper: typing.Any, free_joint: typing.SupportsInt | typing.SupportsIndex, angle_tolerance: typing.SupportsFloat | typing.SupportsIndex = 1e-09, distance_tolerance: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> None:
         ...
-    def ik(self, T: typing.Any, free_value: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def ik(self, T: typing.Any, free_value: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def cached_values(self) -> int:
@@ -136,11 +136,11 @@ class FreeJointIK:
 class ChainIK:
     def __init__(self, chain: Chain, lower: typing.Any, upper: typing.Any, angle_tolerance: typing.SupportsFloat | typing.SupportsIndex = 1e-09, distance_tolerance: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> None:
         ...
-    def ik(self, T: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def ik(self, T: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def ik_nearest(self, target: typing.Any, seed: typing.Any = None, *, out: typing.Any = None) -> typing.Any:
+    def ik_nearest(self, target: typing.Any, seed: typing.Any = None, out: typing.Any = None) -> typing.Any:
         ...
-    def ik_position(self, p: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def ik_position(self, p: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def geometry(self) -> dict:
@@ -157,7 +157,7 @@ class ChainIK:
 class PointToPoint:
     def __init__(self, q0: typing.Any, qf: typing.Any, vmax: typing.Any, amax: typing.Any, profile: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-    def sample(self, t: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def sample(self, t: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def acceleration(self) -> numpy.typing.NDArray[numpy.float64]:
@@ -185,17 +185,17 @@ class WaypointPath:
 class ChainDynamics:
     def __init__(self, chain: Chain, mass: typing.Any, com: typing.Any, inertia: typing.Any) -> None:
         ...
-    def aba(self, q: typing.Any, qd: typing.Any, tau: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def aba(self, q: typing.Any, qd: typing.Any, tau: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def coriolis_matrix(self, q: typing.Any, qd: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def coriolis_matrix(self, q: typing.Any, qd: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def crba(self, q: typing.Any, layout: typing.Any = 'full', *, out: typing.Any = None) -> typing.Any:
+    def crba(self, q: typing.Any, layout: typing.Any = 'full', out: typing.Any = None) -> typing.Any:
         ...
-    def gravity(self, q: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def gravity(self, q: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def nonlinear_effects(self, q: typing.Any, qd: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def nonlinear_effects(self, q: typing.Any, qd: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def rnea(self, q: typing.Any, qd: typing.Any, qdd: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def rnea(self, q: typing.Any, qd: typing.Any, qdd: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def dof(self) -> int:
@@ -203,27 +203,34 @@ class ChainDynamics:
 class FloatingDynamics:
     def __init__(self, body_mass: typing.Any, body_com: typing.Any, body_inertia: typing.Any, chains: collections.abc.Sequence) -> None:
         ...
-    def aba(self, q: typing.Any, v: typing.Any, tau: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def aba(self, q: typing.Any, v: typing.Any, tau: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def com(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def com(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def com_jacobian(self, q: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def com_jacobian(self, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def coriolis_matrix(self, q: typing.Any, v: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def coriolis_matrix(self, q: typing.Any, v: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def crba(self, q: typing.Any, layout: typing.Any = 'full', *, out: typing.Any = None) -> typing.Any:
+    def crba(self, q: typing.Any, layout: typing.Any = 'full', out: typing.Any = None) -> typing.Any:
         ...
-    def gravity(self, q: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def gravity(self, q: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def nonlinear_effects(self, q: typing.Any, v: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def nonlinear_effects(self, q: typing.Any, v: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
-    def rnea(self, q: typing.Any, v: typing.Any, a: typing.Any, gravity: typing.Any, *, out: typing.Any = None) -> typing.Any:
+    def rnea(self, q: typing.Any, v: typing.Any, a: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def nq(self) -> int:
         ...
     @property
     def nv(self) -> int:
+        ...
+class RobotStatics:
+    def __init__(self, body: Body, floating: FloatingDynamics, mass: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    def com(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None) -> typing.Any:
+        ...
+    def standing(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, stance: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
 def _elementary_costs(dtype: str = 'float64', repeats: typing.SupportsInt | typing.SupportsIndex = 100) -> dict[str, float]:
     """
@@ -255,9 +262,11 @@ def _vector_sincos(x: typing.Any) -> typing.Any:
     """
 def available_isas() -> tuple:
     ...
+def body_transform(body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, out: typing.Any = None) -> typing.Any:
+    ...
 def compatible(J: typing.Any, dx: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> typing.Any:
     ...
-def dls(J: typing.Any, dx: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, nullspace: typing.Any = None, *, out: typing.Any = None) -> typing.Any:
+def dls(J: typing.Any, dx: typing.Any, damping: typing.SupportsFloat | typing.SupportsIndex, nullspace: typing.Any = None, out: typing.Any = None) -> typing.Any:
     ...
 def get_isa() -> str:
     ...

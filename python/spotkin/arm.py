@@ -194,12 +194,12 @@ class SpotArm:
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tool pose in the body frame: q (..., 6) -> (..., 4, 4). ``out``: an array of the result's
         shape and dtype to write into and return."""
-        return self._core.fk(q, out=out)
+        return self._core.fk(q, out)
 
     def jacobian(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Geometric Jacobian [v; w] of the tool point in the body frame: (..., 6) -> (..., 6, 6);
         ``out`` as in :meth:`fk`."""
-        return self._core.jacobian(q, out=out)
+        return self._core.jacobian(q, out)
 
     def singularity(self, q: ArrayLike) -> ArmSingularity:
         """Wrist, elbow and shoulder distances to the singular sets, and manipulability (float64)."""
@@ -218,7 +218,7 @@ class SpotArm:
         silently orthonormalised. The seed broadcasts with T over the leading dimensions.
         ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None).
         """
-        return ArmSolutions(*self._core.ik_all(T, seed, out=out))
+        return ArmSolutions(*self._core.ik_all(T, seed, out))
 
     def ik(
         self, T: ArrayLike, seed: ArrayLike | None = None, *, out: tuple | None = None
@@ -232,7 +232,7 @@ class SpotArm:
         NaN seed: q is NaN). A single pose gets an :class:`Status`, a batch an int8 array. The seed
         broadcasts with T; ``out``: ``(q, status)`` arrays to write into (either may be None).
         """
-        return self._core.ik(T, seed, out=out)
+        return self._core.ik(T, seed, out)
 
     def __reduce__(self):
         mount, upper_arm, forearm, forearm_offset, hand, tool, limits = self._params

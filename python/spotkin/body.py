@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._boundary import as_real
+from . import _core
 
 __all__ = ["EULER_SEQUENCES", "body_transform"]
 
@@ -94,34 +94,19 @@ def _elementary(axis: int, angle: np.ndarray) -> np.ndarray:
     return R
 
 
-def body_transform(body_pose: ArrayLike, seq: str = "XYZ") -> np.ndarray:
-    """The world <- body transform (..., 4, 4) of body poses in any accepted form (NumPy).
+def body_transform(body_pose: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None) -> np.ndarray:
+    """The world <- body transform (..., 4, 4) of body poses in any accepted form.
 
-    Poses are checked as :meth:`spotkin.Spot.body_ik` checks them, and an invalid one
+    Poses are checked as :meth:`spotkin.Robot.body_ik` checks them, and an invalid one
     gives a NaN transform for that sample only: a matrix whose last row is not
     ``[0, 0, 0, 1]`` (1e-9) or whose rotation is not one (``max |R^T R - I| > 1e-6`` or
     ``det R <= 0``), a quaternion whose norm is not 1 within 1e-6 (never renormalised:
-    it is converted with s = 2 / |q|^2), NaN or Inf. The result is float64. Non-numeric
-    or masked input raises ``TypeError``, a shape other than (..., 6), (..., 4, 4),
-    (..., 7) ``ValueError``, naming ``body_pose``; ``seq`` is checked for every form.
+    it is converted with s = 2 / |q|^2), NaN or Inf. A valid matrix comes back as given.
+    The result is float64. Non-numeric or masked input raises ``TypeError``, a shape other
+    than (..., 6), (..., 4, 4), (..., 7) ``ValueError``, naming ``body_pose``; ``seq`` is
+    checked for every form. ``out``: a float64 array of the result's shape to write into.
     """
-    pose = as_real(body_pose, "body_pose", np.float64)
-    fmt, lead = pose_format(pose)
-    axes, order = parse_sequence(seq)
-    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        T = _transform_of(pose, fmt, lead, axes, order)
-        bad = ~np.isfinite(T).all(axis=(-2, -1))
-        if fmt == FORMAT_MATRIX:
-            R = T[..., :3, :3]
-            orth = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1), initial=0.0)
-            row = np.abs(T[..., 3, :] - [0.0, 0.0, 0.0, 1.0]).max(axis=-1, initial=0.0)
-            det = np.linalg.det(np.where(bad[..., None, None], 1.0, R))
-            bad |= ~((orth <= 1e-6) & (row <= 1e-9) & (det > 0))
-        elif fmt != FORMAT_EULER:
-            bad |= ~(np.abs(np.linalg.norm(pose[..., 3:], axis=-1) - 1.0) <= 1e-6)
-    if bad.any():
-        T[bad] = np.nan
-    return T
+    return _core.body_transform(body_pose, sequence_code(seq), out)
 
 
 def unchecked_transform(pose: np.ndarray, seq: str = "XYZ") -> np.ndarray:

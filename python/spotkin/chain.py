@@ -392,7 +392,7 @@ class Chain:
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Base-to-tool transform: q (..., dof) -> (..., 4, 4). ``out``: an array of the result's
         shape and dtype to write into and return (a control loop then allocates nothing)."""
-        return self._core.fk(q, out=out)
+        return self._core.fk(q, out)
 
     def frames(self, q: ArrayLike) -> np.ndarray:
         """Every frame in the base frame: q (..., dof) -> (..., dof + 2, 4, 4).
@@ -440,16 +440,14 @@ class Chain:
 
     def _point_jacobian(self, q, rows: int, frame, point, out=None) -> np.ndarray:
         if isinstance(point, str) and point == "tool" and isinstance(frame, str):
-            return self._core.jacobian(
-                q, rows, _tool_frame(frame), out=out
-            )  # the tool point: the fast kernel
+            return self._core.jacobian(q, rows, _tool_frame(frame), out)  # the tool point: the fast kernel
         last = self.dof + 1
         return self._core.point_jacobian(
             q,
             rows,
             _frame_index(point, "point", last, ("tool",)),
             _frame_index(frame, "frame", last, ("base", "tool")),
-            out=out,
+            out,
         )
 
     # -- dynamics (spotkin.dynamics; the chain's inertials) --------------------------------------------

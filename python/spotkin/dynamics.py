@@ -133,7 +133,7 @@ def inverse_dynamics(
 
     ``out``: an array of the result's shape and dtype (C-contiguous, writeable) to write into
     and return, as every function here takes: a control loop then allocates nothing."""
-    return _core_of(chain, inertials).rnea(q, qd, qdd, gravity, out=out)
+    return _core_of(chain, inertials).rnea(q, qd, qdd, gravity, out)
 
 
 def mass_matrix(
@@ -141,7 +141,7 @@ def mass_matrix(
 ) -> np.ndarray:
     """The joint-space inertia matrix A(q), (..., n, n): composite-rigid-body algorithm.
     ``layout`` ``"lower"`` or ``"packed"`` (..., n (n + 1) / 2): see the module's notes."""
-    return _core_of(chain, inertials).crba(q, layout, out=out)
+    return _core_of(chain, inertials).crba(q, layout, out)
 
 
 def unpack_symmetric(packed: ArrayLike) -> np.ndarray:
@@ -188,7 +188,7 @@ def gravity(
     chain, q: ArrayLike, gravity: ArrayLike = GRAVITY, *, inertials=None, out: np.ndarray | None = None
 ) -> np.ndarray:
     """The gravity torques G(q), (..., n)."""
-    return _core_of(chain, inertials).gravity(q, gravity, out=out)
+    return _core_of(chain, inertials).gravity(q, gravity, out)
 
 
 def nonlinear_effects(
@@ -201,14 +201,14 @@ def nonlinear_effects(
     out: np.ndarray | None = None,
 ) -> np.ndarray:
     """h = C(q, qd) qd + G(q), (..., n)."""
-    return _core_of(chain, inertials).nonlinear_effects(q, qd, gravity, out=out)
+    return _core_of(chain, inertials).nonlinear_effects(q, qd, gravity, out)
 
 
 def coriolis_matrix(
     chain, q: ArrayLike, qd: ArrayLike, *, inertials=None, out: np.ndarray | None = None
 ) -> np.ndarray:
     """C(q, qd), (..., n, n), with dA/dt - 2 C skew-symmetric."""
-    return _core_of(chain, inertials).coriolis_matrix(q, qd, out=out)
+    return _core_of(chain, inertials).coriolis_matrix(q, qd, out)
 
 
 def forward_dynamics(
@@ -222,7 +222,7 @@ def forward_dynamics(
     out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Joint accelerations qdd = A^-1 (tau - C qd - G), (..., n): articulated-body algorithm."""
-    return _core_of(chain, inertials).aba(q, qd, tau, gravity, out=out)
+    return _core_of(chain, inertials).aba(q, qd, tau, gravity, out)
 
 
 def _carried(chain, inertials) -> FloatingBase:
@@ -342,35 +342,35 @@ class FloatingBase:
 
     def inverse_dynamics(self, q, v, a, gravity=GRAVITY, *, out=None) -> np.ndarray:
         """Generalised forces tau = A(q) a + h(q, v), (..., 6 + n)."""
-        return self._core.rnea(q, v, a, gravity, out=out)
+        return self._core.rnea(q, v, a, gravity, out)
 
     def mass_matrix(self, q, layout: str = "full", *, out=None) -> np.ndarray:
         """A(q), (..., 6 + n, 6 + n); invariant to the body's pose. ``layout`` ``"lower"`` or
         ``"packed"`` (..., m) with m = (6 + n) (7 + n) / 2, as :func:`mass_matrix`."""
-        return self._core.crba(q, layout, out=out)
+        return self._core.crba(q, layout, out)
 
     def gravity(self, q, gravity=GRAVITY, *, out=None) -> np.ndarray:
-        return self._core.gravity(q, gravity, out=out)
+        return self._core.gravity(q, gravity, out)
 
     def nonlinear_effects(self, q, v, gravity=GRAVITY, *, out=None) -> np.ndarray:
-        return self._core.nonlinear_effects(q, v, gravity, out=out)
+        return self._core.nonlinear_effects(q, v, gravity, out)
 
     def coriolis_matrix(self, q, v, *, out=None) -> np.ndarray:
         """C(q, v), (..., 6 + n, 6 + n), with dA/dt - 2 C skew-symmetric (as Pinocchio's
         ``computeCoriolisMatrix`` for its free-flyer: the body's velocity in the body frame)."""
-        return self._core.coriolis_matrix(q, v, out=out)
+        return self._core.coriolis_matrix(q, v, out)
 
     def forward_dynamics(self, q, v, tau, gravity=GRAVITY, *, out=None) -> np.ndarray:
         """a = A^-1 (tau - h), (..., 6 + n): articulated-body algorithm."""
-        return self._core.aba(q, v, tau, gravity, out=out)
+        return self._core.aba(q, v, tau, gravity, out)
 
     def center_of_mass(self, q, *, out=None) -> np.ndarray:
         """The whole system's centre of mass in the world, (..., 3)."""
-        return self._core.com(q, out=out)
+        return self._core.com(q, out)
 
     def center_of_mass_jacobian(self, q, *, out=None) -> np.ndarray:
         """(..., 3, 6 + n): d com / dt = J v."""
-        return self._core.com_jacobian(q, out=out)
+        return self._core.com_jacobian(q, out)
 
     @property
     def mass(self) -> float:

@@ -314,11 +314,11 @@ class Leg:
         ``out``: an array of the result's shape and dtype (C-contiguous) to write into
         and return, so that a control loop allocates nothing.
         """
-        return self._core.fk(q, out=out)
+        return self._core.fk(q, out)
 
     def jacobian(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """d foot / d q in the leg frame: q (..., 3) -> (..., 3, 3); ``out`` as in :meth:`fk`."""
-        return self._core.jacobian(q, out=out)
+        return self._core.jacobian(q, out)
 
     def singularity(
         self, q: ArrayLike, *, out: tuple[np.ndarray | None, np.ndarray | None] | None = None
@@ -330,7 +330,7 @@ class Leg:
         hip-roll boundary y^2 + z^2 = h1^2, where the two hip-roll branches merge.
         ``out``: two arrays to write them into, as in :meth:`fk`.
         """
-        return self._core.singularity(q, out=out)
+        return self._core.singularity(q, out)
 
     def ik(
         self,
@@ -361,12 +361,12 @@ class Leg:
         ``out``: ``(q, status)`` arrays (float of p's dtype, int8) of the result's shapes to
         write into, either may be None; they are returned.
         """
-        return self._core.ik(p, seed, fallback_is_nearest(fallback), out=out)
+        return self._core.ik(p, seed, fallback_is_nearest(fallback), out)
 
     def ik_all(self, p: ArrayLike, *, out: tuple | None = None) -> LegSolutions:
         """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table.
         ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None)."""
-        return LegSolutions(*self._core.ik_all(p, out=out))
+        return LegSolutions(*self._core.ik_all(p, out))
 
     def nearest_reachable(self, p: ArrayLike, within_limits: bool = False) -> np.ndarray:
         """The foot position nearest to p (3,) that the leg reaches: (3,) float64.

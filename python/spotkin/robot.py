@@ -26,6 +26,7 @@ from ._boundary import (
     broadcast_lead,
     check_trailing,
     fallback_is_nearest,
+    into_out,
     quiet_float_errors,
     real_dtype,
 )
@@ -233,6 +234,7 @@ class Robot:
         "_roles",
         "_source",
         "_specs",
+        "_statics_core",
     )
 
     def __init__(self) -> None:
@@ -563,13 +565,23 @@ class Robot:
             q = np.concatenate([q, np.zeros((*q.shape[:-1], arm))], axis=-1)
         return q
 
-    def center_of_mass(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
-        """The whole robot's centre of mass in the world (..., 3); ``q`` as in :meth:`floating_q`. float32
-        when ``body_pose`` and ``q`` both are."""
-        com = self.floating_base.center_of_mass(self.floating_q(body_pose, q, seq))
-        if real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32:
-            return com.astype(np.float32)
-        return com
+    def center_of_mass(
+        self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The whole robot's centre of mass in the world (..., 3); ``q`` as in :meth:`floating_q`. Leading
+        dimensions broadcast; float32 when ``body_pose`` and ``q`` both are. An invalid pose, or a NaN or
+        Inf joint, gives NaN in that sample. ``out``: an array of the result's shape and dtype to fill."""
+        return self._statics.com(body_pose, sequence_code(seq), q, out)
+
+    @property
+    def _statics(self):
+        """The C++ statics of the robot (its centre of mass and standing torques), built on first use."""
+        statics = getattr(self, "_statics_core", None)
+        if statics is None:
+            floating = self.floating_base
+            statics = _core.RobotStatics(self._body_core, floating._core, floating.mass)
+            self._statics_core = statics
+        return statics
 
     def standing_torques(
         self,
@@ -578,6 +590,8 @@ class Robot:
         stance: ArrayLike | None = None,
         gravity: ArrayLike = (0.0, 0.0, -9.81),
         seq: str = "XYZ",
+        *,
+        out: tuple | None = None,
     ) -> Standing:
         """The leg torques that hold the robot still on its stance feet, and the contact forces.
 
@@ -599,54 +613,13 @@ class Robot:
         foot though the centre of mass projects inside the polygon: a pushing distribution exists, this is
         not it), OUTSIDE (a foot pulls and the centre of mass projects on or outside the polygon: no
         pushing distribution exists on level ground). NaN or Inf input, or an invalid pose: INVALID_INPUT
-        and NaN in that sample.
+        and NaN in that sample. ``out``: ``(tau, forces, status, margin)`` arrays of the result's shapes
+        (float of the working dtype; status int8), any of them None, to write into.
         """
-        floating = self.floating_base
-        n_legs = len(self._legs)
-        g = as_real(gravity, "gravity", np.float64)
-        if g.shape != (3,):
-            raise ValueError(f"gravity must have shape (3,), got {g.shape}")
-        with np.errstate(over="ignore"):
-            weight = self.mass * np.linalg.norm(g)
-        if not np.isfinite(g).all() or not np.isfinite(weight):
-            raise ValueError(f"gravity must be finite and the weight m |g| too, got {g}")
-        T = body_transform(body_pose, seq)
-        f32 = real_dtype(as_real(body_pose, "body_pose"), as_real(q, "q")) == np.float32
-        q = self._legs_and_arm(q)
-        leads = {"body_pose": (T.shape[:-2], T.shape), "q": (q.shape[:-1], q.shape)}
-        if stance is None:
-            stance_arr = np.ones(n_legs)
-        else:
-            stance_arr = as_real(stance, "stance")
-            if stance_arr.ndim == 0 or stance_arr.shape[-1] != n_legs:
-                raise ValueError(f"stance must have shape (..., {n_legs}), got {stance_arr.shape}")
-            leads["stance"] = (stance_arr.shape[:-1], stance_arr.shape)
-        lead = broadcast_lead(**leads)
-        single = len(lead) == 0
-        N = int(np.prod(lead, dtype=np.int64))
-        R = np.broadcast_to(T[..., :3, :3], (*lead, 3, 3)).reshape(N, 3, 3)
-        q = np.broadcast_to(q, (*lead, q.shape[-1])).reshape(N, q.shape[-1])
-        stance_mask = np.broadcast_to(stance_arr, (*lead, n_legs)).reshape(N, n_legs)
-        # in the body frame, where nothing depends on the body's pose but gravity's direction
-        g_body = np.einsum("nji,j->ni", R, g)
-        at_origin = np.concatenate([np.zeros((N, 6)), np.ones((N, 1)), q], axis=1)
-        com = floating.center_of_mass(at_origin)
-        leg_gravity = floating.gravity(at_origin, g_body)[:, 6 : 6 + 3 * n_legs]
-        q_legs = q[:, : 3 * n_legs]
-        feet = self.body_fk(np.zeros(6), q_legs).reshape(N, n_legs, 3)
-        foot_jacobians = np.stack(
-            [leg.jacobian(q_legs[:, 3 * k : 3 * k + 3]) for k, leg in enumerate(self._legs)], axis=1
-        ).reshape(N, n_legs, 3, 3)
-        tau, forces, status, margin = _core.standing_torques(
-            com, self.mass, feet, foot_jacobians, leg_gravity, stance_mask, g_body
-        )
-        forces = np.einsum("nij,nlj->nli", R, forces)  # into the world
-        tau, forces = tau.reshape(*lead, 3 * n_legs), forces.reshape(*lead, n_legs, 3)
-        status, margin = status.reshape(lead), margin.reshape(lead)
-        if f32:
-            tau, forces, margin = (a.astype(np.float32) for a in (tau, forces, margin))
-        if single:
-            return Standing(tau, forces, StanceStatus(int(status)), margin[()])
+        code = sequence_code(seq)
+        tau, forces, status, margin = self._statics.standing(body_pose, code, q, stance, gravity, out)
+        if status.ndim == 0:
+            return Standing(tau, forces, _STANCE_STATUS[status], margin if out is not None else margin[()])
         return Standing(tau, forces, status, margin)
 
     def _tree(self, joints) -> inertia.Tree:
@@ -834,7 +807,7 @@ class Robot:
         nearest = fallback_is_nearest(fallback)
         if seed is not None:
             seed = self._leg_q(as_real(seed, "seed"), "seed")[0]  # a whole-body q: the arm's part unused
-        return self._body_core.ik(body_pose, sequence_code(seq), feet, seed, nearest, out=out)
+        return self._body_core.ik(body_pose, sequence_code(seq), feet, seed, nearest, out)
 
     def body_fk(
         self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
@@ -847,25 +820,30 @@ class Robot:
         NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample.
         ``out``: an array of the result's shape and dtype to write into and return."""
         q = self._leg_q(as_real(q, self._q_name), self._q_name)[0]
-        return self._body_core.fk(body_pose, sequence_code(seq), q, out=out, q_name=self._q_name)
+        return self._body_core.fk(body_pose, sequence_code(seq), q, out, self._q_name)
 
-    def body_jacobian(self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ") -> np.ndarray:
+    def body_jacobian(
+        self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """(..., 3 n, 6 + 3 n) d(feet world) / d(body twist [v; w], q).
 
         The twist is the linear velocity of the body origin and the angular velocity,
         both in the world frame: d foot_i = v + w x (foot_i - t) + R J_leg_i dq_i. ``q`` (..., 3 n), or
         (..., 3 n + n_arm) with the arm's joints after the legs': then the arm's columns follow, zero
         (the arm does not move the feet), so that J has a column per entry of the twist and of ``q``.
+        ``out``: an array of the result's shape and dtype to write into and return.
         """
+        if type(q) is np.ndarray and q.shape == (3 * len(self._legs),):  # the control loop's call
+            return self._body_core.jacobian(body_pose, sequence_code(seq), q, out, self._q_name)
         q = as_real(q, self._q_name)
         width = q.shape[-1] if q.ndim else 0
         q = self._leg_q(q, self._q_name)[0]
-        J = self._body_core.jacobian(body_pose, sequence_code(seq), q, q_name=self._q_name)
         if width == q.shape[-1]:
-            return J
-        out = np.zeros((*J.shape[:-1], 6 + width), dtype=J.dtype)
-        out[..., : J.shape[-1]] = J
-        return out
+            return self._body_core.jacobian(body_pose, sequence_code(seq), q, out, self._q_name)
+        J = self._body_core.jacobian(body_pose, sequence_code(seq), q, None, self._q_name)
+        full = np.zeros((*J.shape[:-1], 6 + width), dtype=J.dtype)
+        full[..., : J.shape[-1]] = J
+        return into_out(full, out)
 
     _q_name = "q"
 
@@ -1122,6 +1100,9 @@ class StanceStatus(IntEnum):
     UNBALANCED = 4
     """No forces at these feet balance the weight (fewer than three feet, or collinear ones, with the
     centre of mass off their line or point): tau and forces are NaN."""
+
+
+_STANCE_STATUS = tuple(StanceStatus)  # by value: one sample's status
 
 
 class Standing(NamedTuple):

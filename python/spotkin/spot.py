@@ -302,9 +302,9 @@ class Spot(Robot):
         """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)); see :meth:`Robot.body_fk`."""
         return super().body_fk(body_pose, q12, seq, out=out)
 
-    def body_jacobian(self, body_pose, q12, seq: str = "XYZ") -> np.ndarray:
+    def body_jacobian(self, body_pose, q12, seq: str = "XYZ", *, out: np.ndarray | None = None) -> np.ndarray:
         """(..., 12, 18) d(feet world) / d(body twist [v; w], q12); see :meth:`Robot.body_jacobian`."""
-        return super().body_jacobian(body_pose, q12, seq)
+        return super().body_jacobian(body_pose, q12, seq, out=out)
 
     def body_rates(self, body_pose, q12, twist, seq: str = "XYZ", tolerance: float = 1e-6) -> BodyRates:
         """Joint velocities (..., 12) that keep every foot fixed; see :meth:`Robot.body_rates`."""

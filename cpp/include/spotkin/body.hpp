@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "spotkin/arm.hpp"
@@ -33,6 +34,15 @@ enum class BodyPoseFormat : std::int8_t { Euler = 0, Matrix = 1, PositionQuatern
 struct EulerSequence {
   int axis[3] = {0, 1, 2};
   int order[3] = {0, 1, 2};
+  // The sequence packed in one int (the façade's form): axis[0] + 3 axis[1] + 9 axis[2], plus 27
+  // when the angles apply in reverse order (extrinsic sequences). std::invalid_argument otherwise.
+  static EulerSequence from_code(int code) {
+    if (code < 0 || code >= 54) throw std::invalid_argument("invalid Euler sequence code " + std::to_string(code));
+    EulerSequence seq;
+    seq.axis[0] = code % 3, seq.axis[1] = code / 3 % 3, seq.axis[2] = code / 9 % 3;
+    for (int k = 0; k < 3; ++k) seq.order[k] = code >= 27 ? 2 - k : k;
+    return seq;
+  }
 };
 
 struct Body {
@@ -122,6 +132,42 @@ SPOTKIN_INLINE void euler_xyz_rotations(const C (*s)[kBlock], const C (*c)[kBloc
     for (int k = 0; k < 9; ++k) out.R[k][i] = R[k], sum += R[k];
     out.ok[i] = (sum - sum) == C(0) ? C(1) : C(0);
   }
+}
+
+// The world <- body transform of one pose (out: 4 x 4, row-major), as read_poses reads it one at a
+// time: Euler angles by Body::euler_rotation, a matrix as given, a quaternion by Arm::read_pose (the
+// same checks). An invalid pose (NaN, Inf, not a rigid transform) gives NaN throughout; returns false.
+template <typename T>
+inline bool pose_transform(const T* in, BodyPoseFormat format, const EulerSequence& seq, double* out) noexcept {
+  double R[3][3], t[3], ok = 1.0;
+  if (format == BodyPoseFormat::Euler) {
+    const double angles[3] = {double(in[3]), double(in[4]), double(in[5])};
+    Body::euler_rotation(seq, angles, R);
+    t[0] = double(in[0]), t[1] = double(in[1]), t[2] = double(in[2]);
+  } else {
+    Arm::Pose pose;
+    double buffer[16];
+    const int width = format == BodyPoseFormat::Matrix ? 16 : 7;
+    for (int k = 0; k < width; ++k) buffer[k] = double(in[k]);
+    ok = format == BodyPoseFormat::Matrix ? Arm::read_pose<PoseFormat::Matrix>(buffer, pose)
+                                          : Arm::read_pose<PoseFormat::PositionQuaternion>(buffer, pose);
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) R[r][k] = pose.R[r][k];
+      t[r] = pose.p[r];
+    }
+  }
+  double sum = t[0] + t[1] + t[2];
+  for (int r = 0; r < 3; ++r) sum += R[r][0] + R[r][1] + R[r][2];
+  const bool valid = ok != 0.0 && (sum - sum) == 0.0;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) out[4 * r + k] = R[r][k];
+    out[4 * r + 3] = t[r];
+  }
+  out[12] = out[13] = out[14] = 0.0, out[15] = 1.0;
+  if (format == BodyPoseFormat::Matrix)  // a valid matrix as given (its last row within 1e-9)
+    for (int k = 12; k < 16; ++k) out[k] = double(in[k]);
+  if (!valid) std::fill(out, out + 16, quiet_nan<double>());
+  return valid;
 }
 
 template <typename T, typename C>
