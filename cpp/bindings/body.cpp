@@ -88,54 +88,6 @@ py::object ik(const Body& body, py::handle pose, int sequence, py::handle feet, 
   return body_ik_result(result[0], result[1]);
 }
 
-// The data of obj when it is a plain, aligned, C-contiguous native float64
-// ndarray of exactly `shape`; null otherwise (the general path then takes it).
-const double* plain_float64(py::handle obj, std::initializer_list<py::ssize_t> shape) {
-  auto& api = py::detail::npy_api::get();
-  if (Py_TYPE(obj.ptr()) != api.PyArray_Type_) return nullptr;
-  static PyObject* const float64 = api.PyArray_DescrFromType_(py::detail::npy_api::NPY_DOUBLE_);
-  const auto* array = py::detail::array_proxy(obj.ptr());
-  constexpr int kFlags = py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_ | py::detail::npy_api::NPY_ARRAY_ALIGNED_;
-  if (array->descr != float64 || (array->flags & kFlags) != kFlags || array->nd != int(shape.size())) return nullptr;
-  int k = 0;
-  for (const py::ssize_t d : shape)
-    if (array->dimensions[k++] != d) return nullptr;
-  return reinterpret_cast<const double*>(array->data);
-}
-
-// A new 1-d array of `size` elements of NumPy type `typenum`.
-py::object new_vector(int typenum, py::ssize_t size) {
-  auto& api = py::detail::npy_api::get();
-  const Py_intptr_t dims[1] = {size};
-  PyObject* array = api.PyArray_NewFromDescr_(api.PyArray_Type_, api.PyArray_DescrFromType_(typenum), 1, dims,
-                                              nullptr, nullptr, 0, nullptr);
-  if (!array) throw py::error_already_set();
-  return py::reinterpret_steal<py::object>(array);
-}
-
-// The control-loop call, Robot.body_ik(pose, feet) with the defaults: one
-// float64 (6,) pose [x, y, z, a, b, c] (intrinsic XYZ) and one shared (n, 3)
-// float64 stance, both plain C-contiguous arrays. It skips the general path's
-// shape bookkeeping, promotion and thread split and solves the pose in the
-// same kernel (so the same answer bit for bit); any other input, or a pose with
-// a non-finite or huge value, goes the general way.
-py::object ik_one(const Body& body, py::handle pose_obj, py::handle feet_obj) {
-  static const EulerSequence xyz = make_sequence(0 + 3 * 1 + 9 * 2);  // the packed code of "XYZ"
-  const py::ssize_t n_legs = body.n_legs(), w = body.width();
-  const double* pose = plain_float64(pose_obj, {6});
-  const double* feet = plain_float64(feet_obj, {n_legs, 3});
-  bool usual = pose && feet;
-  for (int k = 0; usual && k < 6; ++k)
-    usual = std::isfinite(pose[k]) && (k < 3 || std::fabs(pose[k]) <= vector_math::kReducibleLimit);
-  if (!usual) return ik(body, pose_obj, 0 + 3 * 1 + 9 * 2, feet_obj, py::none(), true, py::none());
-  py::object q = new_vector(py::detail::npy_api::NPY_DOUBLE_, w);
-  py::object status = new_vector(py::detail::npy_api::NPY_BYTE_, n_legs);
-  kernels::body_ik<double>(body, pose, BodyPoseFormat::Euler, xyz, feet, true, nullptr,
-                           reinterpret_cast<double*>(py::detail::array_proxy(q.ptr())->data),
-                           reinterpret_cast<std::int8_t*>(py::detail::array_proxy(status.ptr())->data), 1, true);
-  return body_ik_result(std::move(q), std::move(status));
-}
-
 struct Posed {
   const Body& body;
   EulerSequence seq;
@@ -242,7 +194,6 @@ void bind_body(py::module_& m) {
       .def_property_readonly("n_legs", &Body::n_legs)
       .def("ik", &ik, py::arg("body_pose"), py::arg("sequence"), py::arg("feet"), py::arg("seed"),
            py::arg("nearest_fallback") = true, py::arg("out") = py::none())
-      .def("ik_one", &ik_one, py::arg("body_pose"), py::arg("feet"))
       .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::arg("out") = py::none(), py::arg("q_name") = "q")
       .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
            py::arg("out") = py::none(), py::arg("q_name") = "q");

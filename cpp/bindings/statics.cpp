@@ -241,12 +241,25 @@ Arg statics_q(const RobotStatics& r) {
   return r.n_arm ? q.or_shape({legs + r.n_arm}, revolute & all_angles(int(legs + r.n_arm))) : q;
 }
 
+void check_weight(double mass, const double* g);
+
 // gravity (3,): finite, with a finite weight m |g|; ValueError otherwise.
 void read_gravity(py::handle obj, double mass, double* g) {
+  bool parsed = (PyTuple_CheckExact(obj.ptr()) || PyList_CheckExact(obj.ptr())) && PySequence_Fast_GET_SIZE(obj.ptr()) == 3;
+  for (int k = 0; parsed && k < 3; ++k) {  // the default, a tuple of floats: no array
+    PyObject* item = PySequence_Fast_GET_ITEM(obj.ptr(), k);
+    parsed = PyFloat_CheckExact(item);
+    if (parsed) g[k] = PyFloat_AS_DOUBLE(item);
+  }
+  if (parsed) return check_weight(mass, g);
   auto arr = contiguous<double>(as_real_array(obj, "gravity"));
   if (arr.ndim() != 1 || arr.shape(0) != 3)
     throw py::value_error("gravity must have shape (3,), got " + format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())));
   for (int k = 0; k < 3; ++k) g[k] = arr.data()[k];
+  check_weight(mass, g);
+}
+
+void check_weight(double mass, const double* g) {
   const double weight = mass * std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
   if (!std::isfinite(g[0] + g[1] + g[2]) || !std::isfinite(weight))
     throw py::value_error("gravity must be finite and the weight m |g| too, got [" + std::to_string(g[0]) + ", " +

@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from . import _core
 from ._boundary import as_finite, as_index, as_real, broadcast_lead, into_out
 from .chain import Chain, ChainSolutions, IKDifferentialInfo, _limit_override, _scalar
+from .dynamics import _check_layout, _in_layout
 
 __all__ = ["MimicChain"]
 
@@ -288,8 +289,6 @@ class MimicChain(Chain):
 
     def mass_matrix(self, q: ArrayLike, layout: str = "full", *, out: np.ndarray | None = None) -> np.ndarray:
         """A = M^T A_full(M q + b) M, (..., dof, dof); ``layout`` as :meth:`Chain.mass_matrix`."""
-        from .dynamics import _check_layout, _in_layout
-
         layout = _check_layout(layout)  # before the work
         return into_out(_in_layout(self._square(self._full.mass_matrix(self.full_q(q))), layout), out)
 

@@ -5,12 +5,23 @@ tip of :meth:`spotkin.Chain.from_urdf`, and the chains ``spotkin inspect`` lists
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
+from . import chain as chain_module
 from . import inertia, urdf
+from ._mimic import MimicChain, mapped_limits
 from .chain import Chain
 
-__all__ = ["chain_from_model", "chains_summary", "default_tip", "link_name", "tip_candidates"]
+__all__ = [
+    "chain_from_model",
+    "chain_from_urdf",
+    "chains_summary",
+    "default_tip",
+    "link_name",
+    "tip_candidates",
+]
 
 
 def link_name(value, name: str, model: urdf.Model) -> str:
@@ -51,8 +62,6 @@ def chain_from_model(model: urdf.Model, link: str, base: str | None = None) -> C
 
 
 def _mimic_chain(model: urdf.Model, data: urdf.ChainData, has_inertials: bool) -> Chain:
-    from ._mimic import MimicChain, mapped_limits
-
     variables: list[str] = []
     columns: list[tuple[int, float]] = []  # per joint of the path: (variable, multiplier); -1 for none
     offsets = np.zeros(data.n)
@@ -245,3 +254,32 @@ def ik_summary(chain: Chain) -> str:
         if "ik_differential" in reason:
             return reason
         return f"no closed form ({reason}); ik_differential solves it numerically"
+
+
+def chain_from_urdf(source, tip: str | None = None, base: str | None = None) -> Chain:
+    """:meth:`spotkin.Chain.from_urdf` (documented there): the chain from link ``base`` to link ``tip``
+    of a URDF file or text."""
+    if isinstance(source, (bytes, bytearray, memoryview)) or (
+        isinstance(source, str) and source.lstrip().startswith("<")
+    ):
+        data = urdf.read_text(source.lstrip() if isinstance(source, str) else source)
+    elif isinstance(source, (str, os.PathLike)):
+        data = urdf.read_file(source)
+    else:
+        raise TypeError(
+            "source must be a URDF path (str or os.PathLike) or its XML (str or bytes), "
+            f"got {type(source).__name__}"
+        )
+    model = urdf.parse_urdf(data)
+    if base is not None:
+        base = link_name(base, "base", model)
+    if tip is None:
+        tip = default_tip(model, base)
+    else:
+        tip = link_name(tip, "tip", model)
+    return chain_from_model(model, tip, base)
+
+
+chain_module._from_urdf = (
+    chain_from_urdf  # Chain.from_urdf's loader (spotkin.chain cannot import this module)
+)

@@ -15,10 +15,11 @@ from typing import Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core
+from . import _core, dynamics, inertia
 from ._boundary import as_finite, as_index, as_real, broadcast_lead, quiet_float_errors, rigid_transforms
 from ._status import Status
 from .arm import _broadcast_seed
+from .inertia import link_inertials
 
 __all__ = ["Chain", "ChainSolutions", "IKDifferentialInfo"]
 
@@ -94,6 +95,16 @@ def _reduced(angles: np.ndarray) -> np.ndarray:
         return np.where(wide, np.arctan2(np.sin(angles), np.cos(angles)), angles)
 
 
+def _urdf_loader_missing(*args):
+    raise ImportError("spotkin._urdf_chain registers Chain.from_urdf's loader: import spotkin")
+
+
+# Chain.from_urdf's loader: spotkin._urdf_chain.chain_from_urdf, which builds chains of whichever class a
+# URDF needs (spotkin._mimic.MimicChain for mimic joints) and so sits above this module. It registers
+# itself here when imported (the package imports it), so that this module never imports it.
+_from_urdf = _urdf_loader_missing
+
+
 class ChainSolutions(NamedTuple):
     """Every closed-form IK solution for a batch of targets, from :meth:`Chain.ik_position` or
     :meth:`Chain.ik`."""
@@ -152,6 +163,7 @@ class Chain:
         "_base",
         "_convention",
         "_core",
+        "_dynamics",
         "_ik",
         "_ik_tolerance",
         "_inertials",
@@ -185,6 +197,7 @@ class Chain:
         self._ik = None
         self._ik_tolerance = None
         self._inertials = None
+        self._dynamics = None
 
     @classmethod
     def from_joints(
@@ -232,6 +245,7 @@ class Chain:
         chain._ik = None
         chain._ik_tolerance = None
         chain._inertials = None
+        chain._dynamics = None
         return chain
 
     @classmethod
@@ -263,27 +277,7 @@ class Chain:
         ``OSError`` when the file cannot be read; ``ImportError`` (saying what to install) for xacro
         without the ``xacro`` package.
         """
-        from . import _urdf_chain, urdf
-
-        if isinstance(source, (bytes, bytearray, memoryview)) or (
-            isinstance(source, str) and source.lstrip().startswith("<")
-        ):
-            data = urdf.read_text(source.lstrip() if isinstance(source, str) else source)
-        elif isinstance(source, (str, os.PathLike)):
-            data = urdf.read_file(source)
-        else:
-            raise TypeError(
-                "source must be a URDF path (str or os.PathLike) or its XML (str or bytes), "
-                f"got {type(source).__name__}"
-            )
-        model = urdf.parse_urdf(data)
-        if base is not None:
-            base = _urdf_chain.link_name(base, "base", model)
-        if tip is None:
-            tip = _urdf_chain.default_tip(model, base)
-        else:
-            tip = _urdf_chain.link_name(tip, "tip", model)
-        return _urdf_chain.chain_from_model(model, tip, base)
+        return _from_urdf(source, tip, base)
 
     @classmethod
     def from_mdh(
@@ -380,13 +374,12 @@ class Chain:
         ``TypeError`` for non-numeric input, ``ValueError`` naming the argument otherwise (see
         :func:`spotkin.inertia.link_inertials`).
         """
-        from .inertia import link_inertials
-
         inertials = link_inertials(mass, com, inertia, self.dof)
         chain = self.__class__.__new__(self.__class__)
         for name in self.__slots__:
             setattr(chain, name, getattr(self, name))
         chain._inertials = inertials
+        chain._dynamics = None  # built from the new inertials on first use
         return chain
 
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
@@ -467,25 +460,19 @@ class Chain:
         :attr:`base` (m/s²). Needs :attr:`inertials`; conventions in :mod:`spotkin.dynamics`.
         ``out``: an array of the result's shape and dtype to write into and return (every
         dynamics method takes it)."""
-        from . import dynamics
-
-        return dynamics.inverse_dynamics(self, q, qd, qdd, gravity, out=out)
+        return self._dynamics_core().rnea(q, qd, qdd, gravity, out)
 
     def mass_matrix(self, q: ArrayLike, layout: str = "full", *, out: np.ndarray | None = None) -> np.ndarray:
         """The joint-space inertia matrix A(q), (..., dof, dof): composite-rigid-body algorithm.
         ``layout="lower"`` zeroes the strict upper triangle; ``"packed"`` gives the lower triangle
         row by row, (..., dof (dof + 1) / 2) (:func:`spotkin.dynamics.unpack_symmetric`)."""
-        from . import dynamics
-
-        return dynamics.mass_matrix(self, q, layout=layout, out=out)
+        return self._dynamics_core().crba(q, layout, out)
 
     def gravity(
         self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81), *, out: np.ndarray | None = None
     ) -> np.ndarray:
         """The gravity torques G(q) = dU/dq, (..., dof)."""
-        from . import dynamics
-
-        return dynamics.gravity(self, q, gravity, out=out)
+        return self._dynamics_core().gravity(q, gravity, out)
 
     def nonlinear_effects(
         self,
@@ -496,15 +483,11 @@ class Chain:
         out: np.ndarray | None = None,
     ) -> np.ndarray:
         """h = C(q, qd) qd + G(q), (..., dof)."""
-        from . import dynamics
-
-        return dynamics.nonlinear_effects(self, q, qd, gravity, out=out)
+        return self._dynamics_core().nonlinear_effects(q, qd, gravity, out)
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """C(q, qd), (..., dof, dof), the form for which dA/dt - 2 C is skew-symmetric."""
-        from . import dynamics
-
-        return dynamics.coriolis_matrix(self, q, qd, out=out)
+        return self._dynamics_core().coriolis_matrix(q, qd, out)
 
     def forward_dynamics(
         self,
@@ -516,33 +499,36 @@ class Chain:
         out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Joint accelerations qdd = A(q)^-1 (tau - C qd - G), (..., dof): articulated-body algorithm."""
-        from . import dynamics
+        return self._dynamics_core().aba(q, qd, tau, gravity, out)
 
-        return dynamics.forward_dynamics(self, q, qd, tau, gravity, out=out)
+    def _tree(self, joints=None):
+        """The fixed-base tree of this chain for :func:`spotkin.inertia.tree_of` (a robot's is its own)."""
+        if joints is not None:
+            raise ValueError("joints is for robots: a chain's tree has the chain's joints")
+        return inertia.chain_tree(self)
+
+    def _dynamics_core(self):
+        """The C++ dynamics of this chain and its inertials (spotkin.dynamics), built on first use."""
+        core = self._dynamics
+        if core is None:
+            core = self._dynamics = dynamics._core_of(self, None)
+        return core
 
     def center_of_mass(self, q: ArrayLike) -> np.ndarray:
         """The links' centre of mass (..., 3) in the frame before :attr:`base` (needs :attr:`inertials`)."""
-        from . import dynamics
-
         return dynamics.center_of_mass(self, q)
 
     def center_of_mass_jacobian(self, q: ArrayLike) -> np.ndarray:
         """J_com (..., 3, dof): d com / dt = J_com qd, in the frame before :attr:`base`."""
-        from . import dynamics
-
         return dynamics.center_of_mass_jacobian(self, q)
 
     def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
         """The links' kinetic energy qd^T A(q) qd / 2, (...), in J."""
-        from . import dynamics
-
         return dynamics.kinetic_energy(self, q, qd)
 
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
         """The links' potential energy -m g . c, (...), in J (zero with the centre of mass at the origin of
         the frame before :attr:`base`); :meth:`gravity` is its gradient. ``gravity`` (3,) or (..., 3)."""
-        from . import dynamics
-
         return dynamics.potential_energy(self, q, gravity)
 
     def joint_torques_from_forces(self, q: ArrayLike, forces: ArrayLike) -> np.ndarray:

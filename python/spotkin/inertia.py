@@ -249,7 +249,7 @@ def _frozen_tree(names, parents, placements, axes, types, inertials, root, feet,
 # --------------------------------------------------------------------------- trees from chains
 
 
-def _chain_tree(chain) -> Tree:
+def chain_tree(chain) -> Tree:
     """A chain as a fixed-base tree whose root frame is the world (the chain's base folded in).
 
     URDF-style and modified-DH chains move each joint last (``T(j-1, j) = P_j · M_j(q_j)``: in DHm
@@ -316,13 +316,7 @@ def tree_of(source, joints=None) -> Tree:
       every other joint (a gripper finger, a rotor) is locked at 0 and merged into the body it hangs
       from. The tree's feet are the legs' contact points.
     """
-    from .chain import Chain
-    from .robot import Robot
-
-    if isinstance(source, Chain):
-        if joints is not None:
-            raise ValueError("joints is for robots: a chain's tree has the chain's joints")
-        return _chain_tree(source)
-    if isinstance(source, Robot):
-        return source._tree(joints)
-    raise TypeError(f"source must be a spotkin.Chain or spotkin.Robot, got {type(source).__name__}")
+    make = getattr(type(source), "_tree", None)  # Chain._tree and Robot._tree (this module is below both)
+    if make is None:
+        raise TypeError(f"source must be a spotkin.Chain or spotkin.Robot, got {type(source).__name__}")
+    return make(source, joints)

@@ -34,6 +34,7 @@ from ._status import Status
 from ._urdf_chain import chain_from_model
 from .body import body_transform, sequence_code
 from .chain import Chain
+from .dynamics import FloatingBase
 from .leg import Leg
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Robot"]
@@ -517,8 +518,6 @@ class Robot:
         ``[v_body; w_body]`` in the body frame, then the joint rates."""
         floating = getattr(self, "_floating", None)
         if floating is None:
-            from .dynamics import FloatingBase
-
             legs, arms = self._specs
             if self._model is None or not legs:
                 raise ValueError("dynamics need a URDF description; a robot from a model dict has none")
@@ -793,19 +792,8 @@ class Robot:
         dtype. ``out``: ``(q, status)`` arrays of the result's shapes and dtypes (either may be
         None) to write into, so that a control loop allocates nothing.
         """
-        n = len(self._legs)
-        if (
-            seed is None
-            and out is None
-            and seq == "XYZ"
-            and fallback == "nearest"
-            and type(feet) is np.ndarray
-            and feet.shape == (n, 3)
-        ):
-            # the control-loop call, one shared stance: the core checks body_pose itself
-            return self._body_core.ik_one(body_pose, feet)
         nearest = fallback_is_nearest(fallback)
-        if seed is not None:
+        if seed is not None and not (type(seed) is np.ndarray and seed.shape[-1:] == (3 * len(self._legs),)):
             seed = self._leg_q(as_real(seed, "seed"), "seed")[0]  # a whole-body q: the arm's part unused
         return self._body_core.ik(body_pose, sequence_code(seq), feet, seed, nearest, out)
 
