@@ -52,13 +52,13 @@ py::object singularity(const Arm& arm, py::handle q) {
 }
 
 py::object ik_all(const Arm& arm, py::handle T, py::handle seed, py::handle out) {
-  static const Op op({pose_target_arg(), seed_arg()},
+  static const Op op = Op({pose_target_arg(), seed_arg()},
                      {Out("q", {Arm::kSlots, 6}), Out("valid", {Arm::kSlots}, Kind::Bool),
                       Out("exists", {Arm::kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      200.0, [](const void* c, const auto& b) {
                        kernels::arm_ik_all(binder::context<Arm>(c), b.in[0], pose_format(b), b.in[1], b.real(0),
                                            b.flags(1), b.flags(2), b.status(3), b.m);
-                     });
+                     }).returns("ArmSolutions");
   return binder::call(op, &arm, {T, seed}, out);
 }
 

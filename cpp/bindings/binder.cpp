@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -48,6 +49,17 @@ struct Output {
   bool scalar = false;            // returned as a spotkin.Status
   py::object result() const { return scalar ? status_object(single_status) : array; }
 };
+
+// The call's answer: its one output, or a tuple of them: the op's registered result type (a
+// NamedTuple, built here as tuple.__new__ builds it) or a plain tuple until one is registered.
+py::object results(const Op& op, const Output* outs) {
+  if (op.n_outs == 1) return outs[0].result();
+  auto* type = op.named && *op.named ? reinterpret_cast<PyTypeObject*>(*op.named) : &PyTuple_Type;
+  PyObject* result = type == &PyTuple_Type ? PyTuple_New(op.n_outs) : type->tp_alloc(type, op.n_outs);
+  if (!result) throw py::error_already_set();
+  for (int o = 0; o < op.n_outs; ++o) PyTuple_SET_ITEM(result, o, outs[o].result().release().ptr());
+  return py::reinterpret_steal<py::object>(result);
+}
 
 // NumPy's broadcast of the arguments' leading shapes; ValueError naming them.
 template <typename T>
@@ -464,11 +476,7 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
     });
   }
 
-  if (op.n_outs == 1) return outs[0].result();
-  py::tuple result(op.n_outs);
-  for (int o = 0; o < op.n_outs; ++o)
-    result[std::size_t(o)] = outs[o].result();
-  return std::move(result);
+  return results(op, outs);
 }
 
 // The single-sample fast path (issue: a control loop's call). Every argument one sample with
@@ -600,14 +608,29 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
   } else {
     op.f64(context, block);
   }
-  if (op.n_outs == 1) return outs[0].result();
-  PyObject* result = PyTuple_New(op.n_outs);
-  if (!result) throw py::error_already_set();
-  for (int o = 0; o < op.n_outs; ++o) PyTuple_SET_ITEM(result, o, outs[o].result().release().ptr());
-  return py::reinterpret_steal<py::object>(result);
+  return results(op, outs);
 }
 
 }  // namespace
+
+PyObject** result_type(const char* name) {
+  static auto* types = new std::map<std::string, PyObject*>;  // never destroyed (see status_members)
+  return &(*types)[name];
+}
+
+void bind_result_types(py::module_& m) {
+  m.def(
+      "_register_result_type",
+      [](const std::string& name, py::object type) {
+        if (!PyType_Check(type.ptr()) || !PyType_IsSubtype(reinterpret_cast<PyTypeObject*>(type.ptr()), &PyTuple_Type))
+          throw py::type_error("_register_result_type takes a tuple subclass");
+        PyObject** slot = result_type(name.c_str());
+        Py_XDECREF(*slot);
+        *slot = type.release().ptr();
+      },
+      py::arg("name"), py::arg("type"),
+      "Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...).");
+}
 
 py::object call(const Op& op, const void* context, std::initializer_list<py::handle> arg_list, py::handle out) {
   {  // one sample, as a control loop passes it

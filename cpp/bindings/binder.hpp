@@ -136,6 +136,7 @@ struct Op {
   Kernel<float> f32 = nullptr;
   Kernel<double> f64 = nullptr;
   bool float32 = true;  // false: computed in float64 whatever the dtype (float64_only)
+  PyObject** named = nullptr;  // the registered result type (returns), or null: a plain tuple
 
   // kernel: a captureless generic lambda [](const void* context, const auto& block) {...}
   template <typename F>
@@ -148,7 +149,17 @@ struct Op {
   }
   // An operation whose kernel has no float32 form: float32 input is computed, and answered, in float64.
   Op& float64_only() { return float32 = false, *this; }
+  // Several outputs come back as the tuple subclass the façade registers under `name`
+  // (spotkin._core._register_result_type: LegSolutions, ArmSolutions, ...).
+  Op& returns(const char* name);
 };
+
+// The slot of the result type registered under `name` (null until registered; the address is stable).
+PyObject** result_type(const char* name);
+inline Op& Op::returns(const char* name) { return named = result_type(name), *this; }
+
+// spotkin._core._register_result_type(name, type).
+void bind_result_types(py::module_& m);
 
 // The ops of a binding whose shapes depend on its model (a chain's dof, a body's legs), built
 // once per distinct key instead of at every call (a single sample's call measured ~0.1 us of

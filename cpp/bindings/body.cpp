@@ -25,23 +25,6 @@ std::uint64_t euler_columns(BodyPoseFormat format) {
   return format == BodyPoseFormat::Euler ? std::uint64_t{0b111000} : 0;
 }
 
-// Robot.body_ik's result type (a NamedTuple, registered at import by the
-// façade; a plain tuple until then), built here without a Python-level call.
-PyObject*& body_ik_type() {
-  static PyObject* type = nullptr;  // a strong reference, never released (see status_members)
-  return type;
-}
-
-py::object body_ik_result(py::object q, py::object status) {
-  auto* type = reinterpret_cast<PyTypeObject*>(body_ik_type());
-  if (!type) return py::make_tuple(q, status);
-  PyObject* result = type->tp_alloc(type, 2);  // a tuple subclass, as tuple.__new__ makes it
-  if (!result) throw py::error_already_set();
-  PyTuple_SET_ITEM(result, 0, q.release().ptr());
-  PyTuple_SET_ITEM(result, 1, status.release().ptr());
-  return py::reinterpret_steal<py::object>(result);
-}
-
 using binder::Arg;
 using binder::Kind;
 using binder::Op;
@@ -79,13 +62,12 @@ py::object ik(const Body& body, py::handle pose, int sequence, py::handle feet, 
                 // a shared stance is read with stride 0; the kernel reads either form
                 kernels::body_ik(s.body, b.in[0], format_of(b), s.seq, b.in[1], b.stride[1] == 0,
                                  b.in[2], b.real(0), b.status(1), b.m, s.nearest_fallback);
-              });
+              })
+        .returns("BodyIK");
   };
   const Solve context{body, make_sequence(sequence), nearest_fallback};
-  py::tuple result =
-      ops.with({std::uint64_t(n_legs), std::uint64_t(w), 0}, make,
+  return ops.with({std::uint64_t(n_legs), std::uint64_t(w), 0}, make,
                [&](const Op& op) { return binder::call(op, &context, {pose, feet, seed}, out); });
-  return body_ik_result(result[0], result[1]);
 }
 
 struct Posed {
@@ -178,16 +160,6 @@ Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj, py::han
 
 void bind_body(py::module_& m) {
   using namespace body_glue;
-  m.def(
-      "_register_body_ik",
-      [](py::object type) {
-        if (!PyType_Check(type.ptr()) || !PyType_IsSubtype(reinterpret_cast<PyTypeObject*>(type.ptr()), &PyTuple_Type))
-          throw py::type_error("_register_body_ik takes a tuple subclass");
-        PyObject*& slot = body_ik_type();
-        Py_XDECREF(slot);
-        slot = type.release().ptr();
-      },
-      py::arg("type"));
   m.def("body_transform", &transform, py::arg("body_pose"), py::arg("sequence"), py::arg("out") = py::none());
   py::class_<Body>(m, "Body")
       .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"), py::arg("columns") = py::none())

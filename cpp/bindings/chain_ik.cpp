@@ -123,7 +123,7 @@ py::object ik_position(const ChainIK& ik, py::handle p, py::handle out) {
     throw py::value_error("ik_position needs a 3-joint chain; this " + ik.kind() +
                           " chain has 6 joints: use ik(T) for the full pose");
   constexpr py::ssize_t kSlots = Position3::kSlots;
-  static const Op op({Arg("p", {3})},
+  static const Op op = Op({Arg("p", {3})},
                      {Out("q", {kSlots, 3}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
                       Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      kNsPerTarget, [](const void* c, const auto& b) {
@@ -131,7 +131,7 @@ py::object ik_position(const ChainIK& ik, py::handle p, py::handle out) {
                        position_kernel(*k.position, k.limits, b.in[0], b.real(0), b.flags(1), b.flags(2), b.status(4),
                                        b.m);
                        std::copy(b.flags(2), b.flags(2) + kSlots * b.m, b.flags(3));  // closed form: exact where it exists
-                     });
+                     }).returns("ChainSolutions");
   return binder::call(op, &ik, {p}, out);
 }
 
@@ -140,14 +140,14 @@ py::object ik_pose(const ChainIK& ik, py::handle T, py::handle out) {
     throw py::value_error("ik(T) needs a 6-joint chain; this chain has 3 joints (" +
                           ik.kind() + "): use ik_position(p)");
   constexpr py::ssize_t kSlots = Arm6::kSlots;
-  static const Op op({pose_target_arg()},
+  static const Op op = Op({pose_target_arg()},
                      {Out("q", {kSlots, 6}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
                       Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      kNsPerTarget, [](const void* c, const auto& b) {
                        const ChainIK& k = binder::context<ChainIK>(c);
                        arm6_kernel(*k.arm, k.limits, b.in[0], pose_format(b), b.real(0), b.flags(1), b.flags(2),
                                    b.flags(3), b.status(4), b.m);
-                     });
+                     }).returns("ChainSolutions");
   return binder::call(op, &ik, {T}, out);
 }
 
@@ -175,7 +175,7 @@ FreeJointIK make_free_joint_ik(const ChainPair& pair, py::handle lower_obj, py::
 // costs its own 6R solver (cached across calls), then the 6R solve per pose. T and free_value broadcast.
 py::object ik_free(const FreeJointIK& ik, py::handle T, py::handle value, py::handle out) {
   constexpr py::ssize_t kSlots = chain_ik::FreeJoint7::kSlots;
-  static const Op op({pose_target_arg(), Arg("free_value", {})},
+  static const Op op = Op({pose_target_arg(), Arg("free_value", {})},
                      {Out("q", {kSlots, 7}), Out("valid", {kSlots}, Kind::Bool), Out("exists", {kSlots}, Kind::Bool),
                       Out("exact", {kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      kNsPerTarget, [](const void* c, const auto& b) {
@@ -188,7 +188,7 @@ py::object ik_free(const FreeJointIK& ik, py::handle T, py::handle value, py::ha
                          chain_ik::ik_free_joint<PoseFormat::PositionQuaternion>(
                              k.solver, k.lower, k.upper, b.in[0], b.in[1], b.real(0), b.flags(1), b.flags(2),
                              b.flags(3), b.status(4), b.m);
-                     });
+                     }).returns("ChainSolutions");
   return binder::call(op, &ik, {T, value}, out);
 }
 

@@ -61,13 +61,13 @@ py::object ik(const Leg& leg, py::handle p, py::handle seed, bool nearest_fallba
 }
 
 py::object ik_all(const Leg& leg, py::handle p, py::handle out) {
-  static const Op op({Arg("p", {3})},
+  static const Op op = Op({Arg("p", {3})},
                      {Out("q", {Leg::kSlots, 3}), Out("valid", {Leg::kSlots}, Kind::Bool),
                       Out("exists", {Leg::kSlots}, Kind::Bool), Out("status", {}, Kind::Status)},
                      25.0, [](const void* c, const auto& b) {
                        kernels::leg_ik_all(binder::context<Leg>(c), b.in[0], b.real(0), b.flags(1), b.flags(2),
                                            b.status(3), b.m);
-                     });
+                     }).returns("LegSolutions");
   return binder::call(op, &leg, {p}, out);
 }
 

@@ -3,6 +3,9 @@
 
 #include "bindings.hpp"
 
+namespace spotkin::bindings::binder {
+void bind_result_types(pybind11::module_& m);  // binder.cpp
+}
 namespace spotkin::bindings {
 void bind_dynamics(pybind11::module_& m);  // dynamics.cpp
 void bind_statics(pybind11::module_& m);   // statics.cpp
@@ -10,6 +13,7 @@ void bind_statics(pybind11::module_& m);   // statics.cpp
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "spotkin's C++ core. Use the public façade in `spotkin` instead.";
+  spotkin::bindings::binder::bind_result_types(m);
   spotkin::bindings::bind_runtime(m);
   spotkin::bindings::bind_chain(m);
   spotkin::bindings::bind_leg(m);

@@ -240,8 +240,10 @@ def _kernel_work() -> dict[str, dict[str, float]]:
     """
 def _parse_thread_count(text: str) -> int:
     ...
-def _register_body_ik(type: typing.Any) -> None:
-    ...
+def _register_result_type(name: str, type: typing.Any) -> None:
+    """
+    Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...).
+    """
 def _register_status(members: typing.Any) -> None:
     ...
 def _set_thread_limit(n: typing.Any) -> typing.Any:

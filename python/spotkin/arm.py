@@ -67,6 +67,9 @@ class ArmSolutions(NamedTuple):
     UNREACHABLE or INVALID_INPUT."""
 
 
+_core._register_result_type("ArmSolutions", ArmSolutions)  # the core returns it itself
+
+
 class ArmSingularity(NamedTuple):
     """Distances to the arm's singular sets, each (...,)."""
 
@@ -218,7 +221,7 @@ class SpotArm:
         silently orthonormalised. The seed broadcasts with T over the leading dimensions.
         ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None).
         """
-        return ArmSolutions(*self._core.ik_all(T, seed, out))
+        return self._core.ik_all(T, seed, out)  # an ArmSolutions (the core builds it)
 
     def ik(
         self, T: ArrayLike, seed: ArrayLike | None = None, *, out: tuple | None = None

@@ -128,6 +128,9 @@ class ChainSolutions(NamedTuple):
     pose whose rotation is not one)."""
 
 
+_core._register_result_type("ChainSolutions", ChainSolutions)  # the core returns it itself
+
+
 class IKDifferentialInfo(NamedTuple):
     """Per-target outcome of :meth:`Chain.ik_differential`, each of shape (..., K) (or (...,))."""
 
@@ -423,6 +426,8 @@ class Chain:
         [0, dof + 1] or the strings above (``ValueError`` out of range, ``TypeError`` for another type).
         ``out``: an array of the result's shape and dtype to write into and return.
         """
+        if frame is _BASE and point is _TOOL:  # the defaults (interned strings): the control loop's call
+            return self._core.jacobian(q, 6, False, out)
         return self._point_jacobian(q, 6, frame, point, out)
 
     def position_jacobian(
@@ -679,7 +684,7 @@ class Chain:
         of the nearest configuration is not attempted (use a numerical solver for a
         least-squares answer). The full derivation is in ``spotkin.reference.ik3r``.
         """
-        return ChainSolutions(*self._ik_core().ik_position(p))
+        return self._ik_core().ik_position(p)  # a ChainSolutions (the core builds it)
 
     def ik(
         self, T: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
@@ -726,7 +731,7 @@ class Chain:
         """
         fast = self._ik is not None and not isinstance(self._ik, dict)
         if free_joint is None and free_value is None and fast:  # the single-call fast path
-            return ChainSolutions._make(self._ik.ik(T))
+            return self._ik.ik(T)  # a ChainSolutions (the core builds it)
         if free_joint is None:
             if free_value is not None:
                 raise ValueError("free_value needs free_joint (the index of the joint it holds)")
@@ -735,11 +740,11 @@ class Chain:
                     "a 7-joint chain is redundant: pass free_joint (0..6) and free_value to hold one "
                     "joint, or use ik_self_motion to sample it, or ik_differential to solve it numerically"
                 )
-            return ChainSolutions(*self._ik_core().ik(T))
+            return self._ik_core().ik(T)
         core = self._free_core(free_joint)
         if free_value is None:
             raise ValueError("free_joint needs free_value (the value the joint is held at)")
-        return ChainSolutions(*core.ik(T, free_value))
+        return core.ik(T, free_value)
 
     def _free_core(self, free_joint) -> _core.FreeJointIK:
         k = as_index(free_joint, "free_joint")
@@ -1003,6 +1008,9 @@ def _frame_index(value, name: str, last: int, words: tuple[str, ...]) -> int:
     if not 0 <= index <= last:
         raise ValueError(f"{name} must be a frame index in [0, {last}] (as Chain.frames), got {index}")
     return index
+
+
+_BASE, _TOOL = "base", "tool"  # Chain.jacobian's defaults
 
 
 def _tool_frame(frame: str) -> bool:

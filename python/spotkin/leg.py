@@ -82,6 +82,9 @@ class LegSolutions(NamedTuple):
     UNREACHABLE or INVALID_INPUT."""
 
 
+_core._register_result_type("LegSolutions", LegSolutions)  # the core returns it itself
+
+
 def _vector3(value: ArrayLike, name: str) -> tuple[float, float, float]:
     array = as_real(value, name, np.float64)
     if array.shape != (3,) or not np.isfinite(array).all():
@@ -366,7 +369,7 @@ class Leg:
     def ik_all(self, p: ArrayLike, *, out: tuple | None = None) -> LegSolutions:
         """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table.
         ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None)."""
-        return LegSolutions(*self._core.ik_all(p, out))
+        return self._core.ik_all(p, out)  # a LegSolutions (the core builds it)
 
     def nearest_reachable(self, p: ArrayLike, within_limits: bool = False) -> np.ndarray:
         """The foot position nearest to p (3,) that the leg reaches: (3,) float64.

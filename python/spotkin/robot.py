@@ -39,6 +39,9 @@ from .leg import Leg
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Robot"]
 
+_DEFAULT_SEQ, _DEFAULT_FALLBACK = "XYZ", "nearest"  # body_ik's defaults: their fast test is by identity
+_XYZ = sequence_code(_DEFAULT_SEQ)
+
 
 class BodyIK(NamedTuple):
     """Whole-body IK results, from :meth:`Robot.body_ik`."""
@@ -49,7 +52,7 @@ class BodyIK(NamedTuple):
     """(..., n) int8 :class:`Status` per leg, with the leg API's meaning and fallback."""
 
 
-_core._register_body_ik(BodyIK)  # the core returns BodyIK itself
+_core._register_result_type("BodyIK", BodyIK)  # the core returns it itself
 
 
 class BodyRates(NamedTuple):
@@ -792,10 +795,13 @@ class Robot:
         dtype. ``out``: ``(q, status)`` arrays of the result's shapes and dtypes (either may be
         None) to write into, so that a control loop allocates nothing.
         """
-        nearest = fallback_is_nearest(fallback)
+        if seq is _DEFAULT_SEQ and fallback is _DEFAULT_FALLBACK:  # the defaults (interned strings)
+            code, nearest = _XYZ, True
+        else:
+            code, nearest = sequence_code(seq), fallback_is_nearest(fallback)
         if seed is not None and not (type(seed) is np.ndarray and seed.shape[-1:] == (3 * len(self._legs),)):
             seed = self._leg_q(as_real(seed, "seed"), "seed")[0]  # a whole-body q: the arm's part unused
-        return self._body_core.ik(body_pose, sequence_code(seq), feet, seed, nearest, out)
+        return self._body_core.ik(body_pose, code, feet, seed, nearest, out)
 
     def body_fk(
         self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
