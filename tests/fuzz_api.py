@@ -1991,6 +1991,34 @@ def _chain_entries(tool_extra):
             )(x, out, kw, c),
         )
 
+        held = [  # a held joint is for 7-joint chains: refused here, and free_value alone too
+            Custom("free_joint", {"two": lambda c, r, b: Arg(2, REJECT, "value")}, default="omit"),
+            Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
+        ]
+        if dof == 3:  # every branch under the solver interface's name: ik_position's for 3 joints
+            all_slots = [Batch("target", (3,)), *held]
+            all_outs = outs(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("flag", (4,)), ("status", ()))
+            all_check = lambda x, out, kw, c, fkp=point_fk, lim=limits_of: solution_check(  # noqa: E731
+                fkp(c), lambda x: x["target"], lim(c)
+            )(x, out, kw, c)
+        else:  # ik's for the others (a 6-joint chain; any other width is refused)
+            all_slots = [Batch("target", (4, 4), pose="T"), *held]
+            all_outs = outs(("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("flag", (8,)), ("status", ()))
+            all_check = lambda x, out, kw, c, fkp=pose_fk, lim=limits_of: solution_check(  # noqa: E731
+                fkp(c), lambda x: pose_matrix(x["target"]), lim(c)
+            )(x, out, kw, c)
+        register(
+            light=key in URDF_CHAINS,
+            name=f"Chain.ik_all{tag}",
+            covers="spotkin.Chain.ik_all",
+            call=lambda c, get=get, **k: get(c).ik_all(**k),
+            slots=all_slots,
+            baseline=chain_q,
+            outputs=all_outs,
+            expect=ACCEPT if dof in (3, 6) else REJECT,
+            check=all_check,
+        )
+
         def tolerance_probe(result, kw, c, get=get):
             if not isinstance(result, sk.Chain) or result.dof != get(c).dof:
                 return f"with_ik_tolerance returned {result!r}, not a Chain of the same joints"

@@ -104,3 +104,36 @@ def test_inf_input_gives_non_finite_output_not_a_crash():
 def test_set_num_threads_validates():
     with pytest.raises(ValueError, match=r"thread count in \[1, 1024\]"):
         sk.set_num_threads(0)
+
+
+def test_legs_arms_and_chains_share_the_solver_interface():
+    """dof, limits (n, 2), joint_names, fk, jacobian and ik_all (every branch) on each solver; the same
+    limits whichever attribute reads them, and ik_all's branches hold the generating configuration."""
+    spot = sk.Spot()
+    go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+    arm_chain = sk.Robot.from_urdf(sk.robots.path("spot_with_arm")).chain("arm_hand")
+    leg_chain = go2.chain("FL_foot")
+    solvers = {
+        "leg": (spot.leg("fl"), np.array([0.1, 0.9, -1.5])),
+        "go2 leg": (go2.legs[0], np.array([0.05, 0.8, -1.6])),
+        "arm": (spot.arm, np.array([0.1, -1.0, 1.5, 0.2, 0.5, 0.0])),
+        "arm chain": (arm_chain, np.array([0.1, -1.0, 1.5, 0.2, 0.5, 0.0])),
+        "leg chain": (leg_chain, np.array([0.05, 0.8, -1.6])),
+    }
+    for name, (solver, q) in solvers.items():
+        assert solver.dof == len(q), name
+        limits = solver.limits
+        assert limits.shape == (solver.dof, 2) and (limits[:, 0] <= limits[:, 1]).all(), name
+        names = solver.joint_names
+        assert names is None or len(names) == solver.dof, name
+        pose = solver.fk(q)
+        target = pose[:3, 3] if pose.shape == (4, 4) and solver.dof == 3 else pose  # a 3-joint chain: p
+        J = solver.jacobian(q)
+        assert J.shape[-1] == solver.dof, name
+        branches = solver.ik_all(target)
+        hit = np.abs(np.angle(np.exp(1j * (branches.q - q)))).max(axis=-1) < 1e-9
+        assert hit.any(), (name, branches.q, q)  # the generating configuration is among the branches
+    assert spot.leg("fl").joint_names == spot.leg_joint_names[:3]
+    assert go2.legs[0].joint_names == tuple(go2.leg_joint_names[:3])
+    assert spot.arm.joint_names == spot.arm_joint_names
+    np.testing.assert_array_equal(arm_chain.limits, np.stack([arm_chain.lower, arm_chain.upper], axis=1))

@@ -226,3 +226,16 @@ def quiet_float_errors(function):
             return function(*args, **kwargs)
 
     return quiet
+
+
+def limit_table(limits: ArrayLike | None, n: int) -> np.ndarray:
+    """Joint limits as a new (n, 2) float64 table of (lower, upper) rows; None: unlimited (+-inf).
+    ``ValueError`` for another shape, a NaN, or lower > upper. The one check of every solver's limits."""
+    if limits is None:
+        return np.tile([-np.inf, np.inf], (n, 1))
+    table = as_real(limits, "limits", np.float64).copy()
+    if table.shape != (n, 2):
+        raise ValueError(f"limits must have shape ({n}, 2) as (lower, upper) rows, got {table.shape}")
+    if np.isnan(table).any() or (table[:, 0] > table[:, 1]).any():
+        raise ValueError(f"limits must satisfy lower <= upper, with no NaN, got {table.tolist()}")
+    return table

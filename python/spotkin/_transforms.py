@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike
 
 from ._boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors
 
-__all__ = ["rotation_x", "rotation_y", "rotation_z", "transform", "translation"]
+__all__ = ["quaternion_xyzw", "rotation_x", "rotation_y", "rotation_z", "transform", "translation"]
 
 
 def translation(p: ArrayLike) -> np.ndarray:
@@ -69,3 +69,41 @@ def transform(R: ArrayLike, p: ArrayLike) -> np.ndarray:
     out[..., :3, 3] = p
     out[..., 3, 3] = 1.0
     return out
+
+
+@quiet_float_errors
+def quaternion_xyzw(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions [x, y, z, w] (w >= 0) of rotation matrices (..., 3, 3), float64, branch-free over
+    the batch (Shepperd: row k of K = 4 q_k q, taken for the largest of x, y, z, w, is well conditioned);
+    NaN where R is NaN. The one conversion the package uses (the floating base's q, the trajectories,
+    the Spot SDK's (w, x, y, z): reorder the columns)."""
+    t = np.stack(
+        [
+            1.0 + R[..., 0, 0] - R[..., 1, 1] - R[..., 2, 2],
+            1.0 - R[..., 0, 0] + R[..., 1, 1] - R[..., 2, 2],
+            1.0 - R[..., 0, 0] - R[..., 1, 1] + R[..., 2, 2],
+            1.0 + R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2],
+        ],
+        axis=-1,
+    )  # 4 x^2, 4 y^2, 4 z^2, 4 w^2
+    pick = np.argmax(np.where(np.isnan(t), -np.inf, t), axis=-1)
+    d = {
+        "xy": R[..., 0, 1] + R[..., 1, 0],
+        "xz": R[..., 0, 2] + R[..., 2, 0],
+        "yz": R[..., 1, 2] + R[..., 2, 1],
+        "wx": R[..., 2, 1] - R[..., 1, 2],
+        "wy": R[..., 0, 2] - R[..., 2, 0],
+        "wz": R[..., 1, 0] - R[..., 0, 1],
+    }
+    rows = np.stack(
+        [
+            np.stack([t[..., 0], d["xy"], d["xz"], d["wx"]], axis=-1),
+            np.stack([d["xy"], t[..., 1], d["yz"], d["wy"]], axis=-1),
+            np.stack([d["xz"], d["yz"], t[..., 2], d["wz"]], axis=-1),
+            np.stack([d["wx"], d["wy"], d["wz"], t[..., 3]], axis=-1),
+        ],
+        axis=-2,
+    )  # row k: 4 q_k q
+    quat = np.take_along_axis(rows, pick[..., None, None], axis=-2)[..., 0, :]
+    quat = quat / np.linalg.norm(quat, axis=-1, keepdims=True)  # quietly: NaN or Inf input gives NaN
+    return np.where(quat[..., 3:4] < 0.0, -quat, quat)

@@ -88,12 +88,8 @@ def _kind(obj) -> str:
 
 
 def _limits(obj, kind: str) -> tuple[np.ndarray, np.ndarray]:
-    if kind == "chain":
-        lower, upper = obj.lower, obj.upper
-        prismatic = obj.sigma == 1
-    else:
-        lower, upper = obj.limits[:, 0], obj.limits[:, 1]
-        prismatic = np.zeros(lower.shape, dtype=bool)
+    lower, upper = obj.limits[:, 0], obj.limits[:, 1]  # the solvers' shared (n, 2) limits
+    prismatic = obj.sigma == 1 if kind == "chain" else np.zeros(lower.shape, dtype=bool)
     if (prismatic & ~(np.isfinite(lower) & np.isfinite(upper))).any():
         raise ValueError("sampling a workspace needs finite limits on every prismatic joint")
     lower = np.where(np.isfinite(lower), lower, -np.pi)

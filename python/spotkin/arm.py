@@ -43,6 +43,7 @@ from ._boundary import (
     as_scalar,
     broadcast_lead,
     check_trailing,
+    limit_table,
     quiet_float_errors,
     rigid_transforms,
 )
@@ -132,6 +133,9 @@ def _broadcast_seed(T: ArrayLike, seed: ArrayLike) -> tuple[np.ndarray, np.ndarr
     )
 
 
+ARM_JOINT_NAMES = ("arm0.sh0", "arm0.sh1", "arm0.el0", "arm0.el1", "arm0.wr0", "arm0.wr1")
+
+
 class SpotArm:
     """The Spot Arm, or any arm of the same structure. See the module docstring.
 
@@ -154,10 +158,7 @@ class SpotArm:
         tool: ArrayLike | None = None,
         limits: ArrayLike | None = SPOT["arm"]["limits"],
     ) -> None:
-        unlimited = np.tile([-np.inf, np.inf], (6, 1))
-        table = unlimited if limits is None else as_real(limits, "limits", np.float64).copy()
-        if table.shape != (6, 2):
-            raise ValueError(f"limits must have shape (6, 2) as (lower, upper) rows, got {table.shape}")
+        table = limit_table(limits, 6)
         mount = as_real(mount, "mount", np.float64).copy()
         if mount.shape != (3,):
             raise ValueError(f"mount must have shape (3,), got {mount.shape}")
@@ -193,6 +194,17 @@ class SpotArm:
     def tool(self) -> np.ndarray:
         """(4, 4) hand -> tool transform."""
         return np.eye(4) if self._params[5] is None else self._params[5].copy()
+
+    @property
+    def dof(self) -> int:
+        """6 (the solver interface shared with legs and chains)."""
+        return 6
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The joints by their role, as the Spot SDK names them: shoulder (sh0, sh1), elbow (el0,
+        el1), wrist (wr0, wr1)."""
+        return ARM_JOINT_NAMES
 
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tool pose in the body frame: q (..., 6) -> (..., 4, 4). ``out``: an array of the result's

@@ -16,7 +16,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core, dynamics, inertia
-from ._boundary import as_finite, as_index, as_real, broadcast_lead, quiet_float_errors, rigid_transforms
+from ._boundary import (
+    as_finite,
+    as_index,
+    as_real,
+    broadcast_lead,
+    limit_table,
+    quiet_float_errors,
+    rigid_transforms,
+)
 from ._status import Status
 from .arm import _broadcast_seed
 from .inertia import link_inertials
@@ -40,15 +48,8 @@ def _table(rows: ArrayLike) -> np.ndarray:
 
 
 def _limits(limits: ArrayLike | None, dof: int) -> tuple[np.ndarray, np.ndarray]:
-    if limits is None:
-        return np.full(dof, -np.inf), np.full(dof, np.inf)
-    table = as_real(limits, "limits", np.float64)
-    if table.shape != (dof, 2):
-        raise ValueError(f"limits must have shape ({dof}, 2) as (lower, upper) rows, got {table.shape}")
-    lower, upper = table[:, 0].copy(), table[:, 1].copy()
-    if np.isnan(table).any() or (lower > upper).any():
-        raise ValueError("limits must satisfy lower <= upper, with no NaN")
-    return lower, upper
+    table = limit_table(limits, dof)
+    return table[:, 0].copy(), table[:, 1].copy()
 
 
 def _limit_override(limits, current, names, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -362,6 +363,11 @@ class Chain:
         return self._limits[1].copy()
 
     @property
+    def limits(self) -> np.ndarray:
+        """(dof, 2) joint limits (lower, upper); ±inf where unlimited (as :attr:`spotkin.Leg.limits`)."""
+        return np.stack(self._limits, axis=1)
+
+    @property
     def inertials(self):
         """The bodies' mass properties (:class:`spotkin.inertia.LinkInertials`), or None. Row j is the
         body moved by joint j, in frame j + 1 of :meth:`frames`; a chain from :meth:`spotkin.Robot.chain`
@@ -667,6 +673,16 @@ class Chain:
         """The closed form of the position part: :attr:`ik_kind` of the first three joints."""
         return self._ik_core().position_kind
 
+    def ik_all(
+        self, target: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
+    ) -> ChainSolutions:
+        """Every branch for ``target``, as :meth:`spotkin.Leg.ik_all` and :meth:`spotkin.SpotArm.ik_all`
+        answer: :meth:`ik_position` for a 3-joint chain (p (..., 3)), :meth:`ik` for a 6-joint one (T
+        (..., 4, 4) or (..., 7)) and a 7-joint one with ``free_joint`` held at ``free_value``."""
+        if self.dof == 3 and free_joint is None and free_value is None:
+            return _as_target(self.ik_position, target)
+        return _as_target(self.ik, target, free_joint, free_value)
+
     def ik_position(self, p: ArrayLike) -> ChainSolutions:
         """Every joint solution placing the tool point at p, for a 3-joint chain.
 
@@ -854,16 +870,7 @@ class Chain:
         target's leading dimensions. Runs in C++ per block of targets, with no temporary
         array of every solution (for control loops and large batches alike).
         """
-        core = self._ik_core()
-        try:
-            return core.ik_nearest(target, seed)
-        except (TypeError, ValueError) as error:  # the kernels call it p or T: name the argument
-            message = str(error)
-            for name in ("p", "T"):
-                if message.startswith(f"{name} "):
-                    message = "target" + message[len(name) :].replace(f" {name}.filled", " target.filled")
-                    raise type(error)(message) from None
-            raise
+        return _as_target(self._ik_core().ik_nearest, target, seed)
 
     def ik_differential(
         self,
@@ -1011,6 +1018,19 @@ def _frame_index(value, name: str, last: int, words: tuple[str, ...]) -> int:
 
 
 _BASE, _TOOL = "base", "tool"  # Chain.jacobian's defaults
+
+
+def _as_target(call, target, *args):
+    """call(target, *args), its errors naming ``target`` (the kernels call it p or T)."""
+    try:
+        return call(target, *args)
+    except (TypeError, ValueError) as error:
+        message = str(error)
+        for name in ("p", "T"):
+            if message.startswith(f"{name} "):
+                message = "target" + message[len(name) :].replace(f" {name}.filled", " target.filled")
+                raise type(error)(message) from None
+        raise
 
 
 def _tool_frame(frame: str) -> bool:

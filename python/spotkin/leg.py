@@ -53,6 +53,7 @@ from ._boundary import (
     as_real,
     as_scalar,
     fallback_is_nearest,
+    limit_table,
     quiet_float_errors,
 )
 from ._status import Status
@@ -93,13 +94,7 @@ def _vector3(value: ArrayLike, name: str) -> tuple[float, float, float]:
 
 
 def _limit_table(limits: ArrayLike | None) -> np.ndarray:
-    unlimited = np.tile([-np.inf, np.inf], (3, 1))
-    table = unlimited if limits is None else as_real(limits, "limits", np.float64).copy()
-    if table.shape != (3, 2):
-        raise ValueError(f"limits must have shape (3, 2) as (lower, upper) rows, got {table.shape}")
-    if np.isnan(table).any() or (table[:, 0] > table[:, 1]).any():
-        raise ValueError(f"limits must satisfy lower <= upper, with no NaN, got {table.tolist()}")
-    return table
+    return limit_table(limits, 3)
 
 
 class Leg:
@@ -126,7 +121,7 @@ class Leg:
     negative ``hip_offset``, and limits with NaN or lower > upper raise ``ValueError``.
     """
 
-    __slots__ = ("_core", "_geometry", "_limits", "_name")
+    __slots__ = ("_core", "_geometry", "_joint_names", "_limits", "_name")
 
     def __init__(
         self,
@@ -213,6 +208,7 @@ class Leg:
         self._geometry = (a, b, c, signs)
         self._limits = limits
         self._name = name
+        self._joint_names = getattr(self, "_joint_names", None)  # set by the robot that names them
 
     def _slot_of(self, q: tuple[float, float, float]) -> int:
         """The slot whose solution for fk(q) is q (up to 2 pi), or ValueError."""
@@ -228,6 +224,17 @@ class Leg:
     @property
     def name(self) -> str | None:
         return self._name
+
+    @property
+    def dof(self) -> int:
+        """3: hip roll, hip pitch, knee (the solver interface shared with arms and chains)."""
+        return 3
+
+    @property
+    def joint_names(self) -> tuple[str, str, str] | None:
+        """The three joints' names in the robot the leg belongs to (its URDF's, or Spot's SDK names),
+        None for a leg built alone."""
+        return self._joint_names
 
     @property
     def a(self) -> np.ndarray:
@@ -395,7 +402,10 @@ class Leg:
         return np.array(self._core.nearest_reachable(point, within_limits)[0])
 
     def __reduce__(self):
-        return (_rebuild_leg, (*self._geometry, self._limits, self._name, self.preferred_slot))
+        return (
+            _rebuild_leg,
+            (*self._geometry, self._limits, self._name, self.preferred_slot, self._joint_names),
+        )
 
     def __repr__(self) -> str:
         label = f"{self.name!r}, " if self.name else ""
@@ -403,5 +413,7 @@ class Leg:
         return f"Leg({label}a={a}, b={b}, c={c}, signs={signs})"
 
 
-def _rebuild_leg(a, b, c, signs, limits, name, preferred_slot) -> Leg:
-    return Leg.from_geometry(a, b, c, signs, limits, name, preferred_slot)
+def _rebuild_leg(a, b, c, signs, limits, name, preferred_slot, joint_names=None) -> Leg:
+    leg = Leg.from_geometry(a, b, c, signs, limits, name, preferred_slot)
+    leg._joint_names = joint_names
+    return leg

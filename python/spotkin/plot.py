@@ -237,9 +237,7 @@ def _arm_points(arm, q: np.ndarray) -> np.ndarray:
 
 
 def _limits_of(solver) -> np.ndarray:
-    """(n, 2) joint limits of a leg, a SpotArm or a chain."""
-    if isinstance(solver, Chain):
-        return np.stack([solver.lower, solver.upper], axis=1)
+    """(n, 2) joint limits of a leg, a SpotArm or a chain (the solvers' shared ``limits``)."""
     return solver.limits
 
 

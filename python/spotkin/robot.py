@@ -31,6 +31,7 @@ from ._boundary import (
     real_dtype,
 )
 from ._status import Status
+from ._transforms import quaternion_xyzw
 from ._urdf_chain import chain_from_model
 from .body import body_transform, sequence_code
 from .chain import Chain
@@ -344,6 +345,8 @@ class Robot:
                 "spotkin.Chain.from_urdf(path, tip=..., base=...)"
             )
         self._legs = tuple(legs)
+        for leg, triple in zip(legs, joint_names):
+            leg._joint_names = tuple(triple)
         self._leg_names = tuple(names)
         self._hips = np.array(hips, dtype=np.float64).reshape(len(legs), 3)
         self._hips.flags.writeable = False
@@ -554,7 +557,7 @@ class Robot:
         lead = broadcast_lead(body_pose=(T.shape[:-2], T.shape), q=(q.shape[:-1], q.shape))
         T = np.broadcast_to(T, (*lead, 4, 4))
         q = np.broadcast_to(q, (*lead, q.shape[-1]))
-        out = np.concatenate([T[..., :3, 3], _quaternion(T[..., :3, :3]), q], axis=-1)
+        out = np.concatenate([T[..., :3, 3], quaternion_xyzw(T[..., :3, :3]), q], axis=-1)
         # a sample with an invalid pose or a NaN or Inf joint: NaN throughout
         return np.where(np.isfinite(out).all(axis=-1, keepdims=True), out, np.nan)
 
@@ -1112,40 +1115,3 @@ class Standing(NamedTuple):
     """(...) m: signed distance of the centre of mass's projection to the support polygon, in the plane
     normal to gravity, positive inside (with fewer than three non-collinear feet: minus the distance to
     their segment or point; NaN without gravity)."""
-
-
-def _quaternion(R: np.ndarray) -> np.ndarray:
-    """Unit quaternions [x, y, z, w] (w >= 0) of rotation matrices (..., 3, 3), branch-free over the
-    batch (Shepperd: from the largest of w, x, y, z); NaN where R is NaN."""
-    t = np.stack(
-        [
-            1.0 + R[..., 0, 0] - R[..., 1, 1] - R[..., 2, 2],
-            1.0 - R[..., 0, 0] + R[..., 1, 1] - R[..., 2, 2],
-            1.0 - R[..., 0, 0] - R[..., 1, 1] + R[..., 2, 2],
-            1.0 + R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2],
-        ],
-        axis=-1,
-    )  # 4 x^2, 4 y^2, 4 z^2, 4 w^2
-    with np.errstate(invalid="ignore"):
-        pick = np.argmax(np.where(np.isnan(t), -np.inf, t), axis=-1)
-    d = {
-        "xy": R[..., 0, 1] + R[..., 1, 0],
-        "xz": R[..., 0, 2] + R[..., 2, 0],
-        "yz": R[..., 1, 2] + R[..., 2, 1],
-        "wx": R[..., 2, 1] - R[..., 1, 2],
-        "wy": R[..., 0, 2] - R[..., 2, 0],
-        "wz": R[..., 1, 0] - R[..., 0, 1],
-    }
-    rows = np.stack(
-        [
-            np.stack([t[..., 0], d["xy"], d["xz"], d["wx"]], axis=-1),
-            np.stack([d["xy"], t[..., 1], d["yz"], d["wy"]], axis=-1),
-            np.stack([d["xz"], d["yz"], t[..., 2], d["wz"]], axis=-1),
-            np.stack([d["wx"], d["wy"], d["wz"], t[..., 3]], axis=-1),
-        ],
-        axis=-2,
-    )  # row k: 4 q_k q
-    quat = np.take_along_axis(rows, pick[..., None, None], axis=-2)[..., 0, :]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        quat = quat / np.linalg.norm(quat, axis=-1, keepdims=True)
-    return np.where(quat[..., 3:4] < 0.0, -quat, quat)

@@ -57,6 +57,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._boundary import as_real, check_trailing
+from ._transforms import quaternion_xyzw
+from .arm import ARM_JOINT_NAMES
 
 try:
     from bosdyn.api import (
@@ -102,7 +104,6 @@ __all__ = [
 
 LEG_JOINT_NAMES = tuple(f"{leg}.{joint}" for leg in ("fl", "fr", "hl", "hr") for joint in ("hx", "hy", "kn"))
 """The 12 leg joints in the SDK's order, the order of ``q12`` (:attr:`spotkin.Spot.joint_names`)."""
-ARM_JOINT_NAMES = ("arm0.sh0", "arm0.sh1", "arm0.el0", "arm0.el1", "arm0.wr0", "arm0.wr1")
 """The arm's 6 joints in the SDK's order, the order of ``q_arm``."""
 GRIPPER_JOINT_NAME = "arm0.f1x"
 """The gripper's joint."""
@@ -268,30 +269,8 @@ def _rotation_ok(R: np.ndarray) -> np.ndarray:
 
 
 def _matrix_quats(R: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotations -> (..., 4) unit (w, x, y, z) with w >= 0 (Shepperd's method)."""
-    with np.errstate(all="ignore"):
-        m = R
-        trace = m[..., 0, 0] + m[..., 1, 1] + m[..., 2, 2]
-        diag = np.stack([trace, m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]], -1)
-        pick = np.argmax(diag, axis=-1)
-        q = np.empty((*R.shape[:-2], 4))
-        # each case divides by the largest component, 4 times the square root below
-        xy, xz, yz = m[..., 0, 1] + m[..., 1, 0], m[..., 0, 2] + m[..., 2, 0], m[..., 1, 2] + m[..., 2, 1]
-        wx, wy, wz = m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]
-        cases = (
-            (1 + trace, wx, wy, wz),
-            (wx, 1 + 2 * m[..., 0, 0] - trace, xy, xz),
-            (wy, xy, 1 + 2 * m[..., 1, 1] - trace, yz),
-            (wz, xz, yz, 1 + 2 * m[..., 2, 2] - trace),
-        )
-        for k, case in enumerate(cases):
-            chosen = pick == k
-            if chosen.any():
-                big = case[k][chosen]
-                scale = 0.5 / np.sqrt(big)
-                q[chosen] = np.stack([c[chosen] for c in case], -1) * scale[..., None]
-        q *= np.where(q[..., :1] < 0, -1.0, 1.0)
-        return q / np.linalg.norm(q, axis=-1, keepdims=True)
+    """(..., 3, 3) rotations -> (..., 4) unit (w, x, y, z) with w >= 0, the SDK's order."""
+    return quaternion_xyzw(R)[..., [3, 0, 1, 2]]
 
 
 def _rigid_inverse(T: np.ndarray) -> np.ndarray:

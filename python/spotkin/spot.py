@@ -12,7 +12,7 @@ import numpy as np
 
 from . import robots, urdf
 from ._boundary import as_finite, as_real
-from .arm import SpotArm
+from .arm import ARM_JOINT_NAMES, SpotArm
 from .leg import Leg
 from .models import LEG_NAMES, SPOT
 from .robot import BodyFrames, BodyIK, BodyRates, Robot, _limit_table
@@ -163,7 +163,7 @@ class Spot(Robot):
     """The 12 leg joints in SDK order, the order of ``q12``: "fl.hx", "fl.hy", "fl.kn", "fr.hx", ...,
     "hr.kn"."""
     leg_joint_names = joint_names
-    arm_joint_names = ("arm0.sh0", "arm0.sh1", "arm0.el0", "arm0.el1", "arm0.wr0", "arm0.wr1")
+    arm_joint_names = ARM_JOINT_NAMES
     """The 6 arm joints in SDK order, the order of ``q_arm``."""
 
     _q_name = "q12"

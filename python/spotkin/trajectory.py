@@ -56,6 +56,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._boundary import as_index, as_real, quiet_float_errors, rotation_tolerance
+from ._transforms import quaternion_xyzw
 from .body import unchecked_transform
 
 __all__ = [
@@ -230,28 +231,6 @@ def _pose_matrices(poses: np.ndarray, name, dtypes=(np.float64,)) -> np.ndarray:
 def _norm(u: np.ndarray) -> np.ndarray:
     """|u| of 3-vectors along the last axis, without overflow (hypot) for huge components."""
     return np.hypot(np.hypot(u[..., 0], u[..., 1]), u[..., 2])
-
-
-def _quaternions(R: np.ndarray) -> np.ndarray:
-    """[x, y, z, w] (N, 4) of rotation matrices (N, 3, 3) (Shepperd).
-
-    Row i of K is 4 q_i q (i = x, y, z, w); the row of the largest of R00, R11, R22, trace has
-    the largest q_i, so normalising it is well conditioned (and gives q_i > 0).
-    """
-    r = R.reshape(-1, 9)
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = r.T
-    tr = r00 + r11 + r22
-    K = np.stack(
-        [
-            [1 + r00 - r11 - r22, r01 + r10, r02 + r20, r21 - r12],
-            [r01 + r10, 1 - r00 + r11 - r22, r12 + r21, r02 - r20],
-            [r02 + r20, r12 + r21, 1 - r00 - r11 + r22, r10 - r01],
-            [r21 - r12, r02 - r20, r10 - r01, 1 + tr],
-        ]
-    )  # (4, 4, N)
-    best = np.argmax(np.stack([r00, r11, r22, tr]), axis=0)
-    q = K[best, :, np.arange(len(r))]
-    return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
 def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -528,7 +507,7 @@ def _plan(
 
     The blends are then b_j from the chosen d; segments not slowed keep d_k = d_min_k exactly.
     """
-    quats = _quaternions(poses[:, :3, :3])
+    quats = quaternion_xyzw(poses[:, :3, :3])
     positions = poses[:, :3, 3]
     phis, signed = _relative_rotations(quats)
     # drop repeats: a pose at the previous position within _REPEAT_TOL of its rotation
