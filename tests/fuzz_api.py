@@ -1965,32 +1965,6 @@ def _chain_entries(tool_extra):
                 fkp(c), lambda x: x["p"], lim(c)
             )(x, out, kw, c),
         )
-        register(
-            light=key in URDF_CHAINS,  # the DH chains' kernels
-            name=f"Chain.ik{tag}",
-            covers="spotkin.Chain.ik",
-            call=lambda c, get=get, **k: get(c).ik(**k),
-            slots=[
-                Batch("T", (4, 4), pose="T"),
-                # a free joint is for 7-joint chains: refused here, and free_value alone too
-                Custom(
-                    "free_joint",
-                    {
-                        "two": lambda c, r, b: Arg(2, REJECT, "value"),
-                        "bool": lambda c, r, b: Arg(True, REJECT),
-                    },
-                    default="omit",
-                ),
-                Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
-            ],
-            baseline=chain_q,
-            outputs=outs(("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("flag", (8,)), ("status", ())),
-            expect=ACCEPT if dof == 6 else REJECT,
-            check=lambda x, out, kw, c, fkp=pose_fk, lim=limits_of: solution_check(
-                fkp(c), lambda x: pose_matrix(x["T"]), lim(c)
-            )(x, out, kw, c),
-        )
-
         held = [  # a held joint is for 7-joint chains: refused here, and free_value alone too
             Custom("free_joint", {"two": lambda c, r, b: Arg(2, REJECT, "value")}, default="omit"),
             Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
@@ -2121,10 +2095,16 @@ def _chain_entries(tool_extra):
         )
         register(
             light=key in URDF_CHAINS,  # the DH chains' kernels
-            name=f"Chain.ik_nearest{tag}",
-            covers="spotkin.Chain.ik_nearest",
-            call=lambda c, get=get, **k: get(c).ik_nearest(**k),
-            slots=[target, angle_slot("seed", dof, optional=True, default="omit")],
+            name=f"Chain.ik{tag}",
+            covers="spotkin.Chain.ik",
+            call=lambda c, get=get, **k: get(c).ik(**k),
+            slots=[
+                target,
+                angle_slot("seed", dof, optional=True, default="omit"),
+                # a held joint is for 7-joint chains: refused here, and free_value alone too
+                Custom("free_joint", {"two": lambda c, r, b: Arg(2, REJECT, "value")}, default="omit"),
+                Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
+            ],
             baseline=chain_q,
             outputs=outs(("float", (dof,)), ("status", ())),
             check=lambda x, out, kw, c, fkp=(point_fk if dof == 3 else pose_fk), lim=limits_of, d=dof: (
@@ -3412,7 +3392,7 @@ def _robot_entries():
     # Go2: Spot's code with other numbers; the hexapod: six legs, their joints interleaved in q
     _body_entries(BodySpec("go2"), BODY_METHODS, light=BODY_METHODS)
     _body_entries(BodySpec("hexapod"), BODY_METHODS[:-1], light=("body_jacobian", "body_rates", "fk_all"))
-    # Spot from its URDF: the arm is a Chain (closed form by ik_nearest)
+    # Spot from its URDF: the arm is a Chain (closed form by ik)
     _body_entries(BodySpec("spot_urdf"), ("fk_all", "arm_ik_world"), light=("fk_all", "arm_ik_world"))
 
     # stance_feet, leg

@@ -5,7 +5,7 @@ Dask installed nothing is registered (and nothing of ``spotkin.dask`` is public 
 
 Each function of ``spotkin.dask`` is the *twin* of in-memory entries already in the registry
 (``skd.body_ik`` of ``Spot.body_ik`` and ``Robot.body_ik``, ``skd.ik`` of ``Leg.ik``, ``SpotArm.ik`` and
-``Chain.ik_nearest``, ...): the same argument slots and hostile variants (renamed where the Dask
+``Chain.ik``, ...): the same argument slots and hostile variants (renamed where the Dask
 function names an argument otherwise, plus the model argument), the same documented outputs, and the
 twin's oracle on every sample. On top of it, every result must be **bit-identical** to the in-memory
 call on the same arguments (the whole batch: the arm's and chains' closed forms may round a sample of
@@ -257,20 +257,23 @@ def register_entries(api) -> None:
             f"dask.ik[{key}]",
             "spotkin.dask.ik",
             skd.ik,
-            pattern.format("ik_nearest" if chain else "ik"),
+            pattern.format("ik"),
             model,
             {"target": target},
             extra=() if key == "leg" else (fallback_nan(),),
-            change=with_optional("fallback") if key == "leg" else None,
+            change=with_optional("fallback")
+            if key == "leg"
+            # Chain.ik's held joint (7-joint chains) has no Dask form
+            else lambda slots: [slot for slot in slots if slot.name not in ("free_joint", "free_value")],
         )
-        method = {"mdh3": "ik_position", "dh6": "ik"}.get(key, "ik_all")
+        method = "ik_all"
         twin(
             f"dask.ik_all[{key}]",
             "spotkin.dask.ik_all",
             skd.ik_all,
             pattern.format(method),
             model,
-            {"target": {"mdh3": "p", "dh6": "T"}.get(key, target)},
+            {"target": target},
             extra=() if key == "arm" else (no_seed(),),
             # Chain.ik's free joint (7-joint chains) has no Dask form
             change=lambda slots: [slot for slot in slots if slot.name not in ("free_joint", "free_value")],

@@ -181,10 +181,10 @@ def register_entries(api) -> None:
         return probe
 
     def solve_point(solver, p):
-        return solver.ik_all(p) if isinstance(solver, sk.Leg) else solver.ik_position(p)
+        return solver.ik_all(p)  # every solver's branches (the solver interface)
 
     def solve_pose(solver, T):
-        return solver.ik_all(T) if isinstance(solver, sk.SpotArm) else solver.ik(T)
+        return solver.ik_all(T)
 
     def poke(value):
         def make(c, v):

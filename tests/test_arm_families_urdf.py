@@ -50,7 +50,7 @@ def test_quadruped_with_z1_has_a_closed_form_arm():
     rng = np.random.default_rng(7)
     q = rng.uniform(-2.8, 2.8, (500, 6))
     T = arm.fk(q)
-    sol = arm.ik(T)
+    sol = arm.ik_all(T)
     assert (sol.status == sk.Status.OK).all()
     assert (sol.exact == sol.exists).all()
     gap = np.abs(np.angle(np.exp(1j * (sol.q - q[:, None, :])))).max(axis=2)
@@ -65,6 +65,6 @@ def test_quadruped_with_z1_has_a_closed_form_arm():
         for row in ref.q[ref.exists]:
             assert np.abs(np.angle(np.exp(1j * (sol.q[i][sol.exists[i]] - row)))).max(axis=1).min() < 1e-7
     # the nearest solution to a seed near the generating configuration is that configuration
-    q_near, status = arm.ik_nearest(T, seed=q + 0.01)
+    q_near, status = arm.ik(T, seed=q + 0.01)
     assert (status == sk.Status.OK).all()
     np.testing.assert_allclose(q_near, q, atol=1e-7)

@@ -397,16 +397,16 @@ def test_float32_transforms_that_are_not_rigid_are_still_refused():
 def test_messages_name_the_argument():
     arm = SPOT.chain("arm_link_wr1")
     with pytest.raises(ValueError, match=r"^target must have shape \(\.\.\., 4, 4\)"):
-        arm.ik_nearest(np.zeros((3, 3)), np.zeros(6))
+        arm.ik(np.zeros((3, 3)), np.zeros(6))
     with pytest.raises(ValueError, match=r"^target must have shape"):
-        arm.ik_nearest(np.zeros((3, 3)))
+        arm.ik(np.zeros((3, 3)))
     with pytest.raises(TypeError, match=r"^target must be a real numeric array"):
-        arm.ik_nearest("pose", np.zeros(6))
+        arm.ik("pose", np.zeros(6))
     with pytest.raises(ValueError, match=r"^target \(5, 4, 4\) and seed \(3, 6\) do not broadcast"):
-        arm.ik_nearest(np.tile(np.eye(4), (5, 1, 1)), np.zeros((3, 6)))
+        arm.ik(np.tile(np.eye(4), (5, 1, 1)), np.zeros((3, 6)))
     leg = sk.Chain.from_mdh(LEG_MDH_ROWS, tool=sk.translation([0.3365, 0.0, 0.0]))
     with pytest.raises(ValueError, match=r"^target must have shape \(\.\.\., 3\)"):
-        leg.ik_nearest(np.zeros(4), np.zeros(3))
+        leg.ik(np.zeros(4), np.zeros(3))
     with pytest.raises(TypeError, match=r"^link must be a link name \(str\), got list"):
         SPOT.chain(link=["arm_link_wr1"])
     with pytest.raises(TypeError, match=r"^base must be a link name \(str\), got list"):

@@ -175,7 +175,7 @@ def _cases(folder):
         ),
         "chain-ik": (
             ["--robot", "go2", "--link", "FL_foot", "--targets", f["pc"], "--seed", f["qc"]],
-            fields(chain.ik_nearest(pc, seed=qc)),
+            fields(chain.ik(pc, seed=qc)),
         ),
         "chain-ik-all": (
             ["--robot", "go2", "--link", "FL_foot", "--targets", f["pc"]],
@@ -183,7 +183,7 @@ def _cases(folder):
         ),
         "arm-ik[urdf]": (
             ["--robot", "spot_with_arm", "--targets", f["Tu"]],
-            fields(urdf_arm.ik_nearest(Tu)),
+            fields(urdf_arm.ik(Tu)),
         ),
         "chain-inverse-dynamics": (
             [*chain_args, "--qd", f["qd"], "--qdd", f["qdd"], "--gravity", "0", "0", "-9.8"],

@@ -260,7 +260,7 @@ def test_spot_arm_as_chain_equals_the_arm_solver(rng, form, tool):
     T[-50:, :3, 3] *= 3.0  # out of reach
     quat = Rotation.from_matrix(T[:, :3, :3]).as_quat()
     target = T if form == "matrix" else np.concatenate([T[:, :3, 3], quat], axis=-1)
-    ours, theirs = chain.ik(target), arm.ik_all(target)
+    ours, theirs = chain.ik_all(target), arm.ik_all(target)
     assert ours.q.shape == (400, 8, 6)
     np.testing.assert_array_equal(ours.status, theirs.status)
     assert (ours.status == sk.Status.JOINT_LIMIT).any() and (ours.status == sk.Status.OK).any()
@@ -297,7 +297,7 @@ def test_random_spherical_wrists_round_trip(rng):
             continue
         q = rng.uniform(-np.pi, np.pi, (20, 6))
         T = chain.fk(q)
-        sol = chain.ik(T)
+        sol = chain.ik_all(T)
         for i in range(len(q)):
             ours = solutions(sol, i)
             assert 2 <= len(ours) <= 8 and len(ours) % 2 == 0
@@ -310,7 +310,7 @@ def test_wrist_singularity():
     """wr0 = 0 aligns axes 4 and 6: only q4 + q6 is defined, and every returned solution reaches the pose."""
     chain = spot_arm_chain()
     q = np.array([0.3, -0.9, 1.7, 0.4, 0.0, -0.6])
-    sol = chain.ik(chain.fk(q))
+    sol = chain.ik_all(chain.fk(q))
     ours = solutions(sol)
     assert len(ours) == 8 and sol.status == sk.Status.OK
     np.testing.assert_allclose(chain.fk(ours), np.broadcast_to(chain.fk(q), (8, 4, 4)), rtol=0, atol=1e-9)
@@ -378,7 +378,7 @@ def test_6r_non_rotation_is_invalid_input():
     T[1, :3, :3] *= 1.01
     T[2, :3, 0] *= -1  # det -1
     T[3, 3, :] = [0, 0, 1, 1]
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     assert sol.status[0] == sk.Status.OK
     assert sol.status[1:].tolist() == [sk.Status.INVALID_INPUT] * 3
     assert np.isnan(sol.q[1:]).all()
@@ -412,7 +412,7 @@ def test_chains_without_closed_form_raise(rows, message):
     with pytest.raises(ValueError, match=message):
         _ = chain.ik_kind
     with pytest.raises(ValueError, match=message):
-        chain.ik_position(np.zeros(3)) if chain.dof == 3 else chain.ik(np.eye(4))
+        chain.ik_position(np.zeros(3)) if chain.dof == 3 else chain.ik_all(np.eye(4))
 
 
 def test_wrong_method_and_shapes_raise():
@@ -420,14 +420,14 @@ def test_wrong_method_and_shapes_raise():
         [(0, 0, 0, 0, 0), (0, 0, 1.5, 0.1, 0), (0, 0.4, 0, 0, 0)], tool=sk.translation([0.3, 0, 0])
     )
     six = spot_arm_chain()
-    with pytest.raises(ValueError, match="use ik_position"):
-        three.ik(np.eye(4))
+    with pytest.raises(ValueError, match=r"target must have shape \(\.\.\., 3\), got \(4, 4\)"):
+        three.ik_all(np.eye(4))  # ik_position's for 3 joints, its errors naming target
     with pytest.raises(ValueError, match=r"use ik\(T\)"):
         six.ik_position(np.zeros(3))
     with pytest.raises(ValueError, match=r"p must have shape \(\.\.\., 3\), got \(2, 4\)"):
         three.ik_position(np.zeros((2, 4)))
-    with pytest.raises(ValueError, match=r"T must have shape \(\.\.\., 4, 4\) or \(\.\.\., 7\)"):
-        six.ik(np.zeros((3, 5)))
+    with pytest.raises(ValueError, match=r"target must have shape \(\.\.\., 4, 4\) or \(\.\.\., 7\)"):
+        six.ik_all(np.zeros((3, 5)))
     with pytest.raises(TypeError, match="p"):
         three.ik_position("abc")
 
@@ -457,16 +457,16 @@ def test_batch_shapes_and_dtypes(rng, shape, dtype):
                 assert np.abs(err).max() < 1e-4
     # ik_nearest: the same batch semantics (leading shape kept, dtype kept, seed broadcast)
     seed = rng.uniform(-np.pi, np.pi, (*shape, 3)).astype(dtype)
-    q, status = chain.ik_nearest(p, seed)
+    q, status = chain.ik(p, seed)
     assert q.shape == (*shape, 3) and q.dtype == dtype
     if shape == ():
         assert isinstance(status, sk.Status)
     else:
         assert status.shape == shape and status.dtype == np.int8
     np.testing.assert_array_equal(np.asarray(status), sol.status)
-    q_flat, _ = chain.ik_nearest(p.reshape(n, 3), seed.reshape(n, 3))
+    q_flat, _ = chain.ik(p.reshape(n, 3), seed.reshape(n, 3))
     np.testing.assert_array_equal(q.reshape(n, 3), q_flat)
-    q_one_seed, _ = chain.ik_nearest(p, seed.reshape(n, 3)[0])  # one seed for every target
+    q_one_seed, _ = chain.ik(p, seed.reshape(n, 3)[0])  # one seed for every target
     assert q_one_seed.shape == (*shape, 3)
 
 
@@ -474,11 +474,11 @@ def test_non_contiguous_and_empty(rng):
     chain = spot_arm_chain()
     T = chain.fk(rng.uniform(-np.pi, np.pi, (10, 6)))
     strided = np.asfortranarray(T)[::2]
-    np.testing.assert_array_equal(chain.ik(strided).q, chain.ik(np.ascontiguousarray(strided)).q)
+    np.testing.assert_array_equal(chain.ik_all(strided).q, chain.ik_all(np.ascontiguousarray(strided)).q)
     seed = np.asfortranarray(rng.uniform(-np.pi, np.pi, (10, 6)))[::2]
-    contiguous = chain.ik_nearest(np.ascontiguousarray(strided), np.ascontiguousarray(seed))[0]
-    np.testing.assert_array_equal(chain.ik_nearest(strided, seed)[0], contiguous)
-    assert chain.ik(np.zeros((0, 4, 4))).q.shape == (0, 8, 6)
+    contiguous = chain.ik(np.ascontiguousarray(strided), np.ascontiguousarray(seed))[0]
+    np.testing.assert_array_equal(chain.ik(strided, seed)[0], contiguous)
+    assert chain.ik_all(np.zeros((0, 4, 4))).q.shape == (0, 8, 6)
     three = chain_with_closed_form(rng, "mdh", "RRR")
     assert three.ik_position(np.zeros((2, 0, 3))).q.shape == (2, 0, 4, 3)
 
@@ -559,11 +559,11 @@ def test_block_and_single_target_paths_agree_on_merges_and_wrists(rng):
     quat = np.concatenate([T[:, :3, 3], Rotation.from_matrix(np.nan_to_num(T[:, :3, :3])).as_quat()], axis=-1)
     quat[3, 0] = np.nan
     for target in (T, quat):
-        batch = arm.ik(target)
-        assert_same_solutions(batch, stack_solutions(arm, "ik", target), arm.sigma, 1e-9)
+        batch = arm.ik_all(target)
+        assert_same_solutions(batch, stack_solutions(arm, "ik_all", target), arm.sigma, 1e-9)
         assert batch.status[3] == sk.Status.INVALID_INPUT and batch.status[11] == sk.Status.UNREACHABLE
         assert batch.valid[batch.exists].any() and not batch.valid[batch.exists].all()  # limits bite
-    assert arm.ik(T).status[5] == sk.Status.INVALID_INPUT
+    assert arm.ik_all(T).status[5] == sk.Status.INVALID_INPUT
 
 
 def test_threads_give_identical_results(rng):
@@ -628,21 +628,21 @@ def test_ik_nearest_picks_the_valid_solution_nearest_to_the_seed(rng, kind):
         chain = spot_arm_chain()
         target = chain.fk(rng.uniform(-np.pi, np.pi, (300, 6)))
         target[5, :3, 3] *= 4.0
-        sol = chain.ik(target)
+        sol = chain.ik_all(target)
     seed = rng.uniform(-np.pi, np.pi, (300, chain.dof))
-    q, status = chain.ik_nearest(target, seed)
+    q, status = chain.ik(target, seed)
     np.testing.assert_array_equal(status, sol.status)
     np.testing.assert_array_equal(q, nearest_by_hand(sol, seed, chain.sigma))
     assert (status == sk.Status.OK).any() and (status == sk.Status.JOINT_LIMIT).any() and status[5] == 1
     # without a seed: the lowest valid slot
-    q, status = chain.ik_nearest(target)
+    q, status = chain.ik(target)
     first = np.argmax(sol.valid, axis=-1)
     expected = np.take_along_axis(sol.q, first[:, None, None], axis=-2)[:, 0]
     np.testing.assert_array_equal(q, np.where((sol.status == sk.Status.OK)[:, None], expected, np.nan))
     # one seed broadcast over every target, and a single target
-    q_one, _ = chain.ik_nearest(target, seed[0])
-    np.testing.assert_array_equal(q_one, chain.ik_nearest(target, np.broadcast_to(seed[0], seed.shape))[0])
-    q_single, status_single = chain.ik_nearest(target[0], seed[0])
+    q_one, _ = chain.ik(target, seed[0])
+    np.testing.assert_array_equal(q_one, chain.ik(target, np.broadcast_to(seed[0], seed.shape))[0])
+    q_single, status_single = chain.ik(target[0], seed[0])
     assert q_single.shape == (chain.dof,) and isinstance(status_single, sk.Status)
     np.testing.assert_array_equal(q_single, q_one[0])
 
@@ -651,7 +651,7 @@ def test_ik_nearest_agrees_with_the_spot_arm_solver(rng):
     arm, chain = SPOT.arm, spot_arm_chain()
     T = arm.fk(rng.uniform(-np.pi, np.pi, (500, 6)))
     seed = rng.uniform(-np.pi, np.pi, (500, 6))
-    (q, status), (q_arm, status_arm) = chain.ik_nearest(T, seed), arm.ik(T, seed)
+    (q, status), (q_arm, status_arm) = chain.ik(T, seed), arm.ik(T, seed)
     np.testing.assert_array_equal(status, status_arm)
     ok = status == sk.Status.OK
     assert ok.mean() > 0.3
@@ -664,7 +664,7 @@ def test_ik_nearest_agrees_with_the_spot_arm_solver(rng):
     # that two solutions share; ties go to the lower slot, and the two solvers number slots differently)
     np.testing.assert_allclose(largest_move(q)[ok], largest_move(q_arm)[ok], rtol=0, atol=1e-9)
     same = np.abs(np.mod(q - q_arm + np.pi, 2 * np.pi) - np.pi).max(axis=-1) < 1e-8
-    all_sols = chain.ik(T)
+    all_sols = chain.ik_all(T)
     moves = np.abs(np.mod(all_sols.q - seed[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=-1)
     ties = np.sum(all_sols.valid & (np.abs(moves - largest_move(q)[:, None]) < 1e-9), axis=-1) > 1
     assert (same | ties)[ok].all() and same[ok].mean() > 0.8
@@ -673,22 +673,22 @@ def test_ik_nearest_agrees_with_the_spot_arm_solver(rng):
 def test_ik_nearest_bad_input():
     chain = spot_arm_chain()
     T = chain.fk(np.zeros((2, 6)))
-    q, status = chain.ik_nearest(T, np.array([[np.nan] * 6, [0.0] * 6]))
+    q, status = chain.ik(T, np.array([[np.nan] * 6, [0.0] * 6]))
     np.testing.assert_array_equal(status, [sk.Status.INVALID_INPUT, sk.Status.OK])
     assert np.isnan(q[0]).all() and np.isfinite(q[1]).all()
     with pytest.raises(ValueError, match="seed"):
-        chain.ik_nearest(T, np.zeros((2, 3)))
+        chain.ik(T, np.zeros((2, 3)))
     with pytest.raises(ValueError, match="broadcast"):
-        chain.ik_nearest(T, np.zeros((3, 6)))
+        chain.ik(T, np.zeros((3, 6)))
     with pytest.raises(TypeError, match="seed"):
-        chain.ik_nearest(T, "zero")
+        chain.ik(T, "zero")
     rows = [(0, 0.0, 0.0, 0.0, 0.0), (0, 0.0, np.pi / 2, 0.1, 0.0), (0, 0.3, 0.0, 0.0, 0.0)]
     three = sk.Chain.from_mdh(rows, tool=sk.translation([0.3, 0.0, 0.0]))
     with pytest.raises(ValueError, match=r"^target must have shape \(\.\.\., 3\)"):  # the argument's name
-        three.ik_nearest(np.zeros((2, 4)))
-    q, status = three.ik_nearest(np.full(3, np.inf))
+        three.ik(np.zeros((2, 4)))
+    q, status = three.ik(np.full(3, np.inf))
     assert status == sk.Status.INVALID_INPUT and np.isnan(q).all()
-    q, status = three.ik_nearest(np.zeros((0, 3)), np.zeros((0, 3)))
+    q, status = three.ik(np.zeros((0, 3)), np.zeros((0, 3)))
     assert q.shape == (0, 3) and status.shape == (0,)
-    q32, _ = three.ik_nearest(np.array([0.3, 0.2, 0.1], dtype=np.float32))
+    q32, _ = three.ik(np.array([0.3, 0.2, 0.1], dtype=np.float32))
     assert q32.dtype == np.float32

@@ -133,7 +133,7 @@ def test_chain_of_no_family_raises_naming_what_was_checked():
     )
     chain = sk_chain(general)
     with pytest.raises(ValueError, match=r"axes 4-5-6 meeting.*axes 2-3-4 parallel.*ik_differential"):
-        chain.ik(np.eye(4))
+        chain.ik_all(np.eye(4))
     with pytest.raises(ValueError, match="ik_differential"):
         _ = chain.ik_kind
 
@@ -154,7 +154,7 @@ def test_parallel_234_matches_the_reference_slot_by_slot(name, rng):
     q = rng.uniform(-PI, PI, (200, 6))
     T = chain.fk(q)
     T[-40:, :3, 3] += rng.normal(size=(40, 3)) * 0.2  # other targets, some unreachable
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     for i in range(len(q)):
         ref = ik6r.solve(poe, T[i])
         assert_same_slots(
@@ -169,7 +169,7 @@ def test_searched_families_contain_the_reference(name, rng):
     poe = CHAINS[name]()
     chain = sk_chain(poe)
     q = rng.uniform(-PI, PI, (10, 6))
-    sol = chain.ik(chain.fk(q))
+    sol = chain.ik_all(chain.fk(q))
     for i in range(len(q)):
         ref = ik6r.solve(poe, chain.fk(q[i]))
         ours, theirs = sol.q[i][sol.exists[i]], ref.q[ref.exists]
@@ -189,7 +189,7 @@ def test_round_trips_1e5(name, dtype, rng):
     n = 100_000
     q = rng.uniform(-PI, PI, (n, 6))
     T = chain.fk(q)
-    sol = chain.ik(T.astype(dtype))
+    sol = chain.ik_all(T.astype(dtype))
     assert sol.q.dtype == dtype
     ok = sol.status == sk.Status.OK
     if dtype == np.float64:
@@ -215,7 +215,7 @@ def test_round_trips(name, rng):
     chain = sk_chain(CHAINS[name]())
     q = rng.uniform(-PI, PI, (2000, 6))
     T = chain.fk(q)
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     assert (sol.status == sk.Status.OK).all()
     assert (sol.exact == sol.exists).all()
     for i in range(len(q)):
@@ -235,7 +235,7 @@ def test_near_singular_ur5(kind, rng):
     for jitter in (0.0, 1e-9, -1e-7, 1e-5):
         q = np.array([ur5_singular(kind, rng, jitter) for _ in range(20)])
         T = chain.fk(q)
-        sol = chain.ik(T)
+        sol = chain.ik_all(T)
         assert (sol.status == sk.Status.OK).all(), (kind, jitter)
         # exact solutions are exact; within 1e-7 of a wrist singularity the split of q4 and q6 is
         # fixed by the 1e-7 only, so a solution may end as approximate (exact False), never wrong
@@ -269,7 +269,7 @@ def test_perturbed_geometry_is_solved_and_polished(name, rng):
     assert calibrated.ik_idealised
     q = rng.uniform(-PI, PI, (300, 6))
     T = chain.fk(q)
-    sol = calibrated.ik(T)
+    sol = calibrated.ik_all(T)
     found = sol.q[sol.exact]
     # exact solutions are exact on the true chain, the others only within 1e-6
     assert fk_error(chain, found, np.repeat(T, sol.exact.sum(axis=1), axis=0)).max() < 1e-9
@@ -302,34 +302,34 @@ def test_calibrated_tolerance_arguments():
 def test_limits_wrap_and_statuses(rng):
     q = np.array([0.3, -1.0, 1.2, 0.4, -0.6, 0.8])
     chain = sk_chain(CHAINS["UR5"](), limits=np.array([[0.0, 2 * PI]] * 6))
-    sol = chain.ik(chain.fk(q))
+    sol = chain.ik_all(chain.fk(q))
     assert sol.status == sk.Status.OK
     assert (sol.valid == sol.exists).all()
     assert contains(sol.q[sol.valid], np.where(q < 0, q + 2 * PI, q), 1e-8)
     assert (sol.q[sol.valid] >= -1e-12).all()
     narrow = np.array([[0.2, 0.4], [-1.1, -0.9], [1.1, 1.3], [0.3, 0.5], [-0.7, -0.5], [0.7, 0.9]])
     tight = sk_chain(CHAINS["UR5"](), limits=narrow)
-    sol = tight.ik(tight.fk(q))
+    sol = tight.ik_all(tight.fk(q))
     assert sol.valid.sum() == 1 and np.allclose(sol.q[sol.valid][0], q)
     far = tight.fk(q)
     far[:3, 3] = [5.0, 0.0, 0.0]
-    out = tight.ik(np.stack([far, np.full((4, 4), np.nan), 2 * tight.fk(q)]))
+    out = tight.ik_all(np.stack([far, np.full((4, 4), np.nan), 2 * tight.fk(q)]))
     assert list(out.status) == [sk.Status.UNREACHABLE, sk.Status.INVALID_INPUT, sk.Status.INVALID_INPUT]
     assert np.isnan(out.q).all() and not out.exists.any() and not out.exact.any()
     blocked = sk_chain(CHAINS["UR5"](), limits=np.array([[2.0, 2.1]] * 6))
-    assert blocked.ik(blocked.fk(q)).status == sk.Status.JOINT_LIMIT
+    assert blocked.ik_all(blocked.fk(q)).status == sk.Status.JOINT_LIMIT
 
 
 @pytest.mark.parametrize("name", ["UR5", "shoulder"])
 def test_ik_nearest_returns_the_seed_configuration(name, rng):
     chain = sk_chain(CHAINS[name]())
     q = rng.uniform(-PI, PI, (64, 6))
-    q_back, status = chain.ik_nearest(chain.fk(q), q + 1e-4)
+    q_back, status = chain.ik(chain.fk(q), q + 1e-4)
     assert (status == sk.Status.OK).all()
     assert angle_gap(q_back, q).max() < 1e-6
     xyzw = Rotation.from_matrix(chain.fk(q)[:, :3, :3]).as_quat()
     pose7 = np.concatenate([chain.fk(q)[:, :3, 3], xyzw], axis=1)
-    q7, _ = chain.ik_nearest(pose7, q)
+    q7, _ = chain.ik(pose7, q)
     assert angle_gap(q7, q).max() < 1e-6
 
 
@@ -339,18 +339,18 @@ def test_batch_shapes_and_single_calls(shape, dtype, rng):
     chain = sk_chain(CHAINS["UR5"]())
     q = rng.uniform(-PI, PI, (*shape, 6))
     T = chain.fk(q).astype(dtype)
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     assert sol.q.shape == (*shape, 8, 6) and sol.q.dtype == dtype
     assert sol.exact.shape == (*shape, 8) and np.shape(sol.status) == shape
-    flat = chain.ik(T.reshape(-1, 4, 4))
+    flat = chain.ik_all(T.reshape(-1, 4, 4))
     assert np.array_equal(flat.q.reshape(sol.q.shape), sol.q, equal_nan=True)
     if shape == ():
         assert isinstance(sol.status, sk.Status)
-    strided = chain.ik(np.repeat(T.reshape(-1, 4, 4), 2, axis=0)[::2])
+    strided = chain.ik_all(np.repeat(T.reshape(-1, 4, 4), 2, axis=0)[::2])
     assert np.array_equal(strided.q, flat.q, equal_nan=True)
-    assert chain.ik(np.zeros((0, 4, 4))).q.shape == (0, 8, 6)
-    with pytest.raises(ValueError, match="T"):
-        chain.ik(np.zeros((3, 4, 3)))
+    assert chain.ik_all(np.zeros((0, 4, 4))).q.shape == (0, 8, 6)
+    with pytest.raises(ValueError, match="target"):
+        chain.ik_all(np.zeros((3, 4, 3)))
 
 
 def test_threads_give_identical_results(rng):
@@ -359,9 +359,9 @@ def test_threads_give_identical_results(rng):
     before = sk.get_num_threads()
     try:
         sk.set_num_threads(1)
-        one = chain.ik(T)
+        one = chain.ik_all(T)
         sk.set_num_threads(2)
-        two = chain.ik(T)
+        two = chain.ik_all(T)
     finally:
         sk.set_num_threads(before)
     assert np.array_equal(one.q, two.q, equal_nan=True) and np.array_equal(one.exact, two.exact)
@@ -377,7 +377,7 @@ def test_against_eaik(name, rng):
     chain, robot = sk_chain(poe), eaik_robot(poe)
     q = rng.uniform(-PI, PI, (100, 6))
     T = chain.fk(q)
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     least_squares = 0
     for i in range(len(q)):
         theirs = robot.IK(eaik_pose(poe, T[i]))
@@ -401,6 +401,6 @@ def test_calibrated_chains_pickle_with_their_tolerance(rng):
     copy = pickle.loads(pickle.dumps(chain))
     assert copy.ik_idealised and copy.ik_kind == chain.ik_kind
     T = chain.fk(rng.uniform(-PI, PI, (50, 6)))
-    a, b = chain.ik(T), copy.ik(T)
+    a, b = chain.ik_all(T), copy.ik_all(T)
     np.testing.assert_array_equal(a.q, b.q)
     np.testing.assert_array_equal(a.exact, b.exact)

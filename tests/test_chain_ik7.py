@@ -65,7 +65,7 @@ def test_every_solution_and_the_generating_configuration(name, rng):
     assert chain.ik_free_kind(k) == kind
     q = configurations(chain, rng, 2000)
     T = chain.fk(q)
-    sol = chain.ik(T, free_joint=k, free_value=q[:, k])
+    sol = chain.ik_all(T, free_joint=k, free_value=q[:, k])
     assert sol.q.shape == (2000, 8, 7)
     assert (sol.status == sk.Status.OK).all()
     assert (sol.exact == sol.exists).all()
@@ -88,7 +88,7 @@ def test_matches_the_reference(name, rng):
     poe = ik6r.from_sk_chain(chain)
     q = configurations(chain, rng, 10)
     T = chain.fk(q)
-    sol = chain.ik(T, free_joint=k, free_value=q[:, k])
+    sol = chain.ik_all(T, free_joint=k, free_value=q[:, k])
     for i in range(len(q)):
         ref = ik6r.solve_free(poe, T[i], free_joint=k, free_value=float(q[i, k]))
         ours = sol.q[i][sol.exists[i]]
@@ -108,32 +108,32 @@ def test_middle_joint_solvers_are_cached_and_grouped_by_value(name, rng):
     poses = chain.fk(configurations(chain, rng, 40))
     grid = np.linspace(-1.0, 1.0, 7)
     # 40 poses against 7 values, interleaved: one 6R solver per value, kept across calls
-    first = chain.ik(poses[:, None], free_joint=k, free_value=grid)
+    first = chain.ik_all(poses[:, None], free_joint=k, free_value=grid)
     assert core.cached_values == 7
-    again = chain.ik(poses[:, None], free_joint=k, free_value=grid)
+    again = chain.ik_all(poses[:, None], free_joint=k, free_value=grid)
     for a, b in zip(first, again):
         np.testing.assert_array_equal(a, b)
     # a pose's answer does not depend on its neighbours: shuffled, each sample alone, other threads
     flat_T = np.broadcast_to(poses[:, None], (40, 7, 4, 4)).reshape(-1, 4, 4)
     flat_v = np.broadcast_to(grid, (40, 7)).reshape(-1)
     order = rng.permutation(len(flat_v))
-    shuffled = chain.ik(flat_T[order], free_joint=k, free_value=flat_v[order])
+    shuffled = chain.ik_all(flat_T[order], free_joint=k, free_value=flat_v[order])
     np.testing.assert_array_equal(shuffled.q, first.q.reshape(-1, 8, 7)[order])
     np.testing.assert_array_equal(shuffled.status, first.status.reshape(-1)[order])
     for i in (0, 13, 279):
-        one = chain.ik(flat_T[i], free_joint=k, free_value=flat_v[i])
+        one = chain.ik_all(flat_T[i], free_joint=k, free_value=flat_v[i])
         np.testing.assert_array_equal(one.q, first.q.reshape(-1, 8, 7)[i])
     threads = sk.get_num_threads()
     try:
         sk.set_num_threads(2)
-        two = chain.ik(flat_T, free_joint=k, free_value=flat_v)
+        two = chain.ik_all(flat_T, free_joint=k, free_value=flat_v)
     finally:
         sk.set_num_threads(threads)
     np.testing.assert_array_equal(two.q, first.q.reshape(-1, 8, 7))
     # bounded: the most recently used values only; -0.0 is 0.0
-    chain.ik(np.broadcast_to(poses[0], (1500, 4, 4)), free_joint=k, free_value=np.linspace(-2, 2, 1500))
+    chain.ik_all(np.broadcast_to(poses[0], (1500, 4, 4)), free_joint=k, free_value=np.linspace(-2, 2, 1500))
     assert core.cached_values == 1024
-    zero, negative_zero = chain.ik(poses[0], free_joint=k, free_value=np.array([0.0, -0.0]))[0]
+    zero, negative_zero = chain.ik_all(poses[0], free_joint=k, free_value=np.array([0.0, -0.0]))[0]
     np.testing.assert_array_equal(zero, negative_zero)
 
 
@@ -145,13 +145,13 @@ def test_end_joints_take_a_value_per_pose(name, rng):
     chain = make()
     q = configurations(chain, rng, 3000)
     T = chain.fk(q)
-    sol = chain.ik(T, free_joint=k, free_value=q[:, k])
+    sol = chain.ik_all(T, free_joint=k, free_value=q[:, k])
     assert (sol.status == sk.Status.OK).all()
     found = sol.q[sol.exists]
     assert np.abs(chain.fk(found) - np.repeat(T, sol.exists.sum(axis=1), axis=0)).max() < 1e-9
     # position + quaternion poses give the same solutions
     pq = np.concatenate([T[:, :3, 3], Rotation.from_matrix(T[:, :3, :3]).as_quat()], axis=1)
-    by_pq = chain.ik(pq, free_joint=k, free_value=q[:, k])
+    by_pq = chain.ik_all(pq, free_joint=k, free_value=q[:, k])
     assert (by_pq.status == sk.Status.OK).all()
     found = by_pq.q[by_pq.exists]
     assert np.abs(chain.fk(found) - np.repeat(T, by_pq.exists.sum(axis=1), axis=0)).max() < 1e-9
@@ -159,7 +159,7 @@ def test_end_joints_take_a_value_per_pose(name, rng):
     bad[1, 0, 0] += 1e-3  # not a rotation
     values = q[:4, k].copy()
     values[2] = np.inf
-    out = chain.ik(bad, free_joint=k, free_value=values)
+    out = chain.ik_all(bad, free_joint=k, free_value=values)
     assert out.status[1] == sk.Status.INVALID_INPUT and np.isnan(out.q[1]).all()
     assert out.status[2] == sk.Status.INVALID_INPUT and np.isnan(out.q[2]).all()
     assert out.status[0] == out.status[3] == sk.Status.OK
@@ -171,7 +171,7 @@ def test_free_values_broadcast_and_sample_the_self_motion(rng):
     q = configurations(chain, rng, 1)[0]
     T = chain.fk(q)
     values = np.linspace(-2.5, 2.5, 11)
-    sol = chain.ik(T, free_joint=6, free_value=values)
+    sol = chain.ik_all(T, free_joint=6, free_value=values)
     assert sol.q.shape == (11, 8, 7) and sol.status.shape == (11,)
     grid, motion = chain.ik_self_motion(T, 6, 24)
     np.testing.assert_allclose(grid, np.linspace(-2.8973, 2.8973, 24))
@@ -185,7 +185,7 @@ def test_free_values_broadcast_and_sample_the_self_motion(rng):
     grid, many = chain.ik_self_motion(Ts, 6, np.array([0.1, 0.5]))
     assert many.q.shape == (3, 2, 8, 7)
     # float32 stays float32
-    assert chain.ik(T.astype(np.float32), free_joint=6, free_value=np.float32(0.3)).q.dtype == np.float32
+    assert chain.ik_all(T.astype(np.float32), free_joint=6, free_value=np.float32(0.3)).q.dtype == np.float32
 
 
 def test_nearest_to_a_seed(rng):
@@ -198,7 +198,7 @@ def test_nearest_to_a_seed(rng):
     assert np.abs(chain.fk(best) - T).max() < 1e-9
     # never farther from the seed than the best valid solution at the seed's own value (a candidate)
     best_move = angle_gap(best, seed).max(axis=1)
-    own = chain.ik(T, free_joint=2, free_value=seed[:, 2])
+    own = chain.ik_all(T, free_joint=2, free_value=seed[:, 2])
     own_move = np.where(own.valid, angle_gap(own.q, seed[:, None, :]).max(axis=2), np.inf).min(axis=1)
     assert (best_move <= own_move + 1e-12).all()
     assert np.median(best_move) < 0.05
@@ -214,26 +214,26 @@ def test_errors_and_statuses(rng):
     chain = panda()
     T = chain.fk(configurations(chain, rng, 4))
     with pytest.raises(ValueError, match="redundant"):
-        chain.ik(T)
+        chain.ik_all(T)
     with pytest.raises(ValueError, match=r"free_joint must be in \[0, 6\]"):
-        chain.ik(T, free_joint=7, free_value=0.0)
+        chain.ik_all(T, free_joint=7, free_value=0.0)
     with pytest.raises(TypeError, match="free_joint"):
-        chain.ik(T, free_joint=True, free_value=0.0)
+        chain.ik_all(T, free_joint=True, free_value=0.0)
     with pytest.raises(ValueError, match="needs free_value"):
-        chain.ik(T, free_joint=6)
+        chain.ik_all(T, free_joint=6)
     with pytest.raises(ValueError, match="free_value needs free_joint"):
-        chain.ik(T, free_value=0.3)
+        chain.ik_all(T, free_value=0.3)
     with pytest.raises(ValueError, match="do not broadcast"):
-        chain.ik(T, free_joint=6, free_value=np.zeros(3))
+        chain.ik_all(T, free_joint=6, free_value=np.zeros(3))
     six = sk.Chain.from_mdh(PANDA_ROWS[:6])
     with pytest.raises(ValueError, match="7-joint chains"):
-        six.ik(np.eye(4), free_joint=2, free_value=0.0)
+        six.ik_all(np.eye(4), free_joint=2, free_value=0.0)
     # holding joint 1 leaves no closed-form family: the checks are named
     with pytest.raises(ValueError, match="no closed-form 6R family"):
-        chain.ik(T, free_joint=0, free_value=-1.0)
+        chain.ik_all(T, free_joint=0, free_value=-1.0)
     # NaN value: INVALID_INPUT for that sample only; a value outside its limits: no valid slot
     values = np.array([np.nan, 0.2, 5.0, 0.2])
-    sol = chain.ik(T, free_joint=6, free_value=values)
+    sol = chain.ik_all(T, free_joint=6, free_value=values)
     assert sol.status[0] == sk.Status.INVALID_INPUT and np.isnan(sol.q[0]).all()
     assert not sol.valid[2].any()
     assert sol.status[2] in (sk.Status.JOINT_LIMIT, sk.Status.UNREACHABLE)
@@ -245,7 +245,7 @@ def test_empty_and_unreachable_batches(rng):
     assert q.shape == (0, 7) and status.shape == (0,)
     far = chain.fk(configurations(chain, rng, 3))
     far[:, :3, 3] *= 10  # 10 m away: no solution for any value
-    sol = chain.ik(far, free_joint=6, free_value=0.2)
+    sol = chain.ik_all(far, free_joint=6, free_value=0.2)
     assert (sol.status == sk.Status.UNREACHABLE).all() and np.isnan(sol.q).all()
     q, status = chain.ik_nearest_free(far, np.zeros((3, 7)), 6, values=4)
     assert (status == sk.Status.UNREACHABLE).all() and np.isnan(q).all()

@@ -128,13 +128,13 @@ def test_legs_arms_and_chains_match_the_in_memory_calls():
     pc = chain.fk(qc)[:, :3, 3]
     assert_same(skd.fk(chain, da.from_array(qc, chunks=40)), chain.fk(qc))
     assert_same(skd.jacobian(chain, qc, frame="tool"), chain.jacobian(qc, frame="tool"))
-    assert_same(skd.ik(chain, da.from_array(pc, chunks=40), seed=qc), chain.ik_nearest(pc, seed=qc))
+    assert_same(skd.ik(chain, da.from_array(pc, chunks=40), seed=qc), chain.ik(pc, seed=qc))
     assert_same(skd.ik_all(chain, da.from_array(pc, chunks=40)), chain.ik_position(pc))
     spot_arm = sk.Robot.from_urdf(sk.robots.path("spot_with_arm")).arm  # 6 joints: poses
     q6 = rng.uniform(spot_arm.lower, spot_arm.upper, (90, 6))
     T6 = spot_arm.fk(q6)
-    assert_same(skd.ik(spot_arm, da.from_array(T6, chunks=(30, 4, 4))), spot_arm.ik_nearest(T6))
-    assert_same(skd.ik_all(spot_arm, da.from_array(T6, chunks=(30, 4, 4))), spot_arm.ik(T6))
+    assert_same(skd.ik(spot_arm, da.from_array(T6, chunks=(30, 4, 4))), spot_arm.ik(T6))
+    assert_same(skd.ik_all(spot_arm, da.from_array(T6, chunks=(30, 4, 4))), spot_arm.ik_all(T6))
 
 
 def test_broadcasting_follows_numpy():
@@ -333,7 +333,7 @@ def models():
         sk.Robot.from_urdf(sk.robots.path("spot_with_arm")),
         lambda m: [
             m.arm.fk(q12[:, :6]),
-            *m.arm.ik_nearest(m.arm.fk(q12[:, :6])),
+            *m.arm.ik(m.arm.fk(q12[:, :6])),
         ],
     )
     leg = SPOT.leg("hl")
@@ -363,7 +363,7 @@ def models():
     yield (
         "Chain(urdf)",
         urdf_chain,
-        lambda m: [m.fk(q12[:, :3]), m.joint_names, *m.ik_nearest(m.fk(q12[:, :3])[:, :3, 3])],
+        lambda m: [m.fk(q12[:, :3]), m.joint_names, *m.ik(m.fk(q12[:, :3])[:, :3, 3])],
     )
 
 

@@ -300,7 +300,7 @@ def test_ik_differential_rejects_non_rigid_targets(corrupt):
     q_true = np.array([0.2, 0.3, -0.4, 0.5, 0.6, -0.7])
     good = chain.fk(q_true)
     bad = corrupt(good)
-    assert chain.ik(bad).status == sk.Status.INVALID_INPUT  # the closed form says so already
+    assert chain.ik_all(bad).status == sk.Status.INVALID_INPUT  # the closed form says so already
     q, info = chain.ik_differential(np.stack([good, bad]), q_true + 0.01)
     assert info.converged[0] and not info.converged[1]
     assert np.isnan(q[1]).all() and np.isnan(info.position_error[1])

@@ -115,7 +115,7 @@ def _battery(dtype) -> dict[str, np.ndarray]:
     out["arm.ik_all"] = spot.arm.ik_all(out["arm.fk"]).q
     out["ur5.fk"] = ur5.fk(q6)
     out["ur5.jacobian"] = ur5.jacobian(q6)
-    out["ur5.ik"] = ur5.ik(out["ur5.fk"]).q
+    out["ur5.ik"] = ur5.ik_all(out["ur5.fk"]).q
     qd, qdd = rng.normal(size=(2, n, 6)).astype(dtype)
     out["ur5.rnea"] = ur5.inverse_dynamics(q6, qd, qdd)
     out["ur5.crba"] = ur5.mass_matrix(q6)

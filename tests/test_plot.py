@@ -425,7 +425,7 @@ def test_every_arm_or_chain_solution_reaches_the_target(robots, which):
         sol, point = solver.ik_position(target), target
     else:
         target = solver.fk(ARM_Q)
-        sol = solver.ik(target) if which == "spot_urdf_chain6" else solver.ik_all(target)
+        sol = solver.ik_all(target)
         point = target[:3, 3]
     fig = plot.branches(solver, target)
     lines = _slot_lines(fig)
@@ -770,7 +770,7 @@ def test_each_branch_panel_prints_its_q_in_degrees(robots, which):
     else:
         solver = robots["spot"].arm if which == "spot_arm" else robots["spot_urdf"].arm
         target = solver.fk(ARM_Q)
-        sol = solver.ik_all(target) if which == "spot_arm" else solver.ik(target)
+        sol = solver.ik_all(target)
     fig = plot.branches(solver, target)
     lines = _slot_lines(fig)
     texts = {}

@@ -809,7 +809,7 @@ def test_spot_arm_chain_solutions_are_spot_arms(rng):
     T = spot_arm.fk(q)
     np.testing.assert_allclose(arm.fk(q), T, rtol=0, atol=1e-14)  # both include the mount
     np.testing.assert_allclose(arm.jacobian(q), spot_arm.jacobian(q), rtol=0, atol=1e-13)
-    chain_solutions, arm_solutions = arm.ik(T), spot_arm.ik_all(T)
+    chain_solutions, arm_solutions = arm.ik_all(T), spot_arm.ik_all(T)
     assert (chain_solutions.status == sk.Status.OK).all() and (arm_solutions.status == sk.Status.OK).all()
     tolerance = 1e-8
     for k in range(len(q)):

@@ -143,11 +143,11 @@ def test_limits_reach_the_arm_and_the_workspace():
     np.testing.assert_array_equal(narrow.arm.lower[0], -0.5)
     q = np.array([1.0, 1.0, -1.0, 0.2, 0.1, 0.3])
     T = robot.arm.fk(q)
-    assert robot.arm.ik_nearest(T, q)[1] == sk.Status.OK
-    _, status = narrow.arm.ik_nearest(T, q)
+    assert robot.arm.ik(T, q)[1] == sk.Status.OK
+    _, status = narrow.arm.ik(T, q)
     assert status != sk.Status.OK
-    assert bool(np.isfinite(robot.arm.ik(T).q).any())
-    sols = narrow.arm.ik(T)
+    assert bool(np.isfinite(robot.arm.ik_all(T).q).any())
+    sols = narrow.arm.ik_all(T)
     assert not sols.valid[np.isfinite(sols.q).all(-1) & (np.abs(sols.q[..., 0]) > 0.5)].any()
     leg = robot.leg("FL")
     tight = robot.with_limits(
@@ -171,7 +171,7 @@ def test_chain_with_limits(rng):
     restored = pickle.loads(pickle.dumps(by_name))
     np.testing.assert_array_equal(restored.lower, by_name.lower)
     q = np.array([0.3, 1.0, -1.0, 0.2, 0.1, 0.3])
-    sols = by_name.ik(chain.fk(q))
+    sols = by_name.ik_all(chain.fk(q))
     assert not sols.valid[
         np.isfinite(sols.q).all(-1) & ((sols.q[..., 1] < 0.1) | (sols.q[..., 1] > 0.2))
     ].any()

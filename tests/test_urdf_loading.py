@@ -184,7 +184,7 @@ def test_ur5_ik_every_branch_round_trips(rng):
     q = rng.uniform(-PI, PI, (300, 6))
     q = q[np.abs(np.sin(q[:, 4])) > 0.05]  # away from the wrist singularity (q5 = 0, pi)
     T = chain.fk(q)
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     assert sol.exists.any(axis=-1).all()
     found = np.where(sol.exists[..., None, None], chain.fk(np.nan_to_num(sol.q)), T[:, None])
     np.testing.assert_allclose(found, np.broadcast_to(T[:, None], found.shape), atol=1e-10)
@@ -257,9 +257,9 @@ def test_panda_default_tip_is_the_hand_and_its_ik_needs_a_free_joint(rng):
     assert "ik_differential" in str(error.value)
     T = chain.fk(np.zeros(7) + 0.1)
     with pytest.raises(ValueError, match=r"free_joint.*ik_differential"):
-        chain.ik(T)
+        chain.ik_all(T)
     assert chain.ik_free_kind(6) == "6R-spherical-shoulder"
-    chain.ik(T, free_joint=6, free_value=0.1)
+    chain.ik_all(T, free_joint=6, free_value=0.1)
     with pytest.raises(ValueError, match="free_joint"):  # still named after a free-joint call
         _ = chain.ik_kind
 
@@ -277,7 +277,7 @@ def test_panda_ik_with_a_free_joint_round_trips(rng):
     lower, upper = chain.lower, chain.upper
     q = lower + 0.05 + (upper - lower - 0.1) * rng.uniform(0, 1, (300, 7))
     T = chain.fk(q)
-    sol = chain.ik(T, free_joint=6, free_value=q[:, 6])
+    sol = chain.ik_all(T, free_joint=6, free_value=q[:, 6])
     assert sol.exists.any(axis=-1).all()
     found = np.where(sol.exists[..., None, None], chain.fk(np.nan_to_num(sol.q)), T[:, None])
     np.testing.assert_allclose(found, np.broadcast_to(T[:, None], found.shape), atol=1e-10)
@@ -439,12 +439,12 @@ def test_closed_form_ik_maps_back_through_a_mimic_joint(rng):
     q_full[:, 5] = 2 * q[:, 5] + 0.1
     np.testing.assert_allclose(chain.fk(q), plain.fk(q_full), atol=1e-15)
     T = chain.fk(q)
-    sol = chain.ik(T)
+    sol = chain.ik_all(T)
     found = np.where(sol.exists[..., None, None], chain.fk(np.nan_to_num(sol.q)), T[:, None])
     np.testing.assert_allclose(found, np.broadcast_to(T[:, None], found.shape), atol=1e-10)
     gaps = np.where(sol.valid, np.abs(sol.q - q[:, None, :]).max(axis=-1), np.inf)
     assert (gaps.min(axis=-1) < 1e-7).all()
-    q_near, _ = chain.ik_nearest(T, q + 0.01)
+    q_near, _ = chain.ik(T, q + 0.01)
     np.testing.assert_allclose(q_near, q, atol=1e-7)
 
 
@@ -609,12 +609,12 @@ def test_bad_sources_tips_and_bases(tmp_path):
 
 def test_seven_and_five_joint_messages_name_what_applies():
     five = sk.Chain.from_urdf(UR5, tip="wrist_2_link")
-    for call in (lambda: five.ik_kind, lambda: five.ik(np.eye(4))):
+    for call in (lambda: five.ik_kind, lambda: five.ik_all(np.eye(4))):
         with pytest.raises(ValueError, match="ik_differential") as error:
             call()
         assert "free_joint" not in str(error.value)
     with pytest.raises(ValueError, match="free_joint is for 7-joint chains"):
-        five.ik(np.eye(4), free_joint=0, free_value=0.0)
+        five.ik_all(np.eye(4), free_joint=0, free_value=0.0)
 
 
 XACRO = """<?xml version="1.0"?>

@@ -407,11 +407,9 @@ class MimicChain(Chain):
         self._ik_core()
         return self._back(self._full.ik_position(p))
 
-    def ik(
-        self, T: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
-    ) -> ChainSolutions:
-        """As :meth:`spotkin.Chain.ik`, solved on :attr:`full_chain` and mapped back, when every variable
-        drives one joint of the chain (``ValueError`` naming :meth:`ik_differential` otherwise)."""
+    def _ik_pose_all(self, T, free_joint, free_value) -> ChainSolutions:
+        """:meth:`spotkin.Chain.ik_all` for poses, solved on :attr:`full_chain` and mapped back, when every
+        variable drives one joint of the chain (``ValueError`` naming :meth:`ik_differential` otherwise)."""
         self._closed_form()
         if free_joint is not None and free_value is not None:
             k = as_index(free_joint, "free_joint")
@@ -419,14 +417,16 @@ class MimicChain(Chain):
                 value = as_real(free_value, "free_value")
                 with np.errstate(invalid="ignore", over="ignore"):
                     free_value = value * self._M[k, k] + self._b[k]
-        return self._back(self._full.ik(T, free_joint, free_value))
+        return self._back(self._full.ik_all(T, free_joint, free_value))
 
-    def ik_nearest(self, target: ArrayLike, seed: ArrayLike | None = None):
-        """As :meth:`spotkin.Chain.ik_nearest`, on :attr:`full_chain` (M diagonal)."""
+    def ik(self, target: ArrayLike, seed: ArrayLike | None = None, free_joint=None, free_value=None):
+        """As :meth:`spotkin.Chain.ik`, on :attr:`full_chain` (M diagonal)."""
+        if free_joint is not None or free_value is not None:  # chosen among ik_all's, mapped back
+            return super().ik(target, seed, free_joint, free_value)
         self._ik_core()
         if seed is not None:
             seed = self._expand(seed, "seed", offset=True)
-        q, status = self._full.ik_nearest(target, seed)
+        q, status = self._full.ik(target, seed)
         m, b = np.diag(self._M), self._b
         return ((np.asarray(q, dtype=np.float64) - b) / m).astype(np.asarray(q).dtype, copy=False), status
 

@@ -114,7 +114,7 @@ def _branch_counts(obj, kind: str, points: np.ndarray, poses: np.ndarray | None)
         if obj.dof == 3:
             return obj.ik_position(points).valid.sum(-1).astype(np.int8)
         if obj.dof == 6:
-            return obj.ik(poses).valid.sum(-1).astype(np.int8)
+            return obj.ik_all(poses).valid.sum(-1).astype(np.int8)
     except ValueError:  # no closed form for this chain
         pass
     return np.full(len(points), -1, dtype=np.int8)
@@ -260,7 +260,7 @@ def dexterity(
     axes = [np.arange(lo + spacing / 2, hi + spacing / 2, spacing) for lo, hi in zip(low, high)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
     rotations = _random_rotations(rng, orientations)
-    solve = obj.ik if kind == "arm" else obj.ik_nearest
+    solve = obj.ik
     reached = np.zeros(len(grid), dtype=np.int64)
     per_block = max(1, _BATCH // orientations)
     for start in range(0, len(grid), per_block):

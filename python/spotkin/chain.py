@@ -9,6 +9,7 @@ Every joint is a fixed placement followed by a motion about (revolute) or along
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping
 from typing import Literal, NamedTuple
 
@@ -677,36 +678,11 @@ class Chain:
         self, target: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
     ) -> ChainSolutions:
         """Every branch for ``target``, as :meth:`spotkin.Leg.ik_all` and :meth:`spotkin.SpotArm.ik_all`
-        answer: :meth:`ik_position` for a 3-joint chain (p (..., 3)), :meth:`ik` for a 6-joint one (T
-        (..., 4, 4) or (..., 7)) and a 7-joint one with ``free_joint`` held at ``free_value``."""
-        if self.dof == 3 and free_joint is None and free_value is None:
-            return _as_target(self.ik_position, target)
-        return _as_target(self.ik, target, free_joint, free_value)
+        answer (:meth:`ik` chooses one of them).
 
-    def ik_position(self, p: ArrayLike) -> ChainSolutions:
-        """Every joint solution placing the tool point at p, for a 3-joint chain.
-
-        p (..., 3) in the base frame -> :class:`ChainSolutions` with q (..., 4, 3). The
-        tool orientation is free. The closed form is Pieper's: q1 is eliminated through two
-        invariants of its joint (|f|^2 and f_z for a revolute, f_x and f_y for a prismatic),
-        q2 through a 2x2 linear system, leaving a polynomial in q3 of degree <= 4 (degree 2
-        when consecutive axes intersect or are parallel); every real root is back-substituted
-        and polished by Gauss–Newton steps on fk(q) = p. Accepted solutions satisfy
-        |fk(q) - p| <= 1e-9 s (s: the sum of the table's lengths and the tool offset, at least
-        |p|); solutions closer than 1e-6 (rad, or length / s) are merged, so a double root comes
-        back once. Slots are sorted by (q1, q2, q3), values within 1e-7 counting as equal. A
-        target for which a joint is free (on a joint axis) gives one representative with that
-        joint at 0. Unreachable targets get status UNREACHABLE and NaN in every slot; :meth:`fk`
-        of the nearest configuration is not attempted (use a numerical solver for a
-        least-squares answer). The full derivation is in ``spotkin.reference.ik3r``.
-        """
-        return self._ik_core().ik_position(p)  # a ChainSolutions (the core builds it)
-
-    def ik(
-        self, T: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
-    ) -> ChainSolutions:
-        """Every joint solution for a tool pose, for a 6R chain of a closed-form family (:attr:`ik_kind`),
-        or a 7R chain with one joint held (``free_joint``, ``free_value``).
+        **3 joints:** :meth:`ik_position`'s: p (..., 3) -> q (..., 4, 3). **6 joints**: every joint
+        solution for a tool pose of a 6R chain of a closed-form family (:attr:`ik_kind`). **7 joints**:
+        a 7R chain with one joint held (``free_joint``, ``free_value``). Errors name ``target``.
 
         **7 joints** (redundant arms: Franka-Panda- and Kinova-Gen3-like): ``free_joint`` (0-based)
         is held at ``free_value``, which broadcasts against T's leading dimensions (so one pose with
@@ -721,7 +697,7 @@ class Chain:
         for later calls (the 1,024 most recently used values) and shared by every pose with that value.
 
         **6 joints:**
-        T (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw] in the base frame ->
+        ``target`` T (..., 4, 4) or (..., 7) [x, y, z, qx, qy, qz, qw] in the base frame ->
         :class:`ChainSolutions` with q (..., 8, 6): at most 8 solutions, slot ``2 k + b``.
 
         - ``"6R-spherical-wrist"``: the wrist centre (where axes 4, 5 and 6 meet) fixes q1..q3
@@ -745,6 +721,74 @@ class Chain:
         part that is not a rotation (|R^T R - I| > 1e-6 or det < 0) gives INVALID_INPUT. The
         derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
+        if self.dof == 3 and free_joint is None and free_value is None:
+            return _as_target(self.ik_position, target)
+        return _as_target(self._ik_pose_all, target, free_joint, free_value)
+
+    def ik(
+        self,
+        target: ArrayLike,
+        seed: ArrayLike | None = None,
+        free_joint: int | None = None,
+        free_value: ArrayLike | None = None,
+    ) -> tuple[np.ndarray, np.ndarray | Status]:
+        """One solution per target: (q (..., dof), status (...,)), of the branches :meth:`ik_all` gives.
+
+        ``target`` is what :meth:`ik_all` takes (p (..., 3) for 3 joints, T (..., 4, 4) or (..., 7) for
+        6); of its solutions, the one within the limits nearest to ``seed`` (..., dof) (the largest
+        single-joint move: on the circle for a revolute joint, plain for a prismatic one; ties to the
+        lower slot), or the lowest valid slot without a seed. Status as in :class:`ChainSolutions`; q is
+        NaN unless it is OK; a seed with NaN or Inf gives INVALID_INPUT. The seed broadcasts against the
+        target's leading dimensions. Runs in C++ per block of targets, with no temporary array of every
+        solution (for control loops and large batches alike).
+
+        **7 joints**: ``free_joint`` held at ``free_value`` (broadcast against the targets) chooses
+        among that value's solutions; with ``free_joint`` alone, among the solutions over the sampled
+        values of the joint and the seed's own (:meth:`ik_nearest_free`, which needs the seed).
+        """
+        if free_joint is None and free_value is None:
+            if self.dof == 7:
+                raise ValueError(_SEVEN_JOINTS)
+            return _as_target(self._ik_core().ik_nearest, target, seed)
+        if free_value is None:
+            if seed is None:
+                raise ValueError(
+                    "ik with free_joint alone searches the joint's values for the one nearest seed: pass seed"
+                )
+            return _as_target(self.ik_nearest_free, target, seed, free_joint)
+        sol = self.ik_all(target, free_joint, free_value)
+        return _nearest_solution(sol, seed, self.sigma == 1)
+
+    def __getattr__(self, name: str):
+        """Names of the previous interface, kept a short while: ``ik_nearest`` is :meth:`ik`."""
+        if name == "ik_nearest":
+            warnings.warn(
+                "Chain.ik_nearest is deprecated: use Chain.ik(target, seed)", DeprecationWarning, stacklevel=2
+            )
+            return self.ik
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def ik_position(self, p: ArrayLike) -> ChainSolutions:
+        """Every joint solution placing the tool point at p, for a 3-joint chain.
+
+        p (..., 3) in the base frame -> :class:`ChainSolutions` with q (..., 4, 3). The
+        tool orientation is free. The closed form is Pieper's: q1 is eliminated through two
+        invariants of its joint (|f|^2 and f_z for a revolute, f_x and f_y for a prismatic),
+        q2 through a 2x2 linear system, leaving a polynomial in q3 of degree <= 4 (degree 2
+        when consecutive axes intersect or are parallel); every real root is back-substituted
+        and polished by Gauss–Newton steps on fk(q) = p. Accepted solutions satisfy
+        |fk(q) - p| <= 1e-9 s (s: the sum of the table's lengths and the tool offset, at least
+        |p|); solutions closer than 1e-6 (rad, or length / s) are merged, so a double root comes
+        back once. Slots are sorted by (q1, q2, q3), values within 1e-7 counting as equal. A
+        target for which a joint is free (on a joint axis) gives one representative with that
+        joint at 0. Unreachable targets get status UNREACHABLE and NaN in every slot; :meth:`fk`
+        of the nearest configuration is not attempted (use a numerical solver for a
+        least-squares answer). The full derivation is in ``spotkin.reference.ik3r``.
+        """
+        return self._ik_core().ik_position(p)  # a ChainSolutions (the core builds it)
+
+    def _ik_pose_all(self, T, free_joint, free_value) -> ChainSolutions:
+        """Every solution for tool poses (:meth:`ik_all` of a 6- or 7-joint chain)."""
         fast = self._ik is not None and not isinstance(self._ik, dict)
         if free_joint is None and free_value is None and fast:  # the single-call fast path
             return self._ik.ik(T)  # a ChainSolutions (the core builds it)
@@ -792,7 +836,7 @@ class Chain:
         T = as_real(T, "T")
         trailing = 2 if T.shape[-2:] == (4, 4) else 1
         poses = np.expand_dims(T, axis=T.ndim - trailing)  # (..., 1, 4, 4): against (n,) values
-        return grid, self.ik(poses, free_joint=k, free_value=grid.astype(T.dtype, copy=False))
+        return grid, self.ik_all(poses, free_joint=k, free_value=grid.astype(T.dtype, copy=False))
 
     def _free_grid(self, k: int, values) -> np.ndarray:
         if isinstance(values, (int, np.integer)) and not isinstance(values, (bool, np.bool_)):
@@ -834,7 +878,7 @@ class Chain:
         candidates = np.concatenate([np.broadcast_to(grid, (*lead, grid.size)), own[..., None]], axis=-1)
         shape = (*lead, grid.size + 1, *T.shape[-trailing:])
         poses = np.broadcast_to(np.expand_dims(T, axis=T.ndim - trailing), shape)
-        sol = self.ik(poses, free_joint=k, free_value=candidates.astype(T.dtype, copy=False))
+        sol = self.ik_all(poses, free_joint=k, free_value=candidates.astype(T.dtype, copy=False))
         # reduced before the difference: q - 1e17 would lose q (and q - 1e300 everything)
         gap = sol.q - _reduced(seed.astype(np.float64))[..., None, None, :]
         move = np.abs(np.angle(np.exp(1j * gap))).max(axis=-1)
@@ -855,22 +899,6 @@ class Chain:
         if not lead:
             return q, Status(int(status))
         return q, status
-
-    def ik_nearest(
-        self, target: ArrayLike, seed: ArrayLike | None = None
-    ) -> tuple[np.ndarray, np.ndarray | Status]:
-        """One closed-form solution per target: (q (..., dof), status (...,)).
-
-        ``target`` is what :meth:`ik_position` (3-joint chains: p (..., 3)) or :meth:`ik`
-        (6-joint chains: T (..., 4, 4) or (..., 7)) takes; of its solutions, the one within
-        the limits nearest to ``seed`` (..., dof) (the largest single-joint move: on the circle
-        for a revolute joint, plain for a prismatic one; ties to the lower slot), or the lowest
-        valid slot without a seed. Status as in :class:`ChainSolutions`; q is NaN unless it is
-        OK; a seed with NaN or Inf gives INVALID_INPUT. The seed broadcasts against the
-        target's leading dimensions. Runs in C++ per block of targets, with no temporary
-        array of every solution (for control loops and large batches alike).
-        """
-        return _as_target(self._ik_core().ik_nearest, target, seed)
 
     def ik_differential(
         self,
@@ -978,7 +1006,7 @@ class Chain:
 
 _SEVEN_JOINTS = (
     "a 7-joint chain is redundant: no closed form solves all 7 joints at once; "
-    "ik(T, free_joint=k, free_value=v) solves the other six in closed form with joint k held "
+    "ik_all(T, free_joint=k, free_value=v) solves the other six in closed form with joint k held "
     "(ik_free_kind(k) names their family; ik_self_motion samples the redundancy), and "
     "ik_differential solves the whole chain numerically"
 )
@@ -1018,6 +1046,43 @@ def _frame_index(value, name: str, last: int, words: tuple[str, ...]) -> int:
 
 
 _BASE, _TOOL = "base", "tool"  # Chain.jacobian's defaults
+
+
+def _nearest_solution(
+    sol: ChainSolutions, seed, prismatic: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | Status]:
+    """(q, status) from every solution: the valid one nearest to ``seed`` (the largest single-joint move,
+    on the circle for a revolute joint; ties to the lower slot), or the lowest valid slot without a
+    seed. q is NaN unless OK; a NaN or Inf seed gives INVALID_INPUT."""
+    q_all, valid = sol.q, sol.valid
+    n = q_all.shape[-1]
+    slots = np.arange(q_all.shape[-2], dtype=np.float64)
+    if seed is None:
+        seed_ok = np.ones(q_all.shape[:-2], dtype=bool)
+        move = np.where(valid, slots, np.inf)
+    else:
+        seed = as_real(seed, "seed", np.float64)
+        if seed.ndim == 0 or seed.shape[-1] != n:
+            raise ValueError(f"seed must have shape (..., {n}), got {seed.shape}")
+        lead = broadcast_lead(target=(q_all.shape[:-2], q_all.shape), seed=(seed.shape[:-1], seed.shape))
+        q_all = np.broadcast_to(q_all, (*lead, *q_all.shape[-2:]))
+        valid = np.broadcast_to(valid, (*lead, valid.shape[-1]))
+        seed = np.broadcast_to(seed, (*lead, n))
+        seed_ok = np.isfinite(seed).all(axis=-1)
+        with np.errstate(invalid="ignore"):
+            gap = q_all - _reduced(np.where(np.isfinite(seed), seed, 0.0))[..., None, :]
+            move = np.where(prismatic, np.abs(gap), np.abs(np.angle(np.exp(1j * gap)))).max(axis=-1)
+        move = np.where(valid, move, np.inf)
+    best = np.argmin(move, axis=-1)
+    found = np.isfinite(np.take_along_axis(move, best[..., None], axis=-1)[..., 0]) & seed_ok
+    q = np.take_along_axis(q_all, best[..., None, None], axis=-2)[..., 0, :]
+    status = np.broadcast_to(np.asarray(sol.status, dtype=np.int8), found.shape)
+    status = np.where(seed_ok, status, np.int8(Status.INVALID_INPUT))
+    status = np.where(found, np.int8(Status.OK), status).astype(np.int8)
+    q = np.where(found[..., None], q, np.nan).astype(sol.q.dtype, copy=False)
+    if not found.shape:
+        return q, Status(int(status))
+    return q, status
 
 
 def _as_target(call, target, *args):

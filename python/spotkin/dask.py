@@ -24,7 +24,7 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
 - **Identical results.** The computed arrays are bit-identical to the in-memory call on the whole
   batch, for any chunking and scheduler. Each chunk is one call of the in-memory method, and most
   kernels answer each sample on its own. The arm's and the chains' closed forms (``SpotArm.ik``,
-  ``ik_all``; ``Chain.ik_position``, ``ik``, ``ik_nearest``) round their full vector blocks and their
+  ``ik_all``; ``Chain.ik_position``, ``ik``, ``ik_all``) round their full vector blocks and their
   remainder apart in the last bits: for them a chunk computes its samples as the whole call does, in
   full blocks (padded to multiples of :data:`ALIGNMENT`, the core's thread alignment), and the whole
   batch's last ``N mod 64`` samples come from one call on them (one small extra task). The dynamics
@@ -144,8 +144,8 @@ _BLOCKED = {
     ("SpotArm", "ik"),
     ("SpotArm", "ik_all"),
     ("Chain", "ik"),
+    ("Chain", "ik_all"),
     ("Chain", "ik_position"),
-    ("Chain", "ik_nearest"),
 }
 
 
@@ -622,7 +622,7 @@ def _plan_ik(model, target, seed=None, fallback=None) -> _Plan:
         if fallback is not None:
             options["fallback"] = fallback
     else:
-        method = "ik" if isinstance(model, SpotArm) else "ik_nearest"
+        method = "ik"
         if fallback is not None and fallback != "nan":
             raise ValueError(
                 f"fallback must be None or 'nan' for a {type(model).__name__}: arm and chain IK give NaN "
@@ -638,8 +638,7 @@ def ik(model, target, seed=None, fallback: str | None = None):
     - :class:`~spotkin.Leg`: :meth:`Leg.ik` of foot points ``target`` (..., 3); ``fallback``
       ``"nearest"`` (the default) or ``"nan"``.
     - :class:`~spotkin.SpotArm`: :meth:`SpotArm.ik` of tool poses (..., 4, 4) or (..., 7).
-    - :class:`~spotkin.Chain`: :meth:`Chain.ik_nearest` (points (..., 3) for 3 joints, tool poses
-      for 6).
+    - :class:`~spotkin.Chain`: :meth:`Chain.ik` (points (..., 3) for 3 joints, tool poses for 6).
 
     ``seed`` (..., dof) picks the nearest valid branch and broadcasts against ``target``. Arms and
     chains give NaN without a solution: their ``fallback`` may only be None or ``"nan"``.
@@ -656,8 +655,7 @@ def _plan_ik_all(model, target, seed=None) -> _Plan:
         raise TypeError(f"ik_all of a {type(model).__name__} takes no seed (only a SpotArm's does)")
     if isinstance(model, Leg):
         return _plan(model, "ik_all", [("target", target, (3,))], {}, (), None)
-    method = "ik_position" if model.dof == 3 else "ik"
-    return _plan(model, method, [("target", target, _target_core(model))], {}, (), None)
+    return _plan(model, "ik_all", [("target", target, _target_core(model))], {}, (), None)
 
 
 def ik_all(model, target, seed=None):
@@ -665,8 +663,8 @@ def ik_all(model, target, seed=None):
     ``status``) of dask arrays.
 
     :meth:`Leg.ik_all` (foot points (..., 3)), :meth:`SpotArm.ik_all` (tool poses; ``seed`` (..., 6)
-    fixes the free angle in singular cases), or a :class:`~spotkin.Chain`'s :meth:`Chain.ik_position`
-    (3 joints, points) or :meth:`Chain.ik` (6 joints, tool poses). Only the arm takes a ``seed``.
+    fixes the free angle in singular cases), or a :class:`~spotkin.Chain`'s :meth:`Chain.ik_all`
+    (3 joints: points; 6 joints: tool poses). Only the arm takes a ``seed``.
     """
     return _lazy(_plan_ik_all(model, target, seed))
 

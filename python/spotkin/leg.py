@@ -363,7 +363,7 @@ class Leg:
           joint limits whose foot is nearest to the target, computed exactly
           (:meth:`nearest_reachable` with ``within_limits=True``). With
           ``fallback="nan"``, q is NaN instead (as :meth:`SpotArm.ik` and
-          :meth:`Chain.ik_nearest` answer).
+          :meth:`Chain.ik` answer).
         - ``JOINT_LIMIT``: branches exist, but none within the limits; q is NaN.
         - ``INVALID_INPUT``: NaN or Inf in p or seed; q is NaN.
 

@@ -991,7 +991,7 @@ def _solve_all(solver, target: ArrayLike):
             sol = solver.ik_all(value)
             names = tuple(_arm_slot_name(k) for k in range(8))
         else:
-            sol = solver.ik(value)
+            sol = solver.ik_all(value)
             names = tuple(f"solution {k}" for k in range(sol.q.shape[-2]))
         with np.errstate(all="ignore"):
             pose = (

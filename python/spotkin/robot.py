@@ -1012,7 +1012,7 @@ class Robot:
         return self._arm_ik(T_body, seed)
 
     def _arm_ik(self, T_body, seed):
-        return self._arm.ik_nearest(T_body, seed)
+        return self._arm.ik(T_body, seed)
 
     def _q_widths(self) -> tuple[int, ...]:
         """The widths a whole-body q may have: the legs' joints, or the legs' then the arm's."""
