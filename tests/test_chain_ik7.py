@@ -210,6 +210,41 @@ def test_nearest_to_a_seed(rng):
     assert st_bad == sk.Status.INVALID_INPUT and np.isnan(q_bad).all()
 
 
+def test_ik_chooses_among_a_held_values_solutions_or_searches_the_joint(rng):
+    """chain.ik (the solver interface's one answer) on a 7-joint chain: with free_joint and free_value,
+    the valid solution at that value nearest the seed (the lowest valid slot without one); with
+    free_joint alone, ik_nearest_free's search near the seed."""
+    chain = kinova_like()
+    q = configurations(chain, rng, 64)
+    T = chain.fk(q)
+    seed = q + rng.normal(0, 1e-3, q.shape)
+    chosen, status = chain.ik(T, seed, free_joint=2, free_value=q[:, 2])
+    assert chosen.shape == (64, 7) and (status == sk.Status.OK).all()
+    assert angle_gap(chosen, q).max() < 1e-8  # the generating configuration is the nearest
+    every = chain.ik_all(T, free_joint=2, free_value=q[:, 2])
+    first = np.argmax(every.valid, axis=1)
+    lowest, _ = chain.ik(T, free_joint=2, free_value=q[:, 2])
+    np.testing.assert_array_equal(lowest, every.q[np.arange(64), first])
+    searched, searched_status = chain.ik(T[:8], seed[:8], free_joint=2)
+    expected, expected_status = chain.ik_nearest_free(T[:8], seed[:8], 2)
+    np.testing.assert_array_equal(searched, expected)
+    np.testing.assert_array_equal(searched_status, expected_status)
+    one, one_status = chain.ik(T[0], seed[0], free_joint=2, free_value=q[0, 2])
+    assert one.shape == (7,) and one_status == sk.Status.OK
+    bad = seed[0].copy()
+    bad[1] = np.nan
+    q_bad, st_bad = chain.ik(T[0], bad, free_joint=2, free_value=q[0, 2])
+    assert st_bad == sk.Status.INVALID_INPUT and np.isnan(q_bad).all()
+    with pytest.raises(ValueError, match="redundant"):
+        chain.ik(T[0])
+    with pytest.raises(ValueError, match="seed"):
+        chain.ik(T[0], free_joint=2)
+    with pytest.warns(DeprecationWarning, match="ik_nearest"):
+        six = sk.Chain.from_urdf(sk.robots.path("ur5"), tip="tool0")
+        q6 = np.array([0.3, -1.2, 1.4, -0.8, 1.1, 0.4])
+        np.testing.assert_array_equal(six.ik_nearest(six.fk(q6), q6)[0], six.ik(six.fk(q6), q6)[0])
+
+
 def test_errors_and_statuses(rng):
     chain = panda()
     T = chain.fk(configurations(chain, rng, 4))
