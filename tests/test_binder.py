@@ -218,3 +218,91 @@ def test_floating_base_out_and_broadcast():
     tau = fb.gravity(q[0], gravities)
     assert tau.shape == (2, fb.nv)
     np.testing.assert_array_equal(tau[1], fb.gravity(q[0], gravities[1]))
+
+
+# ---- one sample: the fast path ----------------------------------------------------------------------
+
+
+def test_one_sample_answers_the_bits_of_its_batch_row(arm):
+    """A lone sample (the fast path: the caller's memory, inline) gives its row of a batch bit for bit,
+    for kinematics, IK, the body, the dynamics, the statics and the pose transform."""
+    q = leg_q((6,))
+    p = LEG.fk(q)
+    qa = arm_q(arm, (6,))
+    go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+    feet = go2.stance_feet(0.3)
+    poses = np.array([0.01, -0.01, 0.29, 0.03, -0.04, 0.05]) + RNG.normal(0, 0.01, (6, 6))
+    q12 = go2.body_ik(poses, feet).q
+    calls = {
+        "leg.fk": lambda s: LEG.fk(q[s]),
+        "leg.ik seeded": lambda s: LEG.ik(p[s], q[s])[0],
+        "leg.ik_all": lambda s: LEG.ik_all(p[s]).q,
+        "arm.fk": lambda s: arm.fk(qa[s]),
+        "arm.jacobian": lambda s: arm.jacobian(qa[s]),
+        "arm.gravity": lambda s: arm.gravity(qa[s]),
+        "arm.rnea": lambda s: arm.inverse_dynamics(qa[s], qa[s], qa[s]),
+        "arm.mass_matrix": lambda s: arm.mass_matrix(qa[s]),
+        "body_ik": lambda s: go2.body_ik(poses[s], feet).q,
+        "body_ik seeded": lambda s: go2.body_ik(poses[s], feet, q12[s]).q,
+        "body_jacobian": lambda s: go2.body_jacobian(poses[s], q12[s]),
+        "standing_torques": lambda s: go2.standing_torques(poses[s], q12[s]).tau,
+        "center_of_mass": lambda s: go2.center_of_mass(poses[s], q12[s]),
+        "body_transform": lambda s: sk.body_transform(poses[s]),
+    }
+    for name, call in calls.items():
+        batch = call(slice(None))
+        for k in (0, 3, 5):
+            assert np.array_equal(call(k), batch[k], equal_nan=True), (name, k)
+
+
+def test_one_sample_from_lists_and_tuples_equals_arrays(arm):
+    """Short lists of Python numbers take the fast path as float64, with the bits of a float64 array."""
+    q = [0.1, 0.9, -1.5]
+    assert np.array_equal(LEG.fk(q), LEG.fk(np.array(q)))
+    assert np.array_equal(LEG.fk((0, 1, -2)), LEG.fk(np.array([0.0, 1.0, -2.0])))  # ints, as NumPy reads them
+    qa = [0.1, -0.5, 0.7, 0.2, 0.3, -0.1]
+    g = [0.0, 0.0, -9.81]
+    assert np.array_equal(arm.gravity(qa, g), arm.gravity(np.array(qa), np.array(g)))
+    assert (
+        LEG.fk(q).dtype == np.float64 and LEG.fk([True, False, True]).dtype == np.float64
+    )  # bools: as NumPy
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_one_sample_keeps_the_dtype_rules(arm, dtype):
+    """float32 only when every primary argument is; a parameter of the other dtype (gravity, a seed)
+    takes the working one, as in a batch."""
+    qa = arm_q(arm, ()).astype(dtype)
+    g64 = np.array([0.0, 0.0, -9.81])
+    assert arm.gravity(qa, g64).dtype == dtype
+    assert arm.gravity(qa, g64.astype(np.float32)).dtype == dtype
+    batch = arm.gravity(np.stack([qa, qa]), g64.astype(np.float32))
+    assert np.array_equal(arm.gravity(qa, g64.astype(np.float32)), batch[0])
+    p = LEG.fk(leg_q(()).astype(dtype))
+    seed = leg_q(()).astype(np.float32 if dtype == np.float64 else np.float64)
+    assert LEG.ik(p, seed)[0].dtype == dtype
+    mixed = LEG.fk(np.stack([leg_q(()).astype(np.float32)]))  # shape (1, 3): a batch, not the fast path
+    assert mixed.dtype == np.float32
+
+
+def test_one_sample_unusual_values_take_the_general_path():
+    """NaN, Inf and huge angles in a lone sample: the same answers as in a batch (the general path)."""
+    q = np.array([[0.1, 0.9, 1e7], [np.nan, 0.9, -1.5], [0.1, np.inf, -1.5], [0.1, 0.9, -1.5]])
+    batch = LEG.fk(q)
+    for k in range(len(q)):
+        assert np.array_equal(LEG.fk(q[k]), batch[k], equal_nan=True), k
+    assert np.isnan(LEG.fk(q[1])).all() and np.isfinite(LEG.fk(q[0])).all()
+
+
+def test_one_sample_out_overlapping_its_input_is_read_first():
+    q = np.array([0.1, 0.9, -1.5])
+    want = LEG.fk(q)
+    assert np.array_equal(LEG.fk(q, out=q), want) and np.array_equal(q, want)  # written in place, read first
+    buffer = np.zeros(6)
+    buffer[:3] = [0.1, 0.9, -1.5]
+    LEG.fk(buffer[:3], out=buffer[3:])
+    assert np.array_equal(buffer[3:], want)
+    with pytest.raises(ValueError, match="out must hold 1"):
+        LEG.fk(q, out=(np.empty(3), np.empty(3)))
+    with pytest.raises(TypeError, match=r"out\[0\] \(p\) must have dtype float64"):
+        LEG.fk(np.array([0.1, 0.9, -1.5]), out=np.empty(3, np.float32))
