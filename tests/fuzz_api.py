@@ -2308,7 +2308,7 @@ class BodySpec:
 
 
 BODY_METHODS = ("body_ik", "body_fk", "body_jacobian", "body_rates", "fk_all", "arm_ik_world")
-SPOT_BODY = BodySpec("spot", "Spot", "q12")
+SPOT_BODY = BodySpec("spot", "Spot", "q")
 
 
 def arm_limits(arm) -> np.ndarray:

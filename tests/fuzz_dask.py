@@ -171,11 +171,11 @@ def register_entries(api) -> None:
             light=name not in full,
         )
 
-    # -- whole body: Spot (its twins name the joints q12) and two robots from URDFs --
+    # -- whole body: Spot and two robots from URDFs --
     # (the Dask layer is one code path for every function: full variants for the busiest entries, the
     # light set for the rest)
     full = {"dask.body_ik[spot]", "dask.body_fk[spot]", "dask.ik[leg]", "dask.ik_all[arm]"}
-    bodies = {"spot": ("Spot.{}", {"q": "q12"}), "hexapod": ("Robot.{}[hexapod]", {})}
+    bodies = {"spot": ("Spot.{}", {}), "hexapod": ("Robot.{}[hexapod]", {})}
     for key, (pattern, rename) in bodies.items():
         robot = model_slot("robot", lambda c, key=key: c.robot(key), lambda c: c.leg)
         for method in ("body_ik", "body_fk", "body_jacobian", "body_rates"):

@@ -311,7 +311,7 @@ def test_bad_shapes_name_both_arguments():
         SPOT.body_ik(NOMINAL, np.zeros((4, 2)))
     with pytest.raises(ValueError, match=r"body_pose must have shape \(\.\.\., 6\)"):
         SPOT.body_ik(np.zeros(5), FEET)
-    with pytest.raises(ValueError, match=r"q12 must have shape \(\.\.\., 12\)"):
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 12\)"):
         SPOT.body_fk(NOMINAL, np.zeros(11))
     with pytest.raises(TypeError, match="must be a real numeric array"):
         SPOT.body_ik(["a"] * 6, FEET)

@@ -79,18 +79,13 @@ struct Posed {
 // non-finite joints make its foot (its Jacobian rows) NaN, and only them, when each leg's joints are its
 // own three columns of q; otherwise the whole sample.
 template <bool Jacobian>
-// q_name: the joints' name in the caller's signature (spotkin.Spot calls them q12), for the errors.
-py::object fk_or_jacobian(const Body& body, py::handle pose, int sequence, py::handle q, py::handle out,
-                          const std::string& q_name) {
+py::object fk_or_jacobian(const Body& body, py::handle pose, int sequence, py::handle q, py::handle out) {
   const py::ssize_t n_legs = body.n_legs(), w = body.width();
   const int groups = body.leg_contiguous() ? int(n_legs) : 1;
   const Out result = Jacobian ? Out("J", {w, 6 + w}) : Out("feet", {n_legs, 3});
-  static const char* const q12 =
-      "q12";  // the joints' name in a cached op: a literal, never the caller's string
-  const char* const q_label = q_name == q12 ? q12 : "q";
   static binder::OpCache ops;
   const auto make = [&] {
-    return Op({pose_arg(true), Arg(q_label, {w}, all_angles(int(w))).nan_rows(groups)}, {result},
+    return Op({pose_arg(true), Arg("q", {w}, all_angles(int(w))).nan_rows(groups)}, {result},
               55.0, [](const void* c, const auto& b) {
                 const Posed& s = binder::context<Posed>(c);
                 if constexpr (Jacobian) {
@@ -102,9 +97,7 @@ py::object fk_or_jacobian(const Body& body, py::handle pose, int sequence, py::h
               });
   };
   const Posed context{body, make_sequence(sequence)};
-  return ops.with({std::uint64_t(n_legs), std::uint64_t(w),
-                   std::uint64_t(groups) | (std::uint64_t(q_label == q12) << 32)},
-                  make, [&](const Op& op) { return binder::call(op, &context, {pose, q}, out); });
+  return ops.with({std::uint64_t(n_legs), std::uint64_t(w), std::uint64_t(groups)}, make, [&](const Op& op) { return binder::call(op, &context, {pose, q}, out); });
 }
 
 // body_pose (any form) -> the world <- body transforms (..., 4, 4), float64; NaN for an invalid pose.
@@ -166,9 +159,10 @@ void bind_body(py::module_& m) {
       .def_property_readonly("n_legs", &Body::n_legs)
       .def("ik", &ik, py::arg("body_pose"), py::arg("sequence"), py::arg("feet"), py::arg("seed"),
            py::arg("nearest_fallback") = true, py::arg("out") = py::none())
-      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::arg("out") = py::none(), py::arg("q_name") = "q")
+      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
+           py::arg("out") = py::none())
       .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
-           py::arg("out") = py::none(), py::arg("q_name") = "q");
+           py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -111,11 +111,11 @@ class Arm:
 class Body:
     def __init__(self, legs: collections.abc.Sequence[Leg], hip_positions: typing.Any, columns: typing.Any = None) -> None:
         ...
-    def fk(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
+    def fk(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     def ik(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, feet: typing.Any, seed: typing.Any, nearest_fallback: bool = True, out: typing.Any = None) -> typing.Any:
         ...
-    def jacobian(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None, q_name: str = 'q') -> typing.Any:
+    def jacobian(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     @property
     def n_legs(self) -> int:

@@ -816,8 +816,8 @@ class Robot:
         float32 when ``body_pose`` and ``q`` both are float32, else float64. A leg with a
         NaN or Inf joint gets a NaN foot; an invalid body pose NaN feet for its sample.
         ``out``: an array of the result's shape and dtype to write into and return."""
-        q = self._leg_q(as_real(q, self._q_name), self._q_name)[0]
-        return self._body_core.fk(body_pose, sequence_code(seq), q, out, self._q_name)
+        q = self._leg_q(as_real(q, "q"), "q")[0]
+        return self._body_core.fk(body_pose, sequence_code(seq), q, out)
 
     def body_jacobian(
         self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
@@ -831,18 +831,16 @@ class Robot:
         ``out``: an array of the result's shape and dtype to write into and return.
         """
         if type(q) is np.ndarray and q.shape == (3 * len(self._legs),):  # the control loop's call
-            return self._body_core.jacobian(body_pose, sequence_code(seq), q, out, self._q_name)
-        q = as_real(q, self._q_name)
+            return self._body_core.jacobian(body_pose, sequence_code(seq), q, out)
+        q = as_real(q, "q")
         width = q.shape[-1] if q.ndim else 0
-        q = self._leg_q(q, self._q_name)[0]
+        q = self._leg_q(q, "q")[0]
         if width == q.shape[-1]:
-            return self._body_core.jacobian(body_pose, sequence_code(seq), q, out, self._q_name)
-        J = self._body_core.jacobian(body_pose, sequence_code(seq), q, None, self._q_name)
+            return self._body_core.jacobian(body_pose, sequence_code(seq), q, out)
+        J = self._body_core.jacobian(body_pose, sequence_code(seq), q, None)
         full = np.zeros((*J.shape[:-1], 6 + width), dtype=J.dtype)
         full[..., : J.shape[-1]] = J
         return into_out(full, out)
-
-    _q_name = "q"
 
     @quiet_float_errors
     def body_rates(
@@ -875,14 +873,14 @@ class Robot:
         tolerance = as_finite(tolerance, "tolerance", 0.0)
         n_legs = len(self._legs)
         T, pose = self._world_from_body(body_pose, seq)
-        q = as_real(q, self._q_name, np.float64)
+        q = as_real(q, "q", np.float64)
         given = q.shape[-1] if q.ndim else 0
-        q, q_arm = self._leg_q(q, self._q_name)
+        q, q_arm = self._leg_q(q, "q")
         width = 3 * n_legs
         twist = as_real(twist, "twist", np.float64)
         lead = broadcast_lead(
             body_pose=(T.shape[:-2], pose.shape),
-            **{self._q_name: (q.shape[:-1], q.shape)},
+            q=(q.shape[:-1], q.shape),
             twist=(check_trailing(twist, "twist", (6,)), twist.shape),
         )
         n = math.prod(lead)
@@ -936,14 +934,14 @@ class Robot:
         """
         n_legs = len(self._legs)
         T, pose = self._world_from_body(body_pose, seq)
-        q, q_arm_in_q = self._leg_q(as_real(q, self._q_name, np.float64), self._q_name)
+        q, q_arm_in_q = self._leg_q(as_real(q, "q", np.float64), "q")
         if q_arm_in_q is not None:
             if q_arm is not None:
-                raise ValueError(f"{self._q_name} holds the arm's joints, so q_arm must be None")
+                raise ValueError("q holds the arm's joints, so q_arm must be None")
             q_arm = q_arm_in_q
         leads = {
             "body_pose": (T.shape[:-2], pose.shape),
-            self._q_name: (q.shape[:-1], q.shape),
+            "q": (q.shape[:-1], q.shape),
         }
         if q_arm is not None:
             if self._arm is None:

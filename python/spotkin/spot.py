@@ -160,13 +160,11 @@ class Spot(Robot):
     leg_names = LEG_NAMES
     """The legs in SDK order: ("fl", "fr", "hl", "hr") (h: hind)."""
     joint_names = tuple(f"{leg}.{joint}" for leg in LEG_NAMES for joint in ("hx", "hy", "kn"))
-    """The 12 leg joints in SDK order, the order of ``q12``: "fl.hx", "fl.hy", "fl.kn", "fr.hx", ...,
+    """The 12 leg joints in SDK order, the order of the legs' ``q``: "fl.hx", "fl.hy", "fl.kn", "fr.hx", ...,
     "hr.kn"."""
     leg_joint_names = joint_names
     arm_joint_names = ARM_JOINT_NAMES
     """The 6 arm joints in SDK order, the order of ``q_arm``."""
-
-    _q_name = "q12"
 
     def __init__(self, model: Mapping | None = None) -> None:
         self._build(model, {})
@@ -296,23 +294,6 @@ class Spot(Robot):
 
     def _arm_ik(self, T_body, seed):
         return self._arm.ik(T_body, seed=seed)
-
-    # The whole-body calls under Spot's argument names (q12: the 12 leg joints in SDK order).
-    def body_fk(self, body_pose, q12, seq: str = "XYZ", *, out: np.ndarray | None = None) -> np.ndarray:
-        """(..., 4, 3) world foot centres: foot = t + R (hip + leg.fk(q)); see :meth:`Robot.body_fk`."""
-        return super().body_fk(body_pose, q12, seq, out=out)
-
-    def body_jacobian(self, body_pose, q12, seq: str = "XYZ", *, out: np.ndarray | None = None) -> np.ndarray:
-        """(..., 12, 18) d(feet world) / d(body twist [v; w], q12); see :meth:`Robot.body_jacobian`."""
-        return super().body_jacobian(body_pose, q12, seq, out=out)
-
-    def body_rates(self, body_pose, q12, twist, seq: str = "XYZ", tolerance: float = 1e-6) -> BodyRates:
-        """Joint velocities (..., 12) that keep every foot fixed; see :meth:`Robot.body_rates`."""
-        return super().body_rates(body_pose, q12, twist, seq, tolerance)
-
-    def fk_all(self, body_pose, q12, q_arm=None, seq: str = "XYZ") -> BodyFrames:
-        """Body, hips, knees, feet and hand in the world frame; see :meth:`Robot.fk_all`."""
-        return super().fk_all(body_pose, q12, q_arm, seq)
 
     def with_limits(self, limits) -> Spot:
         """This Spot with other joint limits (a new Spot; see :meth:`Robot.with_limits`). The keys may be
