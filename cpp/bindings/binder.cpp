@@ -498,7 +498,12 @@ Given classify(py::handle obj) {
     const auto* a = py::detail::array_proxy(o);
     const auto* d = py::detail::array_descriptor_proxy(a->descr);
     constexpr int kNeeded = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_ALIGNED_;
-    if ((a->flags & kNeeded) != kNeeded || d->byteorder == '>') return Given::Other;
+#if PY_LITTLE_ENDIAN
+    constexpr char kSwapped = '>';
+#else
+    constexpr char kSwapped = '<';
+#endif
+    if ((a->flags & kNeeded) != kNeeded || d->byteorder == kSwapped) return Given::Other;
     return d->type_num == api::NPY_DOUBLE_  ? Given::F64
            : d->type_num == api::NPY_FLOAT_ ? Given::F32
                                             : Given::Other;
