@@ -196,6 +196,20 @@ py::array new_output(const Out& spec, const Shape& leading) {
   return py::reinterpret_steal<py::array>(made);
 }
 
+// Output r made here: a single sample's status in r itself (returned as a spotkin.Status), else a
+// new array of the leading shape and the output's sample shape.
+template <typename T>
+void make_output(Output& r, const Out& spec, const Shape& leading) {
+  if (spec.kind == Kind::Status && leading.empty() && spec.shape.ndim == 0) {
+    r.data = &r.single_status;
+    r.scalar = true;
+    return;
+  }
+  py::array made = new_output<T>(spec, leading);
+  r.data = made.mutable_data();
+  r.array = std::move(made);
+}
+
 bool overlaps(const py::array& a, const void* data, std::size_t bytes) {
   const auto* lo = static_cast<const char*>(a.data());
   const auto* hi = lo + a.nbytes();
@@ -423,7 +437,6 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
       throw py::type_error("out must be a tuple of " + std::to_string(op.n_outs) + " arrays (or None)");
     }
   }
-  const bool single = leading.empty();
   for (int o = 0; o < op.n_outs; ++o) {
     const Out& spec = op.outs[o];
     Output& r = outs[o];
@@ -445,14 +458,7 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
         }
       continue;
     }
-    if (spec.kind == Kind::Status && single && spec.shape.ndim == 0) {
-      r.data = &r.single_status;
-      r.scalar = true;
-      continue;
-    }
-    py::array made = new_output<T>(spec, leading);
-    r.data = made.mutable_data();
-    r.array = std::move(made);
+    make_output<T>(r, spec, leading);
   }
 
   Kernel<T> kernel;
@@ -596,14 +602,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
       r.array = std::move(checked);
       continue;
     }
-    if (spec.kind == Kind::Status && spec.shape.ndim == 0) {
-      r.data = &r.single_status;
-      r.scalar = true;
-      continue;
-    }
-    py::array made = new_output<T>(spec, kNoLeading);
-    r.data = made.mutable_data();
-    r.array = std::move(made);
+    make_output<T>(r, spec, kNoLeading);
   }
   block.first = 0;
   block.m = 1;

@@ -16,11 +16,11 @@ namespace dynamics_glue {
 ChainDynamics make_chain_dynamics(const ChainPair& chain, py::handle mass, py::handle com, py::handle inertia) {
   const auto links = inertials_from(mass, com, inertia, chain.f64.dof());
   try {
-    return ChainDynamics{ChainModel<double, kLanes64>(chain.f64, links), ChainModel<float, kLanes32>(chain.f64, links),
-                         ChainModel<double, kMidLanes64>(chain.f64, links),
-                         ChainModel<float, kMidLanes32>(chain.f64, links),
-                         ChainModel<double, kSmallLanes64>(chain.f64, links),
-                         ChainModel<float, kSmallLanes32>(chain.f64, links)};
+    return ChainDynamics{{ChainModel<double, kLanes64>(chain.f64, links), ChainModel<float, kLanes32>(chain.f64, links),
+                          ChainModel<double, kMidLanes64>(chain.f64, links),
+                          ChainModel<float, kMidLanes32>(chain.f64, links),
+                          ChainModel<double, kSmallLanes64>(chain.f64, links),
+                          ChainModel<float, kSmallLanes32>(chain.f64, links)}};
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }

@@ -122,41 +122,34 @@ struct MassMatrix {
   dynamics::SymmetricLayout layout;
 };
 
-// ---------------------------------------------------------------- fixed base
-
-struct ChainDynamics {
-  ChainModel<double, kLanes64> f64;
-  ChainModel<float, kLanes32> f32;
-  ChainModel<double, kMidLanes64> f64_mid;
-  ChainModel<float, kMidLanes32> f32_mid;
-  ChainModel<double, kSmallLanes64> f64_small;
-  ChainModel<float, kSmallLanes32> f32_small;
-  const ChainModel<double, kLanes64>& get(double) const { return f64; }
-  const ChainModel<float, kLanes32>& get(float) const { return f32; }
-  const ChainModel<double, kMidLanes64>& mid(double) const { return f64_mid; }
-  const ChainModel<float, kMidLanes32>& mid(float) const { return f32_mid; }
-  const ChainModel<double, kSmallLanes64>& small(double) const { return f64_small; }
-  const ChainModel<float, kSmallLanes32>& small(float) const { return f32_small; }
-  int dof() const { return f64.dof(); }
-};
-
-// ---------------------------------------------------------------- floating base
+// ---------------------------------------------------------------- models at every lane width
 
 using dynamics::FloatingModel;
 
-struct FloatingDynamics {
-  FloatingModel<double, kLanes64> f64;
-  FloatingModel<float, kLanes32> f32;
-  FloatingModel<double, kMidLanes64> f64_mid;
-  FloatingModel<float, kMidLanes32> f32_mid;
-  FloatingModel<double, kSmallLanes64> f64_small;
-  FloatingModel<float, kSmallLanes32> f32_small;
-  const FloatingModel<double, kLanes64>& get(double) const { return f64; }
-  const FloatingModel<float, kLanes32>& get(float) const { return f32; }
-  const FloatingModel<double, kMidLanes64>& mid(double) const { return f64_mid; }
-  const FloatingModel<float, kMidLanes32>& mid(float) const { return f32_mid; }
-  const FloatingModel<double, kSmallLanes64>& small(double) const { return f64_small; }
-  const FloatingModel<float, kSmallLanes32>& small(float) const { return f32_small; }
+// A model in each precision at each level's lane width (with_model picks the active level's).
+template <template <typename, int> class Model>
+struct LaneModels {
+  Model<double, kLanes64> f64;
+  Model<float, kLanes32> f32;
+  Model<double, kMidLanes64> f64_mid;
+  Model<float, kMidLanes32> f32_mid;
+  Model<double, kSmallLanes64> f64_small;
+  Model<float, kSmallLanes32> f32_small;
+  const Model<double, kLanes64>& get(double) const { return f64; }
+  const Model<float, kLanes32>& get(float) const { return f32; }
+  const Model<double, kMidLanes64>& mid(double) const { return f64_mid; }
+  const Model<float, kMidLanes32>& mid(float) const { return f32_mid; }
+  const Model<double, kSmallLanes64>& small(double) const { return f64_small; }
+  const Model<float, kSmallLanes32>& small(float) const { return f32_small; }
+};
+
+// A fixed-base chain.
+struct ChainDynamics : LaneModels<ChainModel> {
+  int dof() const { return f64.dof(); }
+};
+
+// A floating base carrying chains.
+struct FloatingDynamics : LaneModels<FloatingModel> {
   std::uint64_t angles = 0;  // the q columns that are joint angles (7 + each revolute joint's index)
 };
 

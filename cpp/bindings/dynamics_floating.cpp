@@ -42,12 +42,13 @@ FloatingDynamics make_floating(py::handle mass, py::handle com, py::handle inert
     for (int j = 0; j < c.dof(); ++j, ++column)
       if (column < 64 && ((c.f64.angle_columns() >> j) & 1U)) angles |= std::uint64_t{1} << column;
   try {
-    return FloatingDynamics{FloatingModel<double, kLanes64>(links[0], std::move(c64)),
-                            FloatingModel<float, kLanes32>(links[0], std::move(c32)),
-                            FloatingModel<double, kMidLanes64>(links[0], std::move(m64)),
-                            FloatingModel<float, kMidLanes32>(links[0], std::move(m32)),
-                            FloatingModel<double, kSmallLanes64>(links[0], std::move(s64)),
-                            FloatingModel<float, kSmallLanes32>(links[0], std::move(s32)), angles};
+    return FloatingDynamics{{FloatingModel<double, kLanes64>(links[0], std::move(c64)),
+                             FloatingModel<float, kLanes32>(links[0], std::move(c32)),
+                             FloatingModel<double, kMidLanes64>(links[0], std::move(m64)),
+                             FloatingModel<float, kMidLanes32>(links[0], std::move(m32)),
+                             FloatingModel<double, kSmallLanes64>(links[0], std::move(s64)),
+                             FloatingModel<float, kSmallLanes32>(links[0], std::move(s32))},
+                            angles};
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }

@@ -134,12 +134,13 @@ SPOTKIN_INLINE void euler_xyz_rotations(const C (*s)[kBlock], const C (*c)[kBloc
   }
 }
 
-// The world <- body transform of one pose (out: 4 x 4, row-major), as read_poses reads it one at a
-// time: Euler angles by Body::euler_rotation, a matrix as given, a quaternion by Arm::read_pose (the
-// same checks). An invalid pose (NaN, Inf, not a rigid transform) gives NaN throughout; returns false.
+// One pose's rotation R and translation t, as read_poses reads them one at a time: Euler angles by
+// Body::euler_rotation, a matrix as given, a quaternion by Arm::read_pose (the same checks).
+// Returns whether the pose is valid (finite, and a rigid transform).
 template <typename T>
-inline bool pose_transform(const T* in, BodyPoseFormat format, const EulerSequence& seq, double* out) noexcept {
-  double R[3][3], t[3], ok = 1.0;
+inline bool read_pose(const T* in, BodyPoseFormat format, const EulerSequence& seq, double R[3][3],
+                      double t[3]) noexcept {
+  double ok = 1.0;
   if (format == BodyPoseFormat::Euler) {
     const double angles[3] = {double(in[3]), double(in[4]), double(in[5])};
     Body::euler_rotation(seq, angles, R);
@@ -156,9 +157,17 @@ inline bool pose_transform(const T* in, BodyPoseFormat format, const EulerSequen
       t[r] = pose.p[r];
     }
   }
-  double sum = t[0] + t[1] + t[2];
+  double sum = t[0] + t[1] + t[2];  // NaN or Inf anywhere makes it NaN
   for (int r = 0; r < 3; ++r) sum += R[r][0] + R[r][1] + R[r][2];
-  const bool valid = ok != 0.0 && (sum - sum) == 0.0;
+  return ok != 0.0 && (sum - sum) == 0.0;
+}
+
+// The world <- body transform of one pose (out: 4 x 4, row-major); an invalid pose gives NaN
+// throughout and returns false.
+template <typename T>
+inline bool pose_transform(const T* in, BodyPoseFormat format, const EulerSequence& seq, double* out) noexcept {
+  double R[3][3], t[3];
+  const bool valid = read_pose(in, format, seq, R, t);
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 3; ++k) out[4 * r + k] = R[r][k];
     out[4 * r + 3] = t[r];
@@ -198,27 +207,8 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
     return;
   }
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    const T* in = poses + stride * i;
-    double R[3][3], t[3], ok = 1.0;
-    if (format == BodyPoseFormat::Euler) {
-      const double angles[3] = {double(in[3]), double(in[4]), double(in[5])};
-      Body::euler_rotation(seq, angles, R);
-      t[0] = double(in[0]), t[1] = double(in[1]), t[2] = double(in[2]);
-    } else {
-      Arm::Pose pose;
-      double buffer[16];
-      const int width = format == BodyPoseFormat::Matrix ? 16 : 7;
-      for (int k = 0; k < width; ++k) buffer[k] = double(in[k]);
-      ok = format == BodyPoseFormat::Matrix ? Arm::read_pose<PoseFormat::Matrix>(buffer, pose)
-                                            : Arm::read_pose<PoseFormat::PositionQuaternion>(buffer, pose);
-      for (int r = 0; r < 3; ++r) {
-        for (int k = 0; k < 3; ++k) R[r][k] = pose.R[r][k];
-        t[r] = pose.p[r];
-      }
-    }
-    double sum = t[0] + t[1] + t[2];
-    for (int r = 0; r < 3; ++r) sum += R[r][0] + R[r][1] + R[r][2];
-    out.ok[i] = (sum - sum) == 0.0 ? C(ok) : C(0);
+    double R[3][3], t[3];
+    out.ok[i] = read_pose(poses + stride * i, format, seq, R, t) ? C(1) : C(0);
     for (int r = 0; r < 3; ++r) {
       for (int k = 0; k < 3; ++k) out.R[3 * r + k][i] = C(R[r][k]);
       out.t[r][i] = C(t[r]);
