@@ -48,14 +48,14 @@ except ImportError as _error:  # pragma: no cover - tested in a subprocess with 
         "(or pip install matplotlib)"
     ) from _error
 
-from ._boundary import as_index, as_real, as_scalar
-from ._status import Status
-from .arm import SpotArm
-from .body import body_transform, parse_sequence
-from .chain import Chain
-from .leg import SLOT_NAMES, Leg
-from .robot import Robot
-from .trajectory import CartesianPath, PointToPoint
+from .._boundary import as_index, as_real, as_scalar
+from .._status import Status
+from ..arm import SpotArm
+from ..body import body_transform, parse_sequence
+from ..chain import Chain
+from ..leg import SLOT_NAMES, Leg
+from ..robot import Robot
+from ..trajectory import CartesianPath, PointToPoint
 
 __all__ = ["animate", "branches", "robot", "trajectory", "workspace"]
 
@@ -806,7 +806,7 @@ def _description(ax, model, values: dict, title: str | None = None) -> None:
     are at 0): every link from its parent's frame to its own (grey), the chain from the root to each tip
     (:func:`spotkin._urdf_chain.tip_candidates`) with its joints (orange squares, mimic joints hollow), the
     root's axes and each tip's frame. Used by ``spotkin plot`` for descriptions without legs."""
-    from ._urdf_chain import tip_candidates
+    from .._urdf_chain import tip_candidates
 
     placements = {link: model.placement(link, values) for link in model.links}
     points = np.array([T[:3, 3] for T in placements.values()])
