@@ -14,7 +14,7 @@ from ._common import _LIMIT_TOL
 # the solver interface (README, "One solver interface")
 _INTERFACE = ("dof", "limits", "joint_names", "fk", "jacobian", "ik_all", "ik")
 # a roll–pitch–pitch leg's geometry, which its pictures draw (side and front views, singular sets)
-_LEG_GEOMETRY = ("a", "signs", "knee", "hip_offset", "reach")
+_LEG_GEOMETRY = ("a", "b", "c", "signs", "knee", "hip_offset", "reach")
 
 
 def _is_solver(value) -> bool:
