@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from spotkin import _boundary
+from spotkin._support import boundary as _boundary
 from spotkin.models import LEG_NAMES
 from spotkin.models import SPOT as SPOT_MODEL
 from spotkin.robot import _solve_rows

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from . import dynamics, inertia, paul, trajectory, urdf
-from ._runtime import (
+from ._support.runtime import (
     MAX_THREADS,
     available_isas,
     get_isa,
@@ -13,8 +13,9 @@ from ._runtime import (
     set_num_threads,
     thread_limit,
 )
-from ._status import Status
-from ._transforms import rotation_x, rotation_y, rotation_z, transform, translation
+from ._support.status import Status
+from ._support.transforms import rotation_x, rotation_y, rotation_z, transform, translation
+from ._support.version import __version__ as __version__
 from ._workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
 from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
@@ -79,5 +80,3 @@ __all__ = [
     "workspace",
     "workspace_volume",
 ]
-
-__version__ = "0.1.0"

@@ -13,10 +13,11 @@ import time
 
 import numpy as np
 
-from . import __version__, _batch, robots
-from ._runtime import get_num_threads
-from ._status import Status
-from ._transforms import translation
+from . import _batch, robots
+from ._support.runtime import get_num_threads
+from ._support.status import Status
+from ._support.transforms import translation
+from ._support.version import __version__
 from .arm import SpotArm
 from .body import body_transform
 from .chain import Chain

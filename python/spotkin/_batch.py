@@ -36,7 +36,8 @@ from typing import Callable
 
 import numpy as np
 
-from . import __version__, robots
+from . import robots
+from ._support.version import __version__
 
 INSTALL = 'pip install "spotkin[dask]"'
 DONE = "chunks_done"  # the per-chunk completion markers, removed once the run is complete
@@ -1045,7 +1046,7 @@ def execute(run: Run, scheduler: str, workers: int | None, progress: Progress, c
                 if isinstance(key, str) and key.startswith(prefix):
                     progress.update(result)
 
-        from . import _runtime
+        from ._support import runtime as _runtime
 
         before, variable = _runtime.get_num_threads(), os.environ.get("SPOTKIN_NUM_THREADS")
         try:  # the chunks share the cores: no more spotkin threads than a worker's share

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_finite, as_index, as_real, broadcast_lead, into_out
+from ._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out
 from .chain import Chain, ChainSolutions, IKDifferentialInfo, _limit_override, _scalar
 from .dynamics import _check_layout, _in_layout
 

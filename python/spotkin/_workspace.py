@@ -22,8 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._boundary import as_finite, as_index
-from ._status import Status
+from ._support.boundary import as_finite, as_index
+from ._support.status import Status
 from .arm import SpotArm
 from .chain import Chain
 from .leg import Leg

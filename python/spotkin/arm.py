@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import (
+from ._support.boundary import (
     as_real,
     as_scalar,
     broadcast_lead,
@@ -47,7 +47,7 @@ from ._boundary import (
     quiet_float_errors,
     rigid_transforms,
 )
-from ._status import Status
+from ._support.status import Status
 from .models import SPOT
 
 __all__ = ["ArmSingularity", "ArmSolutions", "SpotArm", "pose_from"]

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core, dynamics, inertia
-from ._boundary import (
+from ._support.boundary import (
     as_finite,
     as_index,
     as_real,
@@ -26,7 +26,7 @@ from ._boundary import (
     quiet_float_errors,
     rigid_transforms,
 )
-from ._status import Status
+from ._support.status import Status
 from .arm import _broadcast_seed
 from .inertia import link_inertials
 

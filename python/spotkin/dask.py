@@ -74,8 +74,8 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
         f"(dask[array,distributed] and zarr); the import failed with: {error}"
     ) from error
 
-from ._boundary import as_real, broadcast_lead, check_trailing
-from ._runtime import get_num_threads, thread_limit
+from ._support.boundary import as_real, broadcast_lead, check_trailing
+from ._support.runtime import get_num_threads, thread_limit
 from .arm import SpotArm
 from .body import pose_format
 from .chain import Chain

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_flag, as_scalar
+from ._support.boundary import as_flag, as_scalar
 
 __all__ = ["compatible", "dls", "manipulability", "nullspace_projector", "pinv", "rank", "singular_values"]
 

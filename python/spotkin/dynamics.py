@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors, real_dtype
+from ._support.boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors, real_dtype
 from .inertia import LinkInertials
 
 __all__ = [

@@ -24,8 +24,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._boundary import as_index, as_real
-from ._transforms import rotation_x, rotation_z, translation
+from ._support.boundary import as_index, as_real
+from ._support.transforms import rotation_x, rotation_z, translation
 
 __all__ = ["LinkInertials", "Tree", "link_inertials", "merge_inertials", "model_tree", "tree_of"]
 

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import (
+from ._support.boundary import (
     as_flag,
     as_index,
     as_real,
@@ -56,7 +56,7 @@ from ._boundary import (
     limit_table,
     quiet_float_errors,
 )
-from ._status import Status
+from ._support.status import Status
 
 __all__ = ["Leg", "LegSolutions"]
 

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_real, broadcast_lead
+from ._support.boundary import as_real, broadcast_lead
 
 __all__ = ["type2", "type3", "type6"]
 

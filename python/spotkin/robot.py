@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core, inertia, urdf
-from ._boundary import (
+from ._support.boundary import (
     as_finite,
     as_real,
     as_scalar,
@@ -30,8 +30,8 @@ from ._boundary import (
     quiet_float_errors,
     real_dtype,
 )
-from ._status import Status
-from ._transforms import quaternion_xyzw
+from ._support.status import Status
+from ._support.transforms import quaternion_xyzw
 from ._urdf_chain import chain_from_model
 from .body import body_transform, sequence_code
 from .chain import Chain

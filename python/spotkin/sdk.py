@@ -56,8 +56,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._boundary import as_real, check_trailing
-from ._transforms import quaternion_xyzw
+from ._support.boundary import as_real, check_trailing
+from ._support.transforms import quaternion_xyzw
 from .arm import ARM_JOINT_NAMES
 
 try:

@@ -11,7 +11,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from . import robots, urdf
-from ._boundary import as_finite, as_real
+from ._support.boundary import as_finite, as_real
 from .arm import ARM_JOINT_NAMES, SpotArm
 from .leg import Leg
 from .models import LEG_NAMES, SPOT

@@ -55,8 +55,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._boundary import as_index, as_real, quiet_float_errors, rotation_tolerance
-from ._transforms import quaternion_xyzw
+from ._support.boundary import as_index, as_real, quiet_float_errors, rotation_tolerance
+from ._support.transforms import quaternion_xyzw
 from .body import unchecked_transform
 
 __all__ = [

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._boundary import as_real
+from ._support.boundary import as_real
 
 __all__ = [
     "ArmSpec",

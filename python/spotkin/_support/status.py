@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-from . import _core
+from .. import _core
 
 __all__ = ["Status"]
 

@@ -7,8 +7,8 @@ import os
 import warnings
 from collections.abc import Iterator
 
-from . import _core
-from ._boundary import as_index
+from .. import _core
+from .boundary import as_index
 
 __all__ = [
     "MAX_THREADS",

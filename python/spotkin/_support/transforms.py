@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors
+from .boundary import as_real, broadcast_lead, check_trailing, quiet_float_errors
 
 __all__ = ["quaternion_xyzw", "rotation_x", "rotation_y", "rotation_z", "transform", "translation"]
 
