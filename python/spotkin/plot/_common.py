@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 from .. import Robot, body_transform
 
 # spotkin's private helpers, imported here only (the picture modules take them from this one)
-from .._boundary import as_index, as_real, as_scalar  # noqa: F401
+from .._support.boundary import as_index, as_real, as_scalar  # noqa: F401
 from ..leg import SLOT_NAMES  # noqa: F401
 
 # -- style: distinct in greyscale (luminance, line style, marker) -------------------------------------
