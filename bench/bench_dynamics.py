@@ -29,6 +29,7 @@ import pytest
 
 import spotkin as sk
 from spotkin import dynamics as dyn
+from spotkin.dynamics.rigid_body import _core_of
 
 pin = pytest.importorskip("pinocchio")
 
@@ -53,7 +54,7 @@ def _arm6():
     lock = [full.getJointId(n) for n in full.names[1:] if n not in chain.joint_names]
     model = pin.buildReducedModel(full, lock, pin.neutral(full))
     assert list(model.names[1:]) == list(chain.joint_names)
-    core = dyn._core_of(chain, _inertials(model, chain.joint_names))
+    core = _core_of(chain, _inertials(model, chain.joint_names))
     rng = np.random.default_rng(0)
     q = rng.uniform(-np.pi, np.pi, (N, 6))
     return model, core.rnea, core.crba, q, rng.normal(size=(N, 6)), rng.normal(size=(N, 6)), q
@@ -85,7 +86,7 @@ def _legs12_fixed():
     model = pin.buildModelFromUrdf(urdf)
     chains = [robot.chain(f) for f in ("FL_foot", "FR_foot", "RL_foot", "RR_foot")]
     assert [n for c in chains for n in c.joint_names] == list(model.names[1:])
-    cores = [dyn._core_of(c, _inertials(model, c.joint_names)) for c in chains]
+    cores = [_core_of(c, _inertials(model, c.joint_names)) for c in chains]
     rng = np.random.default_rng(0)
     q = rng.uniform(-np.pi, np.pi, (N, 12))
     legs = [np.ascontiguousarray(q[:, 3 * k : 3 * k + 3]) for k in range(4)]

@@ -21,8 +21,7 @@ from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .body import EULER_SEQUENCES, body_transform
 from .chain import Chain, ChainSolutions, IKDifferentialInfo
 from .differential import compatible, dls, manipulability, nullspace_projector, pinv, rank, singular_values
-from .dynamics import unpack_symmetric
-from .inertia import LinkInertials
+from .dynamics import LinkInertials, unpack_symmetric
 from .leg import Leg, LegSolutions
 from .robot import BodyFrames, BodyIK, BodyRates, Robot, StanceStatus, Standing
 from .spot import Spot

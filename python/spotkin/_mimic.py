@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 from . import _core
 from ._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out
 from .chain import Chain, ChainSolutions, IKDifferentialInfo, _limit_override, _scalar
-from .dynamics import _check_layout, _in_layout
+from .dynamics.rigid_body import _check_layout, _in_layout
 
 __all__ = ["MimicChain"]
 

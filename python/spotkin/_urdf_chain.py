@@ -10,9 +10,10 @@ import os
 import numpy as np
 
 from . import chain as chain_module
-from . import inertia, urdf
+from . import urdf
 from ._mimic import MimicChain, mapped_limits
 from .chain import Chain
+from .dynamics import inertia
 
 __all__ = [
     "chain_from_model",

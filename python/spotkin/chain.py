@@ -16,7 +16,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core, dynamics, inertia
+from . import _core
 from ._support.boundary import (
     as_finite,
     as_index,
@@ -28,7 +28,9 @@ from ._support.boundary import (
 )
 from ._support.status import Status
 from .arm import _broadcast_seed
-from .inertia import link_inertials
+from .dynamics import inertia
+from .dynamics import rigid_body as dynamics
+from .dynamics.inertia import link_inertials
 
 __all__ = ["Chain", "ChainSolutions", "IKDifferentialInfo"]
 

@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core, inertia, urdf
+from . import _core, urdf
 from ._support.boundary import (
     as_finite,
     as_real,
@@ -35,7 +35,8 @@ from ._support.transforms import quaternion_xyzw
 from ._urdf_chain import chain_from_model
 from .body import body_transform, sequence_code
 from .chain import Chain
-from .dynamics import FloatingBase
+from .dynamics import inertia
+from .dynamics.rigid_body import FloatingBase
 from .leg import Leg
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Robot"]
