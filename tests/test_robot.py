@@ -20,7 +20,7 @@ import spotkin as sk
 from spotkin import urdf as su
 from spotkin.reference import urdf as ref
 
-SPOT_URDF = Path(su.__file__).resolve().parent / "robots" / "spot_with_arm.urdf"
+SPOT_URDF = Path(sk.__file__).resolve().parent / "robots" / "spot_with_arm.urdf"
 GO2_URDF = Path(__file__).resolve().parent / "data" / "go2.urdf"
 DTYPES = [np.float64, np.float32]
 BATCHES = [(), (1,), (3, 1, 2), (0,)]

@@ -29,8 +29,9 @@ from spotkin.urdf import (
     load_urdf,
     parse_urdf,
 )
+from spotkin.urdf.tree import _motion, _rpy
 
-SPOT = Path(su.__file__).resolve().parent / "robots" / "spot_with_arm.urdf"
+SPOT = Path(su.__file__).resolve().parent.parent / "robots" / "spot_with_arm.urdf"
 GO2 = Path(__file__).resolve().parent / "data" / "go2.urdf"
 PI = "3.141592653589793"
 HALF_PI = "1.5707963267948966"
@@ -479,7 +480,7 @@ def test_reference_rotations():
         R = ref.rpy_matrix(r, p, y)
         expected = ref.axis_angle_matrix([0, 0, 1], y) @ ref.axis_angle_matrix([0, 1, 0], p) @ ref.rot_x(r)
         np.testing.assert_allclose(R, expected, atol=1e-15)
-        np.testing.assert_allclose(su._rpy(r, p, y), R, atol=1e-15)
+        np.testing.assert_allclose(_rpy(r, p, y), R, atol=1e-15)
         axis = rng.normal(size=3)
         angle = rng.uniform(-4, 4)
         A = ref.axis_angle_matrix(axis, angle)
@@ -506,7 +507,7 @@ def test_mimic_joint_follows_its_leader():
     data = m.chain_data("b")
     assert data.n == 2 and data.mimic == (None, ("j1", 2.0, 0.1))  # the full chain, mimic included
     # placement: j2 = 2 * 0.3 + 0.1 about x
-    expected = su._motion(m.joint("j1"), 0.3) @ su._motion(m.joint("j2"), 0.7)
+    expected = _motion(m.joint("j1"), 0.3) @ _motion(m.joint("j2"), 0.7)
     np.testing.assert_allclose(m.placement("b", {"j1": 0.3}), expected, atol=1e-15)
     np.testing.assert_allclose(m.joint("j1").axis, [1, 0, 0])  # the URDF default axis
 
