@@ -312,7 +312,7 @@ def linear_path(
     return T
 
 
-# -- Any roll-pitch-pitch leg (spotkin.leg's model), slot 0, no limits: the hand-written NumPy form ---------
+# -- Any roll-pitch-pitch leg (spotkin.Leg's model), slot 0, no limits: the hand-written NumPy form ---------
 
 
 def rpp_leg_ik_one_branch(p: np.ndarray, a, b, c, signs) -> np.ndarray:

@@ -16,9 +16,9 @@ import pytest
 
 import spotkin as sk
 from spotkin._support import boundary as _boundary
+from spotkin.model.robot import _solve_rows
 from spotkin.models import LEG_NAMES
 from spotkin.models import SPOT as SPOT_MODEL
-from spotkin.robot import _solve_rows
 
 SPOT = sk.Spot()
 Q12 = np.tile([0.0, 1.04, -1.8], 4)

@@ -106,9 +106,9 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 def test_the_graph_reads_the_imports():
     graph = import_graph()
-    assert "spotkin.chain" in graph["spotkin.robot"]  # from .chain import Chain
-    assert "spotkin._core" in graph["spotkin.leg"]  # from . import _core: the submodule, not the package
-    assert graph["spotkin"] >= {"spotkin.robot", "spotkin.chain"}  # the package re-exports them
+    assert "spotkin.model.chain" in graph["spotkin.model.robot"]  # from .chain import Chain
+    assert "spotkin._core" in graph["spotkin.model.leg"]  # from .. import _core: the submodule
+    assert graph["spotkin"] >= {"spotkin.model.robot", "spotkin.model.chain"}  # the package re-exports them
 
 
 def test_cycles_are_found():

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
+from spotkin.model.robot import leg_roles
 
 DATA = pathlib.Path(__file__).parent / "data"
 SCRAMBLED = DATA / "go2_scrambled.urdf"
@@ -73,7 +74,7 @@ def test_roles_of_a_hexapod_and_odd_layouts():
     hips = np.array(
         [[0.3, 0.1, 0], [0.0, 0.12, 0], [-0.3, 0.1, 0], [0.3, -0.1, 0], [0.0, -0.12, 0], [-0.3, -0.1, 0]]
     )
-    assert sk.robot.leg_roles(hips) == (
+    assert leg_roles(hips) == (
         "front_left",
         "middle_left",
         "hind_left",
@@ -82,9 +83,9 @@ def test_roles_of_a_hexapod_and_odd_layouts():
         "hind_right",
     )
     eight = np.array([[x, s * 0.1, 0] for s in (1, -1) for x in (0.3, 0.1, -0.1, -0.3)])
-    assert sk.robot.leg_roles(eight)[:4] == ("front_left", "middle_1_left", "middle_2_left", "hind_left")
-    assert sk.robot.leg_roles([[0, 0.1, 0], [0, -0.1, 0]]) == ("left", "right")
-    assert sk.robot.leg_roles([[0.2, 0.0, 0], [-0.2, 0.0, 0]]) == ("front_center", "hind_center")
+    assert leg_roles(eight)[:4] == ("front_left", "middle_1_left", "middle_2_left", "hind_left")
+    assert leg_roles([[0, 0.1, 0], [0, -0.1, 0]]) == ("left", "right")
+    assert leg_roles([[0.2, 0.0, 0], [-0.2, 0.0, 0]]) == ("front_center", "hind_center")
 
 
 # --------------------------------------------------------------------------------------------- limits

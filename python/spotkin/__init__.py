@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from . import dynamics, inertia, paul, trajectory, urdf
+from . import models as models  # spotkin.models, an attribute of the package as before (not in __all__)
 from ._support.runtime import (
     MAX_THREADS,
     available_isas,
@@ -17,14 +18,14 @@ from ._support.status import Status
 from ._support.transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from ._support.version import __version__ as __version__
 from ._workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
-from .arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
-from .body import EULER_SEQUENCES, body_transform
-from .chain import Chain, ChainSolutions, IKDifferentialInfo
 from .differential import compatible, dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .dynamics import LinkInertials, unpack_symmetric
-from .leg import Leg, LegSolutions
-from .robot import BodyFrames, BodyIK, BodyRates, Robot, StanceStatus, Standing
-from .spot import Spot
+from .model.arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
+from .model.body import EULER_SEQUENCES, body_transform
+from .model.chain import Chain, ChainSolutions, IKDifferentialInfo
+from .model.leg import Leg, LegSolutions
+from .model.robot import BodyFrames, BodyIK, BodyRates, Robot, StanceStatus, Standing
+from .model.spot import Spot
 
 __all__ = [
     "EULER_SEQUENCES",

@@ -18,12 +18,12 @@ from ._support.runtime import get_num_threads
 from ._support.status import Status
 from ._support.transforms import translation
 from ._support.version import __version__
-from .arm import SpotArm
-from .body import body_transform
-from .chain import Chain
-from .leg import SLOT_NAMES
-from .robot import Robot
-from .spot import Spot
+from .model.arm import SpotArm
+from .model.body import body_transform
+from .model.chain import Chain
+from .model.leg import SLOT_NAMES
+from .model.robot import Robot
+from .model.spot import Spot
 from .trajectory import hold_branch, point_to_point, via_points
 
 # A Spot leg as a modified DH table (sigma, d, alpha, r, theta), knee offset left out: the leg model
@@ -175,7 +175,7 @@ def inspect(path: str) -> int:
     described with the chains from its root to each tip: joints, dof, closed-form IK or what applies
     instead, mimic joints (:meth:`spotkin.Chain.from_urdf` builds them)."""
     from . import urdf
-    from ._urdf_chain import chains_summary
+    from .model.urdf_chain import chains_summary
 
     model = urdf.load_urdf(path)
     if urdf.find_legs(model)[0]:

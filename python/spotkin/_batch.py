@@ -595,8 +595,8 @@ def run_chunk(job: Job, index: int) -> int:
 
 
 def _load_robot(spec: str):
-    from .robot import Robot
-    from .spot import Spot
+    from .model.robot import Robot
+    from .model.spot import Spot
 
     if spec == "spot":
         return Spot()

@@ -24,9 +24,9 @@ import numpy as np
 
 from ._support.boundary import as_finite, as_index
 from ._support.status import Status
-from .arm import SpotArm
-from .chain import Chain
-from .leg import Leg
+from .model.arm import SpotArm
+from .model.chain import Chain
+from .model.leg import Leg
 
 __all__ = ["Dexterity", "WorkspaceSamples", "dexterity", "workspace", "workspace_volume"]
 

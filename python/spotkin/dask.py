@@ -76,11 +76,11 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
 
 from ._support.boundary import as_real, broadcast_lead, check_trailing
 from ._support.runtime import get_num_threads, thread_limit
-from .arm import SpotArm
-from .body import pose_format
-from .chain import Chain
-from .leg import Leg
-from .robot import Robot
+from .model.arm import SpotArm
+from .model.body import pose_format
+from .model.chain import Chain
+from .model.leg import Leg
+from .model.robot import Robot
 
 __all__ = [
     "body_fk",

@@ -58,7 +58,7 @@ from numpy.typing import ArrayLike
 
 from ._support.boundary import as_real, check_trailing
 from ._support.transforms import quaternion_xyzw
-from .arm import ARM_JOINT_NAMES
+from .model.arm import ARM_JOINT_NAMES
 
 try:
     from bosdyn.api import (
@@ -713,13 +713,13 @@ def kinematic_state(
 
 @functools.lru_cache(maxsize=1)
 def _default_spot():
-    from .spot import Spot
+    from .model.spot import Spot
 
     return Spot()
 
 
 def _checked_spot(spot):
-    from .spot import Spot
+    from .model.spot import Spot
 
     if spot is None:
         return _default_spot()

@@ -57,7 +57,7 @@ from numpy.typing import ArrayLike
 from . import _core
 from ._support.boundary import as_index, as_real, quiet_float_errors, rotation_tolerance
 from ._support.transforms import quaternion_xyzw
-from .body import unchecked_transform
+from .model.body import unchecked_transform
 
 __all__ = [
     "PROFILES",

@@ -10,11 +10,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from . import robots, urdf
-from ._support.boundary import as_finite, as_real
+from .. import robots, urdf
+from .._support.boundary import as_finite, as_real
 from .arm import ARM_JOINT_NAMES, SpotArm
 from .leg import Leg
-from .models import LEG_NAMES, SPOT
+from .presets import LEG_NAMES, SPOT
 from .robot import BodyFrames, BodyIK, BodyRates, Robot, _limit_table
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Spot"]

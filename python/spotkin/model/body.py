@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core
+from .. import _core
 
 __all__ = ["EULER_SEQUENCES", "body_transform"]
 

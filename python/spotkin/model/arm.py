@@ -37,8 +37,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core
-from ._support.boundary import (
+from .. import _core
+from .._support.boundary import (
     as_real,
     as_scalar,
     broadcast_lead,
@@ -47,8 +47,8 @@ from ._support.boundary import (
     quiet_float_errors,
     rigid_transforms,
 )
-from ._support.status import Status
-from .models import SPOT
+from .._support.status import Status
+from .presets import SPOT
 
 __all__ = ["ArmSingularity", "ArmSolutions", "SpotArm", "pose_from"]
 

@@ -3,7 +3,7 @@ and the arms it carries. Whole-body IK, FK, Jacobians and joint rates for every 
 built by :meth:`Robot.from_urdf`; :class:`spotkin.Spot` is one instance of it.
 
 Frames: the body frame is the URDF's root link frame. Each leg's frame has its origin at
-the leg's hip-roll joint and the body's axes (see :mod:`spotkin.leg`).
+the leg's hip-roll joint and the body's axes (see :class:`spotkin.Leg`).
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core, urdf
-from ._support.boundary import (
+from .. import _core, urdf
+from .._support.boundary import (
     as_finite,
     as_real,
     as_scalar,
@@ -30,14 +30,14 @@ from ._support.boundary import (
     quiet_float_errors,
     real_dtype,
 )
-from ._support.status import Status
-from ._support.transforms import quaternion_xyzw
-from ._urdf_chain import chain_from_model
+from .._support.status import Status
+from .._support.transforms import quaternion_xyzw
+from ..dynamics import inertia
+from ..dynamics.rigid_body import FloatingBase
 from .body import body_transform, sequence_code
 from .chain import Chain
-from .dynamics import inertia
-from .dynamics.rigid_body import FloatingBase
 from .leg import Leg
+from .urdf_chain import chain_from_model
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Robot"]
 
@@ -785,7 +785,7 @@ class Robot:
 
         ``body_pose`` is (..., 6) [x, y, z, a, b, c] with Euler angles in ``seq``
         (default intrinsic X-Y'-Z''), (..., 4, 4), or (..., 7) [x, y, z, qx, qy, qz, qw]:
-        see :mod:`spotkin.body`. ``feet`` (..., n, 3) are world foot points; leading
+        see :func:`spotkin.body_transform`. ``feet`` (..., n, 3) are world foot points; leading
         dimensions broadcast (a single (n, 3) stance is shared without copying). Each
         foot is brought into its hip frame, p = R^T (foot - t) - hip, and solved by the
         limit-aware leg IK: each leg's status and fallback are exactly those of

@@ -26,10 +26,10 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core
-from ._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out
+from .. import _core
+from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out
+from ..dynamics.rigid_body import _check_layout, _in_layout
 from .chain import Chain, ChainSolutions, IKDifferentialInfo, _limit_override, _scalar
-from .dynamics.rigid_body import _check_layout, _in_layout
 
 __all__ = ["MimicChain"]
 
@@ -108,7 +108,7 @@ def _rigid(T: np.ndarray) -> np.ndarray:
 
 
 class MimicChain(Chain):
-    """A :class:`spotkin.Chain` whose path holds mimic joints (see :mod:`spotkin._mimic`): its q holds
+    """A :class:`spotkin.Chain` whose path holds mimic joints (see :mod:`spotkin.model.mimic`): its q holds
     the independent variables (:attr:`joint_names`), the full chain (:attr:`full_chain`) moves through
     ``q_full = M q + b`` (:attr:`mimic_matrix`, :attr:`mimic_offset`). Build one with
     :meth:`spotkin.Chain.from_urdf` or :meth:`spotkin.Robot.chain`."""

@@ -16,8 +16,8 @@ from typing import Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core
-from ._support.boundary import (
+from .. import _core
+from .._support.boundary import (
     as_finite,
     as_index,
     as_real,
@@ -26,11 +26,11 @@ from ._support.boundary import (
     quiet_float_errors,
     rigid_transforms,
 )
-from ._support.status import Status
+from .._support.status import Status
+from ..dynamics import inertia
+from ..dynamics import rigid_body as dynamics
+from ..dynamics.inertia import link_inertials
 from .arm import _broadcast_seed
-from .dynamics import inertia
-from .dynamics import rigid_body as dynamics
-from .dynamics.inertia import link_inertials
 
 __all__ = ["Chain", "ChainSolutions", "IKDifferentialInfo"]
 
@@ -100,11 +100,11 @@ def _reduced(angles: np.ndarray) -> np.ndarray:
 
 
 def _urdf_loader_missing(*args):
-    raise ImportError("spotkin._urdf_chain registers Chain.from_urdf's loader: import spotkin")
+    raise ImportError("spotkin.model.urdf_chain registers Chain.from_urdf's loader: import spotkin")
 
 
-# Chain.from_urdf's loader: spotkin._urdf_chain.chain_from_urdf, which builds chains of whichever class a
-# URDF needs (spotkin._mimic.MimicChain for mimic joints) and so sits above this module. It registers
+# Chain.from_urdf's loader: spotkin.model.urdf_chain.chain_from_urdf, which builds chains of whichever class a
+# URDF needs (spotkin.model.mimic.MimicChain for mimic joints) and so sits above this module. It registers
 # itself here when imported (the package imports it), so that this module never imports it.
 _from_urdf = _urdf_loader_missing
 
