@@ -536,7 +536,8 @@ def test_the_chunking_guarantee_is_documented():
     # the batch around it (tests/test_dynamics.py checks it); said where the thread-count
     # guarantee is, and no longer the old narrow model's "may differ in the last bit"
     root = Path(__file__).resolve().parent.parent
-    texts = [(root / name).read_text(encoding="utf-8") for name in ("README.md", "docs/dynamics.md")]
+    pages = ("docs/guide/dynamics.md", "docs/dynamics.md")
+    texts = [(root / name).read_text(encoding="utf-8") for name in pages]
     texts.append(sk.dynamics.FloatingBase.__doc__)
     for text in texts:
         flat = " ".join(text.split())

@@ -1,4 +1,4 @@
-"""The documentation runs as written: every ```python block of README.md and docs/*.md is executed.
+"""The documentation runs as written: every ```python block of README.md and docs/**/*.md is executed.
 
 Each block runs in a fresh namespace of its own, so that a reader can copy any one snippet and run
 it: a block defines (or imports) every name it uses. Blocks run in file order, each compiled with its
@@ -21,7 +21,7 @@ import spotkin as sk
 from spotkin.__main__ import main
 
 ROOT = Path(__file__).resolve().parent.parent
-DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 
 _FENCE = re.compile(r"^```(\S*)\s*$")
 _NOT_RUN = re.compile(r"^<!--\s*not-run:\s*\S.*-->\s*$")
@@ -80,7 +80,9 @@ def restore_threads():
 
 
 def test_the_documents_have_python_blocks():
-    assert len(_blocks(ROOT / "README.md")) >= 8
+    # the README is the quick start (its five examples); the manual's blocks are in docs/
+    assert len(_blocks(ROOT / "README.md")) >= 5
+    assert sum(len(_blocks(path)) for path in DOCUMENTS[1:]) >= 20
 
 
 @pytest.mark.parametrize(("path", "line", "source", "runs"), list(_cases()))
