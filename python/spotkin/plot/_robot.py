@@ -56,9 +56,9 @@ def _description(ax, model, values: dict, title: str | None = None) -> None:
     """Draw a URDF tree that has no legs (an arm, a gripper, a head) into the 3D ``ax`` at the joint
     values ``values`` (actuated joint name -> value; mimic joints follow their leaders, joints not named
     are at 0): every link from its parent's frame to its own (grey), the chain from the root to each tip
-    (:func:`spotkin._urdf_chain.tip_candidates`) with its joints (orange squares, mimic joints hollow), the
+    (the URDF chain loader's ``tip_candidates``) with its joints (orange squares, mimic joints hollow), the
     root's axes and each tip's frame. Used by ``spotkin plot`` for descriptions without legs."""
-    from .._urdf_chain import tip_candidates
+    from ..model.urdf_chain import tip_candidates
 
     placements = {link: model.placement(link, values) for link in model.links}
     points = np.array([T[:3, 3] for T in placements.values()])
