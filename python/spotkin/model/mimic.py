@@ -29,7 +29,8 @@ from numpy.typing import ArrayLike
 from .. import _core
 from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out
 from ..dynamics.rigid_body import _check_layout, _in_layout
-from .chain import Chain, ChainSolutions, IKDifferentialInfo, _limit_override, _scalar
+from .chain import Chain, _limit_override
+from .chain_ik import ChainSolutions, IKDifferentialInfo, _scalar
 
 __all__ = ["MimicChain"]
 
