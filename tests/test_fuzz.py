@@ -73,8 +73,8 @@ from __future__ import annotations
 import collections
 import os
 
-import fuzz_api
 import pytest
+from fuzz import registry as fuzz_api
 
 EXHAUSTIVE = os.environ.get("SPOTKIN_FUZZ", "").lower() == "exhaustive"
 SEED = int(os.environ.get("SPOTKIN_FUZZ_SEED", "20261113"))

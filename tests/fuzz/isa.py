@@ -1,5 +1,5 @@
 """Fuzz registry entries for the instruction-set levels: spotkin.set_isa, spotkin.isa,
-spotkin.get_isa and spotkin.available_isas (registered by fuzz_api at import)."""
+spotkin.get_isa and spotkin.available_isas (registered by tests/fuzz/registry.py at import)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The fuzz registry's entries for ``spotkin.dask`` (issue 20), the optional Dask wrappers.
 
-``tests/fuzz_api.py`` calls :func:`register_entries` with itself once its own entries are made; without
+``tests/fuzz/registry.py`` calls :func:`register_entries` with itself once its own entries are made; without
 Dask installed nothing is registered (and nothing of ``spotkin.dask`` is public there either).
 
 Each function of ``spotkin.dask`` is the *twin* of in-memory entries already in the registry

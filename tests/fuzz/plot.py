@@ -1,6 +1,6 @@
 """The fuzz registry's entries for ``spotkin.plot`` (issue 18), the optional pictures (matplotlib).
 
-``tests/fuzz_api.py`` calls :func:`register_entries` with itself once its own entries are made; without
+``tests/fuzz/registry.py`` calls :func:`register_entries` with itself once its own entries are made; without
 matplotlib nothing is registered (and nothing of ``spotkin.plot`` is public there either). The workers
 draw with the Agg backend, in memory; every case closes its figures.
 

@@ -1,5 +1,5 @@
 """The fuzz registry's entries for the joint-limit overrides: ``Robot.with_limits``, ``Spot.with_limits``
-and ``Chain.with_limits``. ``tests/fuzz_api.py`` calls :func:`register_entries` with itself.
+and ``Chain.with_limits``. ``tests/fuzz/registry.py`` calls :func:`register_entries` with itself.
 
 The probes read the limits back from the new object (the named joints have the given limits, the others
 keep theirs) and check that the original is unchanged."""

@@ -1,5 +1,5 @@
 """The fuzz registry's entries for loading chains from URDF (issue 32): ``Chain.from_urdf`` on the packaged
-UR5 and Panda descriptions. ``tests/fuzz_api.py`` calls :func:`register_entries` with itself.
+UR5 and Panda descriptions. ``tests/fuzz/registry.py`` calls :func:`register_entries` with itself.
 
 Hostile sources: None, numbers, lists, garbage bytes, a path's bytes (bytes are XML text), a missing file, a
 directory, ``/dev/zero`` (read up to the 64 MiB bound, then refused), empty and non-XML files, loops, planar
@@ -35,7 +35,7 @@ def register_entries(api) -> None:
     def file(name, expect, why):
         return lambda c, r, b: Arg(c.files()[name], expect, why)
 
-    here = os.path.dirname(os.path.abspath(__file__))
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # tests/
     source_table = {
         "valid": const(lambda c: sk.robots.path("ur5")),
         "pathlib": const(lambda c: pathlib.Path(sk.robots.path("ur5"))),

@@ -1,6 +1,6 @@
 """The fuzz registry's entries for ``spotkin.sdk`` (issue 19), the optional Spot SDK interop.
 
-``tests/fuzz_api.py`` calls :func:`register_entries` with itself once its own entries are made; without
+``tests/fuzz/registry.py`` calls :func:`register_entries` with itself once its own entries are made; without
 the SDK installed nothing is registered (and nothing of ``spotkin.sdk`` is public there either).
 
 The slots hold real ``bosdyn.api`` messages, the SDK's ``math_helpers`` objects, nested lists of them,
