@@ -86,7 +86,7 @@ def test_body_functions_match_the_in_memory_calls():
 
 
 def test_robots_from_urdf():
-    from fuzz.registry import HEXAPOD_URDF  # six legs whose joints interleave in q
+    from fuzz.urdf_texts import HEXAPOD_URDF  # six legs whose joints interleave in q
 
     for robot, height in ((GO2, 0.28), (sk.Robot.from_urdf_string(HEXAPOD_URDF), 0.3)):
         feet = robot.stance_feet(height)

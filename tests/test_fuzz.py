@@ -2,20 +2,22 @@
 
 What it covers
 --------------
-``tests/fuzz_api.py`` holds a registry of spotkin's public API: every callable reachable from
+``tests/fuzz/`` holds a registry of spotkin's public API: every callable reachable from
 ``spotkin.__all__``, ``spotkin.paul.__all__`` and ``spotkin.trajectory.__all__`` (functions,
 constructors, classmethods and methods of ``Spot``, ``Robot`` (the packaged Go2 and Spot URDFs, and
 a six-legged robot whose joints interleave in ``q``), ``Leg`` (Spot's, and of any geometry),
 ``SpotArm``, ``Chain`` built with ``from_mdh``/``from_dh`` as 3-joint and 6-joint spherical-wrist
 chains and from URDFs (a Go2 leg, the Spot arm), ``PointToPoint`` and ``CartesianPath`` objects;
 URDF loading with malformed, hostile and oddly encoded descriptions), plus the pickling and copying
-of every object. Optional modules (``fuzz_api.OPTIONAL_MODULES``: ``spotkin.sdk``, whose entries are
-in ``tests/fuzz_sdk.py``) are covered whenever their extra is installed, as the test requirements do.
+of every object (one module of the package per concept; its ``__init__.py`` lists them). Optional
+modules (``fuzz.coverage.OPTIONAL_MODULES``: ``spotkin.sdk``, ``spotkin.dask`` and ``spotkin.plot``,
+whose entries are in ``tests/fuzz/sdk.py``, ``dask.py`` and ``plot.py``) are covered whenever their
+extra is installed, as the test requirements do.
 :func:`test_registry_covers_the_public_api` fails when a public callable is missing from the
 registry, when the registry covers something no longer public, or when an entry's argument slots
 do not match the callable's parameters: new API is fuzzed by default, once described. The only
-exclusion is ``spotkin.Status`` (an IntEnum); NamedTuple result records are skipped unless they
-grow methods of their own.
+exclusions are ``spotkin.Status`` and ``spotkin.StanceStatus`` (IntEnums, ``fuzz.coverage.EXCLUDED``);
+NamedTuple result records are skipped unless they grow methods of their own.
 
 Each registry entry describes its argument slots (a batch array ``(..., *trailing)``, a
 fixed-shape array, a real, an integer, an enum string, a flag, or an explicit table). Each slot
@@ -74,24 +76,28 @@ import collections
 import os
 
 import pytest
-from fuzz import registry as fuzz_api
+from fuzz.canaries import CANARIES, CANARY_FK
+from fuzz.cases import cases_for, label
+from fuzz.coverage import coverage_problems, public_callables
+from fuzz.registry import BY_NAME, REGISTRY
+from fuzz.worker import Pool
 
 EXHAUSTIVE = os.environ.get("SPOTKIN_FUZZ", "").lower() == "exhaustive"
 SEED = int(os.environ.get("SPOTKIN_FUZZ_SEED", "20261113"))
 WORKERS = int(os.environ.get("SPOTKIN_FUZZ_WORKERS", str(min(2, os.cpu_count() or 1))))
 TIMEOUT = float(os.environ.get("SPOTKIN_FUZZ_TIMEOUT", "30"))
 ONLY = os.environ.get("SPOTKIN_FUZZ_ONLY", "")
-ENTRIES = [entry.name for entry in fuzz_api.REGISTRY if ONLY in entry.name]
+ENTRIES = [entry.name for entry in REGISTRY if ONLY in entry.name]
 
 
 def test_registry_covers_the_public_api():
-    problems = fuzz_api.coverage_problems()
+    problems = coverage_problems()
     assert not problems, "\n".join(problems)
 
 
 def test_variants_are_well_formed():
     """Every case builds its arguments from declared variants (a typo in the registry fails here)."""
-    for entry in fuzz_api.REGISTRY:
+    for entry in REGISTRY:
         for slot in entry.slots:
             assert slot.default == "omit" or slot.default in slot.variants(True) or slot.default == "valid", (
                 f"{entry.name}: slot {slot.name} has an unknown default {slot.default!r}"
@@ -105,7 +111,7 @@ def test_variants_are_well_formed():
 def _has_default(entry, name) -> bool:
     import inspect
 
-    public = fuzz_api.public_callables()
+    public = public_callables()
     if entry.covers not in public:
         return True
     parameter = inspect.signature(public[entry.covers]).parameters.get(name)
@@ -113,14 +119,14 @@ def _has_default(entry, name) -> bool:
 
 
 def test_the_harness_catches_crashes_hangs_and_wrong_results():
-    """Canaries broken on purpose (tests/fuzz_api.py): each must be caught, the pool must survive."""
-    canaries = fuzz_api.CANARIES
+    """Canaries broken on purpose (tests/fuzz/canaries.py): each must be caught, the pool must survive."""
+    canaries = CANARIES
     cases = [{"entry": name, "variants": [], "seed": 0} for name in canaries]
-    fk = fuzz_api.CANARY_FK
+    fk = CANARY_FK
     fk_cases = [
         {"entry": fk.name, "variants": [["q", v]], "seed": 1} for v in ("nan", "complex128", "float32")
     ]
-    small = fuzz_api.Pool(1, timeout=3)
+    small = Pool(1, timeout=3)
     try:
         results = small.run(cases + fk_cases + cases[:1])
     finally:
@@ -138,19 +144,19 @@ def test_the_harness_catches_crashes_hangs_and_wrong_results():
 
 @pytest.fixture(scope="module")
 def pool():
-    workers = fuzz_api.Pool(WORKERS, TIMEOUT)
+    workers = Pool(WORKERS, TIMEOUT)
     yield workers
     workers.close()
 
 
 def run(pool, name: str, exhaustive: bool) -> None:
-    entry = fuzz_api.BY_NAME[name]
-    cases = fuzz_api.cases_for(entry, exhaustive, SEED)
+    entry = BY_NAME[name]
+    cases = cases_for(entry, exhaustive, SEED)
     results = pool.run(cases)
     failures = collections.defaultdict(list)
     for case, result in zip(cases, results):
         if not result["ok"]:
-            failures[result["kind"]].append((fuzz_api.label(case), result["detail"]))
+            failures[result["kind"]].append((label(case), result["detail"]))
     if failures:
         lines = [f"{sum(map(len, failures.values()))} of {len(cases)} cases of {name} fail:"]
         for kind, found in sorted(failures.items(), key=lambda item: -len(item[1])):

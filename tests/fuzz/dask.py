@@ -1,6 +1,6 @@
 """The fuzz registry's entries for ``spotkin.dask`` (issue 20), the optional Dask wrappers.
 
-``tests/fuzz/registry.py`` calls :func:`register_entries` with itself once its own entries are made; without
+``tests/fuzz/registry.py`` calls :func:`register_entries` once its own entries are made; without
 Dask installed nothing is registered (and nothing of ``spotkin.dask`` is public there either).
 
 Each function of ``spotkin.dask`` is the *twin* of in-memory entries already in the registry
@@ -24,8 +24,16 @@ import copy
 
 import numpy as np
 
+import spotkin as sk
 
-def register_entries(api) -> None:
+from .entry import REGISTRY, register
+from .objects import URDF_CHAINS
+from .oracles import finite_check
+from .outputs import describe, flatten
+from .slots import REJECT, Arg, Custom
+
+
+def register_entries() -> None:
     try:
         import dask
         import dask.array as da
@@ -34,9 +42,7 @@ def register_entries(api) -> None:
     except ImportError:  # the optional extra is not installed
         return
 
-    sk = api.sk
-    Arg, REJECT, Custom = api.Arg, api.REJECT, api.Custom
-    memory = {entry.name: entry for entry in api.REGISTRY}
+    memory = {entry.name: entry for entry in REGISTRY}
 
     def chunked(value):
         """A plain array of at least two rows as a dask array of two chunks along its first axis."""
@@ -124,11 +130,11 @@ def register_entries(api) -> None:
                 reference = mem.call(c, **to_twin(kw))
             except Exception as error:
                 raise AssertionError(f"the in-memory call raises {type(error).__name__}: {error}") from None
-            for k, (a, b) in enumerate(zip(api.flatten(result), api.flatten(reference))):
+            for k, (a, b) in enumerate(zip(flatten(result), flatten(reference))):
                 if not identical(a, b):
                     raise AssertionError(
-                        f"leaf {k} is not bit-identical to the in-memory call's: {api.describe(a)} "
-                        f"vs {api.describe(b)}"
+                        f"leaf {k} is not bit-identical to the in-memory call's: {describe(a)} "
+                        f"vs {describe(b)}"
                     )
             return result
 
@@ -137,7 +143,7 @@ def register_entries(api) -> None:
             return {**samples, **{new: samples[old] for new, old in rename.items() if old in samples}}
 
         def check(x, out, kw, c):
-            return (mem.check or api.finite_check)(to_twin(x), out, to_twin(kw), c)
+            return (mem.check or finite_check)(to_twin(x), out, to_twin(kw), c)
 
         nan_rule = mem.nan_rule
         if callable(nan_rule):
@@ -152,7 +158,7 @@ def register_entries(api) -> None:
             def pair_rule(plan, rule=mem.pair_rule):
                 return rule(to_twin(plan))
 
-        api.register(
+        register(
             name=name,
             covers=covers,
             call=call,
@@ -281,7 +287,7 @@ def register_entries(api) -> None:
 
     # -- dynamics: chains from URDFs (their twins are the Chain methods), the robots' standing torques
     # and centres of mass
-    for key in api.URDF_CHAINS:
+    for key in URDF_CHAINS:
         for method in (
             "inverse_dynamics",
             "mass_matrix",

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
+import spotkin as sk
 
-def register_entries(api) -> None:
-    sk = api.sk
-    Choice, register = api.Choice, api.register
+from .entry import register
+from .slots import Choice
+
+
+def register_entries() -> None:
     levels = sk.available_isas()
     best = levels[-1]
 

@@ -1,5 +1,5 @@
 """The fuzz registry's entries for the joint-limit overrides: ``Robot.with_limits``, ``Spot.with_limits``
-and ``Chain.with_limits``. ``tests/fuzz/registry.py`` calls :func:`register_entries` with itself.
+and ``Chain.with_limits``. ``tests/fuzz/registry.py`` calls :func:`register_entries`.
 
 The probes read the limits back from the new object (the named joints have the given limits, the others
 keep theirs) and check that the original is unchanged."""
@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
+import spotkin as sk
 
-def register_entries(api) -> None:
-    sk = api.sk
-    Arg, ACCEPT, REJECT, Custom, register = api.Arg, api.ACCEPT, api.REJECT, api.Custom, api.register
+from .entry import register
+from .slots import ACCEPT, REJECT, Arg, Custom
+
+
+def register_entries() -> None:
 
     def arg(value, expect=ACCEPT, why=""):
         return lambda c, r, b: Arg(value, expect, why)

@@ -1,6 +1,6 @@
 """The fuzz registry's entries for ``spotkin.plot`` (issue 18), the optional pictures (matplotlib).
 
-``tests/fuzz/registry.py`` calls :func:`register_entries` with itself once its own entries are made; without
+``tests/fuzz/registry.py`` calls :func:`register_entries` once its own entries are made; without
 matplotlib nothing is registered (and nothing of ``spotkin.plot`` is public there either). The workers
 draw with the Agg backend, in memory; every case closes its figures.
 
@@ -15,6 +15,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+import spotkin as sk
+
+from .entry import register, seq_slot
+from .objects import ROBOT_ARMS, STANCE_HEIGHT
+from .outputs import close, describe
+from .slots import ACCEPT, REJECT, Arg, Array, Choice, Custom, Int, Real
 
 PLOT_ARM_Q = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
 
@@ -44,7 +51,7 @@ def _gid_data(fig, gid):
     return None
 
 
-def register_entries(api) -> None:
+def register_entries() -> None:
     try:
         from matplotlib.animation import FuncAnimation
         from matplotlib.figure import Figure
@@ -53,11 +60,6 @@ def register_entries(api) -> None:
     except ImportError:  # the spotkin[plot] extra is not installed: spotkin.plot is not public here
         return
     _pyplot()
-    sk = api.sk
-    Arg, ACCEPT, REJECT = api.Arg, api.ACCEPT, api.REJECT
-    Array, Choice, Custom, Int, Real = api.Array, api.Choice, api.Custom, api.Int, api.Real
-    close, describe, register, seq_slot = api.close, api.describe, api.register, api.seq_slot
-    ROBOT_ARMS, STANCE_HEIGHT = api.ROBOT_ARMS, api.STANCE_HEIGHT
 
     def const(value, expect=ACCEPT, why=""):
         return lambda c, r, b: Arg(value(c) if callable(value) else value, expect, why)

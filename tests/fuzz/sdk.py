@@ -1,6 +1,6 @@
 """The fuzz registry's entries for ``spotkin.sdk`` (issue 19), the optional Spot SDK interop.
 
-``tests/fuzz/registry.py`` calls :func:`register_entries` with itself once its own entries are made; without
+``tests/fuzz/registry.py`` calls :func:`register_entries` once its own entries are made; without
 the SDK installed nothing is registered (and nothing of ``spotkin.sdk`` is public there either).
 
 The slots hold real ``bosdyn.api`` messages, the SDK's ``math_helpers`` objects, nested lists of them,
@@ -15,6 +15,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+import spotkin as sk
+
+from .batch import Batch
+from .entry import register
+from .objects import rigid as make_rigid
+from .outputs import close, describe
+from .slots import ACCEPT, EITHER, REJECT, Arg, Array, Choice, Custom
 
 # values of a batch slot that a joint command must refuse (NaN, Inf, beyond float32)
 COMMAND_REFUSED = {
@@ -32,7 +40,7 @@ COMMAND_REFUSED = {
 QUAT_TOL = 1e-6
 
 
-def register_entries(api) -> None:
+def register_entries() -> None:
     try:
         from bosdyn.api import (
             arm_command_pb2,
@@ -49,15 +57,10 @@ def register_entries(api) -> None:
     except ImportError:  # the optional extra is not installed
         return
 
-    sk = api.sk
-    Arg, ACCEPT, REJECT = api.Arg, api.ACCEPT, api.REJECT
-    Custom, Choice, Batch, Array = api.Custom, api.Choice, api.Batch, api.Array
-    close, describe, register = api.close, api.describe, api.register
-
     # ---- messages ----
 
     def rigid(seed):
-        return api.rigid(
+        return make_rigid(
             Rotation.random(random_state=seed).as_matrix(), np.random.default_rng(seed).uniform(-1, 1, 3)
         )
 
@@ -535,7 +538,7 @@ def register_entries(api) -> None:
         ],
         probe=transform_probe,
         pair_rule=lambda plan: (
-            api.EITHER
+            EITHER
             if plan["snapshot"] == "empty_list"
             and any(plan[f] in ("unknown", "other_tree", "empty") for f in ("frame_a", "frame_b"))
             else None
@@ -1024,7 +1027,7 @@ def register_entries(api) -> None:
         ],
         probe=feet_probe,
         pair_rule=lambda plan: (
-            api.EITHER
+            EITHER
             if plan["state"] == "empty_list"
             else REJECT
             if plan["source"] == "choice:foot_state"

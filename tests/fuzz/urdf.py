@@ -1,5 +1,5 @@
 """The fuzz registry's entries for loading chains from URDF (issue 32): ``Chain.from_urdf`` on the packaged
-UR5 and Panda descriptions. ``tests/fuzz/registry.py`` calls :func:`register_entries` with itself.
+UR5 and Panda descriptions. ``tests/fuzz/registry.py`` calls :func:`register_entries`.
 
 Hostile sources: None, numbers, lists, garbage bytes, a path's bytes (bytes are XML text), a missing file, a
 directory, ``/dev/zero`` (read up to the 64 MiB bound, then refused), empty and non-XML files, loops, planar
@@ -16,10 +16,14 @@ import pickle
 
 import numpy as np
 
+import spotkin as sk
 
-def register_entries(api) -> None:
-    sk = api.sk
-    Arg, ACCEPT, REJECT, Custom, register = api.Arg, api.ACCEPT, api.REJECT, api.Custom, api.register
+from .entry import register
+from .outputs import describe
+from .slots import ACCEPT, OMIT, REJECT, Arg, Custom
+
+
+def register_entries() -> None:
     from spotkin import urdf
 
     def const(value, expect=ACCEPT, why=""):
@@ -113,7 +117,7 @@ def register_entries(api) -> None:
 
     def chain_probe(result, kw, c, expected_tip):
         if not isinstance(result, sk.Chain):
-            return f"not a Chain: {api.describe(result)}"
+            return f"not a Chain: {describe(result)}"
         source = kw["source"]
         if isinstance(source, (bytes, str)) and (
             isinstance(source, bytes) or source.lstrip().startswith("<")
@@ -122,9 +126,9 @@ def register_entries(api) -> None:
         else:
             model = urdf.load_urdf(source)
         tip = kw.get("tip", None)
-        tip = expected_tip if tip in (None, api.OMIT) else tip
+        tip = expected_tip if tip in (None, OMIT) else tip
         base = kw.get("base", None)
-        base = model.root if base in (None, api.OMIT) else base
+        base = model.root if base in (None, OMIT) else base
         path = [j for j in model.path(tip, base) if j.type != "fixed"]
         leaders = []
         for j in path:
