@@ -24,7 +24,7 @@ RIGID_EXTRA = {  # (4, 4) tools and bases
 }
 
 
-def _arm_entries():
+def arm_entries():
     def arm_q(c, rng, n):
         q = in_limits(c.arm.limits, rng, n, margin=0.1)
         return {"q": q, "T": c.arm.fk(q), "seed": q + rng.normal(0, 0.05, q.shape)}

@@ -103,7 +103,7 @@ def _body_base(spec: BodySpec):
     return base
 
 
-def _body_entries(spec: BodySpec, methods=BODY_METHODS, light=()):
+def body_entries(spec: BodySpec, methods=BODY_METHODS, light=()):
     """The whole-body ``methods`` of one robot, against the documented formulas per leg (n legs,
     each with its columns of the whole-body q); those in ``light`` are light entries (the code is
     Spot's: the robot changes the numbers and shapes, not the paths)."""

@@ -29,7 +29,7 @@ def ikd_pairs(plan):
     return EITHER if plan["T_targets"] == "empty2" else None
 
 
-def _chain_entries(tool_extra):
+def chain_entries(tool_extra):
     for key in (*CHAIN_ROWS, *URDF_CHAINS):
         dof = len(CHAIN_ROWS[key]) if key in CHAIN_ROWS else URDF_CHAINS[key][2]
 

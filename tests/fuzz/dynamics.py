@@ -27,7 +27,7 @@ def laid_out(A, layout):
     return A
 
 
-def _dynamics_entries():
+def dynamics_entries():
     from spotkin import inertia
     from spotkin.reference import dynamics as rd
 

@@ -24,7 +24,7 @@ def dls_pairs(plan):
     return None
 
 
-def _function_entries():
+def function_entries():
     def transform_base(c, rng, n):
         return {
             "p": rng.normal(size=(n, 3)),

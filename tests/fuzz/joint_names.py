@@ -32,7 +32,7 @@ def _by_name(names, positions, joints, aliases) -> np.ndarray:
     return np.array([table.get(aliases.get(j, j), np.nan) for j in joints], dtype=np.float64)
 
 
-def _joint_name_entries():
+def joint_name_entries():
     def reversed_names(c, key):
         return list(reversed(c.robot(key).leg_joint_names))
 

@@ -16,7 +16,7 @@ from .outputs import OutSlot, close, describe, outs
 from .slots import ACCEPT, EITHER, INVALID, OK, REJECT, Arg, Array, Choice, Custom, Flag, Real, finite
 
 
-def _leg_entries():
+def leg_entries():
     def leg_singularity_check(leg):
         def check(x, out, kw, ctx):
             det, sigma = out

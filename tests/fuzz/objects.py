@@ -12,7 +12,7 @@ import numpy as np
 import spotkin as sk
 
 from .slots import OK
-from .urdf_texts import HEXAPOD_URDF, _bad_urdfs, _go2_text, _latin1_urdf
+from .urdf_texts import HEXAPOD_URDF, bad_urdfs, go2_text, latin1_urdf
 
 PROFILES = ("cubic", "quintic", "trapezoid")
 P2P_Q0, P2P_QF = (0.0, 0.5, -1.0), (1.0, -0.5, 0.5)
@@ -152,14 +152,14 @@ class Context:
         def make():
             folder = tempfile.TemporaryDirectory(prefix="spotkin-fuzz-")
             self._cache["folder"] = folder  # removed at exit
-            go2 = _go2_text()
+            go2 = go2_text()
             body = go2.split("?>", 1)[1] if go2.startswith("<?xml") else go2
             contents = {
-                "latin1": _latin1_urdf(),
+                "latin1": latin1_urdf(),
                 "utf16": ('<?xml version="1.0" encoding="UTF-16"?>' + body).encode("utf-16"),
                 "empty": b"",
                 "not_xml": b"hello",
-                "loop": _bad_urdfs()["loop"][0].encode(),
+                "loop": bad_urdfs()["loop"][0].encode(),
             }
             paths = {"missing": os.path.join(folder.name, "missing.urdf"), "directory": folder.name}
             for name, data in contents.items():

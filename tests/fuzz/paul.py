@@ -14,7 +14,7 @@ from .outputs import outs
 from .slots import finite
 
 
-def _paul_entries():
+def paul_entries():
     def residual_tol(*coefs):
         return 1e-9 * max(1.0, *(abs(float(v)) for v in coefs))
 

@@ -15,34 +15,34 @@ from . import limits as fuzz_limits
 from . import plot as fuzz_plot
 from . import sdk as fuzz_sdk
 from . import urdf as fuzz_urdf
-from .arm import _arm_entries
+from .arm import arm_entries
 from .canaries import CANARIES, CANARY_FK
-from .chains import _chain_entries
-from .dynamics import _dynamics_entries
+from .chains import chain_entries
+from .dynamics import dynamics_entries
 from .entry import REGISTRY
-from .functions import _function_entries
-from .joint_names import _joint_name_entries
-from .legs import _leg_entries
-from .paul import _paul_entries
-from .robots import _robot_entries
-from .roundtrip import _roundtrip_entries
-from .spot import _spot_entries
-from .trajectory import _trajectory_entries
-from .workspace import _workspace_entries
+from .functions import function_entries
+from .joint_names import joint_name_entries
+from .legs import leg_entries
+from .paul import paul_entries
+from .robots import robot_entries
+from .roundtrip import roundtrip_entries
+from .spot import spot_entries
+from .trajectory import trajectory_entries
+from .workspace import workspace_entries
 
 __all__ = ["BY_NAME", "REGISTRY"]
 
-_leg_entries()
-_chain_entries(_arm_entries())
-_spot_entries()
-_robot_entries()
-_dynamics_entries()
-_function_entries()
-_paul_entries()
-_trajectory_entries()
-_workspace_entries()
-_roundtrip_entries()
-_joint_name_entries()
+leg_entries()
+chain_entries(arm_entries())
+spot_entries()
+robot_entries()
+dynamics_entries()
+function_entries()
+paul_entries()
+trajectory_entries()
+workspace_entries()
+roundtrip_entries()
+joint_name_entries()
 fuzz_sdk.register_entries()  # spotkin.sdk, when its optional SDK is installed
 fuzz_dask.register_entries()  # spotkin.dask, when Dask is installed
 fuzz_plot.register_entries()  # spotkin.plot, when matplotlib is installed

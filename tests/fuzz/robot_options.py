@@ -25,7 +25,7 @@ GO2_NOMINAL = {
 }
 
 
-def _robot_options():
+def from_urdf_options():
     """Custom slots for from_urdf's keyword options, valid for Go2's names."""
 
     def arg(value, expect=ACCEPT, why=""):
@@ -105,7 +105,7 @@ def _robot_options():
 QUAD_ROLES = ("front_left", "front_right", "hind_left", "hind_right")
 
 
-def _limit_options():
+def limit_options():
     """The ``limits`` and ``leg_order`` slots of from_urdf and from_urdf_string, valid for Go2's names."""
 
     def arg(value, expect=ACCEPT, why=""):
@@ -136,7 +136,7 @@ def _limit_options():
     return limits, leg_order
 
 
-def _option_pairs(plan):
+def option_pairs(plan):
     """The options name Go2's feet and legs: a subset of feet leaves some nominal stances nameless."""
     if plan.get("nominal") == "all" and plan.get("feet") in ("one", "two"):
         return REJECT
@@ -289,7 +289,7 @@ def chain_pairs(key, links, bases):
     return rule
 
 
-def _ignored_nominal(plan):
+def ignored_nominal(plan):
     """With a preferred_slot, nominal is not used: whether a bad one is still refused is not documented."""
     given = ("valid", "min", "max", "np_int", "zero_d")
     if plan["preferred_slot"] in given and plan["nominal"] not in ("omit", "none"):

@@ -11,32 +11,32 @@ import numpy as np
 import spotkin as sk
 
 from .arm import RIGID_EXTRA
-from .body import BODY_METHODS, BodySpec, _body_entries, knee_point
+from .body import BODY_METHODS, BodySpec, body_entries, knee_point
 from .entry import angle_slot, register
 from .objects import STANCE_HEIGHT, euler_matrix, in_limits, rigid
 from .outputs import close, describe, outs
 from .robot_options import (
-    _ignored_nominal,
-    _limit_options,
-    _option_pairs,
-    _robot_options,
     chain_of_link_probe,
     chain_pairs,
     from_joints_probe,
+    from_urdf_options,
     geometry_probe,
+    ignored_nominal,
+    limit_options,
     link_table,
+    option_pairs,
     robot_probe,
 )
 from .slots import ACCEPT, EITHER, INVALID, REJECT, Arg, Array, Choice, Custom, Int, Real
-from .urdf_texts import HEXAPOD_LEGS, _bad_urdfs, _fmt, _go2_kinematics, _go2_text, _odd_urdfs
+from .urdf_texts import HEXAPOD_LEGS, bad_urdfs, go2_kinematics, go2_text, odd_urdfs, vec_text
 
 
-def _robot_entries():
+def robot_entries():
     # Go2: Spot's code with other numbers; the hexapod: six legs, their joints interleaved in q
-    _body_entries(BodySpec("go2"), BODY_METHODS, light=BODY_METHODS)
-    _body_entries(BodySpec("hexapod"), BODY_METHODS[:-1], light=("body_jacobian", "body_rates", "fk_all"))
+    body_entries(BodySpec("go2"), BODY_METHODS, light=BODY_METHODS)
+    body_entries(BodySpec("hexapod"), BODY_METHODS[:-1], light=("body_jacobian", "body_rates", "fk_all"))
     # Spot from its URDF: the arm is a Chain (closed form by ik)
-    _body_entries(BodySpec("spot_urdf"), ("fk_all", "arm_ik_world"), light=("fk_all", "arm_ik_world"))
+    body_entries(BodySpec("spot_urdf"), ("fk_all", "arm_ik_world"), light=("fk_all", "arm_ik_world"))
 
     # stance_feet, leg
     def stance_probe(key):
@@ -153,8 +153,8 @@ def _robot_entries():
             for name, leg in zip(robot.leg_names, robot.legs):
                 # Spot's summary is its URDF's, under the URDF's leg names (front_left for fl)
                 named = isinstance(robot, sk.Spot) or f"  {name}: joints" in legs
-                if not named or f"c = {_fmt(leg.c)}" not in legs:
-                    return f"the summary does not describe leg {name} (c = {_fmt(leg.c)}): {legs[:300]!r}"
+                if not named or f"c = {vec_text(leg.c)}" not in legs:
+                    return f"the summary does not describe leg {name} (c = {vec_text(leg.c)}): {legs[:300]!r}"
             return None
 
         return probe
@@ -172,8 +172,8 @@ def _robot_entries():
         )
 
     # construction
-    feet, contact_offset, nominal = _robot_options()
-    limit_slot, order_slot = _limit_options()
+    feet, contact_offset, nominal = from_urdf_options()
+    limit_slot, order_slot = limit_options()
 
     def path_table():
         def files(c):
@@ -218,7 +218,7 @@ def _robot_entries():
             order_slot,
         ],
         probe=robot_probe,
-        pair_rule=_option_pairs,
+        pair_rule=option_pairs,
         also_raises=(OSError,),
     )
 
@@ -227,16 +227,16 @@ def _robot_entries():
             return lambda c, r, b: Arg(value() if callable(value) else value, expect, why)
 
         table = {
-            "valid": text(_go2_kinematics),  # the options' cases: Go2 without its inertials (faster)
-            "inertials": text(_go2_text),
-            "np_str": text(lambda: np.str_(_go2_text())),
-            "bytes": text(lambda: _go2_text().encode(), REJECT, "type"),
+            "valid": text(go2_kinematics),  # the options' cases: Go2 without its inertials (faster)
+            "inertials": text(go2_text),
+            "np_str": text(lambda: np.str_(go2_text())),
+            "bytes": text(lambda: go2_text().encode(), REJECT, "type"),
             "none": text(None, REJECT, "type"),
             "int": text(1, REJECT, "type"),
             "path": text(lambda: sk.robots.path("go2"), REJECT, "value"),
         }
-        table.update({name: text(value) for name, value in _odd_urdfs().items()})
-        table.update({name: text(*spec) for name, spec in _bad_urdfs().items()})
+        table.update({name: text(value) for name, value in odd_urdfs().items()})
+        table.update({name: text(*spec) for name, spec in bad_urdfs().items()})
         return table
 
     go2_texts = ("valid", "inertials", "np_str", "comments", "no_declaration", "extra_tags")
@@ -252,8 +252,8 @@ def _robot_entries():
         """Go2's texts take Go2's names; the other valid texts have none of them (options naming
         Go2's feet or legs are refused, for that reason first)."""
         if plan["text"] in go2_texts:
-            return _option_pairs(plan)
-        if plan["text"] in _odd_urdfs() and any(plan[k] not in v for k, v in neutral.items()):
+            return option_pairs(plan)
+        if plan["text"] in odd_urdfs() and any(plan[k] not in v for k, v in neutral.items()):
             return REJECT
         return None
 
@@ -343,7 +343,7 @@ def _robot_entries():
         ],
         probe=geometry_probe,
         overflow_ok=True,
-        pair_rule=_ignored_nominal,
+        pair_rule=ignored_nominal,
     )
 
     # knee origins

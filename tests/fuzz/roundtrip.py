@@ -12,7 +12,7 @@ from .objects import CHAIN_ROWS, PROFILES, URDF_CHAINS
 from .outputs import close
 
 
-def _roundtrip_entries():
+def roundtrip_entries():
     q12 = np.tile([0.0, 1.04, -1.8], 4)
     objects = {
         "Spot": (lambda c: c.spot, lambda o: o.body_fk([0.0, 0.0, 0.5, 0.1, 0.0, 0.0], q12)),

@@ -10,14 +10,14 @@ import numpy as np
 
 import spotkin as sk
 
-from .body import SPOT_BODY, _body_entries
+from .body import SPOT_BODY, body_entries
 from .entry import register
 from .outputs import close, describe
 from .slots import ACCEPT, REJECT, Arg, Choice, Custom, Real, finite
 
 
-def _spot_entries():
-    _body_entries(SPOT_BODY)
+def spot_entries():
+    body_entries(SPOT_BODY)
 
     def stance_probe(feet, kw, c):
         height = kw.get("height", 0.5)

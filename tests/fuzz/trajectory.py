@@ -23,7 +23,7 @@ def same_axes(plan):
     return EITHER if plan["q0"] == plan["qf"] == "empty" else None  # zero axes
 
 
-def _trajectory_entries():
+def trajectory_entries():
     traj = sk.trajectory
 
     def p2p_probe(p2p, kw, c):

@@ -105,16 +105,16 @@ HEXAPOD_LEGS = ("L1", "R1", "L2", "R2", "L3", "R3")
 
 
 @functools.cache
-def _go2_text() -> str:
+def go2_text() -> str:
     return sk.robots.text("go2")
 
 
 @functools.cache
-def _go2_kinematics() -> str:
-    return re.sub(r"<inertial>.*?</inertial>", "", _go2_text(), flags=re.S)
+def go2_kinematics() -> str:
+    return re.sub(r"<inertial>.*?</inertial>", "", go2_text(), flags=re.S)
 
 
-def _fmt(v) -> str:
+def vec_text(v) -> str:
     """A vector as spotkin.urdf.describe prints it."""
     return "(" + ", ".join(f"{round(float(x), 12) + 0.0:.6g}" for x in np.ravel(v)) + ")"
 
@@ -155,10 +155,10 @@ def _one_leg(prefix="L", parent="base", hip="0.2 0.1 0") -> str:
 
 
 @functools.cache
-def _bad_urdfs() -> dict:
+def bad_urdfs() -> dict:
     """Malformed or unusable descriptions: name -> (text, expect, why)."""
     leg = '<link name="base"/>' + _one_leg()
-    go2 = _go2_text()
+    go2 = go2_text()
     laughs = "".join(f'<!ENTITY l{i + 1} "{f"&l{i};" * 10}">' for i in range(9))
     return {
         "empty": ("", REJECT, "value"),
@@ -254,9 +254,9 @@ def _bad_urdfs() -> dict:
 
 
 @functools.cache
-def _odd_urdfs() -> dict:
+def odd_urdfs() -> dict:
     """Unusual but valid descriptions: name -> text."""
-    go2 = _go2_text()
+    go2 = go2_text()
     body = go2.split("?>", 1)[1] if go2.startswith("<?xml") else go2
     return {
         "comments": go2.replace("<link", "<!-- a comment --><link", 3),
@@ -286,9 +286,9 @@ def _odd_urdfs() -> dict:
     }
 
 
-def _latin1_urdf() -> bytes:
+def latin1_urdf() -> bytes:
     """Go2 declared and encoded as ISO-8859-1, with a non-ASCII link name (not a leg's)."""
-    go2 = _go2_text()
+    go2 = go2_text()
     body = go2.split("?>", 1)[1] if go2.startswith("<?xml") else go2
     return ('<?xml version="1.0" encoding="ISO-8859-1"?>' + body.replace('"radar"', '"r\xe4dar"')).encode(
         "latin-1"

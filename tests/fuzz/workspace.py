@@ -13,7 +13,7 @@ from .outputs import describe
 from .slots import ACCEPT, REJECT, Arg, Custom, Int, Real, finite
 
 
-def _workspace_entries():
+def workspace_entries():
     def obj_slot(kind: str) -> Custom:
         """The object a workspace function samples: legs, arms and chains it takes, others it refuses."""
 
