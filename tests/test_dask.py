@@ -2,7 +2,7 @@
 threaded, multiprocessing and distributed schedulers; the models pickle (round trips, a spawn pool); the
 module says what to install when Dask is missing.
 
-The fuzz registry (tests/fuzz_dask.py) feeds every function hostile inputs; here: chunkings, broadcasting,
+The fuzz registry (tests/fuzz/dask.py) feeds every function hostile inputs; here: chunkings, broadcasting,
 laziness, the schedulers, and errors raised before any work."""
 
 from __future__ import annotations
