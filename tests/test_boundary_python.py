@@ -16,7 +16,7 @@ import pytest
 
 import spotkin as sk
 from spotkin._support import boundary as _boundary
-from spotkin.model.robot import _solve_rows
+from spotkin.model.robot_body import _solve_rows
 from spotkin.models import LEG_NAMES
 from spotkin.models import SPOT as SPOT_MODEL
 

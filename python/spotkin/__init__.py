@@ -24,7 +24,9 @@ from .model.arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .model.body import EULER_SEQUENCES, body_transform
 from .model.chain import Chain, ChainSolutions, IKDifferentialInfo
 from .model.leg import Leg, LegSolutions
-from .model.robot import BodyFrames, BodyIK, BodyRates, Robot, StanceStatus, Standing
+from .model.robot import Robot
+from .model.robot_body import BodyFrames, BodyIK, BodyRates
+from .model.robot_statics import StanceStatus, Standing
 from .model.spot import Spot
 
 __all__ = [

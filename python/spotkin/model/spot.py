@@ -15,7 +15,8 @@ from .._support.boundary import as_finite, as_real
 from .arm import ARM_JOINT_NAMES, SpotArm
 from .leg import Leg
 from .presets import LEG_NAMES, SPOT
-from .robot import BodyFrames, BodyIK, BodyRates, Robot, _limit_table
+from .robot import Robot, _limit_table
+from .robot_body import BodyFrames, BodyIK, BodyRates
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Spot"]
 
