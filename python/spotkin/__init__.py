@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from . import differential as differential  # a public module outside __all__, bound as before
 from . import dynamics, inertia, paul, trajectory, urdf
-from . import models as models  # spotkin.models, an attribute of the package as before (not in __all__)
+from . import models as models  # a public module outside __all__, bound as before
 from ._support.runtime import (
     MAX_THREADS,
     available_isas,
@@ -17,9 +18,17 @@ from ._support.runtime import (
 from ._support.status import Status
 from ._support.transforms import rotation_x, rotation_y, rotation_z, transform, translation
 from ._support.version import __version__ as __version__
-from ._workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
-from .differential import compatible, dls, manipulability, nullspace_projector, pinv, rank, singular_values
 from .dynamics import LinkInertials, unpack_symmetric
+from .kinematics.differential import (
+    compatible,
+    dls,
+    manipulability,
+    nullspace_projector,
+    pinv,
+    rank,
+    singular_values,
+)
+from .kinematics.workspace import Dexterity, WorkspaceSamples, dexterity, workspace, workspace_volume
 from .model.arm import ArmSingularity, ArmSolutions, SpotArm, pose_from
 from .model.body import EULER_SEQUENCES, body_transform
 from .model.chain import Chain, ChainSolutions, IKDifferentialInfo

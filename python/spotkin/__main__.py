@@ -18,13 +18,14 @@ from ._support.runtime import get_num_threads
 from ._support.status import Status
 from ._support.transforms import translation
 from ._support.version import __version__
+from .kinematics.joint_paths import hold_branch, point_to_point
+from .kinematics.path_planning import via_points
 from .model.arm import SpotArm
 from .model.body import body_transform
 from .model.chain import Chain
 from .model.leg import SLOT_NAMES
 from .model.robot import Robot
 from .model.spot import Spot
-from .trajectory import hold_branch, point_to_point, via_points
 
 # A Spot leg as a modified DH table (sigma, d, alpha, r, theta), knee offset left out: the leg model
 # of the course this library follows (docs/derivations.md, "The leg as a DH table").
@@ -545,7 +546,7 @@ def workspace_report(
     """Print the workspace volume of the robot's first leg (:func:`spotkin.workspace_volume`, ``samples``
     Monte Carlo points) and, with an arm, its dexterity (:func:`spotkin.dexterity` on a grid of
     ``spacing`` with ``orientations`` orientations per position). Deterministic for a given ``seed``."""
-    from ._workspace import dexterity, workspace_volume
+    from .kinematics.workspace import dexterity, workspace_volume
 
     robot = _load_robot(source)
     name = robot.name or source
@@ -625,7 +626,7 @@ DPI_RANGE = (10, 600)  # below 10 dpi the fonts get no pixel (FreeType refuses);
 def _out_of_range(args) -> str | None:
     """What is wrong with a parsed option's value (a count, a resolution) that argparse's types accept,
     or None: checked before anything is loaded, computed or allocated."""
-    from . import _workspace
+    from .kinematics import workspace as _workspace
 
     checks = []
     if args.command == "demo":

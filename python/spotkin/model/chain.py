@@ -16,12 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._support.boundary import (
-    as_index,
-    as_real,
-    limit_table,
-    rigid_transforms,
-)
+from .._support.boundary import as_index, as_real, limit_table, rigid_transforms
 from ..dynamics.inertia import link_inertials
 from .chain_dynamics import _ChainDynamicsMethods
 from .chain_ik import ChainSolutions, IKDifferentialInfo, _ChainIKMethods

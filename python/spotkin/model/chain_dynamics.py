@@ -6,10 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._support.boundary import (
-    as_real,
-    broadcast_lead,
-)
+from .._support.boundary import as_real, broadcast_lead
 from ..dynamics import inertia
 from ..dynamics import rigid_body as dynamics
 

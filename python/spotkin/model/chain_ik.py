@@ -11,13 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._support.boundary import (
-    as_finite,
-    as_index,
-    as_real,
-    broadcast_lead,
-    quiet_float_errors,
-)
+from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, quiet_float_errors
 from .._support.status import Status
 from .arm import _broadcast_seed
 

@@ -15,9 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core, urdf
-from .._support.boundary import (
-    as_real,
-)
+from .._support.boundary import as_real
 from ..dynamics import inertia
 from .chain import Chain
 from .leg import Leg

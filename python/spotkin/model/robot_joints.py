@@ -7,10 +7,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._support.boundary import (
-    as_real,
-    check_trailing,
-)
+from .._support.boundary import as_real, check_trailing
 
 
 def _names(value, name: str) -> tuple[str, ...]:

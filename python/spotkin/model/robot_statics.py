@@ -10,10 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._support.boundary import (
-    as_real,
-    broadcast_lead,
-)
+from .._support.boundary import as_real, broadcast_lead
 from .._support.transforms import quaternion_xyzw
 from ..dynamics import inertia
 from ..dynamics.rigid_body import FloatingBase

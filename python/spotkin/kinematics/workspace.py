@@ -22,11 +22,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._support.boundary import as_finite, as_index
-from ._support.status import Status
-from .model.arm import SpotArm
-from .model.chain import Chain
-from .model.leg import Leg
+from .._support.boundary import as_finite, as_index
+from .._support.status import Status
+from ..model.arm import SpotArm
+from ..model.chain import Chain
+from ..model.leg import Leg
 
 __all__ = ["Dexterity", "WorkspaceSamples", "dexterity", "workspace", "workspace_volume"]
 
