@@ -38,7 +38,7 @@ da = pytest.importorskip("dask.array", reason='pip install "spotkin[dask]"')
 dask = pytest.importorskip("dask")
 pytest.importorskip("zarr", reason='pip install "spotkin[dask]"')
 skd = pytest.importorskip("spotkin.dask")
-from spotkin import _batch  # noqa: E402  (after the optional imports are known to work)
+from spotkin.scale import batch_data, batch_operations, batch_run  # noqa: E402  (after the optional imports work)
 
 SPOT = sk.Spot()
 FEET = SPOT.stance_feet(0.5)
@@ -167,14 +167,14 @@ def disk():
     shutil.rmtree(folder, ignore_errors=True)  # gigabytes at 1e8: never left behind
 
 
-def _run(folder: str, name: str, copy: bool) -> _batch.Run:
+def _run(folder: str, name: str, copy: bool) -> batch_run.Run:
     parser = argparse.ArgumentParser()
-    _batch.add_parser(parser.add_subparsers(dest="command"))
+    batch_operations.add_parser(parser.add_subparsers(dest="command"))
     arguments = ["batch", "body-ik", "--poses", os.path.join(folder, "poses.npy")]
     arguments += ["--feet", os.path.join(folder, "feet.npy"), "--out", os.path.join(folder, name), "--quiet"]
     if BATCH_CHUNK:
         arguments += ["--chunk-size", BATCH_CHUNK]
-    run = _batch.plan(parser.parse_args(arguments))
+    run = batch_run.plan(parser.parse_args(arguments))
     if copy:
         run = dataclasses.replace(run, job=dataclasses.replace(run.job, kernel=CopyKernel(run.job.chunk)))
     return run
@@ -186,13 +186,13 @@ def test_spotkin_batch_on_disk(disk, capsys):
     impls = {}
     for name, copy in (("ref:read+write", True), ("spotkin batch", False)):
         run = _run(disk, f"{'copy' if copy else 'out'}.zarr", copy)
-        quiet = _batch.Progress(run.job.rows, 0, "", enabled=False)
+        quiet = batch_run.Progress(run.job.rows, 0, "", enabled=False)
 
         def setup(run=run):
             shutil.rmtree(run.job.out, ignore_errors=True)
-            _batch.prepare_output(run, overwrite=True)
+            batch_data.prepare_output(run, overwrite=True)
 
-        impls[name] = (setup, lambda run=run, quiet=quiet: _batch.execute(run, "threads", None, quiet))
+        impls[name] = (setup, lambda run=run, quiet=quiet: batch_run.execute(run, "threads", None, quiet))
     times = _interleaved("batch.body_ik", BATCH_N, impls, ROUNDS, capsys)
     ratio = min(times["spotkin batch"]) / min(times["ref:read+write"])
     with capsys.disabled():

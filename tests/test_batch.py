@@ -247,9 +247,9 @@ OPERATIONS = [
 
 
 def test_the_operations_listed_are_the_cli_s():
-    from spotkin import _batch
+    from spotkin.scale import batch_operations
 
-    assert sorted(_batch.OPERATIONS) == sorted(op for op in OPERATIONS if "[" not in op)
+    assert sorted(batch_operations.OPERATIONS) == sorted(op for op in OPERATIONS if "[" not in op)
 
 
 @pytest.mark.parametrize("operation", OPERATIONS)

@@ -419,8 +419,9 @@ def test_models_travel_to_a_spawn_pool(spawn_pool):
 
 def test_a_model_is_unpickled_once_per_process():
     from spotkin.dask import _model_from_pickle
+    from spotkin.scale.dask_calls import _plan_body_ik
 
-    kernel = skd._plan_body_ik(GO2, poses(3, height=0.28), GO2.stance_feet(0.28)).kernel
+    kernel = _plan_body_ik(GO2, poses(3, height=0.28), GO2.stance_feet(0.28)).kernel
     first, second = pickle.loads(pickle.dumps(kernel)), pickle.loads(pickle.dumps(kernel))
     assert first.model is second.model  # the per-process cache
     assert first.model is _model_from_pickle(kernel._digest, kernel._data)
@@ -444,11 +445,13 @@ class ThreadSpy:
 def test_a_chunk_uses_its_share_of_the_threads(chunks, expected):
     """The scheduler's threads run a chunk each: each call gets the thread count over the graph's chunks
     (at least 1), so 2 chunks on 4 threads use 2 each, and a single chunk every thread."""
+    from spotkin.scale.dask_graph import _lazy, _plan
+
     before = sk.get_num_threads()
     sk.set_num_threads(4)
     try:
         q = da.from_array(np.zeros((64, 3)), chunks=(64 // chunks, 3))
-        lazy = skd._lazy(skd._plan(ThreadSpy(), "fk", [("q", q, (3,))], {}, (), "n"))
+        lazy = _lazy(_plan(ThreadSpy(), "fk", [("q", q, (3,))], {}, (), "n"))
         assert lazy.numblocks == (chunks,)
         assert set(lazy.compute(scheduler="threads").tolist()) == {expected}
         assert sk.get_num_threads() == 4  # the calling thread's own count is untouched

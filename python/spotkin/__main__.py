@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from . import _batch, robots
+from . import robots
 from ._support.runtime import get_num_threads
 from ._support.status import Status
 from ._support.transforms import translation
@@ -26,6 +26,7 @@ from .model.chain import Chain
 from .model.leg import SLOT_NAMES
 from .model.robot import Robot
 from .model.spot import Spot
+from .scale import batch_operations, batch_run
 
 # A Spot leg as a modified DH table (sigma, d, alpha, r, theta), knee offset left out: the leg model
 # of the course this library follows (docs/derivations.md, "The leg as a DH table").
@@ -703,10 +704,10 @@ def main(argv: list[str] | None = None) -> int:
         help="orientations sampled per arm grid position (at most 1,000,000; default 128)",
     )
     workspace_parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    _batch.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/_batch.py)
+    batch_operations.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/scale/batch_*.py)
     args = parser.parse_args(argv)
     if args.command == "batch":
-        return _batch.main(args)
+        return batch_run.main(args)
     refused = _out_of_range(args)
     if refused:  # before any work, as argparse refuses malformed values: one line, exit 2
         print(f"spotkin {args.command}: error: {refused}", file=sys.stderr)
