@@ -857,7 +857,7 @@ def test_stance_legend_is_beside_the_robot(robots, view):
 def test_the_demos_motion_is_visible(robots):
     """The demo's body path moves the body by several centimetres and degrees on each robot: at least
     5 % of the picture's span, and the body's outline at frame 1 stays drawn for comparison."""
-    import spotkin.__main__ as cli
+    import spotkin.cli.pictures as cli
 
     for robot, height, scale in ((robots["spot"], 0.5, 1.5), (robots["go2"], 0.3, 0.9)):
         path = sk.trajectory.via_points(cli._scaled_waypoints(height, scale), **cli.DEMO_PATH_LIMITS)
