@@ -31,6 +31,21 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .lagrange import planar_2r_gravity as planar_2r_gravity  # this module's names, as before
+from .lagrange import planar_2r_mass_matrix as planar_2r_mass_matrix
+from .lagrange import rrr_gravity as rrr_gravity
+from .lagrange import rrr_mass_matrix as rrr_mass_matrix
+from .spatial import (
+    crf,
+    crm,
+    inverse_transform,
+    joint_motion,
+    motion_subspace,
+    motion_transform,
+    skew,
+    spatial_inertia,
+)
+
 GRAVITY = (0.0, 0.0, -9.81)
 
 STANCE_OK = 0
@@ -44,87 +59,6 @@ polygon: no pushing distribution exists (on level ground)."""
 STANCE_UNBALANCED = 3
 """No contact forces at these feet balance the weight (fewer than three feet, or collinear ones, with
 the centre of mass off their line or point): torques and forces are NaN."""
-
-
-# --------------------------------------------------------------------------- spatial algebra
-
-
-def skew(p) -> np.ndarray:
-    """[p]x, so that skew(p) @ x = p x x."""
-    x, y, z = (float(v) for v in p)
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def motion_transform(T) -> np.ndarray:
-    """The 6x6 map of motion vectors from frame B's coordinates to frame A's, for T = pose of B in A:
-    [v_A; w_A] = [[R, [p]x R], [0, R]] [v_B; w_B] (RBDA eq. 2.24, linear-first order)."""
-    R, p = T[:3, :3], T[:3, 3]
-    X = np.zeros((6, 6))
-    X[:3, :3] = R
-    X[:3, 3:] = skew(p) @ R
-    X[3:, 3:] = R
-    return X
-
-
-def inverse_transform(T) -> np.ndarray:
-    R, p = T[:3, :3], T[:3, 3]
-    inverse = np.eye(4)
-    inverse[:3, :3] = R.T
-    inverse[:3, 3] = -R.T @ p
-    return inverse
-
-
-def crm(v) -> np.ndarray:
-    """Motion cross product v x (RBDA eq. 2.31): [[w x, v x], [0, w x]]."""
-    X = np.zeros((6, 6))
-    X[:3, :3] = skew(v[3:])
-    X[:3, 3:] = skew(v[:3])
-    X[3:, 3:] = skew(v[3:])
-    return X
-
-
-def crf(v) -> np.ndarray:
-    """Force cross product v x* = -crm(v)^T (RBDA eq. 2.32)."""
-    return -crm(v).T
-
-
-def spatial_inertia(mass: float, com, inertia) -> np.ndarray:
-    """The 6x6 spatial inertia about the frame origin (RBDA eq. 2.63, linear first):
-    [[m E, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]."""
-    C = skew(com)
-    M = np.zeros((6, 6))
-    M[:3, :3] = mass * np.eye(3)
-    M[:3, 3:] = -mass * C
-    M[3:, :3] = mass * C
-    M[3:, 3:] = np.asarray(inertia) - mass * C @ C
-    return M
-
-
-def joint_motion(axis, joint_type: int, q: float) -> np.ndarray:
-    """M_j(q): rotation about (type 0) or translation along (type 1) the unit axis."""
-    T = np.eye(4)
-    x, y, z = (float(v) for v in axis)
-    if joint_type == 1:
-        T[:3, 3] = (x * q, y * q, z * q)
-        return T
-    c, s = math.cos(q), math.sin(q)
-    v = 1.0 - c
-    T[:3, :3] = (
-        (c + x * x * v, x * y * v - z * s, x * z * v + y * s),
-        (y * x * v + z * s, c + y * y * v, y * z * v - x * s),
-        (z * x * v - y * s, z * y * v + x * s, c + z * z * v),
-    )
-    return T
-
-
-def motion_subspace(axis, joint_type: int) -> np.ndarray:
-    """S_j in body j's coordinates: [0; a] for a revolute joint, [a; 0] for a prismatic one."""
-    S = np.zeros(6)
-    if joint_type == 1:
-        S[:3] = axis
-    else:
-        S[3:] = axis
-    return S
 
 
 # --------------------------------------------------------------------------- the model at q
@@ -624,49 +558,3 @@ def standing_torques(tree, body_pose, q, stance_feet, gravity=GRAVITY) -> Standi
     else:
         status = STANCE_PULLING if margin > 0 else STANCE_OUTSIDE
     return Standing(tau, forces, status, margin)
-
-
-# --------------------------------------------------------------------------- closed forms (Lagrange)
-
-
-def planar_2r_mass_matrix(q, masses, lengths) -> np.ndarray:
-    """A(q) of a planar 2R arm of uniform rods (docs/dynamics.md): joint 1 at the origin, link i of
-    mass m_i and length l_i, q2 relative to link 1.
-        A11 = m1 l1²/3 + m2 (l1² + l2²/3 + l1 l2 c2),  A12 = m2 (l2²/3 + l1 l2 c2 / 2),  A22 = m2 l2²/3"""
-    (m1, m2), (l1, l2) = masses, lengths
-    c2 = math.cos(q[1])
-    a11 = m1 * l1**2 / 3 + m2 * (l1**2 + l2**2 / 3 + l1 * l2 * c2)
-    a12 = m2 * (l2**2 / 3 + l1 * l2 * c2 / 2)
-    return np.array([[a11, a12], [a12, m2 * l2**2 / 3]])
-
-
-def planar_2r_gravity(q, masses, lengths, g0=9.81) -> np.ndarray:
-    """G(q) of the planar 2R arm with gravity -g0 along the plane's y axis (angles from x):
-    G1 = g0 ((m1 / 2 + m2) l1 c1 + m2 l2 c12 / 2),  G2 = g0 m2 l2 c12 / 2"""
-    (m1, m2), (l1, l2) = masses, lengths
-    c1, c12 = math.cos(q[0]), math.cos(q[0] + q[1])
-    return np.array([g0 * ((m1 / 2 + m2) * l1 * c1 + m2 * l2 * c12 / 2), g0 * m2 * l2 * c12 / 2])
-
-
-def rrr_mass_matrix(q, masses, lengths) -> np.ndarray:
-    """A(q) of the course's RRR arm (DH(q1, l1, 0, 90°), DH(q2, 0, l2, 0), DH(q3, 0, 0, 90°), tool
-    TransZ(l3)) with uniform thin rods: link 1 along the vertical axis 1 (no inertia about it), link 2
-    from joint 2 to joint 3, link 3 from joint 3 to the tool. With r3 = l2 c2 + l3 s23 / 2:
-        A11 = m2 l2² c2² / 3 + m3 r3² + m3 l3² s23² / 12,   A12 = A13 = 0,
-        A22 = m2 l2² / 3 + m3 (l2² + l3² / 3 + l2 l3 s3),  A23 = m3 (l3² / 3 + l2 l3 s3 / 2),
-        A33 = m3 l3² / 3."""
-    (_, m2, m3), (_, l2, l3) = masses, lengths
-    c2, s3, s23 = math.cos(q[1]), math.sin(q[2]), math.sin(q[1] + q[2])
-    r3 = l2 * c2 + l3 * s23 / 2
-    a11 = m2 * l2**2 * c2**2 / 3 + m3 * r3**2 + m3 * l3**2 * s23**2 / 12
-    a22 = m2 * l2**2 / 3 + m3 * (l2**2 + l3**2 / 3 + l2 * l3 * s3)
-    a23 = m3 * (l3**2 / 3 + l2 * l3 * s3 / 2)
-    return np.array([[a11, 0.0, 0.0], [0.0, a22, a23], [0.0, a23, m3 * l3**2 / 3]])
-
-
-def rrr_gravity(q, masses, lengths, g0=9.81) -> np.ndarray:
-    """G(q) of the course's RRR arm with gravity -g0 along z0 (U = g0 sum m_i z_i):
-    G1 = 0,  G2 = g0 (m2 l2 c2 / 2 + m3 (l2 c2 + l3 s23 / 2)),  G3 = g0 m3 l3 s23 / 2"""
-    (_, m2, m3), (_, l2, l3) = masses, lengths
-    c2, s23 = math.cos(q[1]), math.sin(q[1] + q[2])
-    return np.array([0.0, g0 * (m2 * l2 * c2 / 2 + m3 * (l2 * c2 + l3 * s23 / 2)), g0 * m3 * l3 * s23 / 2])
