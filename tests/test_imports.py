@@ -1,5 +1,7 @@
 """The package's modules import each other without a cycle (every import counted, at module level
-or inside a function, except those under ``if TYPE_CHECKING:``), so that the layers read top down."""
+or inside a function, except those under ``if TYPE_CHECKING:``), so that the layers read top down;
+and its subpackages are layers: a module imports only its own subpackage and the layers below
+(docs/architecture.md)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,24 @@ from pathlib import Path
 import spotkin
 
 PACKAGE = Path(spotkin.__file__).parent
+
+# The layers, bottom up: the part of the package a module is in (``spotkin.model.chain``: ``model``)
+# and its layer. A module may import its own part and the parts of lower layers, never a part beside
+# it in its layer nor a higher one. FACE is the package itself and the public modules directly in it,
+# which only re-export: nothing below imports them.
+FACE = "<face>"
+LAYERS = (
+    ("_core", "reference", "robots"),  # the compiled core, the plain-Python references, package data
+    ("_support",),  # argument checks, statuses, transforms, threads and ISA, the version
+    ("dynamics", "urdf"),  # mass properties and rigid-body dynamics; reading descriptions
+    ("model",),  # legs, arms, chains, robots, Spot
+    ("kinematics", "scale", "sdk"),  # tools over the models; Dask and spotkin batch; the Spot SDK
+    (FACE,),  # spotkin, spotkin.dask, .differential, .inertia, .models, .paul, .trajectory
+    ("plot",),  # the pictures (the optional extra), over the public API
+    ("cli",),  # the command line
+    ("__main__",),
+)
+FACE_MODULES = ("dask", "differential", "inertia", "models", "paul", "trajectory")
 
 
 def _module_name(path: Path) -> str:
@@ -104,6 +124,22 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
+def part_of(module: str) -> str:
+    """The part of the package a module is in: its subpackage, or FACE."""
+    parts = module.split(".")
+    if len(parts) == 1 or parts[1] in FACE_MODULES:
+        return FACE
+    return parts[1]
+
+
+def layer_of(module: str) -> int:
+    part = part_of(module)
+    for layer, parts in enumerate(LAYERS):
+        if part in parts:
+            return layer
+    raise AssertionError(f"{module} is in no layer: add its part ({part}) to LAYERS in tests/test_imports.py")
+
+
 def test_the_graph_reads_the_imports():
     graph = import_graph()
     assert "spotkin.model.chain" in graph["spotkin.model.robot"]  # from .chain import Chain
@@ -119,3 +155,39 @@ def test_cycles_are_found():
 def test_no_import_cycle():
     found = cycles(import_graph())
     assert not found, "import cycles: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_every_module_is_in_a_layer():
+    for module in import_graph():
+        layer_of(module)
+
+
+def test_the_graph_sees_the_subpackages():
+    graph = import_graph()
+    assert {"spotkin.model.robot", "spotkin.urdf.parse", "spotkin.scale.dask_kernel"} <= set(graph)
+    assert "spotkin.urdf.files" in graph["spotkin.urdf.parse"]  # from .files import read_file
+    assert "spotkin.model.body" in graph["spotkin.kinematics.cartesian_paths"]  # from ..model.body import
+
+
+def layer_violations(graph: dict[str, set[str]]) -> list[str]:
+    """The imports of ``graph`` from one part into another that is not in a lower layer."""
+    wrong = []
+    for module, imported in sorted(graph.items()):
+        for target in sorted(imported):
+            if part_of(target) != part_of(module) and layer_of(target) >= layer_of(module):
+                wrong.append(f"{module} ({part_of(module)}) imports {target} ({part_of(target)})")
+    return wrong
+
+
+def test_the_layer_rule_is_read():
+    assert part_of("spotkin.dask") == part_of("spotkin") == FACE
+    assert part_of("spotkin.scale.dask_calls") == "scale"
+    assert not layer_violations({"spotkin.kinematics.paul": {"spotkin.model.chain", "spotkin._core"}})
+    assert len(layer_violations({"spotkin.model.chain": {"spotkin.kinematics.paul"}})) == 1  # upward
+    assert len(layer_violations({"spotkin.scale.dask_calls": {"spotkin.sdk.feet"}})) == 1  # sideways
+    assert len(layer_violations({"spotkin.model.robot": {"spotkin.trajectory"}})) == 1  # into the face
+
+
+def test_lower_layers_never_import_higher_ones():
+    wrong = layer_violations(import_graph())
+    assert not wrong, "imports against the layers:\n" + "\n".join(wrong)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from . import differential as differential  # a public module outside __all__, bound as before
 from . import dynamics, inertia, paul, trajectory, urdf
 from . import models as models  # a public module outside __all__, bound as before
+from ._support.public import publish
 from ._support.runtime import (
     MAX_THREADS,
     available_isas,
@@ -37,6 +38,28 @@ from .model.robot import Robot
 from .model.robot_body import BodyFrames, BodyIK, BodyRates
 from .model.robot_statics import StanceStatus, Standing
 from .model.spot import Spot
+
+# What the models' pickles call to rebuild them, at this path (publish below) whichever file defines
+# them: a pickle names "spotkin" only.
+from .model.chain import _rebuild_chain as _rebuild_chain  # isort: skip
+from .model.chain import _rebuild_joints as _rebuild_joints  # isort: skip
+from .model.chain import _rebuild_with_ik_tolerance as _rebuild_with_ik_tolerance  # isort: skip
+from .model.chain import _rebuild_with_inertials as _rebuild_with_inertials  # isort: skip
+from .model.leg import _rebuild_leg as _rebuild_leg  # isort: skip
+from .model.mimic import _rebuild_mimic as _rebuild_mimic  # isort: skip
+from .model.robot import _rebuild_robot as _rebuild_robot  # isort: skip
+from .model.spot import _rebuild_spot as _rebuild_spot  # isort: skip
+
+_REBUILDERS = (
+    "_rebuild_chain",
+    "_rebuild_joints",
+    "_rebuild_leg",
+    "_rebuild_mimic",
+    "_rebuild_robot",
+    "_rebuild_spot",
+    "_rebuild_with_ik_tolerance",
+    "_rebuild_with_inertials",
+)
 
 __all__ = [
     "EULER_SEQUENCES",
@@ -91,3 +114,6 @@ __all__ = [
     "workspace",
     "workspace_volume",
 ]
+
+# the public classes and functions, and the rebuilders, name this package as their module
+publish(__name__, globals(), [*__all__, *_REBUILDERS])

@@ -49,6 +49,7 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
 
 from __future__ import annotations
 
+from ._support.public import publish
 from .scale.dask_calls import (
     body_fk,
     body_ik,
@@ -95,3 +96,5 @@ __all__ = [
     "nonlinear_effects",
     "standing_torques",
 ]
+
+publish(__name__, globals(), [*__all__, "_model_from_pickle", "_rebuild_kernel"])

@@ -33,6 +33,7 @@ rank except within rounding of the threshold); ``singular_values``, ``rank`` and
 
 from __future__ import annotations
 
+from ._support.public import publish
 from .kinematics.differential import (
     compatible,
     dls,
@@ -52,3 +53,5 @@ __all__ = [
     "rank",
     "singular_values",
 ]
+
+publish(__name__, globals(), __all__)

@@ -19,6 +19,7 @@ the other legs, for a leg chain) is not part of the chain's dynamics. See ``docs
 
 from __future__ import annotations
 
+from ._support.public import publish
 from .dynamics.inertia import LinkInertials, Tree, link_inertials, merge_inertials, model_tree, tree_of
 from .dynamics.inertia import chain_tree as chain_tree
 
@@ -30,3 +31,5 @@ __all__ = [
     "model_tree",
     "tree_of",
 ]
+
+publish(__name__, globals(), __all__)

@@ -18,6 +18,7 @@ coefficient); shapes that do not broadcast raise ``ValueError`` naming them all.
 
 from __future__ import annotations
 
+from ._support.public import publish
 from .kinematics.paul import type2, type3, type6
 
 __all__ = [
@@ -25,3 +26,5 @@ __all__ = [
     "type3",
     "type6",
 ]
+
+publish(__name__, globals(), __all__)

@@ -47,6 +47,7 @@ poses and limits, and plans that overflow float64 raise ValueError.
 
 from __future__ import annotations
 
+from ._support.public import publish
 from .kinematics.cartesian_paths import CartesianPath
 from .kinematics.joint_paths import PROFILES, BranchPath, PointToPoint, hold_branch, point_to_point
 from .kinematics.path_planning import linear, via_points
@@ -61,3 +62,5 @@ __all__ = [
     "point_to_point",
     "via_points",
 ]
+
+publish(__name__, globals(), __all__)

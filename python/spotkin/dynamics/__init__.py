@@ -32,6 +32,7 @@ Batches
 
 from __future__ import annotations
 
+from .._support.public import publish
 from .inertia import LinkInertials
 from .rigid_body import GRAVITY as GRAVITY
 from .rigid_body import (
@@ -66,3 +67,5 @@ __all__ = [
     "potential_energy",
     "unpack_symmetric",
 ]
+
+publish(__name__, globals(), __all__)

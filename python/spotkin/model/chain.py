@@ -414,7 +414,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         if self._rows is None:
             plain = (_rebuild_joints, (*self._joints, self._base, self._tool, limits, self._names))
         else:
-            plain = (_rebuild, (self._rows, self._convention, self._base, self._tool, limits))
+            plain = (_rebuild_chain, (self._rows, self._convention, self._base, self._tool, limits))
         if self._inertials is not None:
             plain = (_rebuild_with_inertials, (*plain, tuple(self._inertials)))
         if self._ik_tolerance is None:
@@ -426,7 +426,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         return f"Chain({kinds}, convention={self._convention!r}, dof={self.dof})"
 
 
-def _rebuild(rows, convention, base, tool, limits) -> Chain:
+def _rebuild_chain(rows, convention, base, tool, limits) -> Chain:
     return Chain(rows, convention=convention, base=base, tool=tool, limits=limits)
 
 

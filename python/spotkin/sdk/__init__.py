@@ -49,6 +49,7 @@ Conventions
 
 from __future__ import annotations
 
+from .._support.public import publish
 from .commands import (
     arm_joint_position_message,
     arm_joint_positions,
@@ -93,3 +94,5 @@ __all__ = [
     "se3_to_matrix",
     "vec3_to_array",
 ]
+
+publish(__name__, globals(), __all__)

@@ -36,6 +36,7 @@ whether their wrist is spherical. :func:`describe` prints a summary.
 
 from __future__ import annotations
 
+from .._support.public import publish
 from .files import MAX_BYTES as MAX_BYTES
 from .files import XACRO_EXTRA as XACRO_EXTRA
 from .files import expand_xacro, is_xacro, read_file, read_text
@@ -63,3 +64,5 @@ __all__ = [
     "read_file",
     "read_text",
 ]
+
+publish(__name__, globals(), __all__)
