@@ -6,15 +6,12 @@ from __future__ import annotations
 import math
 import os
 import threading
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable
+from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
 from .batch_operations import ATTRIBUTE, DONE, BatchError, require
-
-if TYPE_CHECKING:
-    from .batch_run import Run
 
 # ---- inputs ---------------------------------------------------------------------------------------
 
@@ -169,6 +166,19 @@ class Job:
 
     def rows_of(self, index: int) -> slice:
         return slice(index * self.chunk, min((index + 1) * self.chunk, self.rows))
+
+
+@dataclass
+class Run:
+    """A checked run: the job, what the output must hold, and what remains to do."""
+
+    job: Job
+    description: dict
+    outputs: tuple  # (name, dtype, shape, chunks)
+    lead: tuple
+    pending: list = field(default_factory=list)
+    resumed: int = 0
+    complete: bool = False  # the output already holds the whole result
 
 
 def _output_arrays(job: Job) -> dict:

@@ -30,13 +30,21 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import robots
 from .._support.version import __version__
-from .batch_data import Constant, Job, Source, _previous_description, finish_output, prepare_output, run_chunk
+from .batch_data import (
+    Constant,
+    Job,
+    Run,
+    Source,
+    _previous_description,
+    finish_output,
+    prepare_output,
+    run_chunk,
+)
 from .batch_operations import (
     DEFAULT_CHUNK_BYTES,
     DONE,
@@ -85,19 +93,6 @@ def _load_model(args):
 
 
 # ---- planning ------------------------------------------------------------------------------------------
-
-
-@dataclass
-class Run:
-    """A checked run: the job, what the output must hold, and what remains to do."""
-
-    job: Job
-    description: dict
-    outputs: tuple  # (name, dtype, shape, chunks)
-    lead: tuple
-    pending: list = field(default_factory=list)
-    resumed: int = 0
-    complete: bool = False  # the output already holds the whole result
 
 
 def _describe_error(message: str, named: dict) -> str:
