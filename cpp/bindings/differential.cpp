@@ -50,34 +50,6 @@ struct Damped {
   double lambda2;
 };
 
-// Damped least squares, B samples at a time in lanes for the fixed shapes (diff::dls_block); a sample
-// whose damping is below rounding, or whose lane answer is not finite, is solved again alone.
-template <typename T, int M, int N>
-void dls_blocks(const T* J, const T* dx, T lambda2, T* out, std::ptrdiff_t count) {
-  constexpr int B = diff::kDlsBlock;
-  T Js[M * N][B], dxs[M][B], dqs[N][B];
-  bool finite[B];
-  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
-    const int k = static_cast<int>(std::min<std::ptrdiff_t>(B, count - b0));
-    for (int i = 0; i < B; ++i) {
-      const T* Ji = i < k ? J + (b0 + i) * M * N : nullptr;
-      const T* di = i < k ? dx + (b0 + i) * M : nullptr;
-      finite[i] = i < k && diff::all_finite(Ji, M * N) && diff::all_finite(di, M);
-      for (int r = 0; r < M * N; ++r) Js[r][i] = finite[i] ? Ji[r] : T(0);
-      for (int r = 0; r < M; ++r) dxs[r][i] = finite[i] ? di[r] : T(0);
-    }
-    diff::dls_block<T, M, N>(Js, dxs, lambda2, dqs);
-    for (int i = 0; i < k; ++i) {
-      T* dq = out + (b0 + i) * N;
-      bool ok = finite[i];
-      for (int c = 0; c < N; ++c) ok = ok && std::isfinite(dqs[c][i]), dq[c] = finite[i] ? dqs[c][i] : quiet_nan<T>();
-      const T* Ji = J + (b0 + i) * M * N;
-      if (finite[i] && (!ok || diff::damping_below_rounding(Ji, M, N, lambda2)))
-        diff::pinv_solve<T>(Ji, dx + (b0 + i) * M, nullptr, M, N, dq);
-    }
-  }
-}
-
 py::object dls(py::handle J, py::handle dx, double damping, py::handle nullspace, py::handle out) {
   if (!(damping >= 0.0) || !std::isfinite(damping))
     throw py::value_error("damping must be finite and >= 0, got " + std::to_string(damping));
@@ -89,9 +61,9 @@ py::object dls(py::handle J, py::handle dx, double damping, py::handle nullspace
                 const Damped& d = binder::context<Damped>(c);
                 const T lambda2 = T(d.lambda2);
                 if (!b.in[2] && d.lambda2 > 0.0) {
-                  if (d.m == 6 && d.n == 6) return dls_blocks<T, 6, 6>(b.in[0], b.in[1], lambda2, b.real(0), b.m);
-                  if (d.m == 3 && d.n == 3) return dls_blocks<T, 3, 3>(b.in[0], b.in[1], lambda2, b.real(0), b.m);
-                  if (d.m == 12 && d.n == 18) return dls_blocks<T, 12, 18>(b.in[0], b.in[1], lambda2, b.real(0), b.m);
+                  if (d.m == 6 && d.n == 6) return diff::dls_rows<T, 6, 6>(b.in[0], b.in[1], lambda2, b.real(0), b.m);
+                  if (d.m == 3 && d.n == 3) return diff::dls_rows<T, 3, 3>(b.in[0], b.in[1], lambda2, b.real(0), b.m);
+                  if (d.m == 12 && d.n == 18) return diff::dls_rows<T, 12, 18>(b.in[0], b.in[1], lambda2, b.real(0), b.m);
                 }
                 for (std::ptrdiff_t i = 0; i < b.m; ++i)
                   diff::dls<T>(b.in[0] + i * d.m * d.n, b.in[1] + i * d.m, b.in[2] ? b.in[2] + i * d.n : nullptr,

@@ -1,66 +1,63 @@
-// Bindings for Paul's equation solvers: broadcast 1-D float64 inputs, every root.
+// Bindings for Paul's equation solvers: every coefficient a batched scalar (broadcast like NumPy by
+// the binder), computed in float64; every root with its validity.
 #include "spotkin/paul.hpp"
 
+#include <type_traits>
+
+#include "binder.hpp"
 #include "bindings.hpp"
-#include "numpy_boundary.hpp"
 
 namespace spotkin::bindings {
 
 namespace {
 
-// All inputs arrive flattened and broadcast to the same length by the façade.
-std::vector<const double*> inputs(const std::vector<py::array_t<double, py::array::c_style>>& arrays, py::ssize_t& n) {
-  n = arrays.empty() ? 0 : arrays[0].size();
-  std::vector<const double*> ptrs;
-  for (const auto& a : arrays) {
-    if (a.ndim() != 1 || a.size() != n) throw py::value_error("Paul solver inputs must be 1-D of equal length");
-    ptrs.push_back(a.data());
-  }
-  return ptrs;
+using binder::Arg;
+using binder::Kind;
+using binder::Op;
+using binder::Out;
+
+py::object type2(py::handle X, py::handle Y, py::handle Z) {
+  static const Op op = Op({Arg("X", {}), Arg("Y", {}), Arg("Z", {})}, {Out("t", {2}), Out("valid", {2}, Kind::Bool)},
+                          20.0, [](const void*, const auto& b) {
+                            if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>)
+                              for (std::ptrdiff_t i = 0; i < b.m; ++i) {  // X sin t + Y cos t = Z
+                                const auto r = paul::type2(b.in[0][i], b.in[1][i], b.in[2][i]);
+                                for (int k = 0; k < 2; ++k)
+                                  b.real(0)[2 * i + k] = r.t[k], b.flags(1)[2 * i + k] = r.valid[k] != 0.0;
+                              }
+                          })
+                           .float64_only();
+  return binder::call(op, nullptr, {X, Y, Z}, py::none());
 }
 
-using Flat = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-py::tuple type2(Flat X, Flat Y, Flat Z) {
-  py::ssize_t n;
-  auto in = inputs({X, Y, Z}, n);
-  py::array_t<double> t({n, py::ssize_t(2)});
-  py::array_t<bool> valid({n, py::ssize_t(2)});
-  double* td = t.mutable_data();
-  bool* vd = valid.mutable_data();
-  for (py::ssize_t i = 0; i < n; ++i) {
-    const auto r = paul::type2(in[0][i], in[1][i], in[2][i]);
-    for (int k = 0; k < 2; ++k) td[2 * i + k] = r.t[k], vd[2 * i + k] = r.valid[k] != 0.0;
-  }
-  return py::make_tuple(t, valid);
+py::object type3(py::handle X1, py::handle Y1, py::handle Z1, py::handle X2, py::handle Y2, py::handle Z2) {
+  static const Op op = Op({Arg("X1", {}), Arg("Y1", {}), Arg("Z1", {}), Arg("X2", {}), Arg("Y2", {}), Arg("Z2", {})},
+                          {Out("t", {}), Out("valid", {}, Kind::Bool)}, 20.0, [](const void*, const auto& b) {
+                            if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>)
+                              for (std::ptrdiff_t i = 0; i < b.m; ++i) {  // two equations in (sin t, cos t)
+                                const auto r = paul::type3(b.in[0][i], b.in[1][i], b.in[2][i], b.in[3][i],
+                                                           b.in[4][i], b.in[5][i]);
+                                b.real(0)[i] = r.t, b.flags(1)[i] = r.valid != 0.0;
+                              }
+                          })
+                           .float64_only();
+  return binder::call(op, nullptr, {X1, Y1, Z1, X2, Y2, Z2}, py::none());
 }
 
-py::tuple type3(Flat X1, Flat Y1, Flat Z1, Flat X2, Flat Y2, Flat Z2) {
-  py::ssize_t n;
-  auto in = inputs({X1, Y1, Z1, X2, Y2, Z2}, n);
-  py::array_t<double> t(n);
-  py::array_t<bool> valid(n);
-  double* td = t.mutable_data();
-  bool* vd = valid.mutable_data();
-  for (py::ssize_t i = 0; i < n; ++i) {
-    const auto r = paul::type3(in[0][i], in[1][i], in[2][i], in[3][i], in[4][i], in[5][i]);
-    td[i] = r.t, vd[i] = r.valid != 0.0;
-  }
-  return py::make_tuple(t, valid);
-}
-
-py::tuple type6(Flat W, Flat X, Flat Y, Flat Z1, Flat Z2) {
-  py::ssize_t n;
-  auto in = inputs({W, X, Y, Z1, Z2}, n);
-  py::array_t<double> ti({n, py::ssize_t(2)}), tj({n, py::ssize_t(2)});
-  py::array_t<bool> valid({n, py::ssize_t(2)});
-  double *tid = ti.mutable_data(), *tjd = tj.mutable_data();
-  bool* vd = valid.mutable_data();
-  for (py::ssize_t i = 0; i < n; ++i) {
-    const auto r = paul::type6(in[0][i], in[1][i], in[2][i], in[3][i], in[4][i]);
-    for (int k = 0; k < 2; ++k) tid[2 * i + k] = r.ti[k], tjd[2 * i + k] = r.tj[k], vd[2 * i + k] = r.valid[k] != 0.0;
-  }
-  return py::make_tuple(ti, tj, valid);
+py::object type6(py::handle W, py::handle X, py::handle Y, py::handle Z1, py::handle Z2) {
+  static const Op op =
+      Op({Arg("W", {}), Arg("X", {}), Arg("Y", {}), Arg("Z1", {}), Arg("Z2", {})},
+         {Out("ti", {2}), Out("tj", {2}), Out("valid", {2}, Kind::Bool)}, 40.0, [](const void*, const auto& b) {
+           if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>)
+             for (std::ptrdiff_t i = 0; i < b.m; ++i) {  // the coupled (ti, tj) pair
+               const auto r = paul::type6(b.in[0][i], b.in[1][i], b.in[2][i], b.in[3][i], b.in[4][i]);
+               for (int k = 0; k < 2; ++k)
+                 b.real(0)[2 * i + k] = r.ti[k], b.real(1)[2 * i + k] = r.tj[k],
+                                  b.flags(2)[2 * i + k] = r.valid[k] != 0.0;
+             }
+         })
+          .float64_only();
+  return binder::call(op, nullptr, {W, X, Y, Z1, Z2}, py::none());
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Bindings of the standing statics (spotkin/dynamics/statics.hpp) and of a legged robot's whole-body
+// Bindings of the standing statics (spotkin/dynamics/robot_statics.hpp) and of a legged robot's whole-body
 // centre of mass, through the binder: every per-sample array broadcasts over the leading dimensions.
 // RobotStatics computes a robot's centre of mass and standing torques from its body pose and joints
 // in one kernel (the floating model's centre of mass and gravity torques, the legs' FK and Jacobians,
@@ -15,7 +15,7 @@
 #include "dynamics_boundary.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/body.hpp"
-#include "spotkin/dynamics/statics.hpp"
+#include "spotkin/dynamics/robot_statics.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
@@ -52,30 +52,8 @@ py::tuple standing_torques(py::handle com, double mass, py::handle feet, py::han
                    2000.0, [](const void* c, const auto& b) {
                      if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>) {
                        const Standing& s = binder::context<Standing>(c);
-                       const int L = s.legs;
-                       for (std::ptrdiff_t i = 0; i < b.m; ++i) {
-                         double* t = b.real(0) + 3 * L * i;
-                         double* f = b.real(1) + 3 * L * i;
-                         std::int8_t* st = b.status(2) + i;
-                         double* mg = b.real(3) + i;
-                         std::uint8_t on[dynamics::kMaxFeet];
-                         bool stance_ok = true;
-                         for (int l = 0; l < L; ++l) {
-                           const double v = b.in[4][L * i + l];
-                           on[l] = v != 0.0;
-                           stance_ok = stance_ok && (v == 0.0 || v == 1.0);
-                         }
-                         if (!stance_ok) {  // a NaN in the mask: invalid, as any non-finite input
-                           std::fill(t, t + 3 * L, std::numeric_limits<double>::quiet_NaN());
-                           std::fill(f, f + 3 * L, std::numeric_limits<double>::quiet_NaN());
-                           *st = static_cast<std::int8_t>(dynamics::Stance::InvalidInput);
-                           *mg = std::numeric_limits<double>::quiet_NaN();
-                           continue;
-                         }
-                         dynamics::standing_sample(L, b.in[0] + 3 * i, s.mass, b.in[1] + 3 * L * i,
-                                                   b.in[2] + 9 * L * i, b.in[3] + 3 * L * i, on, b.in[5] + 3 * i, t,
-                                                   f, st, mg);
-                       }
+                       dynamics::standing_rows(s.legs, s.mass, b.in[0], b.in[1], b.in[2], b.in[3], b.in[4], b.in[5],
+                                               b.real(0), b.real(1), b.status(2), b.real(3), b.m);
                      }
                    })
                    .float64_only();
@@ -93,12 +71,7 @@ struct RobotStatics {
   const FloatingDynamics& floating;
   double mass;
   int n_arm;
-  int nq() const { return floating.f64.nq(); }
-  int nv() const { return floating.f64.nv(); }
 };
-
-constexpr int kSubBlock = 16;  // samples per call of the floating kernels (scratch on the stack)
-constexpr int kMaxQ = 128;     // the floating model's q, at most
 
 struct StaticsCall {
   const RobotStatics& robot;
@@ -106,128 +79,21 @@ struct StaticsCall {
   double gravity[3];
 };
 
-// One sub-block's poses and floating coordinates: T (16 per sample, NaN when invalid), qf (nq per
-// sample: the body at the origin, then the joints; an invalid sample's joints at zero) and whether
-// each sample is valid (a rigid pose, finite joints).
+// The kernel's rows of a binder block: the pose, q (the legs', or the legs' then the arm's) and the stance.
 template <typename T>
-void load_sub_block(const StaticsCall& s, const binder::Block<T>& b, std::ptrdiff_t first, int m, double* Tm,
-                    double* qf, bool* valid) {
-  const int nq = s.robot.nq(), width = 3 * s.robot.body.n_legs() + (b.shape[1] == 1 ? s.robot.n_arm : 0);
-  const auto format = static_cast<BodyPoseFormat>(b.shape[0]);
-  for (int i = 0; i < m; ++i) {
-    const std::ptrdiff_t k = first + i;
-    valid[i] = body_batch::pose_transform(b.in[0] + b.stride[0] * k, format, s.seq, Tm + 16 * i);
-    const T* q = b.in[1] + b.stride[1] * k;
-    double* row = qf + nq * i;
-    std::fill(row, row + nq, 0.0);
-    row[6] = 1.0;  // the identity quaternion [0, 0, 0, 1]
-    bool finite = true;
-    for (int j = 0; j < width; ++j) finite &= std::isfinite(double(q[j]));
-    valid[i] = valid[i] && finite;
-    if (finite)
-      for (int j = 0; j < width; ++j) row[7 + j] = double(q[j]);
-  }
+dynamics::StaticsRows<T> statics_rows(const binder::Block<T>& b) {
+  dynamics::StaticsRows<T> rows{b.in[0], b.stride[0], static_cast<BodyPoseFormat>(b.shape[0]),
+                                b.in[1], b.stride[1], b.shape[1] == 1};
+  rows.stance = b.in[2], rows.stance_stride = b.stride[2];
+  return rows;
 }
 
-// The centre of mass in the body frame (3 per sample) of a sub-block's floating coordinates.
-void body_frame_com(const RobotStatics& r, const double* qf, int m, double* com) {
+// f(the robot with the active level's floating model)
+template <typename F>
+void on_robot(const RobotStatics& r, F&& f) {
   with_model<double>(r.floating, [&](const auto& model) {
-    dynamics::floating_com_k(model, Rows<double>{qf, r.nq()}, com, false, 0, m, false);
+    f(dynamics::RobotStaticsModel<std::decay_t<decltype(model)>>{r.body, model, r.mass, r.n_arm});
   });
-}
-
-// com = t + R c: the robot's centre of mass in the world (..., 3).
-template <typename T>
-void com_kernel(const void* c, const binder::Block<T>& b) {
-  const StaticsCall& s = binder::context<StaticsCall>(c);
-  double Tm[16 * kSubBlock], qf[kMaxQ * kSubBlock], com[3 * kSubBlock];
-  bool valid[kSubBlock];
-  for (std::ptrdiff_t first = 0; first < b.m; first += kSubBlock) {
-    const int m = int(std::min<std::ptrdiff_t>(kSubBlock, b.m - first));
-    load_sub_block(s, b, first, m, Tm, qf, valid);
-    body_frame_com(s.robot, qf, m, com);
-    for (int i = 0; i < m; ++i) {
-      T* out = b.real(0) + 3 * (first + i);
-      const double* M = Tm + 16 * i;
-      for (int r = 0; r < 3; ++r) {
-        const double v = M[4 * r + 3] + M[4 * r] * com[3 * i] + M[4 * r + 1] * com[3 * i + 1] + M[4 * r + 2] * com[3 * i + 2];
-        out[r] = valid[i] ? T(v) : T(quiet_nan<double>());
-      }
-    }
-  }
-}
-
-// The standing statics of each sample, in the body frame where only gravity's direction depends on
-// the pose: tau_l = G_l - J_l^T f_l (spotkin/dynamics/statics.hpp), the forces then turned to the world.
-template <typename T>
-void standing_kernel(const void* c, const binder::Block<T>& b) {
-  const StaticsCall& s = binder::context<StaticsCall>(c);
-  const Body& body = s.robot.body;
-  const int L = body.n_legs(), nv = s.robot.nv();
-  constexpr double nan = quiet_nan<double>();
-  double Tm[16 * kSubBlock], qf[kMaxQ * kSubBlock], com[3 * kSubBlock], g_body[3 * kSubBlock];
-  double gravity_torques[kMaxQ * kSubBlock];
-  bool valid[kSubBlock];
-  for (std::ptrdiff_t first = 0; first < b.m; first += kSubBlock) {
-    const int m = int(std::min<std::ptrdiff_t>(kSubBlock, b.m - first));
-    load_sub_block(s, b, first, m, Tm, qf, valid);
-    for (int i = 0; i < m; ++i) {  // g_body = R^T g
-      const double* M = Tm + 16 * i;
-      for (int r = 0; r < 3; ++r)
-        g_body[3 * i + r] = valid[i] ? M[r] * s.gravity[0] + M[4 + r] * s.gravity[1] + M[8 + r] * s.gravity[2] : 0.0;
-    }
-    body_frame_com(s.robot, qf, m, com);
-    with_model<double>(s.robot.floating, [&](const auto& model) {
-      dynamics::floating_rnea_k(model, Rows<double>{qf, s.robot.nq()}, nullptr, nullptr, Rows<double>{g_body, 3},
-                                gravity_torques, 0, m, false);
-    });
-    for (int i = 0; i < m; ++i) {
-      const std::ptrdiff_t k = first + i;
-      T* tau_out = b.real(0) + 3 * L * k;
-      T* force_out = b.real(1) + 3 * L * k;
-      std::int8_t* status = b.status(2) + k;
-      T* margin = b.real(3) + k;
-      std::uint8_t on[dynamics::kMaxFeet];
-      bool ok = valid[i];
-      for (int l = 0; l < L; ++l) {
-        const double v = b.in[2] ? double(b.in[2][b.stride[2] * k + l]) : 1.0;
-        on[l] = v != 0.0;
-        ok = ok && (v == 0.0 || v == 1.0);  // a NaN in the mask: invalid, as any non-finite input
-      }
-      if (!ok) {
-        std::fill(tau_out, tau_out + 3 * L, T(nan));
-        std::fill(force_out, force_out + 3 * L, T(nan));
-        *status = static_cast<std::int8_t>(dynamics::Stance::InvalidInput);
-        *margin = T(nan);
-        continue;
-      }
-      double feet[3 * dynamics::kMaxFeet], jacobians[9 * dynamics::kMaxFeet], leg_gravity[3 * dynamics::kMaxFeet];
-      const double* joints = qf + s.robot.nq() * i + 7;
-      for (int l = 0; l < L; ++l) {  // the feet in the body frame: hip + leg FK, and d foot / d q_l
-        const auto& col = body.columns[std::size_t(l)];
-        const double q_leg[3] = {joints[col[0]], joints[col[1]], joints[col[2]]};
-        body.legs[std::size_t(l)].forward(q_leg, feet + 3 * l);
-        body.legs[std::size_t(l)].jacobian(q_leg, jacobians + 9 * l);
-        for (int r = 0; r < 3; ++r) {
-          feet[3 * l + r] += body.hips[std::size_t(l)][std::size_t(r)];
-          leg_gravity[3 * l + r] = gravity_torques[nv * i + 6 + col[std::size_t(r)]];
-        }
-      }
-      double tau[3 * dynamics::kMaxFeet], forces[3 * dynamics::kMaxFeet], margin_value;
-      dynamics::standing_sample(L, com + 3 * i, s.robot.mass, feet, jacobians, leg_gravity, on, g_body + 3 * i, tau,
-                                forces, status, &margin_value);
-      const double* M = Tm + 16 * i;
-      for (int l = 0; l < L; ++l) {
-        const auto& col = body.columns[std::size_t(l)];
-        const double* f = forces + 3 * l;
-        for (int r = 0; r < 3; ++r) {
-          tau_out[col[std::size_t(r)]] = T(tau[3 * l + r]);
-          force_out[3 * l + r] = T(M[4 * r] * f[0] + M[4 * r + 1] * f[1] + M[4 * r + 2] * f[2]);  // R f
-        }
-      }
-      *margin = T(margin_value);
-    }
-  }
 }
 
 // body_pose (any form) and q (..., 3 n_legs [+ n_arm]).
@@ -273,8 +139,10 @@ binder::OpCache::Key statics_key(const RobotStatics& r) {
 py::object robot_com(const RobotStatics& r, py::handle pose, int sequence, py::handle q, py::handle out) {
   static binder::OpCache ops;
   const auto make = [&] {
-    return Op({statics_pose(), statics_q(r)}, {Out("com", {3})}, 600.0,
-              [](const void* c, const auto& b) { com_kernel(c, b); });
+    return Op({statics_pose(), statics_q(r)}, {Out("com", {3})}, 600.0, [](const void* c, const auto& b) {
+      const StaticsCall& s = binder::context<StaticsCall>(c);
+      on_robot(s.robot, [&](const auto& robot) { dynamics::robot_com(robot, s.seq, statics_rows(b), b.real(0), b.m); });
+    });
   };
   const StaticsCall call{r, EulerSequence::from_code(sequence), {0.0, 0.0, 0.0}};
   return ops.with(statics_key(r), make, [&](const Op& op) { return binder::call(op, &call, {pose, q}, out); });
@@ -287,7 +155,13 @@ py::object robot_standing(const RobotStatics& r, py::handle pose, int sequence, 
   const auto make = [&] {
     return Op({statics_pose(), statics_q(r), Arg("stance", {L}).maybe_none().parameter()},
               {Out("tau", {3 * L}), Out("forces", {L, 3}), Out("status", {}, Kind::Code), Out("margin", {})},
-              2000.0, [](const void* c, const auto& b) { standing_kernel(c, b); });
+              2000.0, [](const void* c, const auto& b) {
+                const StaticsCall& s = binder::context<StaticsCall>(c);
+                on_robot(s.robot, [&](const auto& robot) {
+                  dynamics::robot_standing(robot, s.seq, s.gravity, statics_rows(b), b.real(0), b.real(1), b.status(2),
+                                           b.real(3), b.m);
+                });
+              });
   };
   StaticsCall call{r, EulerSequence::from_code(sequence), {}};
   read_gravity(gravity, r.mass, call.gravity);
@@ -299,8 +173,8 @@ RobotStatics make_robot_statics(const Body& body, const FloatingDynamics& floati
   const int legs = 3 * body.n_legs();
   const int n_arm = floating.f64.nq() - 7 - legs;
   if (n_arm < 0) throw py::value_error("the floating model has fewer joints than the legs");
-  if (floating.f64.nq() > kMaxQ)
-    throw py::value_error("a robot's statics take at most " + std::to_string(kMaxQ - 7) + " joints");
+  if (floating.f64.nq() > dynamics::kStaticsMaxQ)
+    throw py::value_error("a robot's statics take at most " + std::to_string(dynamics::kStaticsMaxQ - 7) + " joints");
   if (body.n_legs() > dynamics::kMaxFeet)
     throw py::value_error("a robot's statics take at most " + std::to_string(dynamics::kMaxFeet) + " legs");
   if (!(mass > 0.0) || !std::isfinite(mass)) throw py::value_error("mass must be finite and positive");

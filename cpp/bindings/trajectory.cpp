@@ -61,61 +61,15 @@ void require_positive(const std::vector<double>& v, const char* name) {
       throw py::value_error(std::string(name) + " must be positive and finite, got " + std::to_string(x));
 }
 
+// The plan's inputs checked here (shapes, finite, positive rates); planned by the core.
 class PointToPointCore {
  public:
-  PointToPointCore(py::handle q0_obj, py::handle qf_obj, py::handle vmax_obj, py::handle amax_obj,
-                   int profile)
-      : profile_(static_cast<tj::Profile>(profile)) {
-    if (profile < 0 || profile > 2) throw py::value_error("profile must be 0 (cubic), 1 (quintic) or 2 (trapezoid)");
-    q0_ = vector_arg(q0_obj, "q0", -1, false);
-    const auto n = static_cast<py::ssize_t>(q0_.size());
-    {
-      py::array qf_arr = as_real_array(qf_obj, "qf");
-      if (qf_arr.ndim() != 1 || qf_arr.shape(0) != n)
-        throw py::value_error("qf must have the shape of q0, " + format_shape({n}) + ", got " +
-                              format_shape(shape_of(qf_arr)));
-    }
-    qf_ = vector_arg(qf_obj, "qf", n, false);
-    vmax_ = vector_arg(vmax_obj, "vmax", n, true);
-    amax_ = vector_arg(amax_obj, "amax", n, true);
-    require_finite(q0_, "q0");
-    require_finite(qf_, "qf");
-    require_positive(vmax_, "vmax");
-    require_positive(amax_, "amax");
-    axis_durations_.resize(q0_.size());
-    duration_ = 0.0;
-    for (std::size_t j = 0; j < q0_.size(); ++j) {
-      axis_durations_[j] = tj::min_duration(profile_, std::fabs(qf_[j] - q0_[j]), vmax_[j], amax_[j]);
-      duration_ = std::max(duration_, axis_durations_[j]);
-    }
-    accel_.assign(q0_.size(), 0.0);
-    cruise_.assign(q0_.size(), 0.0);
-    ramp_.assign(q0_.size(), 0.0);
-    if (profile_ == tj::Profile::Trapezoid) {
-      for (std::size_t j = 0; j < q0_.size(); ++j) {
-        const double D = qf_[j] - q0_[j];
-        const double v = tj::stretched_cruise_speed(std::fabs(D), amax_[j], duration_);
-        if (v > 0.0) {
-          accel_[j] = std::copysign(amax_[j], D);
-          cruise_[j] = std::copysign(v, D);
-          ramp_[j] = std::min(v / amax_[j], 0.5 * duration_);
-        }
-      }
-    }
-    keep_params();
-  }
-
-  void keep_params() {
-    int k = 0;
-    for (const auto* src : {&q0_, &qf_, &accel_, &cruise_, &ramp_}) {
-      params64_[k] = *src;
-      params32_[k++].assign(src->begin(), src->end());
-    }
-  }
+  PointToPointCore(py::handle q0_obj, py::handle qf_obj, py::handle vmax_obj, py::handle amax_obj, int profile)
+      : plan_(checked_plan(q0_obj, qf_obj, vmax_obj, amax_obj, profile)) {}
 
   // t (...) -> (q, qd, qdd), each (..., n), in t's precision.
   py::object sample(py::handle t, py::handle out) const {
-    const auto n = static_cast<py::ssize_t>(q0_.size());
+    const auto n = static_cast<py::ssize_t>(plan_.q0.size());
     const binder::Op op({binder::Arg("t", {})}, {binder::Out("q", {n}), binder::Out("qd", {n}), binder::Out("qdd", {n})},
                         kNsPerJointSample, [](const void* c, const auto& b) {
                           // through a member function: inlined into the lambda, the loop measured 18 % slower
@@ -127,21 +81,29 @@ class PointToPointCore {
 
   template <typename T>
   void sample_block(const T* t, T* q, T* qd, T* qdd, std::ptrdiff_t count) const {
-    const auto& p = params(T{});
-    const tj::PointToPoint<T> traj{profile_,    static_cast<int>(q0_.size()), T(duration_), p[0].data(),
-                                   p[1].data(), p[2].data(),                  p[3].data(),  p[4].data()};
-    tj::sample(traj, t, q, qd, qdd, count);
+    tj::sample(plan_.view(T{}), t, q, qd, qdd, count);
   }
 
-  // q0, qf, accel, cruise, ramp in each precision (built once).
-  const std::array<std::vector<double>, 5>& params(double) const { return params64_; }
-  const std::array<std::vector<float>, 5>& params(float) const { return params32_; }
+  tj::PointToPointPlan plan_;
 
-  double duration_;
-  tj::Profile profile_;
-  std::vector<double> q0_, qf_, vmax_, amax_, axis_durations_, accel_, cruise_, ramp_;
-  std::array<std::vector<double>, 5> params64_;
-  std::array<std::vector<float>, 5> params32_;
+ private:
+  static tj::PointToPointPlan checked_plan(py::handle q0_obj, py::handle qf_obj, py::handle vmax_obj,
+                                           py::handle amax_obj, int profile) {
+    if (profile < 0 || profile > 2) throw py::value_error("profile must be 0 (cubic), 1 (quintic) or 2 (trapezoid)");
+    std::vector<double> q0 = vector_arg(q0_obj, "q0", -1, false);
+    const auto n = static_cast<py::ssize_t>(q0.size());
+    py::array qf_arr = as_real_array(qf_obj, "qf");
+    if (qf_arr.ndim() != 1 || qf_arr.shape(0) != n)
+      throw py::value_error("qf must have the shape of q0, " + format_shape({n}) + ", got " +
+                            format_shape(shape_of(qf_arr)));
+    std::vector<double> qf = vector_arg(qf_obj, "qf", n, false);
+    const std::vector<double> vmax = vector_arg(vmax_obj, "vmax", n, true), amax = vector_arg(amax_obj, "amax", n, true);
+    require_finite(q0, "q0");
+    require_finite(qf, "qf");
+    require_positive(vmax, "vmax");
+    require_positive(amax, "amax");
+    return tj::PointToPointPlan(static_cast<tj::Profile>(profile), std::move(q0), std::move(qf), vmax, amax);
+  }
 };
 
 py::array_t<double> to_array(const std::vector<double>& v) {
@@ -150,50 +112,16 @@ py::array_t<double> to_array(const std::vector<double>& v) {
   return out;
 }
 
-// The timing and geometry are planned by the Python façade (spotkin.trajectory).
+// The timing and geometry are planned by the Python façade (spotkin.trajectory); checked here.
 class WaypointPathCore {
  public:
   WaypointPathCore(py::handle times, py::handle blends, py::handle positions, py::handle quaternions,
-                   py::handle linear, py::handle angular) {
-    times_ = vector_arg(times, "times", -1, false);
-    const auto W = static_cast<py::ssize_t>(times_.size());
-    if (W < 1) throw py::value_error("times must hold at least one waypoint");
-    blends_ = vector_arg(blends, "blends", W, false);
-    positions_ = rows(positions, "positions", W, 3);
-    quaternions_ = rows(quaternions, "quaternions", W, 4);
-    linear_ = rows(linear, "linear", W - 1, 3);
-    angular_ = rows(angular, "angular", W - 1, 3);
-    for (const auto* v : {&times_, &blends_, &positions_, &quaternions_, &linear_, &angular_})
-      require_finite(*v, "waypoint path data");
-    for (std::size_t k = 0; k + 1 < times_.size(); ++k) {
-      const double* w = angular_.data() + 3 * k;
-      const double rate = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-      rates_.push_back(rate);
-      for (int c = 0; c < 3; ++c) axes_.push_back(rate > 0.0 ? w[c] / rate : 0.0);
-    }
-    blend_starts_.resize(times_.size());
-    for (std::size_t k = 0; k < times_.size(); ++k) {
-      if (blends_[k] < 0.0) throw py::value_error("blends must be >= 0");
-      blend_starts_[k] = times_[k] - 0.5 * blends_[k];
-      if (k > 0 && blend_starts_[k] < blend_starts_[k - 1])
-        throw py::value_error("blends must not overlap");
-    }
-    duration_ = times_.back() + 0.5 * blends_.back();
-  }
+                   py::handle linear, py::handle angular)
+      : data_(checked_data(times, blends, positions, quaternions, linear, angular)) {}
 
   py::object sample(py::handle t, int form, bool with_twist) const {
     if (form != 0 && form != 1) throw py::value_error("form must be 0 (matrix) or 1 (quaternion)");
-    const tj::WaypointPath path{static_cast<std::ptrdiff_t>(times_.size()),
-                                times_.data(),
-                                blends_.data(),
-                                blend_starts_.data(),
-                                positions_.data(),
-                                quaternions_.data(),
-                                linear_.data(),
-                                angular_.data(),
-                                axes_.data(),
-                                rates_.data(),
-                                duration_};
+    const tj::WaypointPath path = data_.view();
     struct Sampling {
       const tj::WaypointPath& path;
       tj::PoseForm form;
@@ -209,10 +137,21 @@ class WaypointPathCore {
                         &context, {t}, py::none());
   }
 
-  double duration_;
-  std::vector<double> times_, blends_, blend_starts_, positions_, quaternions_, linear_, angular_, axes_, rates_;
+  tj::WaypointPathData data_;
 
  private:
+  static tj::WaypointPathData checked_data(py::handle times_obj, py::handle blends_obj, py::handle positions,
+                                           py::handle quaternions, py::handle linear, py::handle angular) {
+    std::vector<double> times = vector_arg(times_obj, "times", -1, false);
+    const auto W = static_cast<py::ssize_t>(times.size());
+    if (W < 1) throw py::value_error("times must hold at least one waypoint");
+    std::vector<double> blends = vector_arg(blends_obj, "blends", W, false), p = rows(positions, "positions", W, 3),
+                        q = rows(quaternions, "quaternions", W, 4), v = rows(linear, "linear", W - 1, 3),
+                        w = rows(angular, "angular", W - 1, 3);
+    for (const auto* x : {&times, &blends, &p, &q, &v, &w}) require_finite(*x, "waypoint path data");
+    return tj::WaypointPathData(std::move(times), std::move(blends), std::move(p), std::move(q), std::move(v),
+                                std::move(w));
+  }
   static std::vector<double> rows(py::handle obj, const char* name, py::ssize_t n, py::ssize_t width) {
     py::array arr = contiguous<double>(as_real_array(obj, name));
     if (arr.ndim() != 2 || arr.shape(0) != n || arr.shape(1) != width)
@@ -229,18 +168,18 @@ void bind_trajectory(py::module_& m) {
   py::class_<PointToPointCore>(m, "PointToPoint")
       .def(py::init<py::handle, py::handle, py::handle, py::handle, int>(), py::arg("q0"), py::arg("qf"),
            py::arg("vmax"), py::arg("amax"), py::arg("profile"))
-      .def_readonly("duration", &PointToPointCore::duration_)
-      .def_property_readonly("axis_durations", [](const PointToPointCore& p) { return to_array(p.axis_durations_); })
-      .def_property_readonly("acceleration", [](const PointToPointCore& p) { return to_array(p.accel_); })
-      .def_property_readonly("cruise_velocity", [](const PointToPointCore& p) { return to_array(p.cruise_); })
-      .def_property_readonly("ramp_time", [](const PointToPointCore& p) { return to_array(p.ramp_); })
+      .def_property_readonly("duration", [](const PointToPointCore& p) { return p.plan_.duration; })
+      .def_property_readonly("axis_durations", [](const PointToPointCore& p) { return to_array(p.plan_.axis_durations); })
+      .def_property_readonly("acceleration", [](const PointToPointCore& p) { return to_array(p.plan_.accel); })
+      .def_property_readonly("cruise_velocity", [](const PointToPointCore& p) { return to_array(p.plan_.cruise); })
+      .def_property_readonly("ramp_time", [](const PointToPointCore& p) { return to_array(p.plan_.ramp); })
       .def("sample", &PointToPointCore::sample, py::arg("t"), py::arg("out") = py::none());
 
   py::class_<WaypointPathCore>(m, "WaypointPath")
       .def(py::init<py::handle, py::handle, py::handle, py::handle, py::handle, py::handle>(), py::arg("times"),
            py::arg("blends"), py::arg("positions"), py::arg("quaternions"), py::arg("linear"),
            py::arg("angular"))
-      .def_readonly("duration", &WaypointPathCore::duration_)
+      .def_property_readonly("duration", [](const WaypointPathCore& w) { return w.data_.duration; })
       .def("sample", &WaypointPathCore::sample, py::arg("t"), py::arg("form"), py::arg("twist"));
 
   m.def("trajectory_min_duration",

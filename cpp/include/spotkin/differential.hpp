@@ -184,6 +184,35 @@ inline Vec3<S> log_rotation(const Mat3<S>& R) noexcept {
   return theta * axis.normalized();
 }
 
+// Damped least squares over `count` contiguous rows of J (M x N) and dx (M), kDlsBlock samples at
+// a time in lanes (dls_block); a sample whose damping is below rounding, or whose lane answer is
+// not finite, is solved again alone (pinv_solve); a sample with a NaN or an Inf gets NaN.
+template <typename T, int M, int N>
+void dls_rows(const T* J, const T* dx, T lambda2, T* out, std::ptrdiff_t count) noexcept {
+  constexpr int B = kDlsBlock;
+  T Js[M * N][B], dxs[M][B], dqs[N][B];
+  bool finite[B];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
+    const int k = static_cast<int>(std::min<std::ptrdiff_t>(B, count - b0));
+    for (int i = 0; i < B; ++i) {
+      const T* Ji = i < k ? J + (b0 + i) * M * N : nullptr;
+      const T* di = i < k ? dx + (b0 + i) * M : nullptr;
+      finite[i] = i < k && all_finite(Ji, M * N) && all_finite(di, M);
+      for (int r = 0; r < M * N; ++r) Js[r][i] = finite[i] ? Ji[r] : T(0);
+      for (int r = 0; r < M; ++r) dxs[r][i] = finite[i] ? di[r] : T(0);
+    }
+    dls_block<T, M, N>(Js, dxs, lambda2, dqs);
+    for (int i = 0; i < k; ++i) {
+      T* dq = out + (b0 + i) * N;
+      bool ok = finite[i];
+      for (int c = 0; c < N; ++c) ok = ok && std::isfinite(dqs[c][i]), dq[c] = finite[i] ? dqs[c][i] : quiet_nan<T>();
+      const T* Ji = J + (b0 + i) * M * N;
+      if (finite[i] && (!ok || damping_below_rounding(Ji, M, N, lambda2)))
+        pinv_solve<T>(Ji, dx + (b0 + i) * M, nullptr, M, N, dq);
+    }
+  }
+}
+
 struct IkOptions {
   double damping = 1e-2;           // lambda
   double position_tolerance = 1e-6;     // m, ||p_target - p||

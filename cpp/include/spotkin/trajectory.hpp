@@ -22,6 +22,9 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "spotkin/common.hpp"
 #include "spotkin/vector_math.hpp"
@@ -87,6 +90,48 @@ struct PointToPoint {
   const Scalar* accel;
   const Scalar* cruise;
   const Scalar* ramp;
+};
+
+// A point-to-point plan (double): each axis' minimum duration under its vmax and amax, the common
+// duration t_f (the slowest axis'), and for the trapezoid each axis stretched to t_f (its signed
+// acceleration, cruise speed and ramp time; zero for an axis that does not move). The float copies
+// feed the float32 sampler. Inputs are checked by the caller (finite, vmax and amax > 0).
+struct PointToPointPlan {
+  Profile profile;
+  double duration = 0.0;
+  std::vector<double> q0, qf, axis_durations, accel, cruise, ramp;
+  std::vector<float> q0_f, qf_f, accel_f, cruise_f, ramp_f;
+
+  PointToPointPlan(Profile p, std::vector<double> start, std::vector<double> end, const std::vector<double>& vmax,
+                   const std::vector<double>& amax)
+      : profile(p), q0(std::move(start)), qf(std::move(end)) {
+    const std::size_t n = q0.size();
+    axis_durations.resize(n), accel.assign(n, 0.0), cruise.assign(n, 0.0), ramp.assign(n, 0.0);
+    for (std::size_t j = 0; j < n; ++j) {
+      axis_durations[j] = min_duration(profile, std::fabs(qf[j] - q0[j]), vmax[j], amax[j]);
+      duration = std::max(duration, axis_durations[j]);
+    }
+    if (profile == Profile::Trapezoid)
+      for (std::size_t j = 0; j < n; ++j) {
+        const double D = qf[j] - q0[j];
+        const double v = stretched_cruise_speed(std::fabs(D), amax[j], duration);
+        if (v > 0.0) {
+          accel[j] = std::copysign(amax[j], D);
+          cruise[j] = std::copysign(v, D);
+          ramp[j] = std::min(v / amax[j], 0.5 * duration);
+        }
+      }
+    const std::vector<double>* from[5] = {&q0, &qf, &accel, &cruise, &ramp};
+    std::vector<float>* to[5] = {&q0_f, &qf_f, &accel_f, &cruise_f, &ramp_f};
+    for (int k = 0; k < 5; ++k) to[k]->assign(from[k]->begin(), from[k]->end());
+  }
+  PointToPoint<double> view(double) const {
+    return {profile, int(q0.size()), duration, q0.data(), qf.data(), accel.data(), cruise.data(), ramp.data()};
+  }
+  PointToPoint<float> view(float) const {
+    return {profile, int(q0.size()), float(duration), q0_f.data(), qf_f.data(), accel_f.data(), cruise_f.data(),
+            ramp_f.data()};
+  }
 };
 
 // q, qd, qdd (rows of `axes`) at each of the n times t. Times outside [0, t_f]
@@ -195,6 +240,38 @@ struct WaypointPath {
   const double* axes;           // w_k / |w_k| (W-1, 3), zero for w_k = 0
   const double* rates;          // |w_k| (W-1)
   double duration;
+};
+
+// A waypoint path's data and what the sampler derives from it: each segment's angular rate |w_k|
+// and axis, each blend's start, the duration. Blends must be >= 0 and must not overlap
+// (std::invalid_argument otherwise); the data must be finite (checked by the caller).
+struct WaypointPathData {
+  std::vector<double> times, blends, positions, quaternions, linear, angular, blend_starts, axes, rates;
+  double duration = 0.0;
+
+  WaypointPathData(std::vector<double> t, std::vector<double> b, std::vector<double> p, std::vector<double> q,
+                   std::vector<double> v, std::vector<double> w)
+      : times(std::move(t)), blends(std::move(b)), positions(std::move(p)), quaternions(std::move(q)),
+        linear(std::move(v)), angular(std::move(w)) {
+    for (std::size_t k = 0; k + 1 < times.size(); ++k) {
+      const double* wk = angular.data() + 3 * k;
+      const double rate = std::sqrt(wk[0] * wk[0] + wk[1] * wk[1] + wk[2] * wk[2]);
+      rates.push_back(rate);
+      for (int c = 0; c < 3; ++c) axes.push_back(rate > 0.0 ? wk[c] / rate : 0.0);
+    }
+    blend_starts.resize(times.size());
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      if (blends[k] < 0.0) throw std::invalid_argument("blends must be >= 0");
+      blend_starts[k] = times[k] - 0.5 * blends[k];
+      if (k > 0 && blend_starts[k] < blend_starts[k - 1]) throw std::invalid_argument("blends must not overlap");
+    }
+    duration = times.back() + 0.5 * blends.back();
+  }
+  WaypointPath view() const {
+    return {std::ptrdiff_t(times.size()), times.data(),   blends.data(), blend_starts.data(), positions.data(),
+            quaternions.data(),           linear.data(),  angular.data(), axes.data(),        rates.data(),
+            duration};
+  }
 };
 
 enum class PoseForm : int { Matrix = 0, Quaternion = 1 };

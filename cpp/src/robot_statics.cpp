@@ -1,0 +1,170 @@
+// A legged robot's centre of mass and standing statics (spotkin/dynamics/robot_statics.hpp), compiled
+// once: the floating kernels it calls are dispatched per level, and the rest is a few small products
+// per sample and the stance forces' decomposition (statics.hpp, Eigen's dense solvers).
+#include "spotkin/dynamics/robot_statics.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "spotkin/dynamics/kernels.hpp"
+#include "spotkin/dynamics/statics.hpp"
+
+namespace spotkin::dynamics {
+
+namespace {
+
+// One sub-block's poses and floating coordinates: T (16 per sample, NaN when invalid), qf (nq per
+// sample: the body at the origin, then the joints; an invalid sample's joints at zero) and whether
+// each sample is valid (a rigid pose, finite joints).
+template <typename Model, typename T>
+void load_sub_block(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, const StaticsRows<T>& rows,
+                    std::ptrdiff_t first, int m, double* Tm, double* qf, bool* valid) {
+  const int nq = robot.floating.nq(), width = 3 * robot.body.n_legs() + (rows.with_arm ? robot.n_arm : 0);
+  for (int i = 0; i < m; ++i) {
+    const std::ptrdiff_t k = first + i;
+    valid[i] = body_batch::pose_transform(rows.pose + rows.pose_stride * k, rows.format, seq, Tm + 16 * i);
+    const T* q = rows.q + rows.q_stride * k;
+    double* row = qf + nq * i;
+    std::fill(row, row + nq, 0.0);
+    row[6] = 1.0;  // the identity quaternion [0, 0, 0, 1]
+    bool finite = true;
+    for (int j = 0; j < width; ++j) finite &= std::isfinite(double(q[j]));
+    valid[i] = valid[i] && finite;
+    if (finite)
+      for (int j = 0; j < width; ++j) row[7 + j] = double(q[j]);
+  }
+}
+
+}  // namespace
+
+template <typename Model, typename T>
+void robot_com(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, const StaticsRows<T>& rows, T* com_out,
+               std::ptrdiff_t count) {
+  double Tm[16 * kStaticsSubBlock], qf[kStaticsMaxQ * kStaticsSubBlock], com[3 * kStaticsSubBlock];
+  bool valid[kStaticsSubBlock];
+  for (std::ptrdiff_t first = 0; first < count; first += kStaticsSubBlock) {
+    const int m = int(std::min<std::ptrdiff_t>(kStaticsSubBlock, count - first));
+    load_sub_block(robot, seq, rows, first, m, Tm, qf, valid);
+    floating_com_k(robot.floating, Rows<double>{qf, robot.floating.nq()}, com, false, 0, m, false);
+    for (int i = 0; i < m; ++i) {
+      T* out = com_out + 3 * (first + i);
+      const double* M = Tm + 16 * i;
+      for (int r = 0; r < 3; ++r) {
+        const double v = M[4 * r + 3] + M[4 * r] * com[3 * i] + M[4 * r + 1] * com[3 * i + 1] + M[4 * r + 2] * com[3 * i + 2];
+        out[r] = valid[i] ? T(v) : T(quiet_nan<double>());
+      }
+    }
+  }
+}
+
+template <typename Model, typename T>
+void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, const double gravity[3],
+                    const StaticsRows<T>& rows, T* tau_rows, T* force_rows, std::int8_t* status_rows, T* margin_rows,
+                    std::ptrdiff_t count) {
+  const Body& body = robot.body;
+  const int L = body.n_legs(), nq = robot.floating.nq(), nv = robot.floating.nv();
+  constexpr double nan = quiet_nan<double>();
+  double Tm[16 * kStaticsSubBlock], qf[kStaticsMaxQ * kStaticsSubBlock], com[3 * kStaticsSubBlock];
+  double g_body[3 * kStaticsSubBlock], gravity_torques[kStaticsMaxQ * kStaticsSubBlock];
+  bool valid[kStaticsSubBlock];
+  for (std::ptrdiff_t first = 0; first < count; first += kStaticsSubBlock) {
+    const int m = int(std::min<std::ptrdiff_t>(kStaticsSubBlock, count - first));
+    load_sub_block(robot, seq, rows, first, m, Tm, qf, valid);
+    for (int i = 0; i < m; ++i) {  // g_body = R^T g
+      const double* M = Tm + 16 * i;
+      for (int r = 0; r < 3; ++r)
+        g_body[3 * i + r] = valid[i] ? M[r] * gravity[0] + M[4 + r] * gravity[1] + M[8 + r] * gravity[2] : 0.0;
+    }
+    floating_com_k(robot.floating, Rows<double>{qf, nq}, com, false, 0, m, false);
+    floating_rnea_k(robot.floating, Rows<double>{qf, nq}, nullptr, nullptr, Rows<double>{g_body, 3}, gravity_torques, 0,
+                    m, false);
+    for (int i = 0; i < m; ++i) {
+      const std::ptrdiff_t k = first + i;
+      T* tau_out = tau_rows + 3 * L * k;
+      T* force_out = force_rows + 3 * L * k;
+      std::int8_t* status = status_rows + k;
+      std::uint8_t on[kMaxFeet];
+      bool ok = valid[i];
+      for (int l = 0; l < L; ++l) {
+        const double v = rows.stance ? double(rows.stance[rows.stance_stride * k + l]) : 1.0;
+        on[l] = v != 0.0;
+        ok = ok && (v == 0.0 || v == 1.0);  // a NaN in the mask: invalid, as any non-finite input
+      }
+      if (!ok) {
+        std::fill(tau_out, tau_out + 3 * L, T(nan));
+        std::fill(force_out, force_out + 3 * L, T(nan));
+        *status = static_cast<std::int8_t>(Stance::InvalidInput);
+        margin_rows[k] = T(nan);
+        continue;
+      }
+      double feet[3 * kMaxFeet], jacobians[9 * kMaxFeet], leg_gravity[3 * kMaxFeet];
+      const double* joints = qf + nq * i + 7;
+      for (int l = 0; l < L; ++l) {  // the feet in the body frame: hip + leg FK, and d foot / d q_l
+        const auto& col = body.columns[std::size_t(l)];
+        const double q_leg[3] = {joints[col[0]], joints[col[1]], joints[col[2]]};
+        body.legs[std::size_t(l)].forward(q_leg, feet + 3 * l);
+        body.legs[std::size_t(l)].jacobian(q_leg, jacobians + 9 * l);
+        for (int r = 0; r < 3; ++r) {
+          feet[3 * l + r] += body.hips[std::size_t(l)][std::size_t(r)];
+          leg_gravity[3 * l + r] = gravity_torques[nv * i + 6 + col[std::size_t(r)]];
+        }
+      }
+      double tau[3 * kMaxFeet], forces[3 * kMaxFeet], margin;
+      standing_sample(L, com + 3 * i, robot.mass, feet, jacobians, leg_gravity, on, g_body + 3 * i, tau, forces, status,
+                      &margin);
+      const double* M = Tm + 16 * i;
+      for (int l = 0; l < L; ++l) {
+        const auto& col = body.columns[std::size_t(l)];
+        const double* f = forces + 3 * l;
+        for (int r = 0; r < 3; ++r) {
+          tau_out[col[std::size_t(r)]] = T(tau[3 * l + r]);
+          force_out[3 * l + r] = T(M[4 * r] * f[0] + M[4 * r + 1] * f[1] + M[4 * r + 2] * f[2]);  // R f
+        }
+      }
+      margin_rows[k] = T(margin);
+    }
+  }
+}
+
+void standing_rows(int L, double mass, const double* com, const double* feet, const double* jacobians,
+                   const double* leg_gravity, const double* stance, const double* gravity, double* tau, double* forces,
+                   std::int8_t* status, double* margin, std::ptrdiff_t count) {
+  constexpr double nan = quiet_nan<double>();
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
+    double* t = tau + 3 * L * i;
+    double* f = forces + 3 * L * i;
+    std::uint8_t on[kMaxFeet];
+    bool stance_ok = true;
+    for (int l = 0; l < L; ++l) {
+      const double v = stance[L * i + l];
+      on[l] = v != 0.0;
+      stance_ok = stance_ok && (v == 0.0 || v == 1.0);
+    }
+    if (!stance_ok) {  // a NaN in the mask: invalid, as any non-finite input
+      std::fill(t, t + 3 * L, nan);
+      std::fill(f, f + 3 * L, nan);
+      status[i] = static_cast<std::int8_t>(Stance::InvalidInput);
+      margin[i] = nan;
+      continue;
+    }
+    standing_sample(L, com + 3 * i, mass, feet + 3 * L * i, jacobians + 9 * L * i, leg_gravity + 3 * L * i, on,
+                    gravity + 3 * i, t, f, status + i, margin + i);
+  }
+}
+
+#define SPOTKIN_INSTANTIATE(T, L)                                                                               \
+  template void robot_com<FloatingModel<double, L>, T>(const RobotStaticsModel<FloatingModel<double, L>>&,     \
+                                                       const EulerSequence&, const StaticsRows<T>&, T*,        \
+                                                       std::ptrdiff_t);                                         \
+  template void robot_standing<FloatingModel<double, L>, T>(const RobotStaticsModel<FloatingModel<double, L>>&, \
+                                                            const EulerSequence&, const double*,               \
+                                                            const StaticsRows<T>&, T*, T*, std::int8_t*, T*,   \
+                                                            std::ptrdiff_t);
+#define SPOTKIN_INSTANTIATE_WIDTH(L) SPOTKIN_INSTANTIATE(float, L) SPOTKIN_INSTANTIATE(double, L)
+SPOTKIN_INSTANTIATE_WIDTH(kLanes64)
+SPOTKIN_INSTANTIATE_WIDTH(kMidLanes64)
+SPOTKIN_INSTANTIATE_WIDTH(kSmallLanes64)
+#undef SPOTKIN_INSTANTIATE_WIDTH
+#undef SPOTKIN_INSTANTIATE
+
+}  // namespace spotkin::dynamics
