@@ -124,7 +124,7 @@ def test_type6_with_zero_w_and_batches_broadcast():
     assert t.shape == (3, 4, 2) and valid.shape == (3, 4, 2)
     t, valid = sk.paul.type2(np.nan, 1.0, 0.5)
     assert not valid.any()
-    with pytest.raises(TypeError, match="real numbers"):
+    with pytest.raises(TypeError, match="X must be a real numeric array"):
         sk.paul.type2("a", 1.0, 0.5)
 
 

@@ -1,7 +1,9 @@
 // Bindings for Paul's equation solvers: every coefficient a batched scalar (broadcast like NumPy by
-// the binder), computed in float64; every root with its validity.
+// the binder), computed in float64; every root in (-pi, pi] with its validity (a valid root is
+// never NaN).
 #include "spotkin/paul.hpp"
 
+#include <cmath>
 #include <type_traits>
 
 #include "binder.hpp"
@@ -10,6 +12,10 @@
 namespace spotkin::bindings {
 
 namespace {
+
+// Angles in (-pi, pi]: the kernels' atan2 gives -pi for a -0 sine (and a sine below the smallest
+// step at pi), the same angle as pi.
+double half_open(double t) { return t == -kPi<double> ? kPi<double> : t; }
 
 using binder::Arg;
 using binder::Kind;
@@ -22,8 +28,9 @@ py::object type2(py::handle X, py::handle Y, py::handle Z) {
                             if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>)
                               for (std::ptrdiff_t i = 0; i < b.m; ++i) {  // X sin t + Y cos t = Z
                                 const auto r = paul::type2(b.in[0][i], b.in[1][i], b.in[2][i]);
-                                for (int k = 0; k < 2; ++k)
-                                  b.real(0)[2 * i + k] = r.t[k], b.flags(1)[2 * i + k] = r.valid[k] != 0.0;
+                                for (int k = 0; k < 2; ++k)  // a valid root is never NaN
+                                  b.real(0)[2 * i + k] = half_open(r.t[k]),
+                                                    b.flags(1)[2 * i + k] = r.valid[k] != 0.0 && !std::isnan(r.t[k]);
                               }
                           })
                            .float64_only();
@@ -37,7 +44,7 @@ py::object type3(py::handle X1, py::handle Y1, py::handle Z1, py::handle X2, py:
                               for (std::ptrdiff_t i = 0; i < b.m; ++i) {  // two equations in (sin t, cos t)
                                 const auto r = paul::type3(b.in[0][i], b.in[1][i], b.in[2][i], b.in[3][i],
                                                            b.in[4][i], b.in[5][i]);
-                                b.real(0)[i] = r.t, b.flags(1)[i] = r.valid != 0.0;
+                                b.real(0)[i] = half_open(r.t), b.flags(1)[i] = r.valid != 0.0 && !std::isnan(r.t);
                               }
                           })
                            .float64_only();
@@ -52,8 +59,9 @@ py::object type6(py::handle W, py::handle X, py::handle Y, py::handle Z1, py::ha
              for (std::ptrdiff_t i = 0; i < b.m; ++i) {  // the coupled (ti, tj) pair
                const auto r = paul::type6(b.in[0][i], b.in[1][i], b.in[2][i], b.in[3][i], b.in[4][i]);
                for (int k = 0; k < 2; ++k)
-                 b.real(0)[2 * i + k] = r.ti[k], b.real(1)[2 * i + k] = r.tj[k],
-                                  b.flags(2)[2 * i + k] = r.valid[k] != 0.0;
+                 b.real(0)[2 * i + k] = half_open(r.ti[k]), b.real(1)[2 * i + k] = half_open(r.tj[k]),
+                                  b.flags(2)[2 * i + k] =
+                                      r.valid[k] != 0.0 && !std::isnan(r.ti[k]) && !std::isnan(r.tj[k]);
              }
          })
           .float64_only();
