@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fuzz_api import HEXAPOD_URDF
+from fuzz.urdf_texts import HEXAPOD_URDF
 from hypothesis import given
 from hypothesis import strategies as st
 

@@ -1,8 +1,8 @@
-"""URDF test helpers shared by test_urdf.py, test_robot.py and fuzz_api.py: element builders for small
-URDFs and Pinocchio configurations.
+"""URDF test helpers shared by test_urdf.py, test_robot.py and the fuzz registry (tests/fuzz/):
+element builders for small URDFs and Pinocchio configurations.
 
-Imported as a top-level module, as test_fuzz.py imports fuzz_api: pytest puts tests/ on sys.path (no
-__init__.py, the default import mode), and fuzz_api's worker subprocesses run with tests/ as their
+Imported as a top-level module, as test_fuzz.py imports the fuzz package: pytest puts tests/ on sys.path (no
+__init__.py, the default import mode), and the fuzz workers' subprocesses run with tests/ as their
 working directory and on PYTHONPATH. The workers never need Pinocchio, so pin_q imports it itself.
 """
 
