@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -137,3 +138,49 @@ def test_legs_arms_and_chains_share_the_solver_interface():
     assert go2.legs[0].joint_names == tuple(go2.leg_joint_names[:3])
     assert spot.arm.joint_names == spot.arm_joint_names
     np.testing.assert_array_equal(arm_chain.limits, np.stack([arm_chain.lower, arm_chain.upper], axis=1))
+
+
+def _outs_like(result) -> tuple:
+    """Empty out= arrays of each result's dtype and shape (a Status: int8 of shape ())."""
+    return tuple(
+        np.empty((), np.int8) if isinstance(r, sk.Status) else np.empty(np.shape(r), np.asarray(r).dtype)
+        for r in result
+    )
+
+
+@pytest.mark.parametrize("shape", [(), (5,), (2, 3)])
+def test_chain_ik_writes_into_out_and_returns_those_arrays(rng, shape):
+    """Chain.ik, ik_all and ik_position take out= (a control loop allocates nothing): the arrays come
+    back themselves, holding exactly what the call without out= returns; a held joint's choice
+    (made in NumPy) is copied in."""
+    here = Path(sk.__file__).parent / "robots"
+    ur5 = sk.Chain.from_urdf(str(here / "ur5.urdf"))
+    leg = sk.Chain.from_urdf(str(here / "go2.urdf"), tip="FL_foot")
+    panda = sk.Chain.from_urdf(str(here / "panda.urdf")).with_ik_tolerance()
+    q6 = rng.uniform(-2.0, 2.0, (*shape, 6))
+    T = ur5.fk(q6)
+    for call in (lambda **k: ur5.ik(T, q6, **k), lambda **k: ur5.ik_all(T, **k)):
+        plain = call()
+        out = _outs_like(plain)
+        got = call(out=out)
+        assert all(g is o for g, o in zip(got, out))
+        for g, p in zip(got, plain):
+            np.testing.assert_array_equal(np.asarray(g), np.asarray(p))
+    p = leg.fk(rng.uniform(-1.0, 1.0, (*shape, 3)))[..., :3, 3]
+    for call in (lambda **k: leg.ik_position(p, **k), lambda **k: leg.ik_all(p, **k)):
+        plain = call()
+        got = call(out=_outs_like(plain))
+        for g, p_ in zip(got, plain):
+            np.testing.assert_array_equal(np.asarray(g), np.asarray(p_))
+    q7 = np.array([0.1, -0.5, 0.2, -2.0, 0.3, 1.5, 0.4]) + rng.uniform(-0.05, 0.05, (*shape, 7))
+    T7 = panda.fk(q7)
+    plain = panda.ik(T7, q7, free_joint=3, free_value=q7[..., 3])
+    out = _outs_like(plain)
+    got = panda.ik(T7, q7, free_joint=3, free_value=q7[..., 3], out=out)
+    assert all(g is o for g, o in zip(got, out))
+    np.testing.assert_array_equal(got[0], plain[0])
+    np.testing.assert_array_equal(got[1], np.asarray(plain[1], np.int8))
+    with pytest.raises(ValueError, match=r"out\[0\] \(q\) must have shape"):
+        ur5.ik(T, out=(np.empty((*shape, 5)), None))
+    with pytest.raises(TypeError, match="out must be a tuple of 2"):
+        panda.ik(T7, q7, free_joint=3, free_value=0.0, out=np.empty(7))

@@ -127,7 +127,17 @@ def chain_entries(tool_extra):
             name=f"Chain.ik_position{tag}",
             covers="spotkin.Chain.ik_position",
             call=lambda c, get=get, **k: get(c).ik_position(**k),
-            slots=[Batch("p", (3,))],
+            slots=[
+                Batch("p", (3,)),
+                OutSlot(
+                    ("float", (4, 3)),
+                    ("flag", (4,)),
+                    ("flag", (4,)),
+                    ("flag", (4,)),
+                    ("status", ()),
+                    drivers=["p"],
+                ),
+            ],
             baseline=chain_q,
             outputs=outs(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("flag", (4,)), ("status", ())),
             expect=ACCEPT if dof == 3 else REJECT,
@@ -140,14 +150,16 @@ def chain_entries(tool_extra):
             Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
         ]
         if dof == 3:  # every branch under the solver interface's name: ik_position's for 3 joints
-            all_slots = [Batch("target", (3,)), *held]
-            all_outs = outs(("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("flag", (4,)), ("status", ()))
+            leaves = (("float", (4, 3)), ("flag", (4,)), ("flag", (4,)), ("flag", (4,)), ("status", ()))
+            all_slots = [Batch("target", (3,)), *held, OutSlot(*leaves, drivers=["target"])]
+            all_outs = outs(*leaves)
             all_check = lambda x, out, kw, c, fkp=point_fk, lim=limits_of: solution_check(  # noqa: E731
                 fkp(c), lambda x: x["target"], lim(c)
             )(x, out, kw, c)
         else:  # ik's for the others (a 6-joint chain; any other width is refused)
-            all_slots = [Batch("target", (4, 4), pose="T"), *held]
-            all_outs = outs(("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("flag", (8,)), ("status", ()))
+            leaves = (("float", (8, 6)), ("flag", (8,)), ("flag", (8,)), ("flag", (8,)), ("status", ()))
+            all_slots = [Batch("target", (4, 4), pose="T"), *held, OutSlot(*leaves, drivers=["target"])]
+            all_outs = outs(*leaves)
             all_check = lambda x, out, kw, c, fkp=pose_fk, lim=limits_of: solution_check(  # noqa: E731
                 fkp(c), lambda x: pose_matrix(x["target"]), lim(c)
             )(x, out, kw, c)
@@ -274,6 +286,7 @@ def chain_entries(tool_extra):
                 # a held joint is for 7-joint chains: refused here, and free_value alone too
                 Custom("free_joint", {"two": lambda c, r, b: Arg(2, REJECT, "value")}, default="omit"),
                 Custom("free_value", {"value": lambda c, r, b: Arg(0.3, REJECT, "value")}, default="omit"),
+                OutSlot(("float", (dof,)), ("status", ()), drivers=["target"]),
             ],
             baseline=chain_q,
             outputs=outs(("float", (dof,)), ("status", ())),

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, quiet_float_errors
+from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out, quiet_float_errors
 from .._support.status import Status
 from .arm import _broadcast_seed
 
@@ -169,10 +169,19 @@ class _ChainIKMethods:
         return self._ik_core().position_kind
 
     def ik_all(
-        self, target: ArrayLike, free_joint: int | None = None, free_value: ArrayLike | None = None
+        self,
+        target: ArrayLike,
+        free_joint: int | None = None,
+        free_value: ArrayLike | None = None,
+        *,
+        out: tuple | None = None,
     ) -> ChainSolutions:
         """Every branch for ``target``, as :meth:`spotkin.Leg.ik_all` and :meth:`spotkin.SpotArm.ik_all`
         answer (:meth:`ik` chooses one of them).
+
+        ``out``: ``(q, valid, exists, exact, status)`` arrays to write into (any may be None), each of
+        the exact dtype and shape of that result, C-contiguous and writeable: the call then allocates
+        nothing for them.
 
         **3 joints:** :meth:`ik_position`'s: p (..., 3) -> q (..., 4, 3). **6 joints**: every joint
         solution for a tool pose of a 6R chain of a closed-form family (:attr:`ik_kind`). **7 joints**:
@@ -216,8 +225,8 @@ class _ChainIKMethods:
         derivations are in ``docs/derivations.md`` and ``spotkin.reference.ik6r``.
         """
         if self.dof == 3 and free_joint is None and free_value is None:
-            return _as_target(self.ik_position, target)
-        return _as_target(self._ik_pose_all, target, free_joint, free_value)
+            return _as_target(self.ik_position, target, out=out)
+        return _as_target(self._ik_pose_all, target, free_joint, free_value, out)
 
     def ik(
         self,
@@ -225,6 +234,8 @@ class _ChainIKMethods:
         seed: ArrayLike | None = None,
         free_joint: int | None = None,
         free_value: ArrayLike | None = None,
+        *,
+        out: tuple | None = None,
     ) -> tuple[np.ndarray, np.ndarray | Status]:
         """One solution per target: (q (..., dof), status (...,)), of the branches :meth:`ik_all` gives.
 
@@ -239,19 +250,24 @@ class _ChainIKMethods:
         **7 joints**: ``free_joint`` held at ``free_value`` (broadcast against the targets) chooses
         among that value's solutions; with ``free_joint`` alone, among the solutions over the sampled
         values of the joint and the seed's own (:meth:`ik_nearest_free`, which needs the seed).
+
+        ``out``: ``(q, status)`` arrays to write into (either may be None; ``status`` int8), of the
+        exact dtype and shape of that result, C-contiguous and writeable. Without a free joint the core
+        writes them directly and the call allocates nothing (a control loop's path); with one, the
+        choice is made in NumPy and copied in.
         """
         if free_joint is None and free_value is None:
             if self.dof == 7:
                 raise ValueError(_SEVEN_JOINTS)
-            return _as_target(self._ik_core().ik_nearest, target, seed)
+            return _as_target(self._ik_core().ik_nearest, target, seed, out)
         if free_value is None:
             if seed is None:
                 raise ValueError(
                     "ik with free_joint alone searches the joint's values for the one nearest seed: pass seed"
                 )
-            return _as_target(self.ik_nearest_free, target, seed, free_joint)
+            return _into_outs(_as_target(self.ik_nearest_free, target, seed, free_joint), out)
         sol = self.ik_all(target, free_joint, free_value)
-        return _nearest_solution(sol, seed, self.sigma == 1)
+        return _into_outs(_nearest_solution(sol, seed, self.sigma == 1), out)
 
     def __getattr__(self, name: str):
         """Names of the previous interface, kept a short while: ``ik_nearest`` is :meth:`ik`."""
@@ -262,8 +278,9 @@ class _ChainIKMethods:
             return self.ik
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
-    def ik_position(self, p: ArrayLike) -> ChainSolutions:
-        """Every joint solution placing the tool point at p, for a 3-joint chain.
+    def ik_position(self, p: ArrayLike, *, out: tuple | None = None) -> ChainSolutions:
+        """Every joint solution placing the tool point at p, for a 3-joint chain (``out``: as
+        :meth:`ik_all`'s).
 
         p (..., 3) in the base frame -> :class:`ChainSolutions` with q (..., 4, 3). The
         tool orientation is free. The closed form is Pieper's: q1 is eliminated through two
@@ -279,13 +296,13 @@ class _ChainIKMethods:
         of the nearest configuration is not attempted (use a numerical solver for a
         least-squares answer). The full derivation is in ``spotkin.reference.ik3r``.
         """
-        return self._ik_core().ik_position(p)  # a ChainSolutions (the core builds it)
+        return self._ik_core().ik_position(p, out)  # a ChainSolutions (the core builds it)
 
-    def _ik_pose_all(self, T, free_joint, free_value) -> ChainSolutions:
+    def _ik_pose_all(self, T, free_joint, free_value, out=None) -> ChainSolutions:
         """Every solution for tool poses (:meth:`ik_all` of a 6- or 7-joint chain)."""
         fast = self._ik is not None and not isinstance(self._ik, dict)
         if free_joint is None and free_value is None and fast:  # the single-call fast path
-            return self._ik.ik(T)  # a ChainSolutions (the core builds it)
+            return self._ik.ik(T, out)  # a ChainSolutions (the core builds it)
         if free_joint is None:
             if free_value is not None:
                 raise ValueError("free_value needs free_joint (the index of the joint it holds)")
@@ -294,11 +311,11 @@ class _ChainIKMethods:
                     "a 7-joint chain is redundant: pass free_joint (0..6) and free_value to hold one "
                     "joint, or use ik_self_motion to sample it, or ik_differential to solve it numerically"
                 )
-            return self._ik_core().ik(T)
+            return self._ik_core().ik(T, out)
         core = self._free_core(free_joint)
         if free_value is None:
             raise ValueError("free_joint needs free_value (the value the joint is held at)")
-        return core.ik(T, free_value)
+        return core.ik(T, free_value, out)
 
     def _free_core(self, free_joint) -> _core.FreeJointIK:
         k = as_index(free_joint, "free_joint")
@@ -531,10 +548,25 @@ def _nearest_solution(
     return q, status
 
 
-def _as_target(call, target, *args):
+def _into_outs(result: tuple, out) -> tuple:
+    """A result computed in NumPy, written into the caller's ``out`` arrays (a tuple with an array or
+    None per result; the binder's checks) and returned as the core returns them: the arrays given."""
+    if out is None:
+        return result
+    if not isinstance(out, (tuple, list)) or len(out) != len(result):
+        raise TypeError(f"out must be a tuple of {len(result)} arrays or None, got {type(out).__name__}")
+    return tuple(
+        value
+        if into is None
+        else into_out(np.asarray(value, np.int8 if isinstance(value, Status) else None), into)
+        for value, into in zip(result, out)
+    )
+
+
+def _as_target(call, target, *args, **kwargs):
     """call(target, *args), its errors naming ``target`` (the kernels call it p or T)."""
     try:
-        return call(target, *args)
+        return call(target, *args, **kwargs)
     except (TypeError, ValueError) as error:
         message = str(error)
         for name in ("p", "T"):
