@@ -446,6 +446,15 @@ def test_closed_form_ik_maps_back_through_a_mimic_joint(rng):
     assert (gaps.min(axis=-1) < 1e-7).all()
     q_near, _ = chain.ik(T, q + 0.01)
     np.testing.assert_allclose(q_near, q, atol=1e-7)
+    # out=: the mapped-back results written into the caller's arrays, the same bits
+    q_out, status_out = np.empty_like(q), np.empty(len(q), np.int8)
+    got = chain.ik(T, q + 0.01, out=(q_out, status_out))
+    assert got[0] is q_out and got[1] is status_out
+    np.testing.assert_array_equal(q_out, q_near)
+    outs = tuple(np.empty_like(np.asarray(a)) for a in sol)
+    assert all(g is o for g, o in zip(chain.ik_all(T, out=outs), outs))
+    for a, b in zip(outs, sol):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_mimic_validation_names_the_joint():

@@ -30,7 +30,7 @@ from .. import _core
 from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out
 from ..dynamics.rigid_body import _check_layout, _in_layout
 from .chain import Chain, _limit_override
-from .chain_ik import ChainSolutions, IKDifferentialInfo, _scalar
+from .chain_ik import ChainSolutions, IKDifferentialInfo, _into_outs, _scalar
 
 __all__ = ["MimicChain"]
 
@@ -403,12 +403,13 @@ class MimicChain(Chain):
         q = ((sol.q.astype(np.float64) - b) / m).astype(sol.q.dtype, copy=False)
         return sol._replace(q=q)
 
-    def ik_position(self, p: ArrayLike) -> ChainSolutions:
-        """As :meth:`spotkin.Chain.ik_position`, solved on :attr:`full_chain` and mapped back (M diagonal)."""
+    def ik_position(self, p: ArrayLike, *, out: tuple | None = None) -> ChainSolutions:
+        """As :meth:`spotkin.Chain.ik_position`, solved on :attr:`full_chain` and mapped back (M diagonal);
+        ``out`` is written with the result."""
         self._ik_core()
-        return self._back(self._full.ik_position(p))
+        return _into_outs(self._back(self._full.ik_position(p)), out)
 
-    def _ik_pose_all(self, T, free_joint, free_value) -> ChainSolutions:
+    def _ik_pose_all(self, T, free_joint, free_value, out=None) -> ChainSolutions:
         """:meth:`spotkin.Chain.ik_all` for poses, solved on :attr:`full_chain` and mapped back, when every
         variable drives one joint of the chain (``ValueError`` naming :meth:`ik_differential` otherwise)."""
         self._closed_form()
@@ -418,18 +419,22 @@ class MimicChain(Chain):
                 value = as_real(free_value, "free_value")
                 with np.errstate(invalid="ignore", over="ignore"):
                     free_value = value * self._M[k, k] + self._b[k]
-        return self._back(self._full.ik_all(T, free_joint, free_value))
+        return _into_outs(self._back(self._full.ik_all(T, free_joint, free_value)), out)
 
-    def ik(self, target: ArrayLike, seed: ArrayLike | None = None, free_joint=None, free_value=None):
-        """As :meth:`spotkin.Chain.ik`, on :attr:`full_chain` (M diagonal)."""
+    def ik(
+        self, target: ArrayLike, seed: ArrayLike | None = None, free_joint=None, free_value=None, *, out=None
+    ):
+        """As :meth:`spotkin.Chain.ik`, on :attr:`full_chain` (M diagonal); ``out`` is written with the
+        result."""
         if free_joint is not None or free_value is not None:  # chosen among ik_all's, mapped back
-            return super().ik(target, seed, free_joint, free_value)
+            return super().ik(target, seed, free_joint, free_value, out=out)
         self._ik_core()
         if seed is not None:
             seed = self._expand(seed, "seed", offset=True)
         q, status = self._full.ik(target, seed)
         m, b = np.diag(self._M), self._b
-        return ((np.asarray(q, dtype=np.float64) - b) / m).astype(np.asarray(q).dtype, copy=False), status
+        q = ((np.asarray(q, dtype=np.float64) - b) / m).astype(np.asarray(q).dtype, copy=False)
+        return _into_outs((q, status), out)
 
     # -- differential IK on the coupled chain ----------------------------------------------------------
 
