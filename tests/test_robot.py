@@ -746,6 +746,18 @@ def test_spot_is_its_urdf():
     )
 
 
+def test_spot_is_built_through_robots_construction():
+    """sk.Spot() goes through Robot's construction path (Robot._assemble) with the SDK's names and the
+    arm's dedicated solver: what it recognises, reports and mounts is what Robot.from_urdf does."""
+    spot, from_urdf = sk.Spot(), sk.Robot.from_urdf(SPOT_URDF)
+    assert "_assemble" not in vars(type(spot)) and "_set_legs" not in vars(type(spot))
+    assert set(spot.report) == set(from_urdf.report)
+    np.testing.assert_array_equal(spot.arm_mount, from_urdf.arm_mount)
+    assert [spec.name for spec in spot._specs[0]] == [SDK_TO_URDF[name] for name in spot.leg_names]
+    assert spot.leg_joint_names == tuple(f"{leg}.{j}" for leg in spot.leg_names for j in ("hx", "hy", "kn"))
+    assert isinstance(spot.arm, sk.SpotArm) and spot.arm.joint_names == spot.arm_joint_names
+
+
 def test_spot_body_ik_is_its_urdf_robots(rng):
     spot, from_urdf = sk.Spot(), robot("spot")
     feet = spot.stance_feet(0.5)

@@ -9,7 +9,8 @@ the leg's hip-roll joint and the body's axes (see :class:`spotkin.Leg`).
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -87,6 +88,18 @@ def _limit_table(limits, model) -> dict[str, tuple[float, float]]:
             raise ValueError(f"limits[{name!r}] must satisfy lower <= upper, with no NaN, got {row.tolist()}")
         table[name] = (float(row[0]), float(row[1]))
     return table
+
+
+class RobotNaming(NamedTuple):
+    """A description's legs and joints under other names (the Spot SDK's, say), and optionally a
+    dedicated closed form for its arm: what :class:`spotkin.Spot` adds to the packaged description."""
+
+    legs: Mapping[str, str]
+    """Recognised leg name -> the robot's leg name, in the robot's leg order."""
+    joints: Callable[[str], tuple[str, str, str]]
+    """A leg's (new) name -> its three joints' names."""
+    arm: Callable[[urdf.Model], object] | None = None
+    """The description -> its arm's solver (None: the arm's chain, as for any robot)."""
 
 
 class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
@@ -171,12 +184,28 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
 
     @classmethod
     def _from_model(cls, model, feet, contact_offset, nominal, text, limits=None, leg_order="urdf") -> Robot:
+        robot = cls.__new__(cls)
+        robot._assemble(model, feet, contact_offset, nominal, text, limits, leg_order)
+        return robot
+
+    def _assemble(
+        self, model, feet, contact_offset, nominal, text, limits=None, leg_order="urdf", naming=None
+    ) -> None:
+        """Build this robot from a parsed description: every robot, :class:`spotkin.Spot` included, goes
+        through here. ``naming`` (a :class:`RobotNaming`, or None for the description's own names) renames
+        and orders the recognised legs and joints, and may give the arm a dedicated solver."""
         leg_order = _choice(leg_order, "leg_order", ("urdf", "roles"))
         limits = _limit_table(limits, model)
         if limits:
             model = model.with_limits(limits)
         specs, leg_report = urdf.find_legs(model, feet=feet, contact_offset=contact_offset)
-        if leg_order == "roles" and specs:
+        if naming is not None:
+            by_name = {spec.name: spec for spec in specs}
+            missing = [name for name in naming.legs if name not in by_name]
+            if missing:
+                raise ValueError(f"the description lacks the legs {missing} that its names expect")
+            specs = tuple(by_name[name] for name in naming.legs)
+        elif leg_order == "roles" and specs:
             order = _role_order(np.array([spec.hip_origin for spec in specs]))
             specs = tuple(specs[k] for k in order)
         arms, arm_report = urdf.find_arms(model, specs)
@@ -191,34 +220,42 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         for name, value in nominal.items():
             if value is None:
                 raise ValueError(f"nominal[{name!r}] must be (3,) joint angles, got None")
+        names = [naming.legs[spec.name] if naming else spec.name for spec in specs]
         legs = [
             Leg.from_geometry(
-                spec.a, spec.b, spec.c, spec.signs, spec.limits, spec.name, nominal=nominal.get(spec.name)
+                spec.a, spec.b, spec.c, spec.signs, spec.limits, name, nominal=nominal.get(spec.name)
             )
-            for spec in specs
+            for spec, name in zip(specs, names)
         ]
-        robot = cls.__new__(cls)
-        robot._model = model
-        robot._source = (text, feet, contact_offset, nominal, limits, leg_order)
-        robot._report = tuple(leg_report) + tuple(arm_report)
-        robot._specs = (tuple(specs), tuple(arms))
-        arm_chains = tuple(robot.chain(arm.tip, base=arm.base) for arm in arms)
-        robot._arms = arm_chains
+        self._model = model
+        self._source = None if naming else (text, feet, contact_offset, nominal, limits, leg_order)
+        self._report = tuple(leg_report) + tuple(arm_report)
+        self._specs = (tuple(specs), tuple(arms))
+        if naming is not None and naming.arm is not None and arms:
+            arm_solvers = (naming.arm(model),)
+        else:
+            arm_solvers = tuple(self.chain(arm.tip, base=arm.base) for arm in arms)
+        self._arms = arm_solvers
         # body <- arm base: the arm's chain starts at the link its first joint hangs from, which the
         # recognition reaches from the body through fixed joints only (find_arms takes the first six
         # actuated joints below the root), so the mount is that link's placement at zero angles
-        robot._arm_mount = model.placement(arms[0].base) if arms else np.eye(4)
-        robot._arm_mount.flags.writeable = False
-        robot._set_legs(
+        self._arm_mount = model.placement(arms[0].base) if arms else np.eye(4)
+        self._arm_mount.flags.writeable = False
+        joints = [
+            naming.joints(name) if naming else tuple(spec.joint_names) for spec, name in zip(specs, names)
+        ]
+        keep_order = naming is not None or leg_order == "roles"
+        self._set_legs(
             legs,
             [spec.hip_origin for spec in specs],
-            [spec.name for spec in specs],
-            [tuple(spec.joint_names) for spec in specs],
-            arm_chains[0] if arm_chains else None,
+            names,
+            joints,
+            arm_solvers[0] if arm_solvers else None,
+            keep_order,
         )
-        return robot
 
-    def _set_legs(self, legs, hips, names, joint_names, arm) -> None:
+    def _set_legs(self, legs, hips, names, joint_names, arm, keep_order=False) -> None:
+        """The legs (their joints in ``joint_names``' order when ``keep_order``, else the description's)."""
         if not legs:
             raise ValueError(
                 "no roll-pitch-pitch legs were recognised (see spotkin.urdf.find_legs's report): a Robot is "
@@ -233,9 +270,7 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         self._hips.flags.writeable = False
         self._roles = leg_roles(self._hips)
         flat = [name for triple in joint_names for name in triple]
-        source = getattr(self, "_source", None)
-        by_roles = source is not None and len(source) > 5 and source[5] == "roles"
-        order = {name: k for k, name in enumerate(flat)} if by_roles else self._urdf_order(flat)
+        order = {name: k for k, name in enumerate(flat)} if keep_order else self._urdf_order(flat)
         self._leg_joint_names = tuple(sorted(flat, key=order.__getitem__))
         position = {name: k for k, name in enumerate(self._leg_joint_names)}
         self._columns = np.array(
@@ -248,9 +283,7 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         self._arm = arm
 
     def _urdf_order(self, names):
-        model = getattr(self, "_model", None)
-        if model is None:
-            return {name: k for k, name in enumerate(names)}
+        model = self._model
         index = {joint.name: joint.index for joint in model.actuated_joints}
         return {name: index.get(name, k) for k, name in enumerate(names)}
 

@@ -15,7 +15,7 @@ from .._support.boundary import as_finite, as_real
 from .arm import ARM_JOINT_NAMES, SpotArm
 from .leg import Leg
 from .presets import LEG_NAMES, SPOT
-from .robot import Robot, _limit_table
+from .robot import Robot, RobotNaming, _limit_table
 from .robot_body import BodyFrames, BodyIK, BodyRates
 
 __all__ = ["BodyFrames", "BodyIK", "BodyRates", "Spot"]
@@ -133,6 +133,31 @@ def _arm_from_urdf(model: urdf.Model) -> dict:
     }
 
 
+def _spot_arm(arm: Mapping) -> SpotArm:
+    """The Spot Arm's dedicated closed form from its numbers (mount, link lengths, limits)."""
+    return SpotArm(
+        arm["mount"],
+        arm["upper_arm"],
+        arm["forearm"],
+        arm["forearm_offset"],
+        arm["hand"],
+        limits=arm["limits"],
+    )
+
+
+def _sdk_joints(leg: str) -> tuple[str, str, str]:
+    """A leg's joints as the SDK names them: fl.hx, fl.hy, fl.kn."""
+    return (f"{leg}.hx", f"{leg}.hy", f"{leg}.kn")
+
+
+# The packaged description under the SDK's names (legs in SDK order), its arm solved by SpotArm
+_SDK_NAMING = RobotNaming(
+    legs={_URDF_LEGS[name]: name for name in LEG_NAMES},
+    joints=_sdk_joints,
+    arm=lambda description: _spot_arm(_arm_from_urdf(description)),
+)
+
+
 class Spot(Robot):
     """Boston Dynamics Spot. Body frame: x forward, y left, z up, origin at the
     centre of the four hx joints. Legs in SDK order: fl, fr, hl, hr.
@@ -172,81 +197,52 @@ class Spot(Robot):
 
     def _build(self, model: Mapping | None, limits: dict[str, tuple[float, float]]) -> None:
         """``limits``: packaged-URDF joint name -> (lower, upper), checked (see :meth:`with_limits`)."""
+        self._limit_override = dict(limits)
+        self._spot_model = None if model is None else _checked_model(model)
+        if model is None:  # the packaged description, through Robot's construction, with the SDK's names
+            self._assemble(_builtin_model(), None, None, None, None, limits, naming=_SDK_NAMING)
+            self._foot_radius = SPOT["leg"]["foot_radius"]
+            return
         description = _builtin_model()
         if limits:
             description = description.with_limits(limits)
         self._model = description
         self._source = None
-        self._limit_override = dict(limits)
-        self._spot_model = None if model is None else _checked_model(model)
-        if model is None:
-            specs, leg_report = urdf.find_legs(description)
-            by_name = {spec.name: spec for spec in specs}
-            specs = [by_name[_URDF_LEGS[name]] for name in LEG_NAMES]
-            legs = [
-                Leg.from_geometry(spec.a, spec.b, spec.c, spec.signs, spec.limits, name)
-                for spec, name in zip(specs, LEG_NAMES)
-            ]
-            hips = [spec.hip_origin for spec in specs]
-            arm = _arm_from_urdf(description)
-            self._foot_radius = SPOT["leg"]["foot_radius"]
-            arm_specs, arm_report = urdf.find_arms(description, tuple(specs))
-            self._report = tuple(leg_report) + tuple(arm_report)
-            self._specs = (tuple(specs), tuple(arm_specs))
-        else:
-            checked = self._spot_model
-            leg = checked["leg"]
-            per_leg = checked.get("leg_limits", {})
-            legs = [
+        checked = self._spot_model
+        leg = checked["leg"]
+        per_leg = checked.get("leg_limits", {})
+        # the overrides apply to a model dict too, by joint (a URDF name -> its SDK slot)
+        urdf_legs = [
+            f"{_URDF_LEGS[name]}_{joint}" for name in LEG_NAMES for joint in ("hip_x", "hip_y", "knee")
+        ]
+        legs = []
+        for k, name in enumerate(LEG_NAMES):
+            rows = np.array(per_leg.get(name, leg["limits"]), dtype=float)
+            for j in range(3):
+                rows[j] = limits.get(urdf_legs[3 * k + j], rows[j])
+            side = "left" if name.endswith("l") else "right"
+            legs.append(
                 Leg(
                     leg["hip_offset"],
                     leg["upper"],
                     leg["lower"],
                     leg["knee_offset"],
-                    side="left" if name.endswith("l") else "right",
-                    limits=per_leg.get(name, leg["limits"]),
+                    side=side,
+                    limits=rows,
                     name=name,
                 )
-                for name in LEG_NAMES
-            ]
-            hips = [checked["hip_positions"][name] for name in LEG_NAMES]
-            arm = dict(checked["arm"])
-            # the overrides apply to a model dict too, by joint (a URDF name -> its SDK slot)
-            urdf_legs = [
-                f"{_URDF_LEGS[leg]}_{joint}" for leg in LEG_NAMES for joint in ("hip_x", "hip_y", "knee")
-            ]
-            for k, leg_model in enumerate(legs):
-                rows = np.array(leg_model.limits, dtype=float)
-                for j in range(3):
-                    rows[j] = limits.get(urdf_legs[3 * k + j], rows[j])
-                if limits:
-                    legs[k] = Leg(
-                        leg["hip_offset"],
-                        leg["upper"],
-                        leg["lower"],
-                        leg["knee_offset"],
-                        side=leg_model.side,
-                        limits=rows,
-                        name=LEG_NAMES[k],
-                    )
-            arm["limits"] = tuple(limits.get(name, row) for name, row in zip(_URDF_ARM, arm["limits"]))
-            self._foot_radius = leg["foot_radius"]
-            self._report = ("built from a model dict: chain() and describe() show the packaged description",)
-            self._specs = ((), ())
-        spot_arm = SpotArm(
-            arm["mount"],
-            arm["upper_arm"],
-            arm["forearm"],
-            arm["forearm_offset"],
-            arm["hand"],
-            limits=arm["limits"],
-        )
+            )
+        hips = [checked["hip_positions"][name] for name in LEG_NAMES]
+        arm = dict(checked["arm"])
+        arm["limits"] = tuple(limits.get(name, row) for name, row in zip(_URDF_ARM, arm["limits"]))
+        self._foot_radius = leg["foot_radius"]
+        self._report = ("built from a model dict: chain() and describe() show the packaged description",)
+        self._specs = ((), ())
+        spot_arm = _spot_arm(arm)
         self._arms = (spot_arm,)
-        triples = [tuple(f"{name}.{joint}" for joint in ("hx", "hy", "kn")) for name in LEG_NAMES]
-        self._set_legs(legs, hips, LEG_NAMES, triples, spot_arm)
-
-    def _urdf_order(self, names):
-        return {name: k for k, name in enumerate(names)}
+        self._set_legs(
+            legs, hips, LEG_NAMES, [_sdk_joints(name) for name in LEG_NAMES], spot_arm, keep_order=True
+        )
 
     @classmethod
     def from_urdf(cls, *args, **kwargs):
