@@ -169,7 +169,9 @@ def test_chain_ik_writes_into_out_and_returns_those_arrays(rng, shape):
     p = leg.fk(rng.uniform(-1.0, 1.0, (*shape, 3)))[..., :3, 3]
     for call in (lambda **k: leg.ik_position(p, **k), lambda **k: leg.ik_all(p, **k)):
         plain = call()
-        got = call(out=_outs_like(plain))
+        out = _outs_like(plain)
+        got = call(out=out)
+        assert type(got) is type(plain) and all(g is o for g, o in zip(got, out))
         for g, p_ in zip(got, plain):
             np.testing.assert_array_equal(np.asarray(g), np.asarray(p_))
     q7 = np.array([0.1, -0.5, 0.2, -2.0, 0.3, 1.5, 0.4]) + rng.uniform(-0.05, 0.05, (*shape, 7))
@@ -184,3 +186,7 @@ def test_chain_ik_writes_into_out_and_returns_those_arrays(rng, shape):
         ur5.ik(T, out=(np.empty((*shape, 5)), None))
     with pytest.raises(TypeError, match="out must be a tuple of 2"):
         panda.ik(T7, q7, free_joint=3, free_value=0.0, out=np.empty(7))
+    with pytest.raises(ValueError, match="out must hold 2 arrays"):
+        panda.ik(T7, q7, free_joint=3, free_value=0.0, out=(None, None, None))
+    with pytest.raises(TypeError, match=r"out\[0\] \(q\) must have dtype float64"):
+        panda.ik(T7, q7, free_joint=3, free_value=q7[..., 3], out=(np.empty((*shape, 7), np.float32), None))

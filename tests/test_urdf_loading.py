@@ -452,7 +452,8 @@ def test_closed_form_ik_maps_back_through_a_mimic_joint(rng):
     assert got[0] is q_out and got[1] is status_out
     np.testing.assert_array_equal(q_out, q_near)
     outs = tuple(np.empty_like(np.asarray(a)) for a in sol)
-    assert all(g is o for g, o in zip(chain.ik_all(T, out=outs), outs))
+    got_all = chain.ik_all(T, out=outs)
+    assert isinstance(got_all, sk.ChainSolutions) and all(g is o for g, o in zip(got_all, outs))
     for a, b in zip(outs, sol):
         np.testing.assert_array_equal(a, b)
 

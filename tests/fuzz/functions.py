@@ -385,7 +385,7 @@ def function_entries():
     )
 
     # threads
-    max_threads = getattr(sk, "MAX_THREADS", None) or getattr(sk._runtime, "MAX_THREADS", 1024)
+    max_threads = sk.MAX_THREADS
 
     def threads_probe(result, kw, c):
         if result is not None:

@@ -265,7 +265,9 @@ class _ChainIKMethods:
                 raise ValueError(
                     "ik with free_joint alone searches the joint's values for the one nearest seed: pass seed"
                 )
+            _check_outs(out, 2)
             return _into_outs(_as_target(self.ik_nearest_free, target, seed, free_joint), out)
+        _check_outs(out, 2)
         sol = self.ik_all(target, free_joint, free_value)
         return _into_outs(_nearest_solution(sol, seed, self.sigma == 1), out)
 
@@ -548,19 +550,33 @@ def _nearest_solution(
     return q, status
 
 
+def _check_outs(out, count: int) -> None:
+    """The core's checks of an ``out`` tuple's kind and length, made before a solve in NumPy."""
+    if out is not None and not isinstance(out, (tuple, list)):
+        raise TypeError(f"out must be a tuple of {count} arrays (or None)")
+    if out is not None and len(out) != count:
+        raise ValueError(f"out must hold {count} arrays (or None), got {len(out)}")
+
+
 def _into_outs(result: tuple, out) -> tuple:
     """A result computed in NumPy, written into the caller's ``out`` arrays (a tuple with an array or
-    None per result; the binder's checks) and returned as the core returns them: the arrays given."""
+    None per result, checked as the core checks them) and returned as the core returns it: the arrays
+    given, in the result's own type (a :class:`ChainSolutions` stays one)."""
     if out is None:
         return result
-    if not isinstance(out, (tuple, list)) or len(out) != len(result):
-        raise TypeError(f"out must be a tuple of {len(result)} arrays or None, got {type(out).__name__}")
-    return tuple(
-        value
-        if into is None
-        else into_out(np.asarray(value, np.int8 if isinstance(value, Status) else None), into)
-        for value, into in zip(result, out)
-    )
+    _check_outs(out, len(result))
+    names = getattr(result, "_fields", ("q", "status"))
+    written = []
+    for k, (value, into) in enumerate(zip(result, out)):
+        if into is None:
+            written.append(value)
+            continue
+        try:
+            written.append(into_out(np.asarray(value, np.int8 if isinstance(value, Status) else None), into))
+        except (TypeError, ValueError) as error:
+            message = str(error).replace("out must", f"out[{k}] ({names[k]}) must", 1)
+            raise type(error)(message) from None
+    return type(result)(*written) if hasattr(result, "_fields") else tuple(written)
 
 
 def _as_target(call, target, *args, **kwargs):

@@ -300,7 +300,8 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
 
     @property
     def legs(self) -> tuple[Leg, ...]:
-        """The recognised legs, in the URDF's order of their first joints."""
+        """The recognised legs, in :attr:`leg_names` order (the URDF's order of their first joints, unless
+        ``leg_order="roles"`` or the robot names its legs itself, as :class:`spotkin.Spot` does)."""
         return self._legs
 
     @property

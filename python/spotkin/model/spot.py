@@ -185,7 +185,7 @@ class Spot(Robot):
 
     leg_names = LEG_NAMES
     """The legs in SDK order: ("fl", "fr", "hl", "hr") (h: hind)."""
-    joint_names = tuple(f"{leg}.{joint}" for leg in LEG_NAMES for joint in ("hx", "hy", "kn"))
+    joint_names = tuple(name for leg in LEG_NAMES for name in _sdk_joints(leg))
     """The 12 leg joints in SDK order, the order of the legs' ``q``: "fl.hx", "fl.hy", "fl.kn", "fr.hx", ...,
     "hr.kn"."""
     leg_joint_names = joint_names

@@ -11,7 +11,7 @@ import numpy as np
 
 from ._common import _LIMIT_TOL
 
-# the solver interface (README, "One solver interface")
+# the solver interface (docs/guide/solvers.md)
 _INTERFACE = ("dof", "limits", "joint_names", "fk", "jacobian", "ik_all", "ik")
 # a roll–pitch–pitch leg's geometry, which its pictures draw (side and front views, singular sets)
 _LEG_GEOMETRY = ("a", "b", "c", "signs", "knee", "hip_offset", "reach")

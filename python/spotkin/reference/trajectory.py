@@ -25,7 +25,7 @@ Cartesian
      A = min(amax/L, alphamax/theta) (by (T) with D = 1); p = p0 + s (p1 - p0);
      slerp q(s) = sin((1 - s) O) / sin O q0 + sin(s O) / sin O q1, cos O = q0 . q1 >= 0.
 (B)  blended waypoint path (see spotkin.trajectory.CartesianPath), with rotation matrices.
-(P)  its plan (see spotkin.trajectory._plan): rates r_k = 1 / d_k, segment k's (dp_k, phi_k),
+(P)  its plan (see spotkin.kinematics.path_planning._plan): rates r_k = 1 / d_k, segment k's (dp_k, phi_k),
      N(u, w) = max(|u| / amax, |w| / alphamax), blend b_j = max(N(twist change), min_blend).
      Fit rule b_j <= min(d_{j-1}, d_j), bounded by the triangle inequality: with
      gamma = N(seg_j - seg_{j-1}), accelerating (r_j >= r_{j-1}):
