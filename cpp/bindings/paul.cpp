@@ -13,6 +13,8 @@ namespace spotkin::bindings {
 
 namespace {
 
+namespace py = pybind11;
+
 // Angles in (-pi, pi]: the kernels' atan2 gives -pi for a -0 sine (and a sine below the smallest
 // step at pi), the same angle as pi.
 double half_open(double t) { return t == -kPi<double> ? kPi<double> : t; }
