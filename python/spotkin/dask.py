@@ -50,51 +50,12 @@ lazy dask arrays. Nothing is computed until the caller computes or stores them::
 from __future__ import annotations
 
 from ._support.public import publish
-from .scale.dask_calls import (
-    body_fk,
-    body_ik,
-    body_jacobian,
-    body_rates,
-    center_of_mass,
-    coriolis_matrix,
-    fk,
-    floating_q,
-    forward_dynamics,
-    gravity,
-    ik,
-    ik_all,
-    inverse_dynamics,
-    jacobian,
-    joint_torques_from_forces,
-    mass_matrix,
-    nonlinear_effects,
-    standing_torques,
-)
+from .scale.dask_calls import *  # noqa: F403 (the public calls: their __all__ below)
+from .scale.dask_calls import __all__
 from .scale.dask_kernel import ALIGNMENT as ALIGNMENT
 
 # what the graphs' pickles name (a chunk's kernel rebuilds itself through these): here, at this public path
 from .scale.dask_kernel import _model_from_pickle as _model_from_pickle
 from .scale.dask_kernel import _rebuild_kernel as _rebuild_kernel
-
-__all__ = [
-    "body_fk",
-    "body_ik",
-    "body_jacobian",
-    "body_rates",
-    "center_of_mass",
-    "coriolis_matrix",
-    "fk",
-    "floating_q",
-    "forward_dynamics",
-    "gravity",
-    "ik",
-    "ik_all",
-    "inverse_dynamics",
-    "jacobian",
-    "joint_torques_from_forces",
-    "mass_matrix",
-    "nonlinear_effects",
-    "standing_torques",
-]
 
 publish(__name__, globals(), [*__all__, "_model_from_pickle", "_rebuild_kernel"])

@@ -34,24 +34,7 @@ rank except within rounding of the threshold); ``singular_values``, ``rank`` and
 from __future__ import annotations
 
 from ._support.public import publish
-from .kinematics.differential import (
-    compatible,
-    dls,
-    manipulability,
-    nullspace_projector,
-    pinv,
-    rank,
-    singular_values,
-)
-
-__all__ = [
-    "compatible",
-    "dls",
-    "manipulability",
-    "nullspace_projector",
-    "pinv",
-    "rank",
-    "singular_values",
-]
+from .kinematics.differential import *  # noqa: F403 (its __all__, below)
+from .kinematics.differential import __all__
 
 publish(__name__, globals(), __all__)

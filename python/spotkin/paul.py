@@ -19,12 +19,7 @@ coefficient); shapes that do not broadcast raise ``ValueError`` naming them all.
 from __future__ import annotations
 
 from ._support.public import publish
-from .kinematics.paul import type2, type3, type6
-
-__all__ = [
-    "type2",
-    "type3",
-    "type6",
-]
+from .kinematics.paul import *  # noqa: F403 (its __all__, below)
+from .kinematics.paul import __all__
 
 publish(__name__, globals(), __all__)

@@ -13,6 +13,7 @@ import numpy as np
 
 from .._support.version import __version__
 from ..scale import batch_operations, batch_run
+from ..scale.batch_operations import _positive_int
 from .demo import demo
 from .pictures import PLOT_EXTRA, plot_stance
 from .reports import inspect, workspace_report
@@ -28,16 +29,6 @@ def _size(text: str) -> tuple[int, int]:
     if width < 16 or height < 16 or width > 10_000 or height > 10_000:
         raise argparse.ArgumentTypeError(f"each side must be 16 to 10000 pixels, got {text!r}")
     return width, height
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
 
 
 DEMO_MAX_SAMPLES = 10_000_000  # the demo holds a few arrays of this many samples (GBs at the bound)

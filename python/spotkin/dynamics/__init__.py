@@ -33,39 +33,8 @@ Batches
 from __future__ import annotations
 
 from .._support.public import publish
-from .inertia import LinkInertials
+from .rigid_body import *  # noqa: F403 (its __all__, below)
 from .rigid_body import GRAVITY as GRAVITY
-from .rigid_body import (
-    FloatingBase,
-    center_of_mass,
-    center_of_mass_jacobian,
-    coriolis_matrix,
-    forward_dynamics,
-    gravity,
-    inertials_of,
-    inverse_dynamics,
-    kinetic_energy,
-    mass_matrix,
-    nonlinear_effects,
-    potential_energy,
-    unpack_symmetric,
-)
-
-__all__ = [
-    "FloatingBase",
-    "LinkInertials",
-    "center_of_mass",
-    "center_of_mass_jacobian",
-    "coriolis_matrix",
-    "forward_dynamics",
-    "gravity",
-    "inertials_of",
-    "inverse_dynamics",
-    "kinetic_energy",
-    "mass_matrix",
-    "nonlinear_effects",
-    "potential_energy",
-    "unpack_symmetric",
-]
+from .rigid_body import __all__
 
 publish(__name__, globals(), __all__)
