@@ -23,8 +23,9 @@ LAYERS = (
     ("dynamics", "urdf"),  # mass properties and rigid-body dynamics; reading descriptions
     ("model",),  # legs, arms, chains, robots, Spot
     ("kinematics", "scale", "sdk"),  # tools over the models; Dask and spotkin batch; the Spot SDK
+    ("motion",),  # gaits, their plans and controllers, over the models and the kinematics
     (FACE,),  # spotkin, spotkin.dask, .differential, .inertia, .models, .paul, .trajectory
-    ("plot",),  # the pictures (the optional extra), over the public API
+    ("plot", "sim"),  # the pictures and the simulator (optional extras), over the public API
     ("cli",),  # the command line
     ("__main__",),
 )
