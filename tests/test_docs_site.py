@@ -35,6 +35,7 @@ PUBLIC_MODULES = (
     "models",
     "robots",
     "plot",
+    "sim",
     "sdk",
     "dask",
 )

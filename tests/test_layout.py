@@ -22,7 +22,7 @@ MAX_LINES = 600
 # (what it exports is ``spotkin.X``), then the public modules; the optional extras when installed.
 PUBLIC = ["spotkin", "spotkin.urdf", "spotkin.dynamics", "spotkin.inertia", "spotkin.trajectory"]
 PUBLIC += ["spotkin.paul", "spotkin.differential", "spotkin.models", "spotkin.robots"]
-OPTIONAL = ["spotkin.dask", "spotkin.sdk", "spotkin.plot"]
+OPTIONAL = ["spotkin.dask", "spotkin.sdk", "spotkin.plot", "spotkin.sim"]
 
 
 def _public_modules() -> list:

@@ -92,6 +92,8 @@ def test_python_block_runs(path, line, source, runs, restore_threads):
     if "from spotkin import plot" in source:  # the optional extra: drawn into files with Agg
         matplotlib = pytest.importorskip("matplotlib", reason='the block draws: pip install "spotkin[plot]"')
         matplotlib.use("Agg")
+    if "from spotkin import sim" in source:  # the optional extra
+        pytest.importorskip("mujoco", reason='the block simulates: pip install "spotkin[sim]"')
     # pad with blank lines so that tracebacks give the Markdown file's own line numbers
     code = compile("\n" * (line - 1) + source, str(path), "exec")
     namespace = {"__name__": f"{path.stem}_block_{line}"}

@@ -1,8 +1,9 @@
 """URDF parsing, kinematic-tree utilities and recognition of legs and arms.
 
 Standard library plus NumPy only: the XML is read with :mod:`xml.etree.ElementTree`.
-Only kinematics and inertia are kept; meshes (``package://`` paths or any other),
-visuals, collisions, transmissions and ``<gazebo>`` tags are read past and never loaded.
+Only kinematics, inertia and collision spheres (:attr:`Link.spheres`: a foot's contact sphere)
+are kept; meshes (``package://`` paths or any other), visuals, other collision geometry,
+transmissions and ``<gazebo>`` tags are read past and never loaded.
 A ``.xacro`` description is expanded first with the ``xacro`` package when it is
 installed (``pip install "spotkin[xacro]"``; see :func:`read_description`).
 

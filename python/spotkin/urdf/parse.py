@@ -85,6 +85,25 @@ def _parse_inertial(el: ET.Element, link: str) -> Inertial:
         raise ValueError(f"link {link!r}: {exc}") from None
 
 
+def _collision_spheres(el: ET.Element) -> tuple[tuple[tuple[float, float, float], float], ...]:
+    """The link's ``<collision>`` spheres as ((x, y, z), radius) in the link frame. Collisions are
+    optional extras to the kinematics: one that does not read as a sphere with a positive finite
+    radius and a valid origin is read past, as every other collision geometry is."""
+    spheres = []
+    for collision in el.iterfind("collision"):
+        sphere = collision.find("geometry/sphere")
+        if sphere is None:
+            continue
+        try:
+            radius = _float(sphere.get("radius"), "collision sphere radius")
+            centre = _origin(collision.find("origin"), "collision")[:3, 3]
+        except ValueError:
+            continue
+        if radius is not None and radius > 0:
+            spheres.append((tuple(float(v) for v in centre), radius))
+    return tuple(spheres)
+
+
 def _parse_joint(el: ET.Element, k: int, index: int) -> Joint:
     name = el.get("name")
     if not name:
@@ -182,7 +201,7 @@ def parse_urdf(text: str | bytes) -> Model:
             raise ValueError(f"duplicate link name {link!r}")
         inertial_el = el.find("inertial")
         inertial = _parse_inertial(inertial_el, link) if inertial_el is not None else None
-        links[link] = Link(link, inertial)
+        links[link] = Link(link, inertial, _collision_spheres(el))
     if not links:
         raise ValueError(f"robot {name!r} has no links")
     joints = []

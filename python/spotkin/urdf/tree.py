@@ -118,10 +118,16 @@ class Inertial:
 
 @dataclass(frozen=True, eq=False)
 class Link:
-    """A link: its name and optional mass properties."""
+    """A link: its name, optional mass properties and its collision spheres.
+
+    ``spheres`` holds the link's ``<collision>`` elements whose geometry is a ``<sphere>``, as
+    ``((x, y, z), radius)`` pairs in the link frame (a foot's contact sphere, for the simulator);
+    every other collision geometry is read past.
+    """
 
     name: str
     inertial: Inertial | None = None
+    spheres: tuple[tuple[tuple[float, float, float], float], ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
