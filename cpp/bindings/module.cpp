@@ -9,6 +9,7 @@ void bind_result_types(pybind11::module_& m);  // binder.cpp
 namespace spotkin::bindings {
 void bind_dynamics(pybind11::module_& m);  // dynamics.cpp
 void bind_statics(pybind11::module_& m);   // statics.cpp
+void bind_core_method(pybind11::module_& m);  // forward.cpp
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -26,4 +27,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_diagnostics(m);
   spotkin::bindings::bind_dynamics(m);
   spotkin::bindings::bind_statics(m);
+  spotkin::bindings::bind_core_method(m);
 }

@@ -230,6 +230,10 @@ class RobotStatics:
         ...
     def standing(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, stance: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
+def _core_method(function: typing.Any, target: str, method: str, names: tuple, defaults: tuple, converters: tuple, n_positional: typing.SupportsInt | typing.SupportsIndex, order: tuple, constants: tuple, required: typing.Any) -> typing.Any:
+    """
+    A façade method that calls self.<target>.<method>(...) from C (spotkin._support.forward).
+    """
 def _elementary_costs(dtype: str = 'float64', repeats: typing.SupportsInt | typing.SupportsIndex = 100) -> dict[str, float]:
     """
     ns per element of the vectorised atan2, sincos, sqrt and multiply-add, on one thread.

@@ -47,6 +47,7 @@ from .._support.boundary import (
     quiet_float_errors,
     rigid_transforms,
 )
+from .._support.forward import core_method
 from .._support.status import Status
 from .presets import SPOT
 
@@ -206,11 +207,13 @@ class SpotArm:
         el1), wrist (wr0, wr1)."""
         return ARM_JOINT_NAMES
 
+    @core_method("_core", "fk")
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tool pose in the body frame: q (..., 6) -> (..., 4, 4). ``out``: an array of the result's
         shape and dtype to write into and return."""
         return self._core.fk(q, out)
 
+    @core_method("_core", "jacobian")
     def jacobian(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Geometric Jacobian [v; w] of the tool point in the body frame: (..., 6) -> (..., 6, 6);
         ``out`` as in :meth:`fk`."""
@@ -221,6 +224,7 @@ class SpotArm:
         out = self._core.singularity(q)
         return ArmSingularity(out[..., 0], out[..., 1], out[..., 2], out[..., 3])
 
+    @core_method("_core", "ik_all")
     def ik_all(
         self, T: ArrayLike, seed: ArrayLike | None = None, *, out: tuple | None = None
     ) -> ArmSolutions:
@@ -235,6 +239,7 @@ class SpotArm:
         """
         return self._core.ik_all(T, seed, out)  # an ArmSolutions (the core builds it)
 
+    @core_method("_core", "ik")
     def ik(
         self, T: ArrayLike, seed: ArrayLike | None = None, *, out: tuple | None = None
     ) -> tuple[np.ndarray, np.ndarray | Status]:

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike
 
 from .. import _core
 from .._support.boundary import as_index, as_real, limit_table, rigid_transforms
+from .._support.forward import AT_DEFAULT, core_method
 from ..dynamics.inertia import link_inertials
 from .chain_dynamics import _ChainDynamicsMethods
 from .chain_ik import ChainSolutions, IKDifferentialInfo, _ChainIKMethods
@@ -322,6 +323,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         chain._dynamics = None  # built from the new inertials on first use
         return chain
 
+    @core_method("_core", "fk")
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Base-to-tool transform: q (..., dof) -> (..., 4, 4). ``out``: an array of the result's
         shape and dtype to write into and return (a control loop then allocates nothing)."""
@@ -335,6 +337,12 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         """
         return self._core.frames(q)
 
+    @core_method(
+        "_core",
+        "jacobian",
+        call=("q", (6,), (False,), "out"),
+        convert={"frame": AT_DEFAULT, "point": AT_DEFAULT},
+    )
     def jacobian(
         self,
         q: ArrayLike,

@@ -7,6 +7,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._support.boundary import as_real, broadcast_lead
+from .._support.forward import core_method
 from ..dynamics import inertia
 from ..dynamics import rigid_body as dynamics
 
@@ -16,6 +17,7 @@ class _ChainDynamicsMethods:
 
     __slots__ = ()
 
+    @core_method("_dynamics", "rnea")
     def inverse_dynamics(
         self,
         q: ArrayLike,
@@ -33,18 +35,21 @@ class _ChainDynamicsMethods:
         dynamics method takes it)."""
         return self._dynamics_core().rnea(q, qd, qdd, gravity, out)
 
+    @core_method("_dynamics", "crba")
     def mass_matrix(self, q: ArrayLike, layout: str = "full", *, out: np.ndarray | None = None) -> np.ndarray:
         """The joint-space inertia matrix A(q), (..., dof, dof): composite-rigid-body algorithm.
         ``layout="lower"`` zeroes the strict upper triangle; ``"packed"`` gives the lower triangle
         row by row, (..., dof (dof + 1) / 2) (:func:`spotkin.dynamics.unpack_symmetric`)."""
         return self._dynamics_core().crba(q, layout, out)
 
+    @core_method("_dynamics", "gravity")
     def gravity(
         self, q: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81), *, out: np.ndarray | None = None
     ) -> np.ndarray:
         """The gravity torques G(q) = dU/dq, (..., dof)."""
         return self._dynamics_core().gravity(q, gravity, out)
 
+    @core_method("_dynamics", "nonlinear_effects")
     def nonlinear_effects(
         self,
         q: ArrayLike,
@@ -56,10 +61,12 @@ class _ChainDynamicsMethods:
         """h = C(q, qd) qd + G(q), (..., dof)."""
         return self._dynamics_core().nonlinear_effects(q, qd, gravity, out)
 
+    @core_method("_dynamics", "coriolis_matrix")
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """C(q, qd), (..., dof, dof), the form for which dA/dt - 2 C is skew-symmetric."""
         return self._dynamics_core().coriolis_matrix(q, qd, out)
 
+    @core_method("_dynamics", "aba")
     def forward_dynamics(
         self,
         q: ArrayLike,

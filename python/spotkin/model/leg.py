@@ -56,6 +56,7 @@ from .._support.boundary import (
     limit_table,
     quiet_float_errors,
 )
+from .._support.forward import core_method
 from .._support.status import Status
 
 __all__ = ["Leg", "LegSolutions"]
@@ -318,6 +319,7 @@ class Leg:
         return np.stack([vx, np.cos(t1) * vy - np.sin(t1) * vz, np.sin(t1) * vy + np.cos(t1) * vz], -1)
 
     # -- kinematics --------------------------------------------------------------------------------------
+    @core_method("_core", "fk")
     def fk(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """Foot-sphere centre in the leg frame: q (..., 3) as [hx, hy, kn] -> (..., 3).
 
@@ -326,6 +328,7 @@ class Leg:
         """
         return self._core.fk(q, out)
 
+    @core_method("_core", "jacobian")
     def jacobian(self, q: ArrayLike, *, out: np.ndarray | None = None) -> np.ndarray:
         """d foot / d q in the leg frame: q (..., 3) -> (..., 3, 3); ``out`` as in :meth:`fk`."""
         return self._core.jacobian(q, out)
@@ -342,6 +345,7 @@ class Leg:
         """
         return self._core.singularity(q, out)
 
+    @core_method("_core", "ik", convert={"fallback": fallback_is_nearest})
     def ik(
         self,
         p: ArrayLike,
@@ -373,6 +377,7 @@ class Leg:
         """
         return self._core.ik(p, seed, fallback_is_nearest(fallback), out)
 
+    @core_method("_core", "ik_all")
     def ik_all(self, p: ArrayLike, *, out: tuple | None = None) -> LegSolutions:
         """Every branch for p (..., 3): see :class:`LegSolutions` and the slot table.
         ``out``: ``(q, valid, exists, status)`` arrays to write into (any may be None)."""

@@ -23,6 +23,7 @@ from .._support.boundary import (
     quiet_float_errors,
     real_dtype,
 )
+from .._support.forward import core_method
 from .._support.status import Status
 from .body import body_transform, sequence_code
 
@@ -111,6 +112,12 @@ class _WholeBodyMethods:
                 raise ValueError(f"height {height} m puts the feet out of reach")
         return feet
 
+    @core_method(
+        "_body_core",
+        "ik",
+        call=("body_pose", "seq", "feet", "seed", "fallback", "out"),
+        convert={"seq": sequence_code, "fallback": fallback_is_nearest},
+    )
     def body_ik(
         self,
         body_pose: ArrayLike,
@@ -147,6 +154,7 @@ class _WholeBodyMethods:
             seed = self._leg_q(as_real(seed, "seed"), "seed")[0]  # a whole-body q: the arm's part unused
         return self._body_core.ik(body_pose, code, feet, seed, nearest, out)
 
+    @core_method("_body_core", "fk", call=("body_pose", "seq", "q", "out"), convert={"seq": sequence_code})
     def body_fk(
         self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
     ) -> np.ndarray:
@@ -160,6 +168,9 @@ class _WholeBodyMethods:
         q = self._leg_q(as_real(q, "q"), "q")[0]
         return self._body_core.fk(body_pose, sequence_code(seq), q, out)
 
+    @core_method(
+        "_body_core", "jacobian", call=("body_pose", "seq", "q", "out"), convert={"seq": sequence_code}
+    )
     def body_jacobian(
         self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
     ) -> np.ndarray:

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike
 
 from .. import _core
 from .._support.boundary import as_real, broadcast_lead
+from .._support.forward import core_method
 from .._support.transforms import quaternion_xyzw
 from ..dynamics import inertia
 from ..dynamics.rigid_body import FloatingBase
@@ -81,6 +82,9 @@ class _FloatingBaseMethods:
             q = np.concatenate([q, np.zeros((*q.shape[:-1], arm))], axis=-1)
         return q
 
+    @core_method(
+        "_statics_core", "com", call=("body_pose", "seq", "q", "out"), convert={"seq": sequence_code}
+    )
     def center_of_mass(
         self, body_pose: ArrayLike, q: ArrayLike, seq: str = "XYZ", *, out: np.ndarray | None = None
     ) -> np.ndarray:

@@ -52,8 +52,11 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, qd, qdd, &g, b0, m);
-    rnea_chain(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(), blk.root_acceleration(),
-               blk.out.data(), f.data());
+    if (qd || qdd)
+      rnea_chain(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(),
+                 blk.root_acceleration(), blk.out.data(), f.data());
+    else  // G(q)
+      gravity_chain(model, blk.X.data(), blk.root_acceleration(), blk.out.data(), f.data());
     store(blk.out.data(), n, b0, m, blk.ok, tau, stream);
   }
   if (stream) stream_fence();

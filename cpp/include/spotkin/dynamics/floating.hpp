@@ -117,12 +117,18 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
     blk.begin(model, q, v, a, &g, b0, m);
     const Motion<P> vb = blk.body_velocity(), ab = blk.body_acceleration();
     const RigidInertia<P> I = model.body_inertia();
-    const Force<P> fa = apply(I, ab), fv = crf(vb, apply(I, vb));
-    Force<P> fb{fa.n + fv.n, fa.f + fv.f};
+    Force<P> fb = apply(I, ab);
+    if (v) {
+      const Force<P> fv = crf(vb, apply(I, vb));
+      fb.n += fv.n, fb.f += fv.f;
+    }
     for (std::size_t k = 0; k < model.chains().size(); ++k) {
       const int o = model.offset(k);
-      const Force<P> fk = rnea_chain(model.chains()[k], blk.X.data() + o, blk.v.data() + 6 + o,
-                                     blk.a.data() + 6 + o, vb, ab, blk.out.data() + 6 + o, f.data() + o);
+      const Force<P> fk =
+          v || a ? rnea_chain(model.chains()[k], blk.X.data() + o, blk.v.data() + 6 + o,
+                              blk.a.data() + 6 + o, vb, ab, blk.out.data() + 6 + o, f.data() + o)
+                 : gravity_chain(model.chains()[k], blk.X.data() + o, ab, blk.out.data() + 6 + o,
+                                 f.data() + o);  // G(q): at rest
       fb.n += fk.n, fb.f += fk.f;
     }
     for (int r = 0; r < 3; ++r) blk.out[r] = fb.f[r], blk.out[3 + r] = fb.n[r];
