@@ -38,6 +38,7 @@ from .model.robot import Robot
 from .model.robot_body import BodyFrames, BodyIK, BodyRates
 from .model.robot_statics import StanceStatus, Standing
 from .model.spot import Spot
+from .motion import Gait, GaitPlan
 
 # What the models' pickles call to rebuild them, at this path (publish below) whichever file defines
 # them: a pickle names "spotkin" only.
@@ -72,6 +73,8 @@ __all__ = [
     "Chain",
     "ChainSolutions",
     "Dexterity",
+    "Gait",
+    "GaitPlan",
     "IKDifferentialInfo",
     "Leg",
     "LegSolutions",

@@ -42,7 +42,8 @@ Modules:
 - the registry, one module per concept: :mod:`~fuzz.legs`, :mod:`~fuzz.arm`, :mod:`~fuzz.chains`,
   :mod:`~fuzz.body` (whole-body methods), :mod:`~fuzz.spot`, :mod:`~fuzz.robot_options` and
   :mod:`~fuzz.robots` (robots from URDF), :mod:`~fuzz.dynamics`, :mod:`~fuzz.functions`,
-  :mod:`~fuzz.paul`, :mod:`~fuzz.trajectory`, :mod:`~fuzz.workspace`, :mod:`~fuzz.roundtrip`
+  :mod:`~fuzz.paul`, :mod:`~fuzz.trajectory`, :mod:`~fuzz.workspace`, :mod:`~fuzz.gait`,
+  :mod:`~fuzz.roundtrip`
   (pickling and copying), :mod:`~fuzz.joint_names`, then :mod:`~fuzz.sdk`, :mod:`~fuzz.dask`,
   :mod:`~fuzz.plot` (optional modules), :mod:`~fuzz.limits`, :mod:`~fuzz.isa` and :mod:`~fuzz.urdf`;
   :mod:`~fuzz.registry` imports them in that order (the order of :data:`~fuzz.registry.REGISTRY`);

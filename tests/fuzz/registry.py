@@ -21,6 +21,7 @@ from .chains import chain_entries
 from .dynamics import dynamics_entries
 from .entry import REGISTRY
 from .functions import function_entries
+from .gait import gait_entries
 from .joint_names import joint_name_entries
 from .legs import leg_entries
 from .paul import paul_entries
@@ -41,6 +42,7 @@ function_entries()
 paul_entries()
 trajectory_entries()
 workspace_entries()
+gait_entries()
 roundtrip_entries()
 joint_name_entries()
 fuzz_sdk.register_entries()  # spotkin.sdk, when its optional SDK is installed

@@ -27,6 +27,10 @@ from .urdf_chain import chain_from_model
 
 __all__ = ["Robot"]
 
+_MOTION: dict[str, Callable] = {}
+"""What the motion layer (above this one: the model may not import it) lends to :class:`Robot`:
+``spotkin.motion.plan`` registers ``"plan_gait"`` when the package is imported."""
+
 
 def _side_groups(hips: np.ndarray, tolerance: float) -> dict[str, list[int]]:
     """The legs on each side (left: y > tolerance, right: y < -tolerance, else center), front to hind."""
@@ -454,6 +458,28 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         }
         merged = {**(old or {}), **_limit_table(limits, self._model)}
         return _rebuild_robot(text, feet, contact_offset, nominal, merged, leg_order)
+
+    # -- motion --------------------------------------------------------------------------------------
+    def plan_gait(
+        self,
+        gait,
+        velocity=(0.0, 0.0, 0.0),
+        duration: float = 5.0,
+        rate: float = 500.0,
+        *,
+        attitude=(0.0, 0.0),
+    ):
+        """A walk planned open loop: ``gait`` (a :class:`spotkin.Gait` or a preset name) following
+        ``velocity`` (..., 3) = (vx, vy, yaw rate) in the body frame (m/s, rad/s; a batch of commands
+        broadcasts, one plan each) for ``duration`` s at ``rate`` ticks per second, starting at rest on
+        the gait's nominal feet with the body at the origin; ``attitude`` (roll, pitch) of the body
+        (rad). Returns a :class:`spotkin.GaitPlan`: per tick the body pose, the feet, the contacts, q
+        (IK seeded with the previous tick's), qd, feedforward torques, the worst IK status, the support
+        margin and whether a step was shortened. A quadruped only (``ValueError`` otherwise), and at most
+        1e8 ticks; a NaN or Inf command is a ``ValueError``. The gait model is in the guide's *Walking*
+        page. Computed by the pure-Python reference planner for now.
+        """
+        return _MOTION["plan_gait"](self, gait, velocity, duration, rate, attitude)
 
     def __reduce__(self):
         return (_rebuild_robot, self._source)

@@ -1,0 +1,94 @@
+"""Gait plans: :meth:`spotkin.Robot.plan_gait` and its result, :class:`GaitPlan`.
+
+The plan is computed by the pure-Python reference planner (:mod:`spotkin.reference.gait_plan`), one
+command at a time; a compiled planner, checked against it sample by sample, will take its place.
+``Robot.plan_gait`` is defined in :mod:`spotkin.model.robot` and calls through the registry that this
+module fills on import (the model layer may not import motion, which sits above it).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from .._support.boundary import as_real, as_scalar, check_trailing
+from ..model import robot as robot_module
+from ..reference import gait_plan
+from .gait import Gait
+
+__all__ = ["GaitPlan"]
+
+MAX_TICKS = 1e8
+"""The most ticks a plan may have (duration * rate)."""
+
+
+class GaitPlan(NamedTuple):
+    """A planned walk, from :meth:`spotkin.Robot.plan_gait`: one row per tick, for each command (the
+    leading dimensions ``...`` of the velocity given)."""
+
+    t: np.ndarray
+    """(ticks,) s: k / rate."""
+    body_pose: np.ndarray
+    """(..., ticks, 6) [x, y, z, a, b, c], Euler "XYZ" as :meth:`spotkin.Robot.body_ik` takes it (the
+    yaw c continuous, not wrapped)."""
+    feet: np.ndarray
+    """(..., ticks, n_legs, 3) world foot points."""
+    contact: np.ndarray
+    """(..., ticks, n_legs) bool: the planned stance."""
+    q: np.ndarray
+    """(..., ticks, 3 n_legs) rad, :attr:`spotkin.Robot.leg_joint_names` order, each tick's IK seeded with
+    the previous tick's q."""
+    qd: np.ndarray
+    """(..., ticks, 3 n_legs) rad/s, from the leg Jacobians and the feet's and body's velocities."""
+    tau: np.ndarray
+    """(..., ticks, 3 n_legs) N m feedforward: each leg's gravity torques minus J^T f of its stance force."""
+    status: np.ndarray
+    """(..., ticks) int8 :class:`spotkin.Status`: the worst leg's IK status."""
+    margin: np.ndarray
+    """(..., ticks) m: the centre of mass's projection to the support polygon, positive inside."""
+    shortened: np.ndarray
+    """(..., ticks) bool: the command was slowed to fit the legs' steps, or a swinging foot's foothold was
+    pulled back towards its nominal point to be reachable."""
+    residual: np.ndarray
+    """(..., ticks, 6) the wrench the stance forces leave unbalanced, [force (N); moment about the centre
+    of mass (N m)], world axes: the weight's moment about the line of two feet in a trot, say."""
+
+
+def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
+    """The reference path of :meth:`spotkin.Robot.plan_gait`: checks the arguments, resolves the gait, and
+    runs :func:`spotkin.reference.gait_plan.plan` once per command (a plain Python loop over ticks and
+    commands). A compiled planner over commands x ticks will replace it."""
+    if isinstance(gait, str):
+        gait = Gait(gait)
+    if not isinstance(gait, Gait):
+        raise TypeError(f"gait must be a spotkin.Gait or a preset name, got {type(gait).__name__}")
+    velocity = as_real(velocity, "velocity", np.float64)
+    lead = check_trailing(velocity, "velocity", (3,))
+    if not np.isfinite(velocity).all():
+        raise ValueError("velocity must be finite (vx, vy, yaw rate), got NaN or Inf")
+    duration, rate = as_scalar(duration, "duration"), as_scalar(rate, "rate")
+    if not (math.isfinite(duration) and duration > 0.0):
+        raise ValueError(f"duration must be finite and > 0, got {duration}")
+    if not (math.isfinite(rate) and rate > 0.0):
+        raise ValueError(f"rate must be finite and > 0, got {rate}")
+    if duration * rate > MAX_TICKS:
+        raise ValueError(f"duration * rate must be at most {MAX_TICKS:.0e} ticks, got {duration * rate:.3g}")
+    attitude = as_real(attitude, "attitude", np.float64)
+    if attitude.shape != (2,) or not np.isfinite(attitude).all():
+        raise ValueError(f"attitude must be finite (roll, pitch), got {attitude.tolist()}")
+    resolved = gait.resolve(robot)
+    commands = velocity.reshape(-1, 3)
+    runs = [
+        gait_plan.plan(robot, resolved, command, duration, rate, attitude=tuple(attitude))
+        for command in (commands if len(commands) else np.zeros((1, 3)))  # none: one for the shapes
+    ]
+    fields = {"t": runs[0]["t"]}
+    for name in GaitPlan._fields[1:]:
+        stacked = np.stack([run[name] for run in runs])[: len(commands)]
+        fields[name] = stacked.reshape(*lead, *stacked.shape[1:])
+    return GaitPlan(**fields)
+
+
+robot_module._MOTION["plan_gait"] = _plan_gait
