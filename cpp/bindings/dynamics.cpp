@@ -97,9 +97,11 @@ py::object chain_crba(const ChainDynamics& d, py::handle q, py::handle layout_na
               [](const void* c, const auto& b) {
                 const auto& mm = binder::context<MassMatrix<ChainDynamics>>(c);
                 with_model<typename std::decay_t<decltype(b)>::Scalar>(
-                    mm.d, [&](const auto& model) {
+                    mm.d,
+                    [&](const auto& model) {
                       dynamics::crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
-                    });
+                    },
+                    b.m);
               });
   };
   return ops.with({std::uint64_t(d.dof()), d.f64.angle_columns(), std::uint64_t(context.layout)},

@@ -6,6 +6,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -41,14 +43,19 @@ using dynamics::kSmallLanes64;
 // the lanes runs one partial block, and a sample's bits are the same alone, in any batch,
 // and in any thread's chunk.
 template <typename T, typename D, typename F>
-SPOTKIN_INLINE void with_model(const D& d, F&& f) {
+SPOTKIN_INLINE void with_model(const D& d, F&& f, std::ptrdiff_t samples = PTRDIFF_MAX) {
   switch (active_isa()) {
-    case Isa::Avx512: return f(d.get(T{}));
+    case Isa::Avx512:
+      // A few samples (one sample of a control loop) run the AVX2 model, whose one vector holds
+      // them: its clone fuses the same multiply-adds, so the bits are the AVX-512 model's, and a
+      // lone sample moves a quarter of the scratch (5-15 % faster from Python).
+      if (samples <= (std::is_same_v<T, float> ? dynamics::kMidLanes32 : dynamics::kMidLanes64))
+        return f(d.mid(T{}));
+      return f(d.get(T{}));
     case Isa::Avx2: return f(d.mid(T{}));
     default: return f(d.small(T{}));
   }
 }
-
 
 // ---------------------------------------------------------------- inertials
 
@@ -111,8 +118,8 @@ Rows<T> rows(const binder::Block<T>& b, int k) {
 // Calls f(model) with the model (of Dynamics, the kernel's context) of the active level, in the
 // block's precision.
 template <typename Dynamics, typename B, typename F>
-void on_model(const void* context, const B&, F&& f) {
-  with_model<typename B::Scalar>(binder::context<Dynamics>(context), f);
+void on_model(const void* context, const B& b, F&& f) {
+  with_model<typename B::Scalar>(binder::context<Dynamics>(context), f, b.m);
 }
 
 // The mass matrix's context: the model and the output layout.

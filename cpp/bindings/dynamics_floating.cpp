@@ -124,9 +124,13 @@ py::object floating_crba(const FloatingDynamics& d, py::handle q, py::handle lay
         {positions(d)}, {Out("A", symmetric_shape(d.f64.nv(), context.layout))}, kNsFloating,
         [](const void* c, const auto& b) {
           const auto& mm = binder::context<MassMatrix<FloatingDynamics>>(c);
-          with_model<typename std::decay_t<decltype(b)>::Scalar>(mm.d, [&](const auto& model) {
-            dynamics::floating_crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream, mm.layout);
-          });
+          with_model<typename std::decay_t<decltype(b)>::Scalar>(
+              mm.d,
+              [&](const auto& model) {
+                dynamics::floating_crba_k(model, rows(b, 0), b.real(0), 0, b.m, b.stream,
+                                          mm.layout);
+              },
+              b.m);
         });
   };
   return ops.with({std::uint64_t(d.f64.nq()), d.angles, std::uint64_t(context.layout)}, make,

@@ -90,10 +90,14 @@ dynamics::StaticsRows<T> statics_rows(const binder::Block<T>& b) {
 
 // f(the robot with the active level's floating model)
 template <typename F>
-void on_robot(const RobotStatics& r, F&& f) {
-  with_model<double>(r.floating, [&](const auto& model) {
-    f(dynamics::RobotStaticsModel<std::decay_t<decltype(model)>>{r.body, model, r.mass, r.n_arm});
-  });
+void on_robot(const RobotStatics& r, std::ptrdiff_t samples, F&& f) {
+  with_model<double>(
+      r.floating,
+      [&](const auto& model) {
+        f(dynamics::RobotStaticsModel<std::decay_t<decltype(model)>>{r.body, model, r.mass,
+                                                                     r.n_arm});
+      },
+      samples);
 }
 
 // body_pose (any form) and q (..., 3 n_legs [+ n_arm]).
@@ -141,7 +145,9 @@ py::object robot_com(const RobotStatics& r, py::handle pose, int sequence, py::h
   const auto make = [&] {
     return Op({statics_pose(), statics_q(r)}, {Out("com", {3})}, 600.0, [](const void* c, const auto& b) {
       const StaticsCall& s = binder::context<StaticsCall>(c);
-      on_robot(s.robot, [&](const auto& robot) { dynamics::robot_com(robot, s.seq, statics_rows(b), b.real(0), b.m); });
+      on_robot(s.robot, b.m, [&](const auto& robot) {
+        dynamics::robot_com(robot, s.seq, statics_rows(b), b.real(0), b.m);
+      });
     });
   };
   const StaticsCall call{r, EulerSequence::from_code(sequence), {0.0, 0.0, 0.0}};
@@ -157,7 +163,7 @@ py::object robot_standing(const RobotStatics& r, py::handle pose, int sequence, 
               {Out("tau", {3 * L}), Out("forces", {L, 3}), Out("status", {}, Kind::Code), Out("margin", {})},
               2000.0, [](const void* c, const auto& b) {
                 const StaticsCall& s = binder::context<StaticsCall>(c);
-                on_robot(s.robot, [&](const auto& robot) {
+                on_robot(s.robot, b.m, [&](const auto& robot) {
                   dynamics::robot_standing(robot, s.seq, s.gravity, statics_rows(b), b.real(0), b.real(1), b.status(2),
                                            b.real(3), b.m);
                 });

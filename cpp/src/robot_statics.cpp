@@ -78,9 +78,19 @@ void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& 
       for (int r = 0; r < 3; ++r)
         g_body[3 * i + r] = valid[i] ? M[r] * gravity[0] + M[4 + r] * gravity[1] + M[8 + r] * gravity[2] : 0.0;
     }
-    floating_com_k(robot.floating, Rows<double>{qf, nq}, com, false, 0, m, false);
     floating_rnea_k(robot.floating, Rows<double>{qf, nq}, nullptr, nullptr, Rows<double>{g_body, 3}, gravity_torques, 0,
                     m, false);
+    for (int i = 0; i < m; ++i) {
+      // The centre of mass across gravity from G(q)'s body wrench [f; n] (body frame, at rest):
+      // f = -m g, n = c x f, so c_perp = f x n / |f|^2 = c - f (f . c) / |f|^2. The balance and the
+      // margin need no more: c's part along g moves the moment of sum f_i = -m g by nothing.
+      const double* w = gravity_torques + nv * i;
+      const double ff = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+      const double inv = ff > 0.0 ? 1.0 / ff : 0.0;  // no weight: no force, any centre
+      com[3 * i] = (w[1] * w[5] - w[2] * w[4]) * inv;
+      com[3 * i + 1] = (w[2] * w[3] - w[0] * w[5]) * inv;
+      com[3 * i + 2] = (w[0] * w[4] - w[1] * w[3]) * inv;
+    }
     for (int i = 0; i < m; ++i) {
       const std::ptrdiff_t k = first + i;
       T* tau_out = tau_rows + 3 * L * k;
