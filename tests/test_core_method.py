@@ -158,6 +158,14 @@ def test_whole_body(spot, go2):
         check(robot, "body_ik", pose, feet, fallback="nan", seq="XYZ")
         check(robot, "body_ik", pose, feet, seq="bad")
         check(robot, "body_ik", pose.astype(np.float32), feet.astype(np.float32))
+        check(robot, "standing_torques", pose, q)
+        check(robot, "standing_torques", pose, whole, [True, False, True, True])
+        check(robot, "standing_torques", np.tile(pose, (3, 1)), q, gravity=(0.0, 0.0, -1.0))
+        check(robot, "standing_torques", pose, q, stance=[True, True, False, False])  # UNBALANCED
+        check(robot, "standing_torques", pose, q, seq="bad")
+        outs = (np.empty(q.shape), np.empty((robot.n_legs, 3)), np.empty((), np.int8), np.empty(()))
+        check(robot, "standing_torques", pose, q, out=outs)
+        check(robot, "standing_torques", pose, q, out=(None, None, None, None))
         for name in ("body_fk", "body_jacobian", "center_of_mass"):
             check(robot, name, pose, q)
             check(robot, name, pose, whole)

@@ -47,7 +47,28 @@ struct Output {
   std::ptrdiff_t width = 0;
   std::int8_t single_status = 0;  // a single sample's status, without an array
   bool scalar = false;            // returned as a spotkin.Status
-  py::object result() const { return scalar ? status_object(single_status) : array; }
+  bool single = false;            // one sample (no leading dimension)
+  bool given = false;             // the caller's out= array
+  PyObject** codes = nullptr;     // Out::codes
+  bool to_scalar = false;         // Out::scalar
+  py::object result() const {
+    if (scalar) return status_object(single_status);
+    if (single && codes && *codes) {  // the enum's member, by value
+      const std::int8_t code = *static_cast<const std::int8_t*>(data);
+      if (code >= 0 && code < PyTuple_GET_SIZE(*codes))
+        return py::reinterpret_borrow<py::object>(PyTuple_GET_ITEM(*codes, code));
+    }
+    if (single && to_scalar && !given) {  // array[()]: a NumPy scalar
+      PyObject* value = PyObject_GetItem(array.ptr(), py::tuple().ptr());
+      if (!value) throw py::error_already_set();
+      return py::reinterpret_steal<py::object>(value);
+    }
+    return array;
+  }
+  void describe(const Out& spec, bool one, bool caller_s) {
+    single = one, given = caller_s, to_scalar = spec.scalar;
+    codes = spec.kind == Kind::Code ? spec.codes : nullptr;
+  }
 };
 
 // The call's answer: its one output, or a tuple of them: the op's registered result type (a
@@ -200,6 +221,7 @@ py::array new_output(const Out& spec, const Shape& leading) {
 // new array of the leading shape and the output's sample shape.
 template <typename T>
 void make_output(Output& r, const Out& spec, const Shape& leading) {
+  r.describe(spec, leading.empty(), false);
   if (spec.kind == Kind::Status && leading.empty() && spec.shape.ndim == 0) {
     r.data = &r.single_status;
     r.scalar = true;
@@ -445,6 +467,7 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
       Shape shape = leading;
       shape.insert(shape.end(), spec.shape.dim, spec.shape.dim + spec.shape.ndim);
       py::array checked = checked_out<T>(given[o], spec, o, shape);
+      r.describe(spec, leading.empty(), true);
       r.data = checked.mutable_data();
       r.array = checked;
       for (int k = 0; k < op.n_args; ++k)  // an input that shares memory with an output is read from a copy
@@ -598,6 +621,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
       for (int k = 0; k < op.n_args; ++k)
         if (block.in[k] && overlaps(checked, block.in[k], sizeof(T) * std::size_t(widths[k])))
           return {};
+      r.describe(spec, true, true);
       r.data = checked.mutable_data();
       r.array = std::move(checked);
       continue;
@@ -626,14 +650,21 @@ void bind_result_types(py::module_& m) {
   m.def(
       "_register_result_type",
       [](const std::string& name, py::object type) {
-        if (!PyType_Check(type.ptr()) || !PyType_IsSubtype(reinterpret_cast<PyTypeObject*>(type.ptr()), &PyTuple_Type))
-          throw py::type_error("_register_result_type takes a tuple subclass");
+        const bool members =
+            PyTuple_CheckExact(type.ptr());  // an enum's members, by value (Out::members)
+        if (!members &&
+            (!PyType_Check(type.ptr()) ||
+             !PyType_IsSubtype(reinterpret_cast<PyTypeObject*>(type.ptr()), &PyTuple_Type)))
+          throw py::type_error(
+              "_register_result_type takes a tuple subclass, or a tuple of an enum's members");
         PyObject** slot = result_type(name.c_str());
         Py_XDECREF(*slot);
         *slot = type.release().ptr();
       },
       py::arg("name"), py::arg("type"),
-      "Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...).");
+      "Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...), or "
+      "an enum's "
+      "members by value (StanceStatus).");
 }
 
 py::object call(const Op& op, const void* context, std::initializer_list<py::handle> arg_list, py::handle out) {

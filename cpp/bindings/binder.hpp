@@ -91,17 +91,28 @@ struct Arg {
 };
 
 // Real: the working dtype (float32 or float64); Bool; Status: int8 spotkin.Status codes (a single
-// sample's as a spotkin.Status); Code: int8 codes of another enum (an int8 array, even for one sample:
-// the façade names them); Index: int64.
+// sample's as a spotkin.Status); Code: int8 codes of another enum (an int8 array; a single sample's
+// as the member of the enum registered under `codes`, when named); Index: int64.
 enum class Kind : std::uint8_t { Real, Bool, Status, Code, Index };
+
+PyObject** result_type(const char* name);  // a registered result type or enum's members, by name
 
 struct Out {
   const char* name = "";
   Trailing shape;
   Kind kind = Kind::Real;
+  PyObject** codes = nullptr;  // Code: the enum's members (a tuple, by value), registered by name
+  bool scalar =
+      false;  // Real of no sample shape: a single sample's as a NumPy scalar (a new array)
   Out() = default;
   Out(const char* out_name, Trailing out_shape, Kind out_kind = Kind::Real)
       : name(out_name), shape(out_shape), kind(out_kind) {}
+  // A single sample's code as a member of the enum whose members (by value) are registered under
+  // `name` (spotkin._core._register_result_type), an int8 array for a batch.
+  Out& members(const char* enum_name) { return codes = result_type(enum_name), *this; }
+  // A single sample's value as a NumPy scalar, as `array[()]` gives it (the caller's out= array
+  // stays).
+  Out& scalar_when_single() { return scalar = true, *this; }
 };
 
 // What a kernel sees: m samples, the first at index `first` of the batch. Argument k's

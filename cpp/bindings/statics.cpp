@@ -160,14 +160,18 @@ py::object robot_standing(const RobotStatics& r, py::handle pose, int sequence, 
   const py::ssize_t L = r.body.n_legs();
   const auto make = [&] {
     return Op({statics_pose(), statics_q(r), Arg("stance", {L}).maybe_none().parameter()},
-              {Out("tau", {3 * L}), Out("forces", {L, 3}), Out("status", {}, Kind::Code), Out("margin", {})},
-              2000.0, [](const void* c, const auto& b) {
+              {Out("tau", {3 * L}), Out("forces", {L, 3}),
+               Out("status", {}, Kind::Code).members("StanceStatus"),
+               Out("margin", {}).scalar_when_single()},
+              2000.0,
+              [](const void* c, const auto& b) {
                 const StaticsCall& s = binder::context<StaticsCall>(c);
                 on_robot(s.robot, b.m, [&](const auto& robot) {
                   dynamics::robot_standing(robot, s.seq, s.gravity, statics_rows(b), b.real(0), b.real(1), b.status(2),
                                            b.real(3), b.m);
                 });
-              });
+              })
+        .returns("Standing");
   };
   StaticsCall call{r, EulerSequence::from_code(sequence), {}};
   read_gravity(gravity, r.mass, call.gravity);

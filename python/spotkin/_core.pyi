@@ -246,7 +246,7 @@ def _parse_thread_count(text: str) -> int:
     ...
 def _register_result_type(name: str, type: typing.Any) -> None:
     """
-    Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...).
+    Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...), or an enum's members by value (StanceStatus).
     """
 def _register_status(members: typing.Any) -> None:
     ...

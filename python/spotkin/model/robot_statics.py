@@ -103,6 +103,12 @@ class _FloatingBaseMethods:
             self._statics_core = statics
         return statics
 
+    @core_method(
+        "_statics_core",
+        "standing",
+        call=("body_pose", "seq", "q", "stance", "gravity", "out"),
+        convert={"seq": sequence_code},
+    )
     def standing_torques(
         self,
         body_pose: ArrayLike,
@@ -136,11 +142,7 @@ class _FloatingBaseMethods:
         and NaN in that sample. ``out``: ``(tau, forces, status, margin)`` arrays of the result's shapes
         (float of the working dtype; status int8), any of them None, to write into.
         """
-        code = sequence_code(seq)
-        tau, forces, status, margin = self._statics.standing(body_pose, code, q, stance, gravity, out)
-        if status.ndim == 0:
-            return Standing(tau, forces, _STANCE_STATUS[status], margin if out is not None else margin[()])
-        return Standing(tau, forces, status, margin)
+        return self._statics.standing(body_pose, sequence_code(seq), q, stance, gravity, out)  # a Standing
 
     def _tree(self, joints) -> inertia.Tree:
         if self._model is None or not self._specs[0]:
@@ -178,9 +180,6 @@ class StanceStatus(IntEnum):
     centre of mass off their line or point): tau and forces are NaN."""
 
 
-_STANCE_STATUS = tuple(StanceStatus)  # by value: one sample's status
-
-
 class Standing(NamedTuple):
     """The result of :meth:`Robot.standing_torques`."""
 
@@ -194,3 +193,8 @@ class Standing(NamedTuple):
     """(...) m: signed distance of the centre of mass's projection to the support polygon, in the plane
     normal to gravity, positive inside (with fewer than three non-collinear feet: minus the distance to
     their segment or point; NaN without gravity)."""
+
+
+# The core returns Standing itself, one sample's status as a StanceStatus member (by value)
+_core._register_result_type("Standing", Standing)
+_core._register_result_type("StanceStatus", tuple(StanceStatus))
