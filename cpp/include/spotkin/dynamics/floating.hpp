@@ -271,7 +271,7 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
       Pose<P> T = blk.X[static_cast<std::size_t>(o)];
       for (int j = 0; j < n; ++j) {
         if (j > 0) T = compose(T, blk.X[static_cast<std::size_t>(o + j)]);
-        S[o + j] = to_parent(T, chain.subspace(j));
+        if (jacobian) S[o + j] = to_parent(T, chain.subspace(j));  // the centre alone needs no motions
         const RigidInertia<P> I = chain.inertia(j);
         ms[o + j] = I.m;
         hs[o + j] = mul(T.R, I.h) + scale(T.p, I.m);
