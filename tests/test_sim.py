@@ -166,8 +166,11 @@ def test_joints_listed_joint_kind_by_joint_kind_are_placed_right():
 
 def test_the_sizes_scale_with_the_robot():
     spot, go2 = sk.Spot(), sk.Robot.from_urdf(sk.robots.path("go2"))
-    assert sim.hip_height(spot) == pytest.approx(0.7 * 0.6575, abs=1e-3)
-    assert sim.hip_height(go2) == pytest.approx(0.7 * 0.426)
+    # one h for the simulator and the gaits: the most stretched leg at 0.8 of its reach
+    assert sim.hip_height(spot) == pytest.approx(0.5264, abs=1e-3)
+    assert sim.hip_height(go2) == pytest.approx(0.8 * 0.426)
+    for robot in (spot, go2):
+        assert sim.hip_height(robot) == sk.Gait("trot").resolve(robot).hip_height
     assert sim.foot_radius(spot) == 0.036  # Spot's own
     assert sim.foot_radius(go2) == pytest.approx(0.05 * 0.426)  # the default: 5 % of the reach
     text = quadruped_urdf(0.1, 2.0, 3.0, foot_sphere=0.012)

@@ -18,6 +18,7 @@ from . import urdf as fuzz_urdf
 from .arm import arm_entries
 from .canaries import CANARIES, CANARY_FK
 from .chains import chain_entries
+from .controller import controller_entries
 from .dynamics import dynamics_entries
 from .entry import REGISTRY
 from .functions import function_entries
@@ -43,6 +44,7 @@ paul_entries()
 trajectory_entries()
 workspace_entries()
 gait_entries()
+controller_entries()
 roundtrip_entries()
 joint_name_entries()
 fuzz_sdk.register_entries()  # spotkin.sdk, when its optional SDK is installed

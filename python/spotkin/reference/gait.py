@@ -49,6 +49,22 @@ Support margin, stance forces
      carry: force F - sum f, moment -sum (p_j - c) x f_j) is reported: with two feet down, the weight's
      moment about the line through them. The joint torques are then tau_l = G_l - J_l^T f_l (G the
      generalised gravity, J_l = R J_leg the foot's Jacobian in world axes), as ``Robot.standing_torques``.
+     A closed loop adds a wrench w = [F_w; M_w] (a controller's virtual force and moment on the body,
+     world axes, the moment about c): then sum f_j = -m g + F_w exactly and sum (p_j - c) x f_j = M_w
+     in the least-squares sense, z = pinv(M N) (M_w - M f_0), the same minimum norm; w = 0 is the
+     quasi-static case above.
+
+(T)  torque-weighted forces (a closed loop's): the forces on the loaded feet that minimise
+         alpha |S (A f - b)|^2 + sum_l |(G_l - J_l^T f_l) / tau_max,l|^2 + eps |f / (m g)|^2,
+     A f = [sum f_j; sum (p_j - c) x f_j] the wrench of the forces, b = [-m g + F_w; M_w] the one
+     wanted (W), S = diag(1 / (m g) I_3, 1 / (m g h) I_3) its scale, alpha = 1e4 (the wrench first),
+     eps = 1e-6; G_l and J_l as in (W), tau_max,l the joints' effort limits. Among the forces that
+     give the wrench (exactly when the feet can: three feet or more), the ones that keep the joint
+     torques smallest against their limits: a foot displaced from under its hip then pushes along
+     its leg rather than straight up (the hip's torque falls, the other feet take the horizontal
+     force). One linear solve (normal equations); a foot whose force would pull (f_z < 0) is
+     unloaded and the rest solved again; a joint above 0.9 of its limit gets three times the weight
+     and the forces are solved again (at most three times).
 
 The crawl's body sway
 ---------------------
@@ -74,6 +90,15 @@ G = 9.81
 """Standard gravity (m/s^2) of the Froude scaling and the capture point."""
 OK = 0
 """The code of ``spotkin.Status.OK``."""
+TORQUE_ALPHA = 1e4
+"""alpha of (T): the weight of the wrench against the torques."""
+TORQUE_HORIZONTAL = 1e-2
+"""beta of (T): the horizontal force's rows weigh beta alpha."""
+TORQUE_EPS = 1e-6
+"""eps of (T): the forces' own (regularising) weight."""
+TORQUE_NEAR, TORQUE_BOOST, TORQUE_ROUNDS = 0.9, 3.0, 0
+"""(T): a joint above TORQUE_NEAR of its limit weighs TORQUE_BOOST times more, for up to TORQUE_ROUNDS
+more solves."""
 BISECTIONS = 30
 """Bisection steps of (B) (the foothold's lambda, 1e-9 of the step)."""
 
@@ -90,6 +115,7 @@ __all__ = [
     "support_margin",
     "sway_coefficients",
     "swing",
+    "torque_weighted_forces",
 ]
 
 
@@ -246,17 +272,23 @@ def _skew(r) -> np.ndarray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
-def stance_forces(feet, stance, com, mass: float, gravity=(0.0, 0.0, -9.81)):
+def stance_forces(feet, stance, com, mass: float, gravity=(0.0, 0.0, -9.81), wrench=None):
     """(W): (forces (n, 3), residual (6,)): the least-squares quasi-static forces on the stance feet
-    (zero on the others) and the wrench [force; moment about the centre of mass] they leave unbalanced."""
+    (zero on the others) and the wrench [force; moment about the centre of mass] they leave unbalanced.
+    ``wrench`` (6,) [F_w; M_w], world axes, optional: a wrench the feet carry besides the weight (a
+    closed loop's virtual force and moment on the body, the moment about ``com``)."""
     feet = np.asarray(feet, dtype=np.float64)
     com = np.asarray(com, dtype=np.float64)
     F = -mass * np.asarray(gravity, dtype=np.float64)
+    target = np.zeros(3)  # the moment the feet should give about the com
+    if wrench is not None:
+        wrench = np.asarray(wrench, dtype=np.float64)
+        F, target = F + wrench[:3], wrench[3:6].copy()
     down = [j for j in range(len(feet)) if stance[j]]
     forces = np.zeros((len(feet), 3))
     n = len(down)
     if n == 0:
-        return forces, np.concatenate([F, np.zeros(3)])
+        return forces, np.concatenate([F, target])
     if not (np.isfinite(feet[down]).all() and np.isfinite(com).all()):
         return np.full((len(feet), 3), np.nan), np.full(6, np.nan)
     M = np.hstack([_skew(feet[j] - com) for j in down])  # (3, 3 n): the moments about the com
@@ -274,13 +306,61 @@ def stance_forces(feet, stance, com, mass: float, gravity=(0.0, 0.0, -9.81)):
         A = M @ N
         U, sigma, Vt = np.linalg.svd(A, full_matrices=False)
         keep = sigma > 1e-9 * sigma[0] if sigma[0] > 0 else np.zeros_like(sigma, dtype=bool)
-        rhs = U.T @ (-M @ f0)
+        rhs = U.T @ (target - M @ f0)
         z = Vt[keep].T @ (rhs[keep] / sigma[keep])
         f = f0 + N @ z
     for slot, j in enumerate(down):
         forces[j] = f[3 * slot : 3 * slot + 3]
-    residual = np.concatenate([F - forces.sum(axis=0), -(M @ f)])
+    residual = np.concatenate([F - forces.sum(axis=0), target - M @ f])
     return forces, residual
+
+
+def torque_weighted_forces(feet, loaded, com, mass, jacobians, gravity_torques, limits, h, wrench=None):
+    """(T): (forces (n, 3), residual (6,)): the loaded feet's forces (world) and the wrench left
+    unbalanced. ``jacobians`` (n, 3, 3) each foot's d foot / d q_leg in world axes; ``gravity_torques``
+    and ``limits`` (n, 3) each leg's G and effort limits; ``h`` the length scale of the moments;
+    ``wrench`` (6,) [F_w; M_w] as in :func:`stance_forces` (gravity -9.81 z)."""
+    feet = np.asarray(feet, dtype=np.float64)
+    com = np.asarray(com, dtype=np.float64)
+    n = len(feet)
+    weight = mass * G
+    b = np.array([0.0, 0.0, weight, 0.0, 0.0, 0.0])
+    if wrench is not None:
+        b = b + np.asarray(wrench, dtype=np.float64)
+    down = [j for j in range(n) if loaded[j]]
+    forces = np.zeros((n, 3))
+    emphasis = np.ones((n, 3))  # a joint near its limit weighs more, solve after solve
+    rounds = 0
+    while True:
+        k = len(down)
+        if k == 0:
+            return forces, b.copy()
+        A = np.zeros((6, 3 * k))
+        D = np.zeros((3 * k, 3 * k))
+        g = np.zeros(3 * k)
+        for slot, j in enumerate(down):
+            A[:3, 3 * slot : 3 * slot + 3] = np.eye(3)
+            A[3:, 3 * slot : 3 * slot + 3] = _skew(feet[j] - com)
+            scale = emphasis[j] / np.asarray(limits[j], dtype=np.float64)
+            D[3 * slot : 3 * slot + 3, 3 * slot : 3 * slot + 3] = scale[:, None] * np.asarray(jacobians[j]).T
+            g[3 * slot : 3 * slot + 3] = scale * np.asarray(gravity_torques[j], dtype=np.float64)
+        S2 = np.r_[np.full(3, 1.0 / weight**2), np.full(3, 1.0 / (weight * h) ** 2)]
+        S2[:2] *= TORQUE_HORIZONTAL
+        H = TORQUE_ALPHA * A.T @ (S2[:, None] * A) + D.T @ D + np.eye(3 * k) * (TORQUE_EPS / weight**2)
+        f = np.linalg.solve(H, TORQUE_ALPHA * A.T @ (S2 * b) + D.T @ g)
+        pulling = [j for slot, j in enumerate(down) if f[3 * slot + 2] < 0.0]
+        if pulling:
+            down = [j for j in down if j not in pulling]
+            continue
+        tau = (g - D @ f).reshape(k, 3)  # (G - J^T f) / tau_max, times the emphasis
+        near = np.abs(tau) / emphasis[down] > TORQUE_NEAR
+        if rounds >= TORQUE_ROUNDS or not near.any():
+            break
+        rounds += 1
+        emphasis[down] *= np.where(near, TORQUE_BOOST, 1.0)
+    for slot, j in enumerate(down):
+        forces[j] = f[3 * slot : 3 * slot + 3]
+    return forces, b - A @ f
 
 
 def sway_coefficients(stance_xy, roles, offsets, com_xy, amplitude=(0.0, 0.45)):

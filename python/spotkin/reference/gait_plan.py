@@ -39,6 +39,15 @@ One tick, from t to t + dt (:func:`advance`)
    foothold's velocity terms use the planned body velocity for both v_cmd and v_meas (the plan is
    open loop: no capture correction).
 
+Closed-loop inputs (a controller sets them on the state before :func:`advance`; None in a plan)
+-----------------------------------------------------------------------------------------------
+- ``v_measured`` (2,): the measured body velocity (world, horizontal): v_meas of (F), so that the
+  capture-point term k (v_meas - v_cmd) sqrt(h / g) works.
+- ``ground`` (3,) (c, a, b): the ground under the robot, z = c + a x + b y (world; e.g. a plane
+  through the feet's last contacts): the footholds (and the nominal points they are pulled back to)
+  lie on it, at the nominal foot height above it, and the predicted body poses of (B) are ``height``
+  above it. None: the flat ground z = 0 of a plan.
+
 One tick's outputs (:func:`sample`)
 -----------------------------------
 - feet: stance legs at their latched point; swing legs on (S) with s = (phase - phi_lo) /
@@ -71,7 +80,7 @@ from .gait import (
     swing,
 )
 
-__all__ = ["PlannerState", "advance", "change", "plan", "sample", "start"]
+__all__ = ["PlannerState", "advance", "change", "floor_height", "plan", "sample", "start"]
 
 LIFTOFF_FRACTION = 0.75
 """A stance leg lifts off only if at least this fraction of a nominal swing is left (step 4)."""
@@ -133,6 +142,14 @@ class PlannerState:
     step_shortened: np.ndarray  # (n,) bool: the current swing's foothold was shortened (B)
     speed_scale: float  # s of step 3 at t
     q: np.ndarray | None  # the last tick's q, the next IK's seed
+    v_measured: np.ndarray | None = None  # (2,) closed loop: the measured velocity (world) of (F)
+    ground: np.ndarray | None = None  # (3,) closed loop: the ground plane z = c + a x + b y
+
+
+def floor_height(state: PlannerState, x: float, y: float) -> float:
+    """The ground's height under the world point (x, y): ``state.ground``'s plane, or 0 (a plan)."""
+    g = state.ground
+    return 0.0 if g is None else float(g[0] + g[1] * x + g[2] * y)
 
 
 def blend_duration(old: dict, new: dict) -> float:
@@ -305,11 +322,13 @@ def _plan_foothold(robot, state: PlannerState, P: dict, i: int, phase_: float) -
     c, s = math.cos(psi), math.sin(psi)
     nominal = P["stance"][i]
     r = (c * nominal[0] - s * nominal[1], s * nominal[0] + c * nominal[1])
-    p_nominal = np.array([x + r[0], y + r[1], nominal[2]])
+    p_nominal = np.array([x + r[0], y + r[1], nominal[2] + floor_height(state, x + r[0], y + r[1])])
     velocity = (c * v_mid[0] - s * v_mid[1], s * v_mid[0] + c * v_mid[1])
+    measured = velocity if state.v_measured is None else state.v_measured
     p = foothold(
-        p_nominal, r, velocity, velocity, w_mid, t_stance, float(P["hip_height"]), float(P["capture_gain"])
+        p_nominal, r, velocity, measured, w_mid, t_stance, float(P["hip_height"]), float(P["capture_gain"])
     )
+    p[2] = nominal[2] + floor_height(state, p[0], p[1])
     poses = []
     for (px, py, ppsi, _, _), theta, Pf in future:
         phases = [frac(theta + o) for o in Pf["offsets"]]
@@ -318,7 +337,8 @@ def _plan_foothold(robot, state: PlannerState, P: dict, i: int, phase_: float) -
         delta, _ = _crawl_shift(Pf, zero, phases, rates)
         cp, sp = math.cos(ppsi), math.sin(ppsi)
         px, py = px + cp * delta[0] - sp * delta[1], py + sp * delta[0] + cp * delta[1]
-        poses.append(body_transform(body_pose(px, py, float(Pf["height"]), ppsi, state.attitude)))
+        z = float(Pf["height"]) + floor_height(state, px, py)
+        poses.append(body_transform(body_pose(px, py, z, ppsi, state.attitude)))
     seed = None if state.q is None else state.q[_leg_columns(robot)[i]]
     return bounded_foothold(robot.legs[i], robot.hip_positions[i], p, p_nominal, poses, seed)
 
@@ -384,7 +404,8 @@ def sample(robot, state: PlannerState) -> dict:
     delta, delta_rate = _crawl_shift(P, Pd, phases, phase_rates)
     c, s = math.cos(state.psi), math.sin(state.psi)
     shift = np.array([c * delta[0] - s * delta[1], s * delta[0] + c * delta[1]])
-    pose = body_pose(state.x + shift[0], state.y + shift[1], float(P["height"]), state.psi, state.attitude)
+    x, y = state.x + shift[0], state.y + shift[1]
+    pose = body_pose(x, y, float(P["height"]) + floor_height(state, x, y), state.psi, state.attitude)
     T = body_transform(pose)
     R, origin = T[:3, :3], T[:3, 3]
     planar = state.v + delta_rate

@@ -11,12 +11,11 @@ import numpy as np
 
 from .. import Robot
 from .._support.boundary import as_finite
+from ..motion.gait import hip_height as _motion_hip_height
 from .terrain import Bumps, Flat, as_terrain
 
 __all__ = ["foot_radius", "hip_height", "mjcf", "mujoco_model"]
 
-STANCE_FRACTION = 0.7
-"""The nominal hip height as a fraction of the shortest leg's reach (hip-pitch joint to foot)."""
 FOOT_FRACTION = 0.05
 """The default foot radius as a fraction of the leg's reach (Spot: 0.036 / 0.658; Go2: 0.022 / 0.426)."""
 LINK_FRACTION = 0.04
@@ -56,10 +55,12 @@ def check_robot(robot) -> None:
 
 def hip_height(robot: Robot) -> float:
     """The nominal standing hip height h (m): the hip-pitch joints' height above the foot points
-    (the foot spheres' centres) in the simulator's initial stance, 0.7 of the shortest leg's reach
-    (Spot: 0.46 m, Go2: 0.30 m): the speed scale of a walk ("0.5 h per second")."""
+    (the foot spheres' centres) in the simulator's initial stance (Spot: 0.526 m, Go2: 0.341 m): the
+    speed scale of a walk ("0.5 h per second"). It is :func:`spotkin.motion.hip_height`, the gaits'
+    h (:attr:`spotkin.motion.ResolvedGait.hip_height`): the simulated robot starts in the gaits' nominal
+    stance, its most stretched leg at 0.8 of its reach."""
     check_robot(robot)
-    return STANCE_FRACTION * _reach(robot)
+    return _motion_hip_height(robot)
 
 
 def _urdf_names(robot: Robot, joints) -> list[str]:

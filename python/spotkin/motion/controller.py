@@ -1,0 +1,521 @@
+"""The closed-loop gait controller: :class:`GaitController`, one control tick at a time.
+
+It runs the reference planner's state machine (:mod:`spotkin.reference.gait_plan`: the gait clock,
+the latched contacts, the footholds) one tick at a time and closes the loop on the measured state
+(:class:`spotkin.motion.RobotState`); each tick gives a :class:`spotkin.motion.JointCommand`
+(``tau_joint = kp (q - q_meas) + kd (qd - qd_meas) + tau``). What it does, tick by tick:
+
+1. **Measure.** The body's pose and twist; the feet by forward kinematics (``robot.body_fk``); the
+   ground: a plane through the feet's last contact points (less the nominal foot height), low-passed
+   over a quarter period, with its slope in the heading frame.
+2. **Plan.** The planner advances by the tick: gait clock, ramped velocity (the command, with the
+   gait's acceleration limits), lift-offs and touch-downs. Its footholds (F) get the MEASURED body
+   velocity in the capture-point term k (v_meas - v_cmd) sqrt(h / g) and lie on the ground plane,
+   bounded by the legs' workspace (B). With measured contacts, a swing foot that touches the ground in
+   the second half of its swing lands there (stance); a foot that finds no ground at its planned
+   touch-down keeps reaching down (at the swing's mean descent speed, at most ``REACH_DOWN`` h)
+   and carries no load until it touches.
+3. **Re-anchor.** The planner's planar pose is the body's reference; it is kept within
+   ``ANCHOR`` h (position) and ``YAW_ANCHOR`` (yaw) of the measured body, so that drift, pushes and
+   slopes never accumulate an error the legs would try to undo. Stance feet are held where they
+   are measured (their world points latched at touch-down, tracked while they touch).
+4. **Body reference.** Position: the anchored planar pose (plus the centre-of-mass shift s0 of
+   every gait, the crawl's sway (C)); height: the gait's above the ground plane; attitude: the
+   commanded roll and pitch plus ``TERRAIN_FOLLOW`` of the ground's slope; yaw: the planner's.
+5. **Joints.** ``robot.body_ik`` at the reference pose for the stance legs (so that their PD pushes
+   the body towards it) and at the measured pose for the swing legs (so that a swing foot reaches its
+   world foothold whatever the body's error), seeded with the previous tick. Joint velocities from
+   the feet's and the body's velocities: qd_l = (R J_l)^-1 (pdot_l - v - w x (p_l - t)), with the
+   reference twist for stance legs and the measured one for swing legs.
+6. **Feedforward torques.** tau = G - (R J_l)^T f_l per leg (G the generalised gravity at the
+   measured configuration): swing legs carry their own weight only; stance legs, the forces (W) that
+   carry the weight plus a virtual body wrench, least squares over the loaded feet
+   (:func:`spotkin.reference.gait.stance_forces`), kept in a friction pyramid of ``FRICTION`` with
+   f_z >= 0. The wrench is a PD on the body pose about the reference:
+   F = m (wb^2 e_p + 2 wb e_v), M = I (wb^2 e_R + 2 wb e_w) (critically damped; e_R the rotation
+   vector of R_ref R^T, I the body's composite rotational inertia), wb = ``BODY_BANDWIDTH``
+   sqrt(g / h). The feedforward is clipped to the joints' effort limits (:attr:`GaitController.last`
+   reports it).
+
+Gains, from the robot's own inertias (no per-robot table): I_j, the diagonal of the floating base's
+mass matrix ``A(q)`` at the nominal stance for joint j (the inertia of the leg below the joint about
+its axis), sets
+
+    kp_j = I_j w^2,   kd_j = 2 zeta I_j w,   w = kappa sqrt(g / h),   zeta = 1,
+
+with kappa = ``SWING_BANDWIDTH`` (16) for swing legs and ``STANCE_BANDWIDTH`` for stance legs: each
+joint's natural frequency on its own leg's inertia is a fixed multiple of sqrt(g / h), which the
+gaits' period T = c sqrt(h / g) also scales with (Froude similarity: robots of any size get the same
+gains relative to their gait).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .._support.boundary import as_real, as_scalar
+from ..model.robot import Robot
+from ..reference import gait_plan
+from ..reference.gait import G, frac, support_margin, swing, torque_weighted_forces
+from .gait import Gait, ResolvedGait
+from .state import JointCommand, RobotState
+
+__all__ = ["GaitController"]
+
+SWING_BANDWIDTH = 16.0
+"""kappa of a swinging leg's joints: w = kappa sqrt(g / h)."""
+STANCE_BANDWIDTH = 6.0
+"""kappa of a stance leg's joints."""
+DAMPING_RATIO = 1.0
+"""zeta of the joints' PD (kd = 2 zeta I w)."""
+BODY_BANDWIDTH = 1.5
+"""The virtual body wrench's natural frequency, in sqrt(g / h)."""
+TIP_INERTIA = 1.0
+"""The virtual moment's roll and pitch inertia adds TIP_INERTIA m h^2 to the body's own."""
+ANCHOR = 0.1
+"""The body reference stays within this fraction of h of the measured body (horizontally)."""
+YAW_ANCHOR = 0.1
+"""... and within this many radians of its yaw."""
+TERRAIN_FOLLOW = 0.5
+"""The body's pitch and roll follow this fraction of the ground plane's slope."""
+REACH_DOWN = 0.3
+"""A foot that finds no ground at its touch-down reaches at most this fraction of h further down."""
+FRICTION = 0.6
+"""The feedforward's contact forces keep |f_xy| <= FRICTION f_z (a friction pyramid, on the safe side)."""
+ACCEL_TIME = 0.02
+"""The body reference's acceleration (fed forward, m a) low-passes over this fraction of the period."""
+MAX_GAP = 0.1
+"""A longer time between two ticks (s) moves the gait by this much only."""
+GROUND_TIME = 0.25
+"""The ground plane low-passes over this fraction of the gait's period."""
+
+
+def _rotation(quaternion) -> np.ndarray:
+    x, y, z, w = (float(v) for v in quaternion)
+    norm = x * x + y * y + z * z + w * w
+    s = 2.0 / norm if norm > 0 else 0.0
+    return np.array(
+        [
+            [1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
+            [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
+            [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)],
+        ]
+    )
+
+
+def _rotation_vector(R: np.ndarray) -> np.ndarray:
+    """The rotation vector (axis times angle) of R."""
+    c = min(max((np.trace(R) - 1.0) / 2.0, -1.0), 1.0)
+    angle = math.acos(c)
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = math.sin(angle)
+    return 0.5 * axis if s < 1e-9 else axis * (angle / (2.0 * s))
+
+
+class _Memory:
+    """One robot's controller state between ticks."""
+
+    def __init__(self, n: int) -> None:
+        self.plan: gait_plan.PlannerState | None = None
+        self.reaching = np.zeros(n, dtype=bool)  # planned stance, no ground found yet
+        self.depth = np.zeros(n)  # how far each reaching foot went below its foothold
+        self.ground_points = np.zeros((n, 3))  # the feet's last contacts
+        self.ground = np.zeros(3)  # (c, a, b), low-passed
+        self.q = None  # the last targets (the next IK's seed)
+        self.v_ref = None  # the last reference velocity (world)
+        self.a_ref = np.zeros(3)  # its rate, low-passed
+        self.gait = None
+        self.last = None
+        self.t = -math.inf  # the last tick's time
+
+
+class GaitController:
+    """A closed-loop gait controller for a quadruped: ``step(t, state, velocity) -> JointCommand``
+    (module :mod:`spotkin.motion.controller` documents each tick and the gains).
+
+    ``robot``: a quadruped :class:`spotkin.Robot`; ``gait``: a :class:`spotkin.Gait` or a preset
+    name; ``rate``: the control rate (Hz), the tick of the first step; ``attitude``: the commanded
+    (roll, pitch) of the body (rad). Gaits change on the fly (``step(..., gait=...)``, blended as in a
+    plan). ``kp`` and ``kd`` are the swing gains, ``stance_kp`` and ``stance_kd`` the stance ones.
+    """
+
+    def __init__(self, robot, gait="trot", *, rate: float = 500.0, attitude=(0.0, 0.0)) -> None:
+        if not isinstance(robot, Robot):
+            raise TypeError(f"robot must be a spotkin.Robot, got {type(robot).__name__}")
+        self.robot = robot
+        self._resolved: dict[Gait, ResolvedGait] = {}
+        self.gait = self._gait(gait)
+        base = self._resolve(self.gait)  # ValueError for a robot that is not a quadruped
+        rate = as_scalar(rate, "rate")
+        if not (math.isfinite(rate) and rate > 0.0):
+            raise ValueError(f"rate must be finite and > 0, got {rate}")
+        self.rate = rate
+        attitude = as_real(attitude, "attitude", np.float64)
+        if attitude.shape != (2,) or not np.isfinite(attitude).all():
+            raise ValueError(f"attitude must be finite (roll, pitch), got {attitude.tolist()}")
+        self.attitude = (float(attitude[0]), float(attitude[1]))
+        n = robot.n_legs
+        names = list(robot.leg_joint_names)
+        self._columns = [[names.index(j) for j in leg.joint_names] for leg in robot.legs]
+        self._order = np.concatenate(self._columns)  # leg-major slot -> joint index
+        self.h = base.hip_height
+        pose = np.array([0.0, 0.0, base.height, 0.0, 0.0, 0.0])
+        q0 = robot.body_ik(pose, base.stance).q
+        A = robot.floating_base.mass_matrix(robot.floating_q(pose, q0))
+        inertia = np.diag(A)[6 : 6 + 3 * n].copy()
+        # each leg's own block of A at the nominal stance: the swing's inertial feedforward
+        self._leg_inertia = [A[6:, 6:][np.ix_(cols, cols)] for cols in self._columns]
+        scale = math.sqrt(G / self.h)
+        self.kp, self.kd = self._gains(inertia, SWING_BANDWIDTH * scale)
+        self.stance_kp, self.stance_kd = self._gains(inertia, STANCE_BANDWIDTH * scale)
+        # the body's rotational inertia for the virtual moment: its own (the composite, about the body
+        # origin, body axes) plus m h^2 about the horizontal axes (the body tips about its feet)
+        self.body_inertia = A[3:6, 3:6] + np.diag([1.0, 1.0, 0.0]) * robot.mass * self.h**2 * TIP_INERTIA
+        self.body_omega = BODY_BANDWIDTH * scale
+        self.effort = np.array([_effort(robot, name) for name in robot.leg_joint_names], dtype=np.float64)
+        self._memories: list[_Memory] = []
+        self._batch: tuple | None = None
+        self.clipped = 0
+        self.ticks = 0
+
+    @staticmethod
+    def _gains(inertia: np.ndarray, omega: float) -> tuple[np.ndarray, np.ndarray]:
+        return inertia * omega**2, 2.0 * DAMPING_RATIO * inertia * omega
+
+    def _gait(self, gait) -> Gait:
+        if isinstance(gait, str):
+            gait = Gait(gait)
+        if not isinstance(gait, Gait):
+            raise TypeError(f"gait must be a spotkin.Gait or a preset name, got {type(gait).__name__}")
+        return gait
+
+    def _resolve(self, gait: Gait) -> ResolvedGait:
+        """The gait resolved for the robot, its centre-of-mass shift s0 applied in every gait (a
+        weight of 1 with no sway where the gait has none)."""
+        if gait not in self._resolved:
+            resolved = gait.resolve(self.robot)
+            if resolved.com_shift == 0.0:
+                import dataclasses
+
+                resolved = dataclasses.replace(resolved, com_shift=1.0, sway=np.zeros_like(resolved.sway))
+            self._resolved[gait] = resolved
+        return self._resolved[gait]
+
+    def reset(self) -> None:
+        """Forget the robots' states: the next :meth:`step` starts afresh from the measured state."""
+        self._memories, self._batch = [], None
+        self.clipped = self.ticks = 0
+
+    @property
+    def last(self) -> dict | None:
+        """The last tick's details (one robot; a list for a batch): the planned ``body_pose``, ``feet``,
+        ``contact``, the plan's support ``margin`` (m, positive inside), ``measured_margin`` (the
+        measured centre of mass's), the stance ``forces`` (world), the unbalanced ``residual`` wrench,
+        ``clipped`` (the joints whose feedforward was clipped to its effort), ``status`` (the worst IK
+        status), ``shortened`` (the command or a foothold was cut to fit the legs) and ``time`` (s, the
+        tick's wall time)."""
+        if not self._memories:
+            return None
+        lasts = [memory.last for memory in self._memories]
+        return lasts[0] if self._batch == () else lasts
+
+    def step(self, t, state: RobotState, velocity=(0.0, 0.0, 0.0), gait=None) -> JointCommand:
+        """The joint command for the measured ``state`` at time ``t`` (s), for the commanded ``velocity``
+        (vx, vy, yaw rate) in the body's heading frame; ``gait`` (a Gait or a preset name) switches the
+        gait (blended). A state with leading dimensions holds a batch of robots (each keeps its own
+        controller state; the batch must keep its shape until :meth:`reset`); ``velocity`` broadcasts.
+        ``ValueError`` for a NaN or misshapen state or command, or a time that goes backwards."""
+        if not isinstance(state, RobotState):
+            raise TypeError(f"state must be a spotkin.motion.RobotState, got {type(state).__name__}")
+        t = as_scalar(t, "t")
+        if not math.isfinite(t):
+            raise ValueError(f"t must be finite, got {t}")
+        n, legs = 3 * self.robot.n_legs, self.robot.n_legs
+        if state.q.shape[-1] != n:
+            raise ValueError(f"state.q must have {n} joints (robot.leg_joint_names), got {state.q.shape[-1]}")
+        lead = state.q.shape[:-1]
+        arrays = [state.position, state.quaternion, state.linear_velocity, state.angular_velocity, state.qd]
+        try:
+            shape = np.broadcast_shapes(lead, *(a.shape[:-1] for a in arrays))
+        except ValueError:
+            raise ValueError("the state's fields do not broadcast to one batch of robots") from None
+        for name in ("position", "quaternion", "linear_velocity", "angular_velocity", "q", "qd"):
+            if not np.isfinite(getattr(state, name)).all():
+                raise ValueError(f"state.{name} must be finite, got NaN or Inf")
+        if state.contact is not None and state.contact.shape[-1] != legs:
+            raise ValueError(f"state.contact must have {legs} feet, got {state.contact.shape[-1]}")
+        velocity = as_real(velocity, "velocity", np.float64)
+        if velocity.shape[-1:] != (3,):
+            raise ValueError(f"velocity must be (vx, vy, yaw rate), got shape {velocity.shape}")
+        if not np.isfinite(velocity).all():
+            raise ValueError("velocity must be finite (vx, vy, yaw rate), got NaN or Inf")
+        shape = np.broadcast_shapes(shape, velocity.shape[:-1])
+        new_gait = None if gait is None else self._gait(gait)
+        if self._batch is None:
+            self._batch = shape
+            self._memories = [_Memory(legs) for _ in range(math.prod(shape))]
+        elif self._batch != shape:
+            raise ValueError(f"the batch changed from {self._batch} to {shape}: call reset() first")
+
+        def flat(a, width):
+            return np.broadcast_to(a, (*shape, width)).reshape(-1, width)
+
+        fields = [
+            flat(state.position, 3),
+            flat(state.quaternion, 4),
+            flat(state.linear_velocity, 3),
+            flat(state.angular_velocity, 3),
+            flat(state.q, n),
+            flat(state.qd, n),
+            None if state.contact is None else flat(state.contact, legs),
+            flat(velocity, 3),
+        ]
+        out = []
+        for k, memory in enumerate(self._memories):
+            values = [None if f is None else f[k] for f in fields]
+            out.append(self._tick(memory, t, *values, new_gait))
+        stacked = [np.stack([o[j] for o in out]).reshape(*shape, -1) for j in range(4)]
+        kp = out[0][4] if len(out) == 1 else np.stack([o[4] for o in out]).reshape(*shape, -1)
+        kd = out[0][5] if len(out) == 1 else np.stack([o[5] for o in out]).reshape(*shape, -1)
+        return JointCommand(stacked[0], stacked[1], stacked[2], kp, kd, stacked[3].astype(bool))
+
+    # ------------------------------------------------------------------ one robot, one tick
+
+    def _start(self, memory: _Memory, t, position, yaw, feet, gait: ResolvedGait) -> None:
+        plan = gait_plan.start(self.robot, gait)
+        plan.t, plan.t0 = t, t
+        plan.x, plan.y, plan.psi = float(position[0]), float(position[1]), yaw
+        plan.p_stance = feet.copy()
+        plan.p_touchdown = feet.copy()
+        plan.old = dict(plan.old, com_shift=np.zeros_like(plan.old["com_shift"]))  # the shift blends in
+        memory.plan, memory.t = plan, t
+        memory.ground_points = feet.copy()
+        memory.ground = self._plane(feet, np.asarray(gait.stance)[:, 2])
+
+    @staticmethod
+    def _plane(points: np.ndarray, foot_z: np.ndarray) -> np.ndarray:
+        """(c, a, b) of the least-squares plane z = c + a x + b y through the ground under the foot
+        ``points`` (each ``foot_z`` above it)."""
+        ground = points[:, 2] - foot_z
+        X = np.column_stack([np.ones(len(points)), points[:, 0], points[:, 1]])
+        return np.linalg.lstsq(X, ground, rcond=None)[0]
+
+    def _tick(self, memory, t, position, quaternion, v, w, q, qd, contact, command, new_gait):
+        start_time = time.perf_counter()
+        robot, legs = self.robot, self.robot.n_legs
+        R = _rotation(quaternion)
+        yaw = math.atan2(R[1, 0], R[0, 0])
+        T_meas = np.eye(4)
+        T_meas[:3, :3], T_meas[:3, 3] = R, position
+        feet_meas = robot.body_fk(T_meas, q)
+        if memory.plan is None:
+            memory.gait = new_gait or self.gait
+            self._start(memory, t, position, yaw, feet_meas, self._resolve(memory.gait))
+        plan = memory.plan
+        if new_gait is not None and new_gait != memory.gait:
+            memory.gait = new_gait
+            gait_plan.change(plan, self._resolve(new_gait))
+        dt = t - memory.t
+        if dt < -1e-9:
+            raise ValueError(f"t went backwards: {t} after {memory.t}: call reset() first")
+        memory.t = t
+        dt = min(max(dt, 0.0), MAX_GAP)  # a gap between ticks is walked as MAX_GAP at most
+        plan.command = np.array(command, dtype=np.float64)
+        plan.v_measured = v[:2].copy()
+        plan.ground = memory.ground
+        before = plan.contact.copy()
+        if dt > 0.0:
+            gait_plan.advance(robot, plan, dt)
+        P, Pd = gait_plan.blended(plan, plan.t)
+        period, duty = float(P["period"]), float(P["duty"])
+        nominal_z = np.asarray(P["stance"])[:, 2]
+        # --- contacts: touch-downs (planned, early, late) and the stance feet
+        phases = np.array([frac(plan.theta + o) for o in P["offsets"]])
+        phase_rates = plan.clock_rate + np.asarray(Pd["offsets"], dtype=np.float64)
+        swing_time = max((1.0 - duty) * period, 1e-3)
+        descent = 2.0 * (float(P["step_height"]) + 1e-3 * self.h) / swing_time
+        touched = np.ones(legs, dtype=bool) if contact is None else np.asarray(contact, dtype=bool)
+        for i in range(legs):
+            if plan.contact[i] and not before[i]:  # the planned touch-down
+                memory.reaching[i], memory.depth[i] = not touched[i], 0.0
+                if touched[i]:
+                    plan.p_stance[i] = feet_meas[i]
+            elif not plan.contact[i]:
+                lift = plan.lift_phase[i]
+                progress = (phases[i] - lift) / (1.0 - lift)
+                if contact is not None and touched[i] and 0.5 < progress < 1.0:  # early: lands here
+                    plan.contact[i], memory.reaching[i] = True, False
+                    plan.p_stance[i] = feet_meas[i]
+            elif memory.reaching[i]:
+                if touched[i]:
+                    memory.reaching[i] = False
+                    plan.p_stance[i] = feet_meas[i]
+                elif memory.depth[i] < REACH_DOWN * self.h:
+                    step = min(descent * max(dt, 0.0), REACH_DOWN * self.h - memory.depth[i])
+                    memory.depth[i] += step
+                    plan.p_stance[i, 2] -= step
+            elif touched[i]:
+                plan.p_stance[i] = feet_meas[i]  # held where it is measured
+            if plan.contact[i] and touched[i] and not memory.reaching[i]:
+                memory.ground_points[i] = feet_meas[i]
+        loaded = plan.contact & touched & ~memory.reaching
+        # --- the ground plane, low-passed
+        target = self._plane(memory.ground_points, nominal_z)
+        memory.ground += (target - memory.ground) * min(1.0, max(dt, 0.0) / (GROUND_TIME * period))
+        c, s = math.cos(yaw), math.sin(yaw)
+        slope_x = memory.ground[1] * c + memory.ground[2] * s
+        slope_y = -memory.ground[1] * s + memory.ground[2] * c
+        roll = self.attitude[0] + TERRAIN_FOLLOW * math.atan(slope_y)
+        pitch = self.attitude[1] - TERRAIN_FOLLOW * math.atan(slope_x)
+        plan.attitude = (roll, pitch)
+        # --- re-anchor the planar reference (with its shift) to the measured body
+        epsi = (plan.psi - yaw + math.pi) % (2.0 * math.pi) - math.pi
+        if abs(epsi) > YAW_ANCHOR:
+            plan.psi -= epsi - math.copysign(YAW_ANCHOR, epsi)
+        delta, delta_rate = gait_plan._crawl_shift(P, Pd, phases, phase_rates)
+        cp, sp = math.cos(plan.psi), math.sin(plan.psi)
+        shift = np.array([cp * delta[0] - sp * delta[1], sp * delta[0] + cp * delta[1]])
+        ex, ey = plan.x + shift[0] - position[0], plan.y + shift[1] - position[1]
+        bound = ANCHOR * self.h
+        norm = math.hypot(ex, ey)
+        if norm > bound:
+            plan.x -= ex * (1.0 - bound / norm)
+            plan.y -= ey * (1.0 - bound / norm)
+        # --- the body reference
+        x_ref, y_ref = plan.x + shift[0], plan.y + shift[1]
+        floor = gait_plan.floor_height(plan, x_ref, y_ref)
+        pose_ref = gait_plan.body_pose(x_ref, y_ref, floor + float(P["height"]), plan.psi, plan.attitude)
+        T_ref = gait_plan.body_transform(pose_ref)
+        planar = plan.v + delta_rate
+        v_ref = np.array(
+            [
+                cp * planar[0] - sp * planar[1] - plan.w * shift[1],
+                sp * planar[0] + cp * planar[1] + plan.w * shift[0],
+                0.0,
+            ]
+        )
+        v_ref[2] = memory.ground[1] * v_ref[0] + memory.ground[2] * v_ref[1] + float(Pd["height"])
+        w_ref = np.array([0.0, 0.0, plan.w])
+        # --- the feet
+        feet = plan.p_stance.copy()
+        feet_rate = np.zeros((legs, 3))
+        feet_accel = np.zeros((legs, 3))
+        for i in range(legs):
+            if plan.contact[i]:
+                if memory.reaching[i] and memory.depth[i] < REACH_DOWN * self.h:
+                    feet_rate[i, 2] = -descent
+                continue
+            lift = plan.lift_phase[i]
+            progress = (phases[i] - lift) / (1.0 - lift)
+            feet[i], dp, d2p = swing(plan.p_stance[i], plan.p_touchdown[i], progress, plan.lift_height[i])
+            feet_rate[i] = dp * phase_rates[i] / (1.0 - lift)
+            feet_accel[i] = d2p * (phase_rates[i] / (1.0 - lift)) ** 2
+        # --- joints: loaded legs at the reference pose, the others (swinging, reaching) at the measured one
+        seed = q if memory.q is None else memory.q
+        solved = robot.body_ik(np.stack([T_ref, T_meas]), feet, seed=np.stack([seed, seed]))
+        q_ref, q_sw = solved.q
+        stance_cols = np.zeros(3 * legs, dtype=bool)
+        for i in range(legs):
+            stance_cols[self._columns[i]] = loaded[i]
+        q_des = np.where(stance_cols, q_ref, q_sw)
+        q_des = np.where(np.isfinite(q_des), q_des, q)  # a leg without an answer holds where it is
+        memory.q = q_des.copy()
+        plan.q = q_des.copy()
+        Jb = robot.body_jacobian(T_meas, q)  # (3 n, 6 + 3 n): world feet by [v; w; q]
+        qd_des = np.zeros(3 * legs)
+        jac = []
+        for i in range(legs):
+            cols = self._columns[i]
+            Jw = Jb[3 * i : 3 * i + 3, 6:][:, cols]
+            jac.append(Jw)
+            if loaded[i]:
+                rel = feet_rate[i] - v_ref - np.cross(w_ref, feet[i] - T_ref[:3, 3])
+            else:
+                rel = feet_rate[i] - v - np.cross(w, feet[i] - position)
+            try:
+                qd_des[cols] = np.linalg.solve(Jw, rel)
+            except np.linalg.LinAlgError:
+                qd_des[cols] = 0.0
+        qd_des = np.where(np.isfinite(qd_des), qd_des, 0.0)
+        # --- feedforward: gravity, the weight and the virtual body wrench on the loaded feet
+        com = robot.center_of_mass(T_meas, q)
+        mass = robot.mass
+        e_p = T_ref[:3, 3] - position
+        wb = self.body_omega
+        if memory.v_ref is not None and dt > 0.0:  # the reference's acceleration, low-passed
+            blend = min(1.0, dt / (ACCEL_TIME * period))
+            memory.a_ref += ((v_ref - memory.v_ref) / dt - memory.a_ref) * blend
+        memory.v_ref = v_ref
+        force = mass * (wb * wb * e_p + 2.0 * wb * (v_ref - v) + memory.a_ref)
+        inertia = R @ self.body_inertia @ R.T
+        e_R = _rotation_vector(T_ref[:3, :3] @ R.T)
+        moment = inertia @ (wb * wb * e_R + 2.0 * wb * (w_ref - w))
+        gravity = robot.floating_base.gravity(robot.floating_q(T_meas, q))[6 : 6 + 3 * legs]
+        leg_gravity = [gravity[cols] for cols in self._columns]
+        limits = [np.minimum(self.effort[cols], 1e12) for cols in self._columns]
+        forces, residual = torque_weighted_forces(
+            feet_meas, loaded, com, mass, jac, leg_gravity, limits, self.h, np.r_[force, moment]
+        )
+        forces = _friction(forces)
+        tau = gravity.copy()
+        for i in range(legs):
+            if loaded[i]:
+                tau[self._columns[i]] -= jac[i].T @ forces[i]
+            elif not plan.contact[i]:  # a swing leg: M_leg qdd, qdd from the swing's acceleration
+                try:
+                    qdd = np.linalg.solve(jac[i], feet_accel[i])
+                except np.linalg.LinAlgError:
+                    continue
+                if np.isfinite(qdd).all():
+                    tau[self._columns[i]] += self._leg_inertia[i] @ qdd
+        clipped = np.abs(tau) > self.effort
+        tau = np.clip(tau, -self.effort, self.effort)
+        self.clipped += int(clipped.any())
+        self.ticks += 1
+        kp = np.where(stance_cols, self.stance_kp, self.kp)
+        kd = np.where(stance_cols, self.stance_kd, self.kd)
+        down = [feet[i, :2] for i in range(legs) if plan.contact[i]]
+        com_ref = robot.center_of_mass(T_ref, q_des)
+        memory.last = {
+            "t": t,
+            "body_pose": pose_ref,
+            "feet": feet,
+            "contact": plan.contact.copy(),
+            "loaded": loaded,
+            "margin": support_margin(down, com_ref[:2]),
+            "measured_margin": support_margin(down, com[:2]),
+            "forces": forces,
+            "residual": residual,
+            "wrench": np.r_[force, moment],
+            "clipped": clipped,
+            "status": int(np.max(solved.status[0])),
+            "shortened": bool(plan.speed_scale < 1.0 or (plan.step_shortened & ~plan.contact).any()),
+            "ground": memory.ground.copy(),
+            "time": time.perf_counter() - start_time,
+        }
+        return q_des, qd_des, tau, plan.contact.copy(), kp, kd
+
+
+def _friction(forces: np.ndarray) -> np.ndarray:
+    """Each force with f_z >= 0 and its horizontal part within FRICTION f_z."""
+    out = forces.copy()
+    out[:, 2] = np.maximum(out[:, 2], 0.0)
+    horizontal = np.hypot(out[:, 0], out[:, 1])
+    limit = FRICTION * out[:, 2]
+    scale = np.where(horizontal > limit, limit / np.maximum(horizontal, 1e-300), 1.0)
+    out[:, :2] *= scale[:, None]
+    return out
+
+
+def _effort(robot, name: str) -> float:
+    """The effort limit (N m) of the joint ``name`` of ``robot.leg_joint_names`` (inf when none)."""
+    model = robot.model
+    if model is None:
+        return math.inf
+    actuated = [joint.name for joint in model.actuated_joints]
+    index = robot.q_from_names(actuated, np.arange(len(actuated), dtype=float), joints=[name])
+    effort = model.joint(actuated[int(index[0])]).effort
+    return math.inf if effort is None or not effort > 0 else float(effort)
