@@ -69,13 +69,11 @@ def test_matches_the_reference(name, rng):
             names = {rd.STANCE_OK: "OK", rd.STANCE_PULLING: "PULLING", rd.STANCE_OUTSIDE: "OUTSIDE"}
             assert got.status.name == names.get(want.status, "UNBALANCED"), (stance, got.status, want.status)
             np.testing.assert_allclose(got.margin, want.margin, atol=1e-12)
-            if want.status == rd.STANCE_UNBALANCED:
-                assert np.isnan(got.tau).all() and np.isnan(got.forces).all()
-                continue
             np.testing.assert_allclose(got.tau, want.tau[: 3 * r.n_legs], atol=1e-9)
             forces = np.zeros((r.n_legs, 3))
             forces[np.flatnonzero(stance)] = want.forces
             np.testing.assert_allclose(got.forces, forces, atol=1e-9)
+            np.testing.assert_allclose(got.residual, want.residual, atol=1e-9)
 
 
 @pytest.mark.parametrize("name", ["spot", "go2"])
@@ -109,16 +107,53 @@ def test_statuses_outside_and_unbalanced():
     got = r.standing_torques(pose, q, [True, True, True, False])
     assert got.status == sk.StanceStatus.OUTSIDE and got.margin < 0
     assert got.forces[:, 2].min() < 0  # a foot pulls
-    # one foot: nothing balances the moment
+    # one foot: it carries the weight, nothing balances the moment, which the residual gives
     one = r.standing_torques(pose, q, [True, False, False, False])
-    assert one.status == sk.StanceStatus.UNBALANCED and np.isnan(one.tau).all()
-    # no foot
+    assert one.status == sk.StanceStatus.UNBALANCED and np.isfinite(one.tau).all()
+    weight = r.mass * np.array([0.0, 0.0, 9.81])
+    np.testing.assert_allclose(one.forces[0], weight, atol=1e-9)
+    com, foot = r.center_of_mass(pose, q), r.body_fk(pose, q)[0]
+    np.testing.assert_allclose(one.residual, np.r_[0.0, 0.0, 0.0, -np.cross(foot - com, weight)], atol=1e-9)
+    # no foot: the whole weight is left
     none = r.standing_torques(pose, q, [False] * 4)
     assert none.status == sk.StanceStatus.UNBALANCED and none.margin == -np.inf
+    np.testing.assert_array_equal(none.forces, 0.0)
+    np.testing.assert_allclose(none.residual, np.r_[weight, 0.0, 0.0, 0.0], atol=1e-9)
     # no gravity: nothing to hold, every force zero, the margin undefined
     free = r.standing_torques(pose, q, gravity=[0.0, 0.0, 0.0])
     assert free.status == sk.StanceStatus.OK and np.isnan(free.margin)
     np.testing.assert_array_equal(free.forces, 0.0)
+
+
+@pytest.mark.parametrize("name", ["spot", "go2"])
+def test_two_feet_carry_the_weight_and_the_moment_in_least_squares(name, rng):
+    """A trot's or a pace's two feet: sum f = -m g exactly; the moment left is the least one (normal
+    to every moment the feet can make without changing sum f) and the forces the smallest giving it;
+    the residual is that moment, about the centre of mass."""
+    r, feet, height = nominal(name)
+    for stance in ([True, False, False, True], [True, False, True, False], [False, True, True, False]):
+        pose = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0]) + rng.uniform(-1, 1, 6) * 0.03
+        q = r.body_ik(pose, feet).q
+        got = r.standing_torques(pose, q, stance)
+        assert got.status == sk.StanceStatus.UNBALANCED
+        weight = r.mass * np.array([0.0, 0.0, 9.81])
+        np.testing.assert_allclose(got.forces.sum(axis=0), weight, atol=1e-9)
+        np.testing.assert_allclose(got.residual[:3], 0.0, atol=1e-9)
+        com, p = r.center_of_mass(pose, q), r.body_fk(pose, q)
+        down = np.flatnonzero(stance)
+        moment = np.cross(p[down] - com, got.forces[down]).sum(axis=0)
+        np.testing.assert_allclose(got.residual[3:], -moment, atol=1e-9)
+        # moving force between the feet (keeping the sum) changes the moment by (p_a - p_b) x d:
+        # the moment left is normal to all of them, and the forces move none along the null space
+        a, b = p[down[0]] - com, p[down[1]] - com
+        span = np.array([np.cross(a - b, e) for e in np.eye(3)])
+        np.testing.assert_allclose(span @ got.residual[3:], 0.0, atol=1e-7 * r.mass)
+        # the smallest forces with this sum and this moment: orthogonal to the null space of both maps
+        A = np.vstack([np.hstack([np.eye(3)] * 2), np.hstack([rd.skew(a), rd.skew(b)])])
+        null = np.linalg.svd(A)[2][np.linalg.matrix_rank(A) :]
+        np.testing.assert_allclose(null @ got.forces[down].ravel(), 0.0, atol=1e-9)
+        tau = r.standing_torques(pose, q, [True] * 4).tau
+        assert np.isfinite(got.tau).all() and not np.allclose(got.tau, tau)
 
 
 def test_swing_legs_hold_their_own_weight():

@@ -27,40 +27,6 @@ using binder::Kind;
 using binder::Op;
 using binder::Out;
 
-struct Standing {
-  double mass;
-  int legs;
-};
-
-// Per sample: com (3), feet (legs, 3), foot Jacobians (legs, 3, 3), the legs' gravity torques
-// (3 legs), the stance mask (legs: 0 or 1) and gravity (3), broadcast; float64.
-py::tuple standing_torques(py::handle com, double mass, py::handle feet, py::handle jacobians, py::handle leg_gravity,
-                           py::handle stance, py::handle gravity) {
-  py::array feet_arr = as_real_array(feet, "feet");
-  if (feet_arr.ndim() < 2 || feet_arr.shape(feet_arr.ndim() - 1) != 3)
-    throw py::value_error("feet must have shape (..., legs, 3), got " +
-                          format_shape(Shape(feet_arr.shape(), feet_arr.shape() + feet_arr.ndim())));
-  const py::ssize_t legs = feet_arr.shape(feet_arr.ndim() - 2);
-  if (legs < 1 || legs > dynamics::kMaxFeet)
-    throw py::value_error("standing torques take 1 to " + std::to_string(dynamics::kMaxFeet) + " legs, got " +
-                          std::to_string(legs));
-  if (!(mass >= 0.0) || !std::isfinite(mass)) throw py::value_error("mass must be finite and non-negative");
-  const Op op = Op({Arg("com", {3}), Arg("feet", {legs, 3}), Arg("foot_jacobians", {legs, 3, 3}),
-                    Arg("leg_gravity", {3 * legs}), Arg("stance", {legs}), Arg("gravity", {3})},
-                   {Out("tau", {3 * legs}), Out("forces", {legs, 3}), Out("status", {}, Kind::Status),
-                    Out("margin", {})},
-                   2000.0, [](const void* c, const auto& b) {
-                     if constexpr (std::is_same_v<typename std::decay_t<decltype(b)>::Scalar, double>) {
-                       const Standing& s = binder::context<Standing>(c);
-                       dynamics::standing_rows(s.legs, s.mass, b.in[0], b.in[1], b.in[2], b.in[3], b.in[4], b.in[5],
-                                               b.real(0), b.real(1), b.status(2), b.real(3), b.m);
-                     }
-                   })
-                   .float64_only();
-  const Standing context{mass, int(legs)};
-  return binder::call(op, &context, {com, feet, jacobians, leg_gravity, stance, gravity}, py::none());
-}
-
 // ---------------------------------------------------------------- a robot's statics
 
 // The robot: its legs (Body: leg l's joints are q's columns[l]), its floating model (the body, then
@@ -162,13 +128,13 @@ py::object robot_standing(const RobotStatics& r, py::handle pose, int sequence, 
     return Op({statics_pose(), statics_q(r), Arg("stance", {L}).maybe_none().parameter()},
               {Out("tau", {3 * L}), Out("forces", {L, 3}),
                Out("status", {}, Kind::Code).members("StanceStatus"),
-               Out("margin", {}).scalar_when_single()},
+               Out("margin", {}).scalar_when_single(), Out("residual", {6})},
               2000.0,
               [](const void* c, const auto& b) {
                 const StaticsCall& s = binder::context<StaticsCall>(c);
                 on_robot(s.robot, b.m, [&](const auto& robot) {
-                  dynamics::robot_standing(robot, s.seq, s.gravity, statics_rows(b), b.real(0), b.real(1), b.status(2),
-                                           b.real(3), b.m);
+                  dynamics::robot_standing(robot, s.seq, s.gravity, statics_rows(b), b.real(0),
+                                           b.real(1), b.status(2), b.real(3), b.real(4), b.m);
                 });
               })
         .returns("Standing");
@@ -200,10 +166,6 @@ void bind_statics(py::module_& m) {
       .def("com", &robot_com, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::arg("out") = py::none())
       .def("standing", &robot_standing, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
            py::arg("stance"), py::arg("gravity"), py::arg("out") = py::none());
-  m.def("standing_torques", &standing_torques, py::arg("com"), py::arg("mass"), py::arg("feet"),
-        py::arg("foot_jacobians"), py::arg("leg_gravity"), py::arg("stance"), py::arg("gravity"),
-        "Minimum-norm stance forces and leg torques, per sample of flat (N, ...) arrays (see "
-        "spotkin/dynamics/statics.hpp).");
 }
 
 }  // namespace spotkin::bindings

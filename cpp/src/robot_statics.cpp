@@ -61,8 +61,9 @@ void robot_com(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, 
 }
 
 template <typename Model, typename T>
-void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, const double gravity[3],
-                    const StaticsRows<T>& rows, T* tau_rows, T* force_rows, std::int8_t* status_rows, T* margin_rows,
+void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& seq,
+                    const double gravity[3], const StaticsRows<T>& rows, T* tau_rows, T* force_rows,
+                    std::int8_t* status_rows, T* margin_rows, T* residual_rows,
                     std::ptrdiff_t count) {
   const Body& body = robot.body;
   const int L = body.n_legs(), nq = robot.floating.nq(), nv = robot.floating.nv();
@@ -106,6 +107,7 @@ void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& 
       if (!ok) {
         std::fill(tau_out, tau_out + 3 * L, T(nan));
         std::fill(force_out, force_out + 3 * L, T(nan));
+        std::fill(residual_rows + 6 * k, residual_rows + 6 * k + 6, T(nan));
         *status = static_cast<std::int8_t>(Stance::InvalidInput);
         margin_rows[k] = T(nan);
         continue;
@@ -122,10 +124,16 @@ void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& 
           leg_gravity[3 * l + r] = gravity_torques[nv * i + 6 + col[std::size_t(r)]];
         }
       }
-      double tau[3 * kMaxFeet], forces[3 * kMaxFeet], margin;
-      standing_sample(L, com + 3 * i, robot.mass, feet, jacobians, leg_gravity, on, g_body + 3 * i, tau, forces, status,
-                      &margin);
+      double tau[3 * kMaxFeet], forces[3 * kMaxFeet], margin, residual[6];
+      standing_sample(L, com + 3 * i, robot.mass, feet, jacobians, leg_gravity, on, g_body + 3 * i,
+                      tau, forces, status, &margin, residual);
       const double* M = Tm + 16 * i;
+      for (int h = 0; h < 2; ++h)  // the residual force and moment, turned to the world: R v
+        for (int r = 0; r < 3; ++r) {
+          const double* v = residual + 3 * h;
+          residual_rows[6 * k + 3 * h + r] =
+              T(M[4 * r] * v[0] + M[4 * r + 1] * v[1] + M[4 * r + 2] * v[2]);
+        }
       for (int l = 0; l < L; ++l) {
         const auto& col = body.columns[std::size_t(l)];
         const double* f = forces + 3 * l;
@@ -139,40 +147,13 @@ void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& 
   }
 }
 
-void standing_rows(int L, double mass, const double* com, const double* feet, const double* jacobians,
-                   const double* leg_gravity, const double* stance, const double* gravity, double* tau, double* forces,
-                   std::int8_t* status, double* margin, std::ptrdiff_t count) {
-  constexpr double nan = quiet_nan<double>();
-  for (std::ptrdiff_t i = 0; i < count; ++i) {
-    double* t = tau + 3 * L * i;
-    double* f = forces + 3 * L * i;
-    std::uint8_t on[kMaxFeet];
-    bool stance_ok = true;
-    for (int l = 0; l < L; ++l) {
-      const double v = stance[L * i + l];
-      on[l] = v != 0.0;
-      stance_ok = stance_ok && (v == 0.0 || v == 1.0);
-    }
-    if (!stance_ok) {  // a NaN in the mask: invalid, as any non-finite input
-      std::fill(t, t + 3 * L, nan);
-      std::fill(f, f + 3 * L, nan);
-      status[i] = static_cast<std::int8_t>(Stance::InvalidInput);
-      margin[i] = nan;
-      continue;
-    }
-    standing_sample(L, com + 3 * i, mass, feet + 3 * L * i, jacobians + 9 * L * i, leg_gravity + 3 * L * i, on,
-                    gravity + 3 * i, t, f, status + i, margin + i);
-  }
-}
-
-#define SPOTKIN_INSTANTIATE(T, L)                                                                               \
-  template void robot_com<FloatingModel<double, L>, T>(const RobotStaticsModel<FloatingModel<double, L>>&,     \
-                                                       const EulerSequence&, const StaticsRows<T>&, T*,        \
-                                                       std::ptrdiff_t);                                         \
-  template void robot_standing<FloatingModel<double, L>, T>(const RobotStaticsModel<FloatingModel<double, L>>&, \
-                                                            const EulerSequence&, const double*,               \
-                                                            const StaticsRows<T>&, T*, T*, std::int8_t*, T*,   \
-                                                            std::ptrdiff_t);
+#define SPOTKIN_INSTANTIATE(T, L)                                                              \
+  template void robot_com<FloatingModel<double, L>, T>(                                        \
+      const RobotStaticsModel<FloatingModel<double, L>>&, const EulerSequence&,                \
+      const StaticsRows<T>&, T*, std::ptrdiff_t);                                              \
+  template void robot_standing<FloatingModel<double, L>, T>(                                   \
+      const RobotStaticsModel<FloatingModel<double, L>>&, const EulerSequence&, const double*, \
+      const StaticsRows<T>&, T*, T*, std::int8_t*, T*, T*, std::ptrdiff_t);
 #define SPOTKIN_INSTANTIATE_WIDTH(L) SPOTKIN_INSTANTIATE(float, L) SPOTKIN_INSTANTIATE(double, L)
 SPOTKIN_INSTANTIATE_WIDTH(kLanes64)
 SPOTKIN_INSTANTIATE_WIDTH(kMidLanes64)

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'standing_torques', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -296,10 +296,6 @@ def set_num_threads(n: typing.Any) -> None:
     ...
 def singular_values(J: typing.Any) -> typing.Any:
     ...
-def standing_torques(com: typing.Any, mass: typing.SupportsFloat | typing.SupportsIndex, feet: typing.Any, foot_jacobians: typing.Any, leg_gravity: typing.Any, stance: typing.Any, gravity: typing.Any) -> tuple:
-    """
-    Minimum-norm stance forces and leg torques, per sample of flat (N, ...) arrays (see spotkin/dynamics/statics.hpp).
-    """
 def trajectory_min_duration(profile: typing.SupportsInt | typing.SupportsIndex, distance: typing.SupportsFloat | typing.SupportsIndex, vmax: typing.SupportsFloat | typing.SupportsIndex, amax: typing.SupportsFloat | typing.SupportsIndex) -> float:
     ...
 MAX_THREADS: int = 1024

@@ -204,13 +204,19 @@ def dynamics_entries():
         names = {rd.STANCE_OK: 0, rd.STANCE_PULLING: 1, rd.STANCE_OUTSIDE: 2, rd.STANCE_UNBALANCED: 4}
 
         def standing_check(x, out, kw, c, whole_tree=whole_tree, full_q=full_q, names=names):
-            tau, forces, status, margin = out
+            tau, forces, status, margin, residual = out
             ok = pose_validity(x["body_pose"])
             stance = np.asarray(x.get("stance", np.ones(len(tau) // 3)), dtype=np.float64)
             if ok is None:
                 return None
             if not ok or not finite(x["q"]) or not np.isin(stance, (0.0, 1.0)).all():
-                if int(status) != INVALID or not all_nan(tau) or not all_nan(forces) or not all_nan(margin):
+                if (
+                    int(status) != INVALID
+                    or not all_nan(tau)
+                    or not all_nan(forces)
+                    or not all_nan(margin)
+                    or not all_nan(residual)
+                ):
                     return f"invalid input but status {status}, tau {describe(tau)}"
                 return None
             T = pose_matrix(x["body_pose"], kw.get("seq", "XYZ"))
@@ -223,14 +229,18 @@ def dynamics_entries():
             tol = tol_for(*x.values(), base=1e-7, f32=5e-2)
             if np.isfinite(want.margin) and abs(float(margin) - want.margin) > tol:
                 return f"margin {margin}, the reference's {want.margin}"
-            if want.status == rd.STANCE_UNBALANCED:
-                return None if all_nan(tau) else f"unbalanced but tau {describe(tau)}"
             scale = max(1.0, float(np.abs(want.tau).max()))
             if (
                 not finite(tau)
                 or np.abs(np.asarray(tau, np.float64) - want.tau[: tau.shape[-1]]).max() > tol * scale
             ):
                 return f"tau {describe(tau)}, the reference's {describe(want.tau)}"
+            weight = float(np.linalg.norm(gravity)) * float(np.abs(want.residual).max() + 1.0)
+            if (
+                not finite(residual)
+                or np.abs(np.asarray(residual, np.float64) - want.residual).max() > tol * weight
+            ):
+                return f"residual {describe(residual)}, the reference's {describe(want.residual)}"
             return None
 
         stance_slot = Batch(
@@ -254,11 +264,14 @@ def dynamics_entries():
                     ("float", (legs, 3)),
                     ("stance", ()),
                     ("float", ()),
+                    ("float", (6,)),
                     drivers=["body_pose", "q"],
                 ),
             ],
             baseline=body_base,
-            outputs=outs(("float", (3 * legs,)), ("float", (legs, 3)), ("stance", ()), ("float", ())),
+            outputs=outs(
+                ("float", (3 * legs,)), ("float", (legs, 3)), ("stance", ()), ("float", ()), ("float", (6,))
+            ),
             nan_rule="check",
             check=standing_check,
             overflow_ok=True,

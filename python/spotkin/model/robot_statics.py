@@ -121,10 +121,13 @@ class _FloatingBaseMethods:
     ) -> Standing:
         """The leg torques that hold the robot still on its stance feet, and the contact forces.
 
-        Point contacts at the stance feet (the foot points of :meth:`body_fk`) carry world forces f_i,
-        the minimum-norm ones that balance the weight: sum f_i = -m g and sum (p_i - c) x f_i = 0 (c the
-        centre of mass). Each leg then holds tau_l = G_l - J_l^T f_l, with G_l its joint gravity torques
-        and J_l = d foot_l / d q_l (world axes); a swing leg holds G_l alone.
+        Point contacts at the stance feet (the foot points of :meth:`body_fk`) carry world forces f_i
+        that carry the weight, sum f_i = -m g, and balance its moment, sum (p_i - c) x f_i = 0 (c the
+        centre of mass): the minimum-norm such forces. Where the moment cannot be balanced (fewer than
+        three feet down, or collinear ones, as in a trot or a pace), the weight is still carried and the
+        moment balanced in the least-squares sense, with the smallest forces among those, and
+        ``residual`` gives the moment left. Each leg then holds tau_l = G_l - J_l^T f_l, with G_l its
+        joint gravity torques and J_l = d foot_l / d q_l (world axes); a swing leg holds G_l alone.
 
         ``body_pose`` as :meth:`body_fk` takes it; ``q`` (..., 3 n_legs), or with the arm's joints after
         the legs' (else the arm is at zero; it moves the centre of mass); ``stance`` (..., n_legs) bool,
@@ -132,15 +135,18 @@ class _FloatingBaseMethods:
 
         Returns :class:`Standing`: ``tau`` (..., 3 n_legs) N m in :attr:`leg_joint_names` order, ``forces``
         (..., n_legs, 3) N (zero on swing feet), ``status`` (:class:`StanceStatus`; an int8 array for a
-        batch) and ``margin`` (m): the signed distance of the centre of mass's projection, along gravity,
-        to the support polygon (positive inside). The status, checked in this order: UNBALANCED (no forces
-        at these feet balance the weight, e.g. fewer than three feet with the centre of mass off their line
-        or point; tau and forces NaN), OK (every foot pushes), PULLING (the minimum-norm forces pull on a
-        foot though the centre of mass projects inside the polygon: a pushing distribution exists, this is
-        not it), OUTSIDE (a foot pulls and the centre of mass projects on or outside the polygon: no
-        pushing distribution exists on level ground). NaN or Inf input, or an invalid pose: INVALID_INPUT
-        and NaN in that sample. ``out``: ``(tau, forces, status, margin)`` arrays of the result's shapes
-        (float of the working dtype; status int8), any of them None, to write into.
+        batch), ``margin`` (m; a float for one sample): the signed distance of the centre of mass's
+        projection, along gravity, to the support polygon (positive inside), and ``residual`` (..., 6):
+        the wrench the forces leave unbalanced, [force (N); moment about the centre of mass (N m)] in
+        world axes (zero when balanced). The status, checked in this order: UNBALANCED (the moment
+        cannot be balanced at these feet, e.g. fewer than three feet with the centre of mass off their
+        line or point: tau and forces are the least-squares ones, ``residual`` says what is left), OK
+        (every foot pushes), PULLING (the minimum-norm forces pull on a foot though the centre of mass
+        projects inside the polygon: a pushing distribution exists, this is not it), OUTSIDE (a foot
+        pulls and the centre of mass projects on or outside the polygon: no pushing distribution exists
+        on level ground). NaN or Inf input, or an invalid pose: INVALID_INPUT and NaN in that sample.
+        ``out``: ``(tau, forces, status, margin, residual)`` arrays of the result's shapes (float of the
+        working dtype; status int8), any of them None, to write into.
         """
         return self._statics.standing(body_pose, sequence_code(seq), q, stance, gravity, out)  # a Standing
 
@@ -176,8 +182,9 @@ class StanceStatus(IntEnum):
     """NaN or Inf in the input, an invalid body pose or a stance value other than 0/1: everything NaN
     (the code of :attr:`Status.INVALID_INPUT`)."""
     UNBALANCED = 4
-    """No forces at these feet balance the weight (fewer than three feet, or collinear ones, with the
-    centre of mass off their line or point): tau and forces are NaN."""
+    """No forces at these feet balance the weight's moment (fewer than three feet, or collinear ones,
+    with the centre of mass off their line or point): tau and forces are the least-squares ones (the
+    weight carried, the moment balanced as well as these feet can), ``residual`` the wrench left."""
 
 
 class Standing(NamedTuple):
@@ -192,7 +199,10 @@ class Standing(NamedTuple):
     margin: np.ndarray
     """(...) m: signed distance of the centre of mass's projection to the support polygon, in the plane
     normal to gravity, positive inside (with fewer than three non-collinear feet: minus the distance to
-    their segment or point; NaN without gravity)."""
+    their segment or point; NaN without gravity). A float for a single sample."""
+    residual: np.ndarray
+    """(..., 6) the wrench the forces leave unbalanced, [force (N); moment about the centre of mass
+    (N m)], world axes: zero when balanced; with two feet down, the weight's moment about their line."""
 
 
 # The core returns Standing itself, one sample's status as a StanceStatus member (by value)

@@ -443,6 +443,8 @@ class Standing(NamedTuple):
     normal to gravity: with three or more non-collinear feet, the smallest signed distance to the
     polygon's edge lines (positive inside); otherwise minus the distance to the feet's segment or
     point."""
+    residual: np.ndarray
+    """(6,) the wrench the forces leave unbalanced: [-m g - sum f_i; -sum (p_i - c) x f_i] (world)."""
 
 
 def _hull(points: list) -> list:
@@ -504,8 +506,12 @@ def standing_torques(tree, body_pose, q, stance_feet, gravity=GRAVITY) -> Standi
         sum f_i = -m g,    sum (p_i - c) x f_i = 0   (c: the centre of mass)
     — six equations A f = b in 3 k unknowns. f is the minimum-norm solution (the pseudo-inverse);
     then tau = G_joints - sum J_i^T f_i over the stance feet (J_i: the foot point's Jacobian, joint
-    columns). Status, in this order:
-      STANCE_UNBALANCED when |A f - b| > 1e-9 m |g| (NaN tau and forces);
+    columns). When no f solves A f = b (|A f - b| > 1e-9 m |g|), f carries the weight exactly and the
+    moment in least squares, the smallest such: f = f_p + N z over the forces with sum f_i = -m g
+    (f_p = pinv(C) (-m g), C = [I ... I], N an orthonormal basis of C's null space), z = pinv(M N)
+    (-M f_p) (M f = sum (p_i - c) x f_i; singular values below 1e-9 of the largest dropped).
+    ``residual`` = b - A f, the wrench left. Status, in this order:
+      STANCE_UNBALANCED when |A f - b| > 1e-9 m |g| for the exact minimum-norm f (the least-squares f);
       STANCE_OK when every normal component -f_i . g / |g| >= -1e-9 m |g| (with g = 0, the forces are
       zero and the status OK; the margin is then NaN);
       otherwise STANCE_PULLING when the centre of mass projects inside the support polygon
@@ -545,16 +551,26 @@ def standing_torques(tree, body_pose, q, stance_feet, gravity=GRAVITY) -> Standi
     forces = (np.linalg.pinv(A) @ b).reshape(len(stance), 3) if stance else np.zeros((0, 3))
     up = -g / np.linalg.norm(g)
     margin = _support_margin(points, com, up) if points else -math.inf
-    if float(np.linalg.norm(A @ forces.ravel() - b)) > 1e-9 * weight:
-        n = state.n
-        return Standing(np.full(n, np.nan), np.full((len(stance), 3), np.nan), STANCE_UNBALANCED, margin)
+    unbalanced = float(np.linalg.norm(A @ forces.ravel() - b)) > 1e-9 * weight
+    if unbalanced:  # the weight exactly, the moment in least squares, the smallest forces
+        k = len(stance)
+        C = A[:3]
+        f_p = np.linalg.pinv(C) @ b[:3]
+        _, _, Vt = np.linalg.svd(C)
+        N = Vt[3:].T  # (3 k, 3 k - 3): C's null space
+        M = A[3:]
+        z = np.linalg.pinv(M @ N, rcond=1e-9) @ (-M @ f_p) if k > 1 else np.zeros(0)
+        forces = (f_p + N @ z).reshape(k, 3)
+    residual = b - (A @ forces.ravel() if stance else np.zeros(6))
     G = gravity_torques(tree, q, g, body_pose)
     tau = G[6:].copy()
     for f, Jp in zip(forces, foot_jacobians):
         tau -= joint_torques_from_forces(Jp[:, 6:], f)
     normals = forces @ up
-    if weight == 0.0 or (normals >= -1e-9 * weight).all():  # no gravity: zero forces, nothing pulls
+    if unbalanced:
+        status = STANCE_UNBALANCED
+    elif weight == 0.0 or (normals >= -1e-9 * weight).all():  # no gravity: zero forces, nothing pulls
         status = STANCE_OK
     else:
         status = STANCE_PULLING if margin > 0 else STANCE_OUTSIDE
-    return Standing(tau, forces, status, margin)
+    return Standing(tau, forces, status, margin, residual)

@@ -48,17 +48,12 @@ void robot_com(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, 
                std::ptrdiff_t m);
 
 // The standing statics of each sample, in the body frame where only gravity's direction depends on
-// the pose: tau_l = G_l - J_l^T f_l (statics.hpp), the forces then turned to the world. tau (m, 3 legs)
-// in q's leg columns, forces (m, legs, 3), status (m) Stance codes, margin (m).
+// the pose: tau_l = G_l - J_l^T f_l (statics.hpp), the forces and the residual wrench then turned
+// to the world. tau (m, 3 legs) in q's leg columns, forces (m, legs, 3), status (m) Stance codes,
+// margin (m), residual (m, 6) [force; moment about the centre of mass].
 template <typename Model, typename T>
-void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& seq, const double gravity[3],
-                    const StaticsRows<T>& rows, T* tau, T* forces, std::int8_t* status, T* margin, std::ptrdiff_t m);
-
-// standing_sample over m contiguous rows: com (3), feet (legs, 3), foot Jacobians (legs, 3, 3), the
-// legs' gravity torques (3 legs), the stance mask (legs; a value other than 0 or 1 makes the sample
-// INVALID_INPUT) and gravity (3) -> tau (3 legs), forces (legs, 3), status, margin.
-void standing_rows(int legs, double mass, const double* com, const double* feet, const double* jacobians,
-                   const double* leg_gravity, const double* stance, const double* gravity, double* tau, double* forces,
-                   std::int8_t* status, double* margin, std::ptrdiff_t m);
+void robot_standing(const RobotStaticsModel<Model>& robot, const EulerSequence& seq,
+                    const double gravity[3], const StaticsRows<T>& rows, T* tau, T* forces,
+                    std::int8_t* status, T* margin, T* residual, std::ptrdiff_t m);
 
 }  // namespace spotkin::dynamics
