@@ -502,7 +502,7 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
 // signature: the bindings pass their dispatched ik_all kernel, so that the solver is not
 // compiled a second time inside this one.
 template <typename T, typename All>
-SPOTKIN_INLINE void ik(const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
+SPOTKIN_INLINE void ik(const Arm& /*arm: all() holds it*/, const T* poses, PoseFormat format, const T* seed, T* q,
                        std::int8_t* status, std::ptrdiff_t count, All&& all) noexcept {
   T q_all[kBlock * Arm::kSlots * 6];
   std::uint8_t valid[kBlock * Arm::kSlots], exists[kBlock * Arm::kSlots];
