@@ -42,6 +42,8 @@ struct CoreMethod {
                          // (the fast path only at the default: another value takes the function)
   PyObject*
       order;  // the core's arguments: tuple of int, k >= 0 parameter k, k < 0 constants[-1 - k]
+  Py_ssize_t slots[kMaxParams];  // order, read once
+  Py_ssize_t n_core;
   PyObject* constants;  // tuple
   PyObject* required;   // the marker (inspect.Parameter.empty)
   Py_ssize_t n_params, n_positional;
@@ -124,18 +126,20 @@ PyObject* call(PyObject* callable, PyObject* const* args, std::size_t nargsf, Py
     Py_XDECREF(core);
     return release(), through_function(self, args, nargsf, kwnames);
   }
-  const Py_ssize_t n_core = PyTuple_GET_SIZE(self->order);
+  const Py_ssize_t n_core = self->n_core;
   PyObject* stack[kMaxParams + 2];
   stack[0] = nullptr;  // PY_VECTORCALL_ARGUMENTS_OFFSET: room for the callee to prepend
   stack[1] = core;
   for (Py_ssize_t k = 0; k < n_core; ++k) {
-    const Py_ssize_t slot = PyLong_AsSsize_t(PyTuple_GET_ITEM(self->order, k));
+    const Py_ssize_t slot = self->slots[k];
     stack[k + 2] = slot >= 0 ? value[slot] : PyTuple_GET_ITEM(self->constants, -1 - slot);
   }
   PyObject* result;
   if (PyObject* function = unbound_method(self, core)) {
+    Py_INCREF(function);  // held through the call, should a re-entrant call replace the cache
     result = PyObject_Vectorcall(function, stack + 1,
                                  std::size_t(n_core + 1) | PY_VECTORCALL_ARGUMENTS_OFFSET, nullptr);
+    Py_DECREF(function);
   } else {
     PyObject* bound = PyObject_GetAttr(core, self->method);
     result = bound ? PyObject_Vectorcall(bound, stack + 2, std::size_t(n_core), nullptr) : nullptr;
@@ -260,6 +264,9 @@ py::object make_core_method(py::object function, py::str target, py::str method,
   self->names = py::tuple(interned).release().ptr();
   self->defaults = defaults.release().ptr();
   self->converters = converters.release().ptr();
+  self->n_core = Py_ssize_t(order.size());
+  for (Py_ssize_t k = 0; k < self->n_core; ++k)
+    self->slots[k] = order[std::size_t(k)].cast<Py_ssize_t>();
   self->order = order.release().ptr();
   self->constants = constants.release().ptr();
   self->required = required.release().ptr();
