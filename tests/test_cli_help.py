@@ -19,7 +19,7 @@ def _help(argv):
 
 
 @pytest.mark.parametrize(
-    "argv", [[], ["demo"], ["inspect"], ["plot"], ["workspace"], ["batch"], ["batch", "body-ik"]]
+    "argv", [[], ["demo"], ["inspect"], ["plot"], ["workspace"], ["walk"], ["batch"], ["batch", "body-ik"]]
 )
 def test_help_has_no_rest_markup(argv):
     text = _help(argv)

@@ -419,3 +419,104 @@ def register_entries() -> None:
         combos=(),
         pairs=8,
     )
+
+    # plot.gait_diagram and plot.foot_paths: a short trot of Go2
+    def trot(c):
+        return c.robot("go2").plan_gait("trot", velocity=[0.3, 0.0, 0.0], duration=0.4, rate=50)
+
+    def diagram_probe(fig, kw, c):
+        if not isinstance(fig, Figure):
+            return f"not a Figure: {describe(fig)}"
+        contact = np.asarray(kw["contact"], dtype=bool)
+        bars = next((a for ax in fig.axes for a in ax.get_children() if a.get_gid() == "stance:0"), None)
+        if bars is None:
+            return "no bars for the first leg"
+        runs = int(np.count_nonzero(np.diff(np.r_[0, contact[:, 0].astype(int), 0]) == 1))
+        if len(bars.get_paths()) != runs:
+            return f"{len(bars.get_paths())} bars for {runs} stances"
+        return None
+
+    legs_table = {
+        "names": const(("FL", "FR", "RL", "RR")),
+        "none": const(None),
+        "str": const("FLFRRLRR", REJECT, "type"),
+        "two": const(("a", "b"), REJECT, "value"),
+        "ints": const((1, 2, 3, 4), REJECT, "type"),
+    }
+    register(
+        name="plot.gait_diagram",
+        covers="spotkin.plot.gait_diagram",
+        call=lambda c, **k: plot.gait_diagram(**k),
+        slots=[
+            Custom(
+                "contact",
+                {
+                    "valid": const(lambda c: trot(c).contact),
+                    "ints": const(lambda c: trot(c).contact.astype(np.int64)),
+                    "floats": const(lambda c: trot(c).contact.astype(float), REJECT, "type"),
+                    "one_leg": const(lambda c: trot(c).contact[:, :1]),
+                    "flat": const(lambda c: trot(c).contact[:, 0], REJECT, "value"),
+                    "empty": const(np.zeros((0, 4), dtype=bool), REJECT, "value"),
+                    "none": const(None, REJECT, "type"),
+                },
+            ),
+            Array("t", lambda c: trot(c).t, optional=True, default="omit"),
+            Custom("legs", legs_table, default="omit"),
+            Custom(
+                "measured",
+                {
+                    "names": const(lambda c: trot(c).contact),
+                    "none": const(None),
+                    "short": const(lambda c: trot(c).contact[:3], REJECT, "value"),
+                    "floats": const(lambda c: trot(c).contact.astype(float), REJECT, "type"),
+                },
+                default="omit",
+            ),
+            Custom("ax", axes_table(False), default="omit"),
+            Custom(
+                "title",
+                {"text": const("a title"), "none": const(None), "int": const(3, REJECT, "type")},
+                default="omit",
+            ),
+        ],
+        probe=diagram_probe,
+        pair_rule=lambda plan: (  # one leg's contacts with four legs' names or measured contacts
+            REJECT if plan["contact"] == "one_leg" and "names" in (plan["legs"], plan["measured"]) else None
+        ),
+        after=_close_figures,
+        combos=(),
+        pairs=12,
+    )
+
+    def paths_probe(fig, kw, c):
+        if not isinstance(fig, Figure):
+            return f"not a Figure: {describe(fig)}"
+        robot = kw["robot"]
+        q = np.asarray(kw["q"], dtype=np.float64)
+        leg = robot.legs[0]
+        names = list(robot.leg_joint_names)
+        feet = np.asarray(leg.fk(q[:, [names.index(j) for j in leg.joint_names]])) - leg.a
+        got = _gid_data(fig, "path:0")
+        if got is None or not close(got, feet[:, [0, 2]], False):
+            return f"the first path {describe(got)} is not the foot's {describe(feet)}"
+        return None
+
+    register(
+        name="plot.foot_paths",
+        covers="spotkin.plot.foot_paths",
+        call=lambda c, **k: plot.foot_paths(**k),
+        slots=[
+            Custom("robot", robot_table("go2")),
+            Array("q", lambda c: trot(c).q),
+            Custom("ax", axes_table(False), default="omit"),
+            Custom(
+                "title",
+                {"text": const("a title"), "none": const(None), "int": const(3, REJECT, "type")},
+                default="omit",
+            ),
+        ],
+        probe=paths_probe,
+        after=_close_figures,
+        combos=(),
+        pairs=8,
+    )

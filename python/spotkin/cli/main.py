@@ -2,7 +2,8 @@
 also writes its pictures); ``spotkin inspect ROBOT.urdf`` shows what a description holds and what
 spotkin recognises; ``spotkin plot ROBOT.urdf`` draws a robot in its nominal or zero stance;
 ``spotkin batch OPERATION`` runs a batch kernel over datasets on disk (``spotkin[dask]``);
-``spotkin workspace --robot spot`` estimates a leg's workspace volume and an arm's dexterous region."""
+``spotkin workspace --robot spot`` estimates a leg's workspace volume and an arm's dexterous region;
+``spotkin walk ROBOT.urdf`` walks a quadruped in the MuJoCo simulator (``spotkin[sim]``)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from ..scale.batch_operations import _positive_int
 from .demo import demo
 from .pictures import PLOT_EXTRA, plot_stance
 from .reports import inspect, workspace_report
+from .walk import SIM_EXTRA, walk
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -32,6 +34,7 @@ def _size(text: str) -> tuple[int, int]:
 
 
 DEMO_MAX_SAMPLES = 10_000_000  # the demo holds a few arrays of this many samples (GBs at the bound)
+WALK_MAX_DURATION = 3600.0  # s: an hour of simulated walk (about half an hour of computing)
 DPI_RANGE = (10, 600)  # below 10 dpi the fonts get no pixel (FreeType refuses); above, GIF frames of GBs
 
 
@@ -43,8 +46,13 @@ def _out_of_range(args) -> str | None:
     checks = []
     if args.command == "demo":
         checks.append(("--samples", args.samples, 1, DEMO_MAX_SAMPLES))
-    if args.command in ("demo", "plot"):
+    if args.command in ("demo", "plot", "walk"):
         checks.append(("--dpi", args.dpi, *DPI_RANGE))
+    if args.command == "walk":
+        if not (np.isfinite(args.duration) and 0 < args.duration <= WALK_MAX_DURATION):
+            return f"--duration must be in (0, {WALK_MAX_DURATION:g}] seconds, got {args.duration}"
+        if not np.isfinite(args.velocity).all():
+            return f"--velocity must be three finite numbers, got {args.velocity}"
     if args.command == "workspace":
         checks.append(("--samples", args.samples, 1, _workspace.MAX_VOLUME_SAMPLES))
         checks.append(("--orientations", args.orientations, 1, _workspace.MAX_ORIENTATIONS))
@@ -115,6 +123,29 @@ def main(argv: list[str] | None = None) -> int:
         help="orientations sampled per arm grid position (at most 1,000,000; default 128)",
     )
     workspace_parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    walk_parser = commands.add_parser(
+        "walk",
+        help=f"walk a quadruped in the MuJoCo simulator with the closed-loop gait controller ({SIM_EXTRA})",
+    )
+    walk_parser.add_argument("urdf", help="path of the URDF file, or spot (built-in), go2 (packaged)")
+    walk_parser.add_argument(
+        "--gait", default="trot", help="stand, walk, trot, pace, bound, pronk or gallop (default trot)"
+    )
+    walk_parser.add_argument(
+        "--velocity",
+        type=float,
+        nargs=3,
+        default=(0.3, 0.0, 0.0),
+        metavar=("VX", "VY", "YAW_RATE"),
+        help="the command: m/s forward, m/s to the left, rad/s (default 0.3 0 0), ramped over 1 s",
+    )
+    walk_parser.add_argument("--duration", type=float, default=10.0, help="seconds simulated (default 10)")
+    walk_parser.add_argument(
+        "--plots",
+        metavar="DIR",
+        help=f"also write the gait diagram and the foot paths into DIR ({PLOT_EXTRA})",
+    )
+    walk_parser.add_argument("--dpi", type=_positive_int, default=100, help=dpi_help)
     batch_operations.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/scale/batch_*.py)
     args = parser.parse_args(argv)
     if args.command == "batch":
@@ -140,6 +171,12 @@ def main(argv: list[str] | None = None) -> int:
             return workspace_report(args.robot, args.samples, args.spacing, args.orientations, args.seed)
         except (OSError, ValueError) as error:
             print(f"spotkin workspace: {error}", file=sys.stderr)
+            return 1
+    if args.command == "walk":
+        try:
+            return walk(args.urdf, args.gait, args.velocity, args.duration, args.plots, args.dpi)
+        except (ImportError, OSError, ValueError, TypeError) as error:
+            print(f"spotkin walk: {error}", file=sys.stderr)
             return 1
     if args.command == "inspect":
         try:

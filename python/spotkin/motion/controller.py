@@ -73,14 +73,17 @@ DAMPING_RATIO = 1.0
 """zeta of the joints' PD (kd = 2 zeta I w)."""
 BODY_BANDWIDTH = 1.5
 """The virtual body wrench's natural frequency, in sqrt(g / h)."""
-TIP_INERTIA = 1.0
+TIP_INERTIA = 0.3
 """The virtual moment's roll and pitch inertia adds TIP_INERTIA m h^2 to the body's own."""
 ANCHOR = 0.1
 """The body reference stays within this fraction of h of the measured body (horizontally)."""
 YAW_ANCHOR = 0.1
 """... and within this many radians of its yaw."""
-TERRAIN_FOLLOW = 0.5
-"""The body's pitch and roll follow this fraction of the ground plane's slope."""
+TERRAIN_FOLLOW = 1.0
+"""The body's pitch follows this fraction of the ground plane's slope along the heading."""
+TERRAIN_ROLL = 0.0
+"""... and its roll this fraction of the slope across it (none: a plane through four feet, two on a
+step and two below, tilts sideways too)."""
 REACH_DOWN = 0.3
 """A foot that finds no ground at its touch-down reaches at most this fraction of h further down."""
 FRICTION = 0.6
@@ -121,6 +124,9 @@ class _Memory:
     def __init__(self, n: int) -> None:
         self.plan: gait_plan.PlannerState | None = None
         self.reaching = np.zeros(n, dtype=bool)  # planned stance, no ground found yet
+        self.landed = np.ones(n, dtype=bool)  # touched since its touch-down
+        self.shift = np.zeros(2)  # the planner's shift (C) at the last tick, world
+        self.shift_rate = np.zeros(2)  # and its rate
         self.depth = np.zeros(n)  # how far each reaching foot went below its foothold
         self.ground_points = np.zeros((n, 3))  # the feet's last contacts
         self.ground = np.zeros(3)  # (c, a, b), low-passed
@@ -130,6 +136,7 @@ class _Memory:
         self.gait = None
         self.last = None
         self.t = -math.inf  # the last tick's time
+        self.settle = -math.inf  # the gait clock starts then
 
 
 class GaitController:
@@ -292,6 +299,7 @@ class GaitController:
         plan.p_touchdown = feet.copy()
         plan.old = dict(plan.old, com_shift=np.zeros_like(plan.old["com_shift"]))  # the shift blends in
         memory.plan, memory.t = plan, t
+        memory.settle = t + plan.duration  # every foot down while the body moves to its shifted place
         memory.ground_points = feet.copy()
         memory.ground = self._plane(feet, np.asarray(gait.stance)[:, 2])
 
@@ -324,11 +332,17 @@ class GaitController:
         memory.t = t
         dt = min(max(dt, 0.0), MAX_GAP)  # a gap between ticks is walked as MAX_GAP at most
         plan.command = np.array(command, dtype=np.float64)
-        plan.v_measured = v[:2].copy()
+        # the measured body less the planner's own shift (C) and its rate: the errors the footholds correct
+        plan.v_measured = v[:2] - memory.shift_rate
+        plan.p_measured = position[:2] - memory.shift
         plan.ground = memory.ground
         before = plan.contact.copy()
-        if dt > 0.0:
-            gait_plan.advance(robot, plan, dt)
+        settling = min(dt, max(0.0, memory.settle - plan.t))  # the start: the clock held
+        if (memory.reaching & (memory.depth < REACH_DOWN * self.h)).any():
+            settling = dt  # a foot still reaching for the ground: no other leg lifts off meanwhile
+        plan.t += settling
+        if dt - settling > 0.0:
+            gait_plan.advance(robot, plan, dt - settling)
         P, Pd = gait_plan.blended(plan, plan.t)
         period, duty = float(P["period"]), float(P["duty"])
         nominal_z = np.asarray(P["stance"])[:, 2]
@@ -361,14 +375,22 @@ class GaitController:
                 plan.p_stance[i] = feet_meas[i]  # held where it is measured
             if plan.contact[i] and touched[i] and not memory.reaching[i]:
                 memory.ground_points[i] = feet_meas[i]
-        loaded = plan.contact & touched & ~memory.reaching
+                memory.landed[i] = True
+            memory.landed[i] &= bool(plan.contact[i])
+        # a stance foot carries load from its first touch to its lift-off (a flickering contact, a foot
+        # on an edge, stays loaded)
+        loaded = memory.landed & ~memory.reaching
         # --- the ground plane, low-passed
         target = self._plane(memory.ground_points, nominal_z)
         memory.ground += (target - memory.ground) * min(1.0, max(dt, 0.0) / (GROUND_TIME * period))
+        # each leg's footholds: the plane's slope through its own last contact
+        own = memory.ground_points[:, 2] - nominal_z
+        plane = memory.ground[0] + memory.ground[1] * memory.ground_points[:, 0]
+        plan.ground_offsets = own - plane - memory.ground[2] * memory.ground_points[:, 1]
         c, s = math.cos(yaw), math.sin(yaw)
         slope_x = memory.ground[1] * c + memory.ground[2] * s
         slope_y = -memory.ground[1] * s + memory.ground[2] * c
-        roll = self.attitude[0] + TERRAIN_FOLLOW * math.atan(slope_y)
+        roll = self.attitude[0] + TERRAIN_ROLL * math.atan(slope_y)
         pitch = self.attitude[1] - TERRAIN_FOLLOW * math.atan(slope_x)
         plan.attitude = (roll, pitch)
         # --- re-anchor the planar reference (with its shift) to the measured body
@@ -378,6 +400,7 @@ class GaitController:
         delta, delta_rate = gait_plan._crawl_shift(P, Pd, phases, phase_rates)
         cp, sp = math.cos(plan.psi), math.sin(plan.psi)
         shift = np.array([cp * delta[0] - sp * delta[1], sp * delta[0] + cp * delta[1]])
+        memory.shift = shift
         ex, ey = plan.x + shift[0] - position[0], plan.y + shift[1] - position[1]
         bound = ANCHOR * self.h
         norm = math.hypot(ex, ey)
@@ -399,6 +422,7 @@ class GaitController:
         )
         v_ref[2] = memory.ground[1] * v_ref[0] + memory.ground[2] * v_ref[1] + float(Pd["height"])
         w_ref = np.array([0.0, 0.0, plan.w])
+        memory.shift_rate = v_ref[:2] - (cp * plan.v[0] - sp * plan.v[1], sp * plan.v[0] + cp * plan.v[1])
         # --- the feet
         feet = plan.p_stance.copy()
         feet_rate = np.zeros((legs, 3))
@@ -494,6 +518,7 @@ class GaitController:
             "status": int(np.max(solved.status[0])),
             "shortened": bool(plan.speed_scale < 1.0 or (plan.step_shortened & ~plan.contact).any()),
             "ground": memory.ground.copy(),
+            "reaching": memory.reaching.copy(),
             "time": time.perf_counter() - start_time,
         }
         return q_des, qd_des, tau, plan.contact.copy(), kp, kd

@@ -13,6 +13,8 @@
 - :func:`trajectory`: a point-to-point motion's q, qd and qdd against time with the speed and
   acceleration limits, or a Cartesian path's position and velocities.
 - :func:`animate`: a matplotlib animation of the robot along a body path (``.save("path.gif")``).
+- :func:`gait_diagram`: a walk's contacts, a bar per leg against time (planned and measured);
+  :func:`foot_paths`: the feet's paths in side view over each leg's sagittal workspace.
 
 Every function returns the matplotlib Figure it drew in, or draws into an ``ax`` (or ``fig``)
 that it is given, so that pictures compose and save as usual (``fig.savefig("stance.png")``).
@@ -26,8 +28,8 @@ leg's geometry, a chain's frames), not for its class.
 """
 
 # One module per picture family: _robot (with _stance, one configuration in the world, and _artists, its
-# drawing), _branches, _workspace_map, _trajectory, _animation; _common (style, argument checks, axes) and
-# _solvers (the solver interface as the pictures read it) hold what they share.
+# drawing), _branches, _workspace_map, _trajectory, _animation, _gait (walks); _common (style, argument
+# checks, axes) and _solvers (the solver interface as the pictures read it) hold what they share.
 
 from __future__ import annotations
 
@@ -45,6 +47,7 @@ except ImportError as _error:  # pragma: no cover - tested in a subprocess with 
 from ._animation import animate
 from ._branches import _q_text as _q_text
 from ._branches import branches
+from ._gait import foot_paths, gait_diagram
 from ._robot import _description as _description
 from ._robot import robot
 from ._stance import _frame as _frame
@@ -54,4 +57,4 @@ from ._stance import _zero_stance as _zero_stance
 from ._trajectory import trajectory
 from ._workspace_map import workspace
 
-__all__ = ["animate", "branches", "robot", "trajectory", "workspace"]
+__all__ = ["animate", "branches", "foot_paths", "gait_diagram", "robot", "trajectory", "workspace"]

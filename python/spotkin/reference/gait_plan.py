@@ -47,6 +47,14 @@ Closed-loop inputs (a controller sets them on the state before :func:`advance`; 
   through the feet's last contacts): the footholds (and the nominal points they are pulled back to)
   lie on it, at the nominal foot height above it, and the predicted body poses of (B) are ``height``
   above it. None: the flat ground z = 0 of a plan.
+- ``p_measured`` (2,): the measured body position (world, horizontal, less the crawl's shift): the
+  body poses predicted for a foothold (touch-down and the checks of (B)) move by
+  (p_measured - (x, y)) + (v_measured - v) (t_touchdown - t), where the body will be if it keeps its
+  measured position error and velocity error (v the plan's velocity, in the world); so that after a
+  push the feet land under the hips where they will be, and the capture term of (F) adds to that.
+- ``ground_offsets`` (n,): leg i's footholds lie ``ground_offsets[i]`` above that plane (a plane of
+  the same slope through the leg's own last contact, say: at a step's edge the hind feet keep to
+  the lower ground while the front ones are up). None: 0.
 
 One tick's outputs (:func:`sample`)
 -----------------------------------
@@ -144,6 +152,8 @@ class PlannerState:
     q: np.ndarray | None  # the last tick's q, the next IK's seed
     v_measured: np.ndarray | None = None  # (2,) closed loop: the measured velocity (world) of (F)
     ground: np.ndarray | None = None  # (3,) closed loop: the ground plane z = c + a x + b y
+    ground_offsets: np.ndarray | None = None  # (n,) closed loop: each leg's footholds above that plane
+    p_measured: np.ndarray | None = None  # (2,) closed loop: the measured position (world, less the shift)
 
 
 def floor_height(state: PlannerState, x: float, y: float) -> float:
@@ -317,7 +327,15 @@ def _plan_foothold(robot, state: PlannerState, P: dict, i: int, phase_: float) -
     t_stance = float(touchdown[2]["duty"]) * float(touchdown[2]["period"])  # the gait's at touch-down
     ahead = [to_touchdown + t_stance * k / CHECKS for k in range(CHECKS + 1)]
     future = predict(state, ahead)
+    offset = np.zeros(2)  # closed loop: where the body will be, from its measured position and velocity
+    if state.p_measured is not None:
+        offset = np.asarray(state.p_measured, dtype=np.float64) - (state.x, state.y)
+        if state.v_measured is not None:
+            c0, s0 = math.cos(state.psi), math.sin(state.psi)
+            now = (c0 * state.v[0] - s0 * state.v[1], s0 * state.v[0] + c0 * state.v[1])
+            offset = offset + (np.asarray(state.v_measured, dtype=np.float64) - now) * to_touchdown
     (x, y, psi, _, _), _, _ = future[0]
+    x, y = x + offset[0], y + offset[1]
     _, v_mid, w_mid = future[CHECKS // 2][0][2:]
     c, s = math.cos(psi), math.sin(psi)
     nominal = P["stance"][i]
@@ -329,6 +347,9 @@ def _plan_foothold(robot, state: PlannerState, P: dict, i: int, phase_: float) -
         p_nominal, r, velocity, measured, w_mid, t_stance, float(P["hip_height"]), float(P["capture_gain"])
     )
     p[2] = nominal[2] + floor_height(state, p[0], p[1])
+    if state.ground_offsets is not None:
+        p[2] += float(state.ground_offsets[i])
+        p_nominal[2] += float(state.ground_offsets[i])
     poses = []
     for (px, py, ppsi, _, _), theta, Pf in future:
         phases = [frac(theta + o) for o in Pf["offsets"]]
@@ -336,7 +357,10 @@ def _plan_foothold(robot, state: PlannerState, P: dict, i: int, phase_: float) -
         zero = {key: np.zeros_like(value) for key, value in Pf.items()}
         delta, _ = _crawl_shift(Pf, zero, phases, rates)
         cp, sp = math.cos(ppsi), math.sin(ppsi)
-        px, py = px + cp * delta[0] - sp * delta[1], py + sp * delta[0] + cp * delta[1]
+        px, py = (
+            px + cp * delta[0] - sp * delta[1] + offset[0],
+            py + sp * delta[0] + cp * delta[1] + offset[1],
+        )
         z = float(Pf["height"]) + floor_height(state, px, py)
         poses.append(body_transform(body_pose(px, py, z, ppsi, state.attitude)))
     seed = None if state.q is None else state.q[_leg_columns(robot)[i]]

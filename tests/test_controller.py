@@ -1,0 +1,161 @@
+"""sk.GaitController without the simulator: its gains come from the robot's own inertias, a tick's
+command holds the robot (the stance forces carry the weight), a batch of robots is each robot alone,
+and bad input gets a clear answer. The walks themselves are in tests/test_walk.py."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+import spotkin as sk
+from spotkin.motion import JointCommand, RobotState
+from spotkin.motion import controller as ctl
+from spotkin.reference import gait as ref
+
+GO2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+
+
+def standing(robot, **changes) -> RobotState:
+    gait = sk.Gait("trot").resolve(robot)
+    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
+    values = {
+        "position": pose[:3],
+        "quaternion": np.array([0.0, 0.0, 0.0, 1.0]),
+        "linear_velocity": np.zeros(3),
+        "angular_velocity": np.zeros(3),
+        "q": robot.body_ik(pose, gait.stance).q,
+        "qd": np.zeros(3 * robot.n_legs),
+        "contact": np.ones(robot.n_legs, dtype=bool),
+    }
+    values.update(changes)
+    return RobotState(**values)
+
+
+@pytest.mark.parametrize("robot", [GO2, sk.Spot()], ids=["go2", "spot"])
+def test_the_gains_come_from_the_legs_inertias(robot):
+    controller = sk.GaitController(robot)
+    gait = sk.Gait("trot").resolve(robot)
+    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
+    A = robot.floating_base.mass_matrix(robot.floating_q(pose, robot.body_ik(pose, gait.stance).q))
+    inertia = np.diag(A)[6 : 6 + 3 * robot.n_legs]
+    for kappa, kp, kd in (
+        (ctl.SWING_BANDWIDTH, controller.kp, controller.kd),
+        (ctl.STANCE_BANDWIDTH, controller.stance_kp, controller.stance_kd),
+    ):
+        omega = kappa * math.sqrt(ref.G / gait.hip_height)
+        np.testing.assert_allclose(kp, inertia * omega**2, rtol=1e-12)
+        np.testing.assert_allclose(kd, 2.0 * ctl.DAMPING_RATIO * inertia * omega, rtol=1e-12)
+    assert (controller.stance_kp < controller.kp).all()
+    np.testing.assert_array_equal(
+        controller.effort, [robot.model.joint(j.name).effort for j in _joints(robot)]
+    )
+
+
+def _joints(robot):
+    actuated = robot.model.actuated_joints
+    index = robot.q_from_names([j.name for j in actuated], np.arange(len(actuated), dtype=float))
+    return [actuated[int(k)] for k in index]
+
+
+def test_a_standing_tick_holds_the_robot():
+    controller = sk.GaitController(GO2)
+    state = standing(GO2)
+    command = controller.step(0.0, state, velocity=(0.2, 0.0, 0.0))
+    assert isinstance(command, JointCommand)
+    assert command.q.shape == command.qd.shape == command.tau.shape == (12,)
+    assert command.contact.tolist() == [True] * 4  # the start: every foot down while the body settles
+    np.testing.assert_allclose(command.q, state.q, atol=1e-6)  # the reference is where the robot is
+    last = controller.last
+    weight = GO2.mass * ref.G
+    np.testing.assert_allclose(last["forces"].sum(axis=0), [0.0, 0.0, weight], atol=1e-3 * weight)
+    assert last["margin"] > 0 and last["status"] == 0 and not last["clipped"].any()
+    # the feedforward: each leg's gravity torques less J^T f of its stance force
+    pose = np.r_[state.position, state.quaternion]
+    gravity = GO2.floating_base.gravity(GO2.floating_q(pose, state.q))[6:18]
+    J = GO2.body_jacobian(pose, state.q)[:, 6:]
+    np.testing.assert_allclose(command.tau, gravity - J.T @ last["forces"].ravel(), atol=1e-9)
+
+
+def test_a_batch_of_robots_is_each_robot_alone():
+    states = [standing(GO2, position=np.array([0.1 * k, 0.0, 0.3408])) for k in range(3)]
+    batch = RobotState(
+        *(
+            np.stack([getattr(s, f) for s in states])
+            for f in ("position", "quaternion", "linear_velocity", "angular_velocity", "q", "qd", "contact")
+        )
+    )
+    velocity = np.array([[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.3]])
+    together = sk.GaitController(GO2)
+    alone = [sk.GaitController(GO2) for _ in range(3)]
+    for tick in range(40):
+        t = tick / 500
+        command = together.step(t, batch, velocity)
+        for k in range(3):
+            single = alone[k].step(t, states[k], velocity[k])
+            np.testing.assert_array_equal(command.q[k], single.q)
+            np.testing.assert_array_equal(command.tau[k], single.tau)
+    assert command.q.shape == (3, 12) and command.contact.shape == (3, 4)
+    assert len(together.last) == 3
+    with pytest.raises(ValueError, match="reset"):
+        together.step(1.0, states[0])
+    together.reset()
+    assert together.last is None
+    together.step(1.0, states[0])
+
+
+def test_bad_input_gets_a_clear_answer():
+    controller = sk.GaitController(GO2)
+    state = standing(GO2)
+    with pytest.raises(ValueError, match="q must be finite"):
+        controller.step(0.0, standing(GO2, q=np.full(12, np.nan)))
+    with pytest.raises(ValueError, match="velocity must be finite"):
+        controller.step(0.0, state, velocity=(np.nan, 0.0, 0.0))
+    with pytest.raises(ValueError, match="velocity"):
+        controller.step(0.0, state, velocity=(0.1, 0.0))
+    with pytest.raises(ValueError, match="12 joints"):
+        controller.step(0.0, standing(GO2, q=np.zeros(9), qd=np.zeros(9)))
+    with pytest.raises(TypeError, match="RobotState"):
+        controller.step(0.0, np.zeros(12))
+    controller.step(1.0, state)
+    with pytest.raises(ValueError, match="backwards"):
+        controller.step(0.5, state)
+    with pytest.raises(ValueError, match="unknown gait"):
+        controller.step(1.1, state, gait="canter")
+    with pytest.raises(ValueError, match="quadrupeds"):
+        sk.GaitController(sk.Robot.from_urdf_string(_biped()))
+    with pytest.raises(TypeError, match=r"spotkin\.Robot"):
+        sk.GaitController(GO2.legs[0])
+    with pytest.raises(ValueError, match="rate"):
+        sk.GaitController(GO2, rate=-1.0)
+    with pytest.raises(ValueError, match="attitude"):
+        sk.GaitController(GO2, attitude=(np.nan, 0.0))
+
+
+def _biped() -> str:
+    from test_sim import quadruped_urdf
+
+    return quadruped_urdf(0.1, 2.0, 3.0, legs=2)
+
+
+def test_a_tick_costs_under_two_milliseconds():
+    """The controller's cost per tick, one robot from Python (the figure the docs quote, with room for a
+    slow machine): a second of walking at 500 Hz, the robot following the plan exactly."""
+    controller = sk.GaitController(GO2)
+    state = standing(GO2)
+    controller.step(0.0, state, velocity=(0.2, 0.0, 0.0))
+    start = time.perf_counter()
+    for tick in range(1, 501):
+        command = controller.step(
+            tick / 500, state.replace(q=command_q(controller)), velocity=(0.2, 0.0, 0.0)
+        )
+    cost = (time.perf_counter() - start) / 500
+    assert np.isfinite(command.tau).all()
+    assert cost < 2e-3, f"{1e3 * cost:.2f} ms per tick"
+
+
+def command_q(controller):
+    """The last planned targets (the robot following them exactly)."""
+    return controller._memories[0].q
