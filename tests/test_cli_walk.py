@@ -39,7 +39,7 @@ def test_a_walk_prints_its_figures_and_writes_its_pictures(tmp_path):
         assert line in out, out
     assert "h = 0.341 m" in out and "trot" in out
     written = sorted(path.name for path in tmp_path.iterdir())
-    assert written == ["go2_description_foot_paths.png", "go2_description_gait.png"], written
+    assert written == ["go2_foot_paths.png", "go2_gait.png"], written
 
 
 def test_spot_walks_from_the_command_line():

@@ -159,3 +159,45 @@ def test_a_tick_costs_under_two_milliseconds():
 def command_q(controller):
     """The last planned targets (the robot following them exactly)."""
     return controller._memories[0].q
+
+
+def _legs_at(robot, pose, feet):
+    q = robot.body_ik(pose, feet).q
+    names = list(robot.leg_joint_names)
+    cols = [[names.index(j) for j in leg.joint_names] for leg in robot.legs]
+    J = robot.body_jacobian(pose, q)[:, 6:]
+    jac = [J[3 * i : 3 * i + 3][:, c] for i, c in enumerate(cols)]
+    gravity = robot.floating_base.gravity(robot.floating_q(pose, q))[6 : 6 + 3 * robot.n_legs]
+    return q, cols, jac, [gravity[c] for c in cols]
+
+
+def test_the_stance_forces_carry_a_wrench_and_the_torque_weighted_ones_spare_the_motors():
+    """(W) with a wrench: the feet carry the weight plus the wrench's force exactly, its moment in the
+    least-squares sense. (T): with three feet or more the same wrench (vertical force and moments
+    exactly), the joints further from their limits than (W)'s, with the feet displaced as in a stride."""
+    spot = sk.Spot()
+    gait = sk.Gait("trot").resolve(spot)
+    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
+    feet = gait.stance + np.array([[0.12, 0, 0], [-0.12, 0, 0], [0.12, 0, 0], [-0.12, 0, 0]])
+    q, _, jac, gravity = _legs_at(spot, pose, feet)
+    com = spot.center_of_mass(pose, q)
+    wrench = np.array([10.0, -5.0, 20.0, 1.0, 2.0, -0.5])
+    down = np.ones(4, dtype=bool)
+    forces, residual = ref.stance_forces(feet, down, com, spot.mass, (0, 0, -ref.G), wrench)
+    np.testing.assert_allclose(forces.sum(axis=0), [10.0, -5.0, 20.0 + spot.mass * ref.G], atol=1e-9)
+    np.testing.assert_allclose(residual, 0.0, atol=1e-8)  # four feet: every moment balances
+    limits = [[45.0, 45.0, 115.0]] * 4
+    weighted, rest = ref.torque_weighted_forces(
+        feet, down, com, spot.mass, jac, gravity, limits, gait.hip_height, wrench
+    )
+    assert abs(rest[2]) < 1e-3 * spot.mass * ref.G and np.abs(rest[3:]).max() < 1e-2 * spot.mass * ref.G
+    assert np.abs(rest[:2]).max() < 0.1 * spot.mass * ref.G  # the softer horizontal rows
+
+    def worst(f):
+        return max(np.abs((gravity[i] - jac[i].T @ f[i]) / limits[i]).max() for i in range(4))
+
+    assert worst(weighted) < worst(forces)
+    # a foot that would have to pull is unloaded
+    two = np.array([True, False, False, True])
+    weighted, _ = ref.torque_weighted_forces(feet, two, com, spot.mass, jac, gravity, limits, gait.hip_height)
+    assert (weighted[~two] == 0).all() and (weighted[two, 2] > 0).all()

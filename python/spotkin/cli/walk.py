@@ -65,9 +65,9 @@ def walk(
     command = np.asarray(velocity, dtype=np.float64)
     result = sim.run(robot, recorder, duration=duration, rate=rate, velocity=command, ramp=1.0)
     m = result.metrics
-    name = robot.name or os.path.splitext(os.path.basename(source))[0]
+    name = os.path.splitext(os.path.basename(source))[0]  # the pictures' prefix: spot, go2, robot.urdf's
     print(
-        f"{name}: {robot.mass:.1f} kg, h = {h:.3f} m; {gait} at ({command[0]:+.3f} m/s, "
+        f"{robot.name or name}: {robot.mass:.1f} kg, h = {h:.3f} m; {gait} at ({command[0]:+.3f} m/s, "
         f"{command[1]:+.3f} m/s, {command[2]:+.3f} rad/s) for {duration:g} s at {rate:g} Hz, on flat ground"
     )
     vx, vy, wz = m.velocity
@@ -106,7 +106,8 @@ def walk(
 def write_walk_plots(folder: str, robot, name: str, result, planned, dpi: int = 100) -> list[str]:
     """The walk's gait diagram (the last 3 s: planned stance and measured contacts) and its foot paths
     in side view over the legs' workspaces, as ``NAME_gait.png`` and ``NAME_foot_paths.png`` in
-    ``folder``; ImportError naming the plot extra without matplotlib."""
+    ``folder`` (NAME: the robot argument's file name without its extension, or spot, go2); ImportError
+    naming the plot extra without matplotlib."""
     try:
         plot = _plotting()
     except ImportError:

@@ -57,14 +57,15 @@ Support margin, stance forces
 (T)  torque-weighted forces (a closed loop's): the forces on the loaded feet that minimise
          alpha |S (A f - b)|^2 + sum_l |(G_l - J_l^T f_l) / tau_max,l|^2 + eps |f / (m g)|^2,
      A f = [sum f_j; sum (p_j - c) x f_j] the wrench of the forces, b = [-m g + F_w; M_w] the one
-     wanted (W), S = diag(1 / (m g) I_3, 1 / (m g h) I_3) its scale, alpha = 1e4 (the wrench first),
-     eps = 1e-6; G_l and J_l as in (W), tau_max,l the joints' effort limits. Among the forces that
-     give the wrench (exactly when the feet can: three feet or more), the ones that keep the joint
-     torques smallest against their limits: a foot displaced from under its hip then pushes along
-     its leg rather than straight up (the hip's torque falls, the other feet take the horizontal
-     force). One linear solve (normal equations); a foot whose force would pull (f_z < 0) is
-     unloaded and the rest solved again; a joint above 0.9 of its limit gets three times the weight
-     and the forces are solved again (at most three times).
+     wanted (W), S = diag(sqrt(beta) / (m g), sqrt(beta) / (m g), 1 / (m g), 1 / (m g h) I_3) its
+     scale, alpha = 1e4 (the wrench first), beta = 1e-2 (the horizontal force softer: a tenth of the
+     weight missed costs as much as a joint at its limit), eps = 1e-6; G_l and J_l as in (W),
+     tau_max,l the joints' effort limits. Among the forces that give the wrench (the vertical force
+     and the moments exactly when the feet can: three feet or more), the ones that keep the joint
+     torques smallest against their limits: a foot displaced from under its hip pushes partly along
+     its leg rather than straight up (the hip's torque falls; the body's speed then swings a little
+     within a step, as an inverted pendulum's does). One linear solve (normal equations); a foot
+     whose force would pull (f_z < 0) is unloaded and the rest solved again.
 
 The crawl's body sway
 ---------------------
@@ -93,12 +94,9 @@ OK = 0
 TORQUE_ALPHA = 1e4
 """alpha of (T): the weight of the wrench against the torques."""
 TORQUE_HORIZONTAL = 1e-2
-"""beta of (T): the horizontal force's rows weigh beta alpha."""
+"""beta of (T): the horizontal force's rows weigh beta alpha (the vertical force and the moments alpha)."""
 TORQUE_EPS = 1e-6
 """eps of (T): the forces' own (regularising) weight."""
-TORQUE_NEAR, TORQUE_BOOST, TORQUE_ROUNDS = 0.9, 3.0, 0
-"""(T): a joint above TORQUE_NEAR of its limit weighs TORQUE_BOOST times more, for up to TORQUE_ROUNDS
-more solves."""
 BISECTIONS = 30
 """Bisection steps of (B) (the foothold's lambda, 1e-9 of the step)."""
 
@@ -329,8 +327,6 @@ def torque_weighted_forces(feet, loaded, com, mass, jacobians, gravity_torques, 
         b = b + np.asarray(wrench, dtype=np.float64)
     down = [j for j in range(n) if loaded[j]]
     forces = np.zeros((n, 3))
-    emphasis = np.ones((n, 3))  # a joint near its limit weighs more, solve after solve
-    rounds = 0
     while True:
         k = len(down)
         if k == 0:
@@ -341,7 +337,7 @@ def torque_weighted_forces(feet, loaded, com, mass, jacobians, gravity_torques, 
         for slot, j in enumerate(down):
             A[:3, 3 * slot : 3 * slot + 3] = np.eye(3)
             A[3:, 3 * slot : 3 * slot + 3] = _skew(feet[j] - com)
-            scale = emphasis[j] / np.asarray(limits[j], dtype=np.float64)
+            scale = 1.0 / np.asarray(limits[j], dtype=np.float64)
             D[3 * slot : 3 * slot + 3, 3 * slot : 3 * slot + 3] = scale[:, None] * np.asarray(jacobians[j]).T
             g[3 * slot : 3 * slot + 3] = scale * np.asarray(gravity_torques[j], dtype=np.float64)
         S2 = np.r_[np.full(3, 1.0 / weight**2), np.full(3, 1.0 / (weight * h) ** 2)]
@@ -349,15 +345,9 @@ def torque_weighted_forces(feet, loaded, com, mass, jacobians, gravity_torques, 
         H = TORQUE_ALPHA * A.T @ (S2[:, None] * A) + D.T @ D + np.eye(3 * k) * (TORQUE_EPS / weight**2)
         f = np.linalg.solve(H, TORQUE_ALPHA * A.T @ (S2 * b) + D.T @ g)
         pulling = [j for slot, j in enumerate(down) if f[3 * slot + 2] < 0.0]
-        if pulling:
-            down = [j for j in down if j not in pulling]
-            continue
-        tau = (g - D @ f).reshape(k, 3)  # (G - J^T f) / tau_max, times the emphasis
-        near = np.abs(tau) / emphasis[down] > TORQUE_NEAR
-        if rounds >= TORQUE_ROUNDS or not near.any():
+        if not pulling:
             break
-        rounds += 1
-        emphasis[down] *= np.where(near, TORQUE_BOOST, 1.0)
+        down = [j for j in down if j not in pulling]
     for slot, j in enumerate(down):
         forces[j] = f[3 * slot : 3 * slot + 3]
     return forces, b - A @ f
