@@ -11,12 +11,9 @@ import spotkin as sk
 from spotkin.motion import JointCommand, RobotState
 
 from .entry import register
+from .gait import _arg, attitude_slot
 from .outputs import describe
-from .slots import ACCEPT, REJECT, Arg, Custom, Real
-
-
-def _arg(value, expect=ACCEPT, why=""):
-    return lambda c, r, b: Arg(value, expect, why)
+from .slots import REJECT, Arg, Custom, Real
 
 
 def standing_state(robot, **changes) -> RobotState:
@@ -104,16 +101,7 @@ def controller_entries():
         },
         default="omit",
     )
-    attitude = Custom(
-        "attitude",
-        {
-            "valid": _arg((0.05, -0.03)),
-            "nan": _arg((math.nan, 0.0), REJECT, "value"),
-            "wrong_shape": _arg((0.0, 0.0, 0.0), REJECT, "value"),
-            "str": _arg("flat", REJECT, "type"),
-        },
-        default="omit",
-    )
+    attitude = attitude_slot()
     register(
         name="GaitController",
         covers="spotkin.GaitController",

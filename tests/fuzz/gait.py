@@ -24,6 +24,20 @@ def _arg(value, expect=ACCEPT, why=""):
     return lambda c, r, b: Arg(value, expect, why)
 
 
+def attitude_slot():
+    """The (roll, pitch) a plan or a controller holds, valid or not (shared with fuzz/controller.py)."""
+    return Custom(
+        "attitude",
+        {
+            "valid": _arg((0.05, -0.03)),
+            "nan": _arg((math.nan, 0.0), REJECT, "value"),
+            "wrong_shape": _arg((0.0, 0.0, 0.0), REJECT, "value"),
+            "str": _arg("flat", REJECT, "type"),
+        },
+        default="omit",
+    )
+
+
 def _offsets_slot():
     return Custom(
         "offsets",
@@ -158,16 +172,7 @@ def gait_entries():
             "none": _arg(None, REJECT, "type"),
         },
     )
-    attitude = Custom(
-        "attitude",
-        {
-            "valid": _arg((0.05, -0.03)),
-            "nan": _arg((math.nan, 0.0), REJECT, "value"),
-            "wrong_shape": _arg((0.0, 0.0, 0.0), REJECT, "value"),
-            "str": _arg("flat", REJECT, "type"),
-        },
-        default="omit",
-    )
+    attitude = attitude_slot()
     for key, covers in (("go2", "spotkin.Robot.plan_gait"), ("spot", "spotkin.Spot.plan_gait")):
         register(
             name=f"{covers.split('.', 1)[1]}[{key}]",
