@@ -135,7 +135,7 @@ def test_bad_input_gets_a_clear_answer():
 
 
 def _biped() -> str:
-    from test_sim import quadruped_urdf
+    from urdf_helpers import quadruped_urdf
 
     return quadruped_urdf(0.1, 2.0, 3.0, legs=2)
 

@@ -16,64 +16,9 @@ import spotkin as sk
 
 mujoco = pytest.importorskip("mujoco")
 sim = pytest.importorskip("spotkin.sim")
+from urdf_helpers import quadruped_urdf  # noqa: E402
+
 from spotkin.motion import JointCommand  # noqa: E402
-
-
-def _box(mass: float, x: float, y: float, z: float) -> str:
-    ixx, iyy, izz = (mass * (b * b + c * c) / 12.0 for b, c in ((y, z), (x, z), (x, y)))
-    return f'<inertia ixx="{ixx}" iyy="{iyy}" izz="{izz}" ixy="0" ixz="0" iyz="0"/>'
-
-
-def quadruped_urdf(
-    segment: float, mass: float, effort: float, legs: int = 4, foot_sphere: float | None = None
-) -> str:
-    """A quadruped (or ``legs``: 2) of thigh and shank ``segment`` m and ``mass`` kg: boxes and rods, no
-    meshes, no collisions (but a foot sphere when ``foot_sphere``), a massless hip link on the small
-    robot (MuJoCo needs positive masses: the builder handles it)."""
-    L, parts = segment, []
-    body = 0.7 * mass
-    parts.append(
-        f'<link name="trunk"><inertial><origin xyz="0 0 0"/><mass value="{body}"/>'
-        f"{_box(body, 2.2 * L, 0.8 * L, 0.4 * L)}</inertial></link>"
-    )
-    parts.append('<link name="imu"/><joint name="imu_joint" type="fixed"><parent link="trunk"/>')
-    parts.append('<child link="imu"/><origin xyz="0.05 0 0.02"/></joint>')
-    leg = 0.3 * mass / 4
-    corners = [("fl", 1, 1), ("fr", 1, -1), ("hl", -1, 1), ("hr", -1, -1)][:legs]
-    for name, sx, sy in corners:
-        hip_mass = 0.0 if mass < 5 else 0.25 * leg
-        hip_inertial = (
-            ""
-            if hip_mass == 0.0
-            else f'<inertial><mass value="{hip_mass}"/>{_box(hip_mass, 0.3 * L, 0.3 * L, 0.3 * L)}</inertial>'
-        )
-        thigh, shank = 0.45 * leg, 0.3 * leg if hip_mass else 0.55 * leg
-        sphere = (
-            ""
-            if foot_sphere is None
-            else f'<collision><geometry><sphere radius="{foot_sphere}"/></geometry></collision>'
-        )
-        parts += [
-            f'<link name="{name}_hip">{hip_inertial}</link>',
-            f'<joint name="{name}_roll" type="revolute"><parent link="trunk"/><child link="{name}_hip"/>',
-            f'<origin xyz="{sx * 0.9 * L} {sy * 0.25 * L} 0"/><axis xyz="1 0 0"/>',
-            f'<limit lower="-0.6" upper="0.6" effort="{effort}" velocity="20"/></joint>',
-            f'<link name="{name}_thigh"><inertial><origin xyz="0 0 {-L / 2}"/><mass value="{thigh}"/>',
-            f"{_box(thigh, 0.15 * L, 0.15 * L, L)}</inertial></link>",
-            f'<joint name="{name}_pitch" type="revolute"><parent link="{name}_hip"/>',
-            f'<child link="{name}_thigh"/><origin xyz="0 {sy * 0.3 * L} 0"/><axis xyz="0 1 0"/>',
-            f'<limit lower="-1.5" upper="2.5" effort="{effort}" velocity="20"/></joint>',
-            f'<link name="{name}_shank"><inertial><origin xyz="0 0 {-L / 2}"/><mass value="{shank}"/>',
-            f"{_box(shank, 0.1 * L, 0.1 * L, L)}</inertial></link>",
-            f'<joint name="{name}_knee" type="revolute"><parent link="{name}_thigh"/>',
-            f'<child link="{name}_shank"/><origin xyz="0 0 {-L}"/><axis xyz="0 1 0"/>',
-            f'<limit lower="-2.6" upper="-0.3" effort="{effort}" velocity="20"/></joint>',
-            f'<link name="{name}_foot">{sphere}</link>',
-            f'<joint name="{name}_foot_joint" type="fixed"><parent link="{name}_shank"/>',
-            f'<child link="{name}_foot"/><origin xyz="0 0 {-L}"/></joint>',
-        ]
-    return '<robot name="test_quadruped">' + "".join(parts) + "</robot>"
-
 
 ROBOTS = {
     "spot": sk.Spot,

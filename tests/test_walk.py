@@ -23,7 +23,7 @@ import spotkin as sk
 
 mujoco = pytest.importorskip("mujoco")
 sim = pytest.importorskip("spotkin.sim")
-from test_sim import quadruped_urdf  # noqa: E402  (after the optional imports)
+from urdf_helpers import quadruped_urdf  # noqa: E402  (after the optional imports)
 
 DURATION = 10.0
 

@@ -14,6 +14,7 @@
 #include "binder.hpp"
 #include "dynamics_boundary.hpp"
 #include "numpy_boundary.hpp"
+#include "robot_statics.hpp"
 #include "spotkin/body.hpp"
 #include "spotkin/dynamics/robot_statics.hpp"
 #include "spotkin/parallel.hpp"
@@ -29,16 +30,6 @@ using binder::Out;
 
 // ---------------------------------------------------------------- a robot's statics
 
-// The robot: its legs (Body: leg l's joints are q's columns[l]), its floating model (the body, then
-// the legs' chains, then the arm's, in q's order) and its total mass. Held by reference: the
-// Python object keeps both alive.
-struct RobotStatics {
-  const Body& body;
-  const FloatingDynamics& floating;
-  double mass;
-  int n_arm;
-};
-
 struct StaticsCall {
   const RobotStatics& robot;
   EulerSequence seq;
@@ -52,18 +43,6 @@ dynamics::StaticsRows<T> statics_rows(const binder::Block<T>& b) {
                                 b.in[1], b.stride[1], b.shape[1] == 1};
   rows.stance = b.in[2], rows.stance_stride = b.stride[2];
   return rows;
-}
-
-// f(the robot with the active level's floating model)
-template <typename F>
-void on_robot(const RobotStatics& r, std::ptrdiff_t samples, F&& f) {
-  with_model<double>(
-      r.floating,
-      [&](const auto& model) {
-        f(dynamics::RobotStaticsModel<std::decay_t<decltype(model)>>{r.body, model, r.mass,
-                                                                     r.n_arm});
-      },
-      samples);
 }
 
 // body_pose (any form) and q (..., 3 n_legs [+ n_arm]).

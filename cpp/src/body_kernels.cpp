@@ -12,6 +12,13 @@ SPOTKIN_CLONES((template <typename T>), void, body_ik,
                (body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback),
   body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback);
 )
+SPOTKIN_CLONES((template <typename T>), void, body_ik_path,
+               (const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                const T* feet, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n,
+                bool nearest_fallback),
+               (body, poses, format, seq, feet, seed, q, status, n, nearest_fallback),
+               body_batch::ik_path(body, poses, format, seq, feet, seed, q, status, n,
+                                   nearest_fallback);)
 SPOTKIN_CLONES((template <typename T>), void, body_fk,
                (const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq, const T* q, T* feet,
                 std::ptrdiff_t n),
@@ -25,13 +32,15 @@ SPOTKIN_CLONES((template <typename T>), void, body_jacobian,
   body_batch::jacobian(body, poses, format, seq, q, J, n);
 )
 
-#define SPOTKIN_INSTANTIATE(T)                                                                                 \
-  template void body_ik<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&, const T*, bool,        \
-                           const T*, T*, std::int8_t*, std::ptrdiff_t, bool);                                  \
-  template void body_fk<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&, const T*, T*,          \
-                           std::ptrdiff_t);                                                                    \
-  template void body_jacobian<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&, const T*, T*,    \
-                                 std::ptrdiff_t);
+#define SPOTKIN_INSTANTIATE(T)                                                                    \
+  template void body_ik<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&, const T*, \
+                           bool, const T*, T*, std::int8_t*, std::ptrdiff_t, bool);               \
+  template void body_ik_path<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&,      \
+                                const T*, const T*, T*, std::int8_t*, std::ptrdiff_t, bool);      \
+  template void body_fk<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&, const T*, \
+                           T*, std::ptrdiff_t);                                                   \
+  template void body_jacobian<T>(const Body&, const T*, BodyPoseFormat, const EulerSequence&,     \
+                                 const T*, T*, std::ptrdiff_t);
 SPOTKIN_INSTANTIATE(float)
 SPOTKIN_INSTANTIATE(double)
 #undef SPOTKIN_INSTANTIATE

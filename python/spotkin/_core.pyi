@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'plan_gait', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -288,6 +288,10 @@ def paul_type6(W: typing.Any, X: typing.Any, Y: typing.Any, Z1: typing.Any, Z2: 
     ...
 def pinv(J: typing.Any) -> typing.Any:
     ...
+def plan_gait(robot: RobotStatics, gait: typing.Any, velocity: typing.Any, attitude: typing.Any, ticks: typing.SupportsInt | typing.SupportsIndex, rate: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+    """
+    Plans of a quadruped's walk for commands (B, 3): (pose, feet, contact, q, qd, tau, status, margin, shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,).
+    """
 def rank(J: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> typing.Any:
     ...
 def set_isa(level: str) -> None:

@@ -361,6 +361,83 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   }
 }
 
+// Whole-body IK along a path (double): pose k seeded with the answer at pose k - 1, pose 0 with
+// `seed` (null: unseeded). Each leg's running seed takes its last finite joints (a leg without an
+// answer keeps the seed it had), so the branch never flips while an answer exists. Answers and
+// statuses are those of ik() called pose by pose with these seeds: every slot of a block is solved
+// in lanes (OpenTargets), then chosen in order.
+template <typename T>
+SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat format,
+                            const EulerSequence& seq, const T* feet, const T* seed, T* q,
+                            std::int8_t* status, std::ptrdiff_t count,
+                            bool nearest_fallback = true) noexcept {
+  const std::ptrdiff_t stride =
+      format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  using C = leg_batch::Compute<T>;
+  const int n = body.n_legs(), w = body.width();
+  const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
+  BlockPoses<C> P;
+  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock],
+      exists[kBlock], ok[kBlock];
+  leg_batch::OpenTargets<C> open;
+  T running[3 * Body::kMaxLegs];  // each leg's seed, in its own three slots
+  bool seeded = seed != nullptr;
+  if (seeded)
+    for (int l = 0; l < n; ++l)
+      for (int j = 0; j < 3; ++j)
+        running[3 * l + j] = seed[body.columns[std::size_t(l)][std::size_t(j)]];
+  for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
+    const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    read_poses(poses + stride * b0, format, seq, stride, m, P);
+    const std::ptrdiff_t padded = leg_batch::padded_count<C>(m);
+    for (std::ptrdiff_t k = m; k < padded; ++k) {
+      for (int r = 0; r < 9; ++r) P.R[r][k] = P.R[r][m - 1];
+      for (int r = 0; r < 3; ++r) P.t[r][k] = P.t[r][m - 1];
+    }
+    const bool block_seeded = seeded;
+    for (int l = 0; l < n; ++l) {
+      const Leg& leg = body.legs[std::size_t(l)];
+      const std::array<int, 3>& col = body.columns[std::size_t(l)];
+      for (std::ptrdiff_t i = 0; i < m; ++i) {
+        const T* f = feet + 3 * n * (b0 + i) + 3 * l;
+        fx[i] = C(f[0]), fy[i] = C(f[1]), fz[i] = C(f[2]);
+      }
+      leg_batch::pad_block(fx, fy, fz, m);
+      const std::array<double, 3>& hip = body.hips[std::size_t(l)];
+      const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
+      leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol, limit_tol);
+      open.count = 0;
+      for (std::ptrdiff_t i = 0; i < m; ++i)
+        if (P.ok[i] != C(0) && exists[i] >= C(0)) open.add(i, x[i], y[i], z[i]);
+      open.solve(leg, tol, limit_tol);
+      T* sd = running + 3 * l;
+      bool leg_seeded = block_seeded;
+      for (std::ptrdiff_t i = 0, k = 0; i < m; ++i) {
+        const std::ptrdiff_t t = b0 + i;
+        T* qt = q + w * t;
+        T leg_q[3];
+        std::int8_t st;
+        const bool solved = k < open.count && open.index[k] == i;
+        if (!solved ||
+            (leg_seeded && !leg_batch::finite3(sd))) {  // as ik(): an invalid pose, target or seed
+          leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
+          st = std::int8_t(Status::InvalidInput);
+        } else {
+          st = std::int8_t(open.choose(leg, k, leg_seeded ? sd : nullptr, leg_q, nearest_fallback));
+        }
+        k += solved;
+        qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
+        status[n * t + l] = st;
+        for (int j = 0; j < 3;
+             ++j)  // the next seed: the last finite joints (all of them at the first pose)
+          if (!leg_seeded || std::isfinite(double(leg_q[j]))) sd[j] = leg_q[j];
+        leg_seeded = true;
+      }
+    }
+    seeded = true;
+  }
+}
+
 // (B1): world foot positions (count, n, 3).
 template <typename T>
 SPOTKIN_INLINE void fk(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,

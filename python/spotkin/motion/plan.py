@@ -1,7 +1,8 @@
 """Gait plans: :meth:`spotkin.Robot.plan_gait` and its result, :class:`GaitPlan`.
 
-The plan is computed by the pure-Python reference planner (:mod:`spotkin.reference.gait_plan`), one
-command at a time; a compiled planner, checked against it sample by sample, will take its place.
+The plan is computed by the compiled planner (``_core.plan_gait``, cpp/src/gait_plan.cpp): every
+command of a batch on the threads, each one's ticks in order. It mirrors the pure-Python reference
+(:mod:`spotkin.reference.gait_plan`), which the tests compare it with sample by sample.
 ``Robot.plan_gait`` is defined in :mod:`spotkin.model.robot` and calls through the registry that this
 module fills on import (the model layer may not import motion, which sits above it).
 """
@@ -13,9 +14,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import _core
 from .._support.boundary import as_real, as_scalar, check_trailing
 from ..model import robot as robot_module
-from ..reference import gait_plan
+from ..reference.gait_plan import KEYS
 from .gait import Gait
 
 __all__ = ["GaitPlan"]
@@ -56,10 +58,15 @@ class GaitPlan(NamedTuple):
     of mass (N m)], world axes: the weight's moment about the line of two feet in a trot, say."""
 
 
+def gait_numbers(resolved) -> np.ndarray:
+    """A resolved gait's numbers (44,) as the compiled planner takes them: the blended numbers of the
+    reference planner (``spotkin.reference.gait_plan.KEYS``), each flattened, in that order."""
+    return np.concatenate([np.ravel(np.asarray(getattr(resolved, key), dtype=np.float64)) for key in KEYS])
+
+
 def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
-    """The reference path of :meth:`spotkin.Robot.plan_gait`: checks the arguments, resolves the gait, and
-    runs :func:`spotkin.reference.gait_plan.plan` once per command (a plain Python loop over ticks and
-    commands). A compiled planner over commands x ticks will replace it."""
+    """:meth:`spotkin.Robot.plan_gait`: checks the arguments, resolves the gait, and runs the compiled
+    planner over the commands (..., 3), one plan each."""
     if isinstance(gait, str):
         gait = Gait(gait)
     if not isinstance(gait, Gait):
@@ -79,15 +86,12 @@ def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
     if attitude.shape != (2,) or not np.isfinite(attitude).all():
         raise ValueError(f"attitude must be finite (roll, pitch), got {attitude.tolist()}")
     resolved = gait.resolve(robot)
-    commands = velocity.reshape(-1, 3)
-    runs = [
-        gait_plan.plan(robot, resolved, command, duration, rate, attitude=tuple(attitude))
-        for command in (commands if len(commands) else np.zeros((1, 3)))  # none: one for the shapes
-    ]
-    fields = {"t": runs[0]["t"]}
-    for name in GaitPlan._fields[1:]:
-        stacked = np.stack([run[name] for run in runs])[: len(commands)]
-        fields[name] = stacked.reshape(*lead, *stacked.shape[1:])
+    ticks = round(duration * rate) + 1
+    commands = np.ascontiguousarray(velocity.reshape(-1, 3))
+    arrays = _core.plan_gait(robot._statics, gait_numbers(resolved), commands, attitude, ticks, rate)
+    fields = {"t": np.arange(ticks) / rate}
+    for name, array in zip(GaitPlan._fields[1:], arrays):
+        fields[name] = array.reshape(*lead, *array.shape[1:])
     return GaitPlan(**fields)
 
 

@@ -16,6 +16,13 @@ template <typename T>
 void body_ik(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq, const T* feet,
              bool feet_shared, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n, bool nearest_fallback);
 
+// body_ik along a path (body_batch::ik_path): pose k seeded with pose k - 1's answer, pose 0 with
+// seed (null: unseeded); feet (n, legs, 3).
+template <typename T>
+void body_ik_path(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                  const T* feet, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n,
+                  bool nearest_fallback);
+
 // Body poses (n, width) and q (n, 3 legs) -> the feet in the world frame (n, legs, 3).
 template <typename T>
 void body_fk(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq, const T* q, T* feet,

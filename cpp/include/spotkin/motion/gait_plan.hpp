@@ -1,0 +1,113 @@
+// The gait planner: a quadruped's walk, one command at a time, tick by tick. It mirrors the
+// pure-Python reference (python/spotkin/reference/gait_plan.py, whose numbered steps and lettered
+// formulas (P), (Q), (S), (F), (B), (C) are cited here; docs/guide/walking.md explains them):
+//   advance()  steps 1-4: the gait's blend, the clock, the ramped planar motion, the latched
+//              contacts and, at a lift-off, the foothold (Raibert, bounded by the leg's reach);
+//   sample()   a tick's body pose, feet, contacts and twist.
+// plan_command() runs them over every tick of one command, then solves the whole-body IK along the
+// path (each tick seeded with the previous one), the joint velocities and the standing statics.
+// Everything is double; a command's ticks are sequential, commands are independent (threads).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "spotkin/body.hpp"
+#include "spotkin/dynamics/robot_statics.hpp"
+
+namespace spotkin::motion {
+
+constexpr int kLegs = 4;  // quadrupeds
+
+// The resolved gait's numbers that blend (reference KEYS), flattened in this order.
+enum GaitSlot : int {
+  kPeriod = 0,
+  kDuty = 1,
+  kOffsets = 2,                      // (4,)
+  kStepHeight = kOffsets + kLegs,    // 6
+  kHeight,                           // 7: the body's height above the ground
+  kHipHeight,                        // 8: h, the speed and length scale
+  kStance,                           // 9: (4, 3) the nominal feet, body frame (z: above the ground)
+  kComShift = kStance + 3 * kLegs,   // 21: w, the crawl's shift weight
+  kShift,                            // 22: (2,) s0
+  kSway = kShift + 2,                // 24: (4, 2) (X_i, Y_i) of (C)
+  kCaptureGain = kSway + 2 * kLegs,  // 32
+  kAccel,                            // 33
+  kYawAccel,                         // 34
+  kStepReach,                        // 35: (4, 2) rho per axis
+  kMoving = kStepReach + 2 * kLegs,  // 43
+  kGaitNumbers                       // 44
+};
+
+struct GaitNumbers {
+  double v[kGaitNumbers] = {};
+  double operator[](int k) const noexcept { return v[k]; }
+  double& operator[](int k) noexcept { return v[k]; }
+};
+
+constexpr double kLiftoffFraction = 0.75;  // LIFTOFF_FRACTION
+constexpr int kPredictionSteps = 16;       // PREDICTION_STEPS
+constexpr int kChecks = 4;                 // CHECKS
+constexpr double kStepFit = 0.8;           // STEP_FIT
+constexpr int kBisections = 30;            // BISECTIONS of (B)
+constexpr double kGravity = 9.81;          // G
+
+// Everything the planner remembers between ticks (reference PlannerState).
+struct PlannerState {
+  double t = 0, theta = 0, clock_rate = 0;
+  double x = 0, y = 0, psi = 0, v[2] = {0, 0}, w = 0;
+  double command[3] = {0, 0, 0};
+  double roll = 0, pitch = 0;
+  GaitNumbers old_numbers, new_numbers;
+  double t0 = 0, duration = 0;
+  bool contact[kLegs] = {};
+  double cycles[kLegs] = {};  // floor(theta + o_i), integral values
+  double lift_phase[kLegs] = {}, lift_height[kLegs] = {};
+  double p_stance[kLegs][3] = {}, p_touchdown[kLegs][3] = {};
+  bool step_shortened[kLegs] = {};
+  double speed_scale = 1;
+  // closed-loop inputs (a controller's; absent in a plan)
+  bool has_v_measured = false, has_ground = false, has_ground_offsets = false,
+       has_p_measured = false;
+  double v_measured[2] = {0, 0}, ground[3] = {0, 0, 0}, ground_offsets[kLegs] = {},
+         p_measured[2] = {0, 0};
+};
+
+// One tick's kinematic outputs (reference sample, before the IK).
+struct TickKinematics {
+  double pose[6];  // [x, y, z, a, b, c], Euler "XYZ"
+  double feet[kLegs][3], feet_rate[kLegs][3];
+  bool contact[kLegs];
+  double linear[3], angular[3];  // the body's twist, world axes
+  bool shortened;
+};
+
+void start(const GaitNumbers& gait, const double command[3], const double attitude[2],
+           PlannerState& s) noexcept;
+// A new gait (blended from now) and / or a new command; either may be null.
+void change(PlannerState& s, const GaitNumbers* gait, const double* command) noexcept;
+void advance(const Body& body, PlannerState& s, double dt) noexcept;
+void sample(const PlannerState& s, TickKinematics& out) noexcept;
+
+// One command's plan over `ticks` ticks t_k = k / rate, written at row k of each output:
+// pose (6), feet (4, 3), contact (4), q (12), qd (12), tau (12), status, margin, shortened,
+// residual (6). q is in the body's column order (the robot's leg joint order).
+struct PlanRows {
+  double* pose;
+  double* feet;
+  bool* contact;
+  double* q;
+  double* qd;
+  double* tau;
+  std::int8_t* status;
+  double* margin;
+  bool* shortened;
+  double* residual;
+};
+
+template <typename Model>
+void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait,
+                  const double command[3], const double attitude[2], std::ptrdiff_t ticks,
+                  double rate, const PlanRows& out);
+
+}  // namespace spotkin::motion

@@ -1,0 +1,523 @@
+// The gait planner (spotkin/motion/gait_plan.hpp): the reference planner's state machine
+// (python/spotkin/reference/gait_plan.py) line for line, in double, then each command's IK along
+// its path, joint velocities and standing statics over all its ticks at once.
+#include "spotkin/motion/gait_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "spotkin/dynamics/kernels.hpp"
+#include "spotkin/kernels/body.hpp"
+#include "spotkin/leg.hpp"
+
+namespace spotkin::motion {
+
+namespace {
+
+constexpr double kPiValue = 3.14159265358979323846;
+constexpr double kTwoPi = 2.0 * kPiValue;
+
+struct Quintic {
+  double b, db, d2b;
+};
+
+// (Q): b(x) = 10 x^3 - 15 x^4 + 6 x^5 at x clamped to [0, 1], with b' and b''.
+inline Quintic quintic(double x) noexcept {
+  x = std::min(std::max(x, 0.0), 1.0);
+  return {x * x * x * (10.0 - 15.0 * x + 6.0 * x * x), 30.0 * x * x * (1.0 - x) * (1.0 - x),
+          60.0 * x * (1.0 - x) * (1.0 - 2.0 * x)};
+}
+
+inline double frac(double x) noexcept { return x - std::floor(x); }
+
+// x mod 1 as Python's float % (the sign of the divisor).
+inline double mod1(double x) noexcept {
+  double m = std::fmod(x, 1.0);
+  if (m != 0.0) {
+    if (m < 0.0) m += 1.0;
+  } else {
+    m = 0.0;
+  }
+  return m;
+}
+
+inline double floor_height(const PlannerState& s, double x, double y) noexcept {
+  return s.has_ground ? s.ground[0] + s.ground[1] * x + s.ground[2] * y : 0.0;
+}
+
+// Step 1: the gait's numbers at t and (when rates) their time derivatives.
+void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates) noexcept {
+  if (s.duration <= 0.0 || t >= s.t0 + s.duration) {
+    P = s.new_numbers;
+    if (rates) *rates = GaitNumbers{};
+    return;
+  }
+  const Quintic q = quintic((t - s.t0) / s.duration);
+  for (int k = 0; k < kGaitNumbers; ++k) {
+    const double delta = s.new_numbers[k] - s.old_numbers[k];
+    P[k] = s.old_numbers[k] + delta * q.b;
+    if (rates) (*rates)[k] = delta * q.db / s.duration;
+  }
+}
+
+// D of step 1: max(T_new, 2 max_i |delta o_i| max(T_old, T_new)).
+double blend_duration(const GaitNumbers& old, const GaitNumbers& nw) noexcept {
+  double worst_delta = 0.0;
+  for (int i = 0; i < kLegs; ++i)
+    worst_delta =
+        std::max(worst_delta, std::fabs(mod1(nw[kOffsets + i] - old[kOffsets + i] + 0.5) - 0.5));
+  const double worst = std::max(old[kPeriod], nw[kPeriod]);
+  return std::max(nw[kPeriod], 2.0 * worst_delta * worst);
+}
+
+struct Planar {
+  double x, y, psi, v[2], w;
+};
+
+// Step 3's motion over dt: velocity ramped towards the target, the pose by the trapezoid rule.
+void ramp(Planar& p, const double target[3], double accel, double yaw_accel, double dt) noexcept {
+  const double step = accel * dt, yaw_step = yaw_accel * dt;
+  double v1[2];
+  for (int k = 0; k < 2; ++k) v1[k] = p.v[k] + std::min(std::max(target[k] - p.v[k], -step), step);
+  const double w1 = p.w + std::min(std::max(target[2] - p.w, -yaw_step), yaw_step);
+  const double psi1 = p.psi + dt * (p.w + w1) / 2.0;
+  const double mid = (p.psi + psi1) / 2.0;
+  const double mean[2] = {(p.v[0] + v1[0]) / 2.0, (p.v[1] + v1[1]) / 2.0};
+  const double c = std::cos(mid), s = std::sin(mid);
+  p.x += dt * (c * mean[0] - s * mean[1]);
+  p.y += dt * (s * mean[0] + c * mean[1]);
+  p.psi = psi1, p.v[0] = v1[0], p.v[1] = v1[1], p.w = w1;
+}
+
+// s of step 3 for a target (vx, vy, yaw rate): the half strides against each leg's room.
+double speed_scale(const GaitNumbers& P, const double target[3]) noexcept {
+  const double half_stance = P[kDuty] * P[kPeriod] / 2.0;
+  double sway[2];
+  for (int k = 0; k < 2; ++k) {
+    double total = 0.0;
+    for (int j = 0; j < kLegs; ++j) total += std::fabs(P[kSway + 2 * j + k]);
+    sway[k] = P[kComShift] * (std::fabs(P[kShift + k]) + total);
+  }
+  double worst = 1.0;
+  for (int i = 0; i < kLegs; ++i) {
+    const double r0 = P[kStance + 3 * i], r1 = P[kStance + 3 * i + 1];
+    double room[2];
+    for (int k = 0; k < 2; ++k) {
+      const double reach = P[kStepReach + 2 * i + k];
+      room[k] = std::max(kStepFit * reach - sway[k], 0.1 * reach);
+    }
+    const double dx = half_stance * (target[0] - target[2] * r1);
+    const double dy = half_stance * (target[1] + target[2] * r0);
+    worst = std::max(worst, std::hypot(dx / room[0], dy / room[1]));
+  }
+  return 1.0 / worst;
+}
+
+// Step 3's target: the command times `moving` times the step-fit scale.
+void target_of(const PlannerState& s, const GaitNumbers& P, double target[3]) noexcept {
+  for (int k = 0; k < 3; ++k) target[k] = s.command[k] * P[kMoving];
+  const double scale = speed_scale(P, target);
+  for (int k = 0; k < 3; ++k) target[k] *= scale;
+}
+
+// The plan's own motion ahead (reference predict): steps 1-3 without the legs, kPredictionSteps
+// equal steps between successive horizons.
+struct Predictor {
+  const PlannerState& s;
+  Planar planar;
+  double theta, rate, t;
+  explicit Predictor(const PlannerState& state)
+      : s(state),
+        planar{state.x, state.y, state.psi, {state.v[0], state.v[1]}, state.w},
+        theta(state.theta),
+        rate(state.clock_rate),
+        t(state.t) {}
+  // Moves to s.t + horizon; P: the gait's numbers there.
+  void to(double horizon, GaitNumbers& P) noexcept {
+    const double dt = (s.t + horizon - t) / kPredictionSteps;
+    double target[3];
+    for (int k = 0; k < kPredictionSteps; ++k) {
+      t += dt;
+      blended(s, t, P, nullptr);
+      const double rate1 = 1.0 / P[kPeriod];
+      theta += dt * (rate + rate1) / 2.0;
+      rate = rate1;
+      target_of(s, P, target);
+      ramp(planar, target, P[kAccel], P[kYawAccel], dt);
+    }
+    blended(s, t, P, nullptr);
+  }
+};
+
+// (C): the crawl's sway delta and d delta / dt (body frame), with its weight and base offset.
+void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phases,
+                 const double* phase_rates, double value[2], double rate[2]) noexcept {
+  const double weight = P[kComShift], weight_rate = Pd[kComShift];
+  value[0] = value[1] = rate[0] = rate[1] = 0.0;
+  if (weight == 0.0 && weight_rate == 0.0) return;
+  const double centre = (1.0 + P[kDuty]) / 2.0, centre_rate = Pd[kDuty] / 2.0;
+  double sum[2] = {0.0, 0.0}, sum_rate[2] = {0.0, 0.0};
+  for (int i = 0; i < kLegs; ++i)
+    for (int axis = 0; axis < 2; ++axis) {
+      const double harmonic = axis == 0 ? 2.0 : 1.0;
+      const double angle = kTwoPi * harmonic * (phases[i] - centre);
+      const double angle_rate = kTwoPi * harmonic * (phase_rates[i] - centre_rate);
+      const double X = P[kSway + 2 * i + axis], X_rate = Pd[kSway + 2 * i + axis];
+      const double c = std::cos(angle), s = std::sin(angle);
+      sum[axis] += X * c;
+      sum_rate[axis] += X_rate * c - X * s * angle_rate;
+    }
+  for (int axis = 0; axis < 2; ++axis) {
+    const double v = sum[axis] + P[kShift + axis], r = sum_rate[axis] + Pd[kShift + axis];
+    value[axis] = weight * v;
+    rate[axis] = weight_rate * v + weight * r;
+  }
+}
+
+// [x, y, z, a, b, c] with R = Rx(a) Ry(b) Rz(c) = Rz(psi) Ry(pitch) Rx(roll), c unwrapped near psi.
+void body_pose(double x, double y, double z, double psi, double roll, double pitch,
+               double pose[6]) noexcept {
+  const double cz = std::cos(psi), sz = std::sin(psi), cy = std::cos(pitch), sy = std::sin(pitch),
+               cx = std::cos(roll), sx = std::sin(roll);
+  const double R00 = cz * cy, R01 = -sz * cx + cz * sy * sx, R02 = sz * sx + cz * sy * cx;
+  const double R12 = -cz * sx + sz * sy * cx, R22 = cy * cx;
+  const double b = std::asin(std::min(std::max(R02, -1.0), 1.0));
+  const double a = std::atan2(-R12, R22);
+  double c = std::atan2(-R01, R00);
+  c += kTwoPi * std::nearbyint((psi - c) / kTwoPi);
+  pose[0] = x, pose[1] = y, pose[2] = z, pose[3] = a, pose[4] = b, pose[5] = c;
+}
+
+const EulerSequence& xyz() noexcept {
+  static const EulerSequence seq = EulerSequence::from_code(0 + 3 * 1 + 9 * 2);  // "XYZ"
+  return seq;
+}
+
+struct Transform {
+  double R[3][3], t[3];
+};
+
+Transform transform_of(const double pose[6]) noexcept {
+  Transform T;
+  Body::euler_rotation(xyz(), pose + 3, T.R);
+  for (int k = 0; k < 3; ++k) T.t[k] = pose[k];
+  return T;
+}
+
+// (B)'s test: leg i reaches the world point p within its limits at every pose.
+bool reachable(const Body& body, int i, const double p[3], const Transform* poses,
+               int count) noexcept {
+  double points[3 * (kChecks + 1)], q[3 * (kChecks + 1)];
+  std::int8_t status[kChecks + 1];
+  const auto& hip = body.hips[std::size_t(i)];
+  for (int k = 0; k < count; ++k) {  // R^T (p - t) - hip
+    const Transform& T = poses[k];
+    const double d[3] = {p[0] - T.t[0], p[1] - T.t[1], p[2] - T.t[2]};
+    for (int r = 0; r < 3; ++r)
+      points[3 * k + r] =
+          T.R[0][r] * d[0] + T.R[1][r] * d[1] + T.R[2][r] * d[2] - hip[std::size_t(r)];
+  }
+  leg_batch::ik(body.legs[std::size_t(i)], points, static_cast<const double*>(nullptr), q, status,
+                count, false);
+  for (int k = 0; k < count; ++k)
+    if (status[k] != std::int8_t(Status::Ok)) return false;
+  return true;
+}
+
+// (B): p if reachable at every pose, else the point towards p_nominal found by bisection.
+bool bounded_foothold(const Body& body, int i, double p[3], const double p_nominal[3],
+                      const Transform* poses, int count) noexcept {
+  if (reachable(body, i, p, poses, count)) return false;
+  double lo = 0.0, hi = 1.0, trial[3];
+  for (int n = 0; n < kBisections; ++n) {
+    const double mid = 0.5 * (lo + hi);
+    for (int r = 0; r < 3; ++r) trial[r] = p_nominal[r] + mid * (p[r] - p_nominal[r]);
+    (reachable(body, i, trial, poses, count) ? lo : hi) = mid;
+  }
+  for (int r = 0; r < 3; ++r) p[r] = p_nominal[r] + lo * (p[r] - p_nominal[r]);
+  return true;
+}
+
+// Step 4's foothold of leg i lifting off now at `phase` (P: the gait's numbers now).
+void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int i,
+                   double phase) noexcept {
+  const double to_touchdown = (1.0 - phase) * P[kPeriod];
+  Predictor ahead(s);
+  Planar planar[kChecks + 1];
+  double theta[kChecks + 1];
+  GaitNumbers Pf[kChecks + 1];
+  ahead.to(to_touchdown, Pf[0]);
+  planar[0] = ahead.planar, theta[0] = ahead.theta;
+  const double t_stance = Pf[0][kDuty] * Pf[0][kPeriod];  // the gait's at touch-down
+  for (int k = 1; k <= kChecks; ++k) {
+    ahead.to(to_touchdown + t_stance * k / kChecks, Pf[k]);
+    planar[k] = ahead.planar, theta[k] = ahead.theta;
+  }
+  double offset[2] = {0.0, 0.0};  // closed loop: where the body will be
+  if (s.has_p_measured) {
+    offset[0] = s.p_measured[0] - s.x, offset[1] = s.p_measured[1] - s.y;
+    if (s.has_v_measured) {
+      const double c0 = std::cos(s.psi), s0 = std::sin(s.psi);
+      const double now[2] = {c0 * s.v[0] - s0 * s.v[1], s0 * s.v[0] + c0 * s.v[1]};
+      for (int k = 0; k < 2; ++k) offset[k] = offset[k] + (s.v_measured[k] - now[k]) * to_touchdown;
+    }
+  }
+  const double x = planar[0].x + offset[0], y = planar[0].y + offset[1], psi = planar[0].psi;
+  const Planar& middle = planar[kChecks / 2];
+  const double c = std::cos(psi), sn = std::sin(psi);
+  const double* nominal = &P.v[kStance + 3 * i];
+  const double r[2] = {c * nominal[0] - sn * nominal[1], sn * nominal[0] + c * nominal[1]};
+  double p_nominal[3] = {x + r[0], y + r[1], nominal[2] + floor_height(s, x + r[0], y + r[1])};
+  const double velocity[2] = {c * middle.v[0] - sn * middle.v[1],
+                              sn * middle.v[0] + c * middle.v[1]};
+  const double* measured = s.has_v_measured ? s.v_measured : velocity;
+  // (F): p = p_nom + (v_cmd + omega z x r) T_st / 2 + k (v_meas - v_cmd) sqrt(h / g)
+  const double capture = P[kCaptureGain] * std::sqrt(P[kHipHeight] / kGravity);
+  const double hip_velocity[2] = {-middle.w * r[1], middle.w * r[0]};
+  double p[3] = {p_nominal[0], p_nominal[1], p_nominal[2]};
+  for (int j = 0; j < 2; ++j)
+    p[j] +=
+        (velocity[j] + hip_velocity[j]) * t_stance / 2.0 + capture * (measured[j] - velocity[j]);
+  p[2] = nominal[2] + floor_height(s, p[0], p[1]);
+  if (s.has_ground_offsets) p[2] += s.ground_offsets[i], p_nominal[2] += s.ground_offsets[i];
+  Transform poses[kChecks + 1];
+  for (int k = 0; k <= kChecks; ++k) {
+    const GaitNumbers& F = Pf[k];
+    double phases[kLegs], rates[kLegs], delta[2], delta_rate[2];
+    for (int j = 0; j < kLegs; ++j)
+      phases[j] = frac(theta[k] + F[kOffsets + j]), rates[j] = 1.0 / F[kPeriod];
+    crawl_shift(F, GaitNumbers{}, phases, rates, delta, delta_rate);
+    const double cp = std::cos(planar[k].psi), sp = std::sin(planar[k].psi);
+    const double px = planar[k].x + cp * delta[0] - sp * delta[1] + offset[0];
+    const double py = planar[k].y + sp * delta[0] + cp * delta[1] + offset[1];
+    double pose[6];
+    body_pose(px, py, F[kHeight] + floor_height(s, px, py), planar[k].psi, s.roll, s.pitch, pose);
+    poses[k] = transform_of(pose);
+  }
+  s.step_shortened[i] = bounded_foothold(body, i, p, p_nominal, poses, kChecks + 1);
+  for (int k = 0; k < 3; ++k) s.p_touchdown[i][k] = p[k];
+}
+
+// (S): the swing foot's position and dp/ds at s.
+void swing(const double p0[3], const double p1[3], double s, double height, double p[3],
+           double dp[3]) noexcept {
+  const Quintic h = quintic(s);
+  for (int k = 0; k < 2; ++k) p[k] = p0[k] + (p1[k] - p0[k]) * h.b, dp[k] = (p1[k] - p0[k]) * h.db;
+  const double apex = std::max(p0[2], p1[2]) + height;
+  if (s <= 0.5) {
+    const Quintic v = quintic(2.0 * s);
+    const double rise = apex - p0[2];
+    p[2] = p0[2] + rise * v.b, dp[2] = 2.0 * rise * v.db;
+  } else {
+    const Quintic v = quintic(2.0 * s - 1.0);
+    const double fall = p1[2] - apex;
+    p[2] = apex + fall * v.b, dp[2] = 2.0 * fall * v.db;
+  }
+}
+
+// 3x3 solve by Gaussian elimination with partial pivoting (LAPACK's getrf / getrs order); false
+// when singular or not finite.
+bool solve3(const double* J, const double* b, double* x) noexcept {
+  double A[3][4];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) A[r][c] = J[3 * r + c];
+    A[r][3] = b[r];
+  }
+  for (int c = 0; c < 3; ++c) {
+    int pivot = c;
+    for (int r = c + 1; r < 3; ++r)
+      if (std::fabs(A[r][c]) > std::fabs(A[pivot][c])) pivot = r;
+    if (!(A[pivot][c] != 0.0) || !std::isfinite(A[pivot][c])) return false;
+    if (pivot != c) std::swap(A[pivot], A[c]);
+    for (int r = c + 1; r < 3; ++r) {
+      const double f = A[r][c] / A[c][c];
+      for (int k = c; k < 4; ++k) A[r][k] -= f * A[c][k];
+    }
+  }
+  for (int r = 2; r >= 0; --r) {
+    double v = A[r][3];
+    for (int k = r + 1; k < 3; ++k) v -= A[r][k] * x[k];
+    x[r] = v / A[r][r];
+  }
+  return std::isfinite(x[0] + x[1] + x[2]);
+}
+
+}  // namespace
+
+void start(const GaitNumbers& gait, const double command[3], const double attitude[2],
+           PlannerState& s) noexcept {
+  s = PlannerState{};
+  s.clock_rate = 1.0 / gait[kPeriod];
+  for (int k = 0; k < 3; ++k) s.command[k] = command[k];
+  s.roll = attitude[0], s.pitch = attitude[1];
+  s.old_numbers = gait;
+  s.old_numbers[kMoving] = 0.0;  // the start: the speed blends in over the first period
+  s.new_numbers = gait;
+  s.t0 = 0.0, s.duration = gait[kPeriod];
+  for (int i = 0; i < kLegs; ++i) {
+    s.contact[i] = true;
+    s.cycles[i] = std::floor(gait[kOffsets + i]);
+    for (int k = 0; k < 3; ++k) s.p_stance[i][k] = s.p_touchdown[i][k] = gait[kStance + 3 * i + k];
+  }
+}
+
+void change(PlannerState& s, const GaitNumbers* gait, const double* command) noexcept {
+  if (command)
+    for (int k = 0; k < 3; ++k) s.command[k] = command[k];
+  if (!gait) return;
+  GaitNumbers old;
+  blended(s, s.t, old, nullptr);
+  GaitNumbers nw = *gait;
+  // the offsets move the shorter way round, and end there (floor(theta + o_i) never jumps)
+  for (int i = 0; i < kLegs; ++i)
+    nw[kOffsets + i] = old[kOffsets + i] + (mod1(nw[kOffsets + i] - old[kOffsets + i] + 0.5) - 0.5);
+  bool all_down = true;
+  for (int i = 0; i < kLegs; ++i) all_down = all_down && s.contact[i];
+  if (old[kDuty] >= 1.0 && all_down)  // no swing: the new offsets at once
+    for (int i = 0; i < kLegs; ++i) old[kOffsets + i] = nw[kOffsets + i];
+  s.old_numbers = old, s.new_numbers = nw, s.t0 = s.t;
+  s.duration = blend_duration(old, nw);
+}
+
+void advance(const Body& body, PlannerState& s, double dt) noexcept {
+  const double t1 = s.t + dt;
+  GaitNumbers P;
+  blended(s, t1, P, nullptr);
+  const double rate1 = 1.0 / P[kPeriod];
+  s.theta += dt * (s.clock_rate + rate1) / 2.0;
+  s.clock_rate = rate1;
+  double target[3], moving[3];
+  target_of(s, P, target);
+  for (int k = 0; k < 3; ++k) moving[k] = s.command[k] * P[kMoving];
+  s.speed_scale = speed_scale(P, moving);
+  Planar planar{s.x, s.y, s.psi, {s.v[0], s.v[1]}, s.w};
+  ramp(planar, target, P[kAccel], P[kYawAccel], dt);
+  s.x = planar.x, s.y = planar.y, s.psi = planar.psi, s.v[0] = planar.v[0], s.v[1] = planar.v[1],
+  s.w = planar.w;
+  s.t = t1;
+  const double duty = P[kDuty];
+  for (int i = 0; i < kLegs; ++i) {
+    const double cycles = std::floor(s.theta + P[kOffsets + i]);
+    const double phase = s.theta + P[kOffsets + i] - cycles;
+    if (!s.contact[i]) {
+      if (cycles > s.cycles[i]) {  // the phase wrapped: touch-down
+        s.contact[i] = true;
+        for (int k = 0; k < 3; ++k) s.p_stance[i][k] = s.p_touchdown[i][k];
+        s.step_shortened[i] = false;
+      }
+    } else if (phase >= duty && 1.0 - phase >= kLiftoffFraction * (1.0 - duty)) {
+      s.contact[i] = false;
+      s.lift_phase[i] = phase;
+      s.lift_height[i] = P[kStepHeight];
+      plan_foothold(body, s, P, i, phase);
+    }
+    s.cycles[i] = cycles;
+  }
+}
+
+void sample(const PlannerState& s, TickKinematics& out) noexcept {
+  GaitNumbers P, Pd;
+  blended(s, s.t, P, &Pd);
+  double phases[kLegs], rates[kLegs];
+  bool shortened = s.speed_scale < 1.0;
+  for (int i = 0; i < kLegs; ++i) {
+    phases[i] = frac(s.theta + P[kOffsets + i]);
+    rates[i] = s.clock_rate + Pd[kOffsets + i];
+    out.contact[i] = s.contact[i];
+    if (s.contact[i]) {
+      for (int k = 0; k < 3; ++k) out.feet[i][k] = s.p_stance[i][k], out.feet_rate[i][k] = 0.0;
+      continue;
+    }
+    shortened = shortened || s.step_shortened[i];
+    const double lift = s.lift_phase[i];
+    double dp[3];
+    swing(s.p_stance[i], s.p_touchdown[i], (phases[i] - lift) / (1.0 - lift), s.lift_height[i],
+          out.feet[i], dp);
+    for (int k = 0; k < 3; ++k) out.feet_rate[i][k] = dp[k] * rates[i] / (1.0 - lift);
+  }
+  double delta[2], delta_rate[2];
+  crawl_shift(P, Pd, phases, rates, delta, delta_rate);
+  const double c = std::cos(s.psi), sn = std::sin(s.psi);
+  const double shift[2] = {c * delta[0] - sn * delta[1], sn * delta[0] + c * delta[1]};
+  const double x = s.x + shift[0], y = s.y + shift[1];
+  body_pose(x, y, P[kHeight] + floor_height(s, x, y), s.psi, s.roll, s.pitch, out.pose);
+  const double planar[2] = {s.v[0] + delta_rate[0], s.v[1] + delta_rate[1]};
+  out.linear[0] = c * planar[0] - sn * planar[1] - s.w * shift[1];
+  out.linear[1] = sn * planar[0] + c * planar[1] + s.w * shift[0];
+  out.linear[2] = Pd[kHeight];
+  out.angular[0] = out.angular[1] = 0.0, out.angular[2] = s.w;
+  out.shortened = shortened;
+}
+
+template <typename Model>
+void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait,
+                  const double command[3], const double attitude[2], std::ptrdiff_t ticks,
+                  double rate, const PlanRows& out) {
+  const Body& body = robot.body;
+  constexpr int W = 3 * kLegs;
+  std::vector<double> feet_rate(std::size_t(ticks) * W), twist(std::size_t(ticks) * 6),
+      stance(std::size_t(ticks) * kLegs), forces(std::size_t(ticks) * W);
+  std::vector<std::int8_t> leg_status(std::size_t(ticks) * kLegs);
+  PlannerState s;
+  start(gait, command, attitude, s);
+  TickKinematics k;
+  for (std::ptrdiff_t n = 0; n < ticks; ++n) {
+    if (n) advance(body, s, double(n) / rate - s.t);  // the tick times without drift
+    sample(s, k);
+    std::copy(k.pose, k.pose + 6, out.pose + 6 * n);
+    std::copy(&k.feet[0][0], &k.feet[0][0] + W, out.feet + W * n);
+    std::copy(&k.feet_rate[0][0], &k.feet_rate[0][0] + W, feet_rate.data() + W * n);
+    std::copy(k.linear, k.linear + 3, twist.data() + 6 * n);
+    std::copy(k.angular, k.angular + 3, twist.data() + 6 * n + 3);
+    for (int i = 0; i < kLegs; ++i)
+      out.contact[kLegs * n + i] = k.contact[i], stance[kLegs * n + i] = k.contact[i];
+    out.shortened[n] = k.shortened;
+  }
+  // the whole-body IK along the path, each tick seeded with the previous one
+  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz(), out.feet, nullptr,
+                                out.q, leg_status.data(), ticks, true);
+  for (std::ptrdiff_t n = 0; n < ticks; ++n) {
+    std::int8_t worst = leg_status[kLegs * n];
+    for (int i = 1; i < kLegs; ++i) worst = std::max(worst, leg_status[kLegs * n + i]);
+    out.status[n] = worst;
+    // qd_l = J_l^-1 R^T (pdot_l - v - w x (p_l - t)): the foot's velocity relative to the hip
+    const Transform T = transform_of(out.pose + 6 * n);
+    const double* v = twist.data() + 6 * n;
+    const double* w = v + 3;
+    for (int i = 0; i < kLegs; ++i) {
+      const auto& col = body.columns[std::size_t(i)];
+      const double* p = out.feet + W * n + 3 * i;
+      const double* pd = feet_rate.data() + W * n + 3 * i;
+      const double d[3] = {p[0] - T.t[0], p[1] - T.t[1], p[2] - T.t[2]};
+      const double u[3] = {pd[0] - v[0] - (w[1] * d[2] - w[2] * d[1]),
+                           pd[1] - v[1] - (w[2] * d[0] - w[0] * d[2]),
+                           pd[2] - v[2] - (w[0] * d[1] - w[1] * d[0])};
+      double relative[3], q_leg[3], J[9], qd[3];
+      for (int r = 0; r < 3; ++r)
+        relative[r] = T.R[0][r] * u[0] + T.R[1][r] * u[1] + T.R[2][r] * u[2];
+      for (int j = 0; j < 3; ++j) q_leg[j] = out.q[W * n + col[std::size_t(j)]];
+      body.legs[std::size_t(i)].jacobian(q_leg, J);
+      if (!solve3(J, relative, qd)) qd[0] = qd[1] = qd[2] = quiet_nan<double>();
+      for (int j = 0; j < 3; ++j) out.qd[W * n + col[std::size_t(j)]] = qd[j];
+    }
+  }
+  // the statics: tau = G - J^T f with the least-squares stance forces (W), the margin (M)
+  dynamics::StaticsRows<double> rows{out.pose, 6, BodyPoseFormat::Euler, out.q, W, false};
+  rows.stance = stance.data(), rows.stance_stride = kLegs;
+  const double gravity[3] = {0.0, 0.0, -kGravity};
+  std::vector<std::int8_t> stance_status(static_cast<std::size_t>(ticks));
+  dynamics::robot_standing(robot, xyz(), gravity, rows, out.tau, forces.data(),
+                           stance_status.data(), out.margin, out.residual, ticks);
+}
+
+#define SPOTKIN_INSTANTIATE(L)                                                                    \
+  template void plan_command<dynamics::FloatingModel<double, L>>(                                 \
+      const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const GaitNumbers&, \
+      const double*, const double*, std::ptrdiff_t, double, const PlanRows&);
+SPOTKIN_INSTANTIATE(dynamics::kLanes64)
+SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
+SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)
+#undef SPOTKIN_INSTANTIATE
+
+}  // namespace spotkin::motion
