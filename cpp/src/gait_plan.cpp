@@ -8,7 +8,9 @@
 #include <vector>
 
 #include "spotkin/dynamics/kernels.hpp"
+#include "spotkin/dynamics/statics.hpp"
 #include "spotkin/kernels/body.hpp"
+#include "spotkin/kernels/leg.hpp"
 #include "spotkin/leg.hpp"
 
 namespace spotkin::motion {
@@ -47,8 +49,13 @@ inline double floor_height(const PlannerState& s, double x, double y) noexcept {
 }
 
 // Step 1: the gait's numbers at t and (when rates) their time derivatives.
+// Whether the blend of step 1 is over at t (the gait's numbers are the new ones).
+inline bool settled_at(const PlannerState& s, double t) noexcept {
+  return s.duration <= 0.0 || t >= s.t0 + s.duration;
+}
+
 void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates) noexcept {
-  if (s.duration <= 0.0 || t >= s.t0 + s.duration) {
+  if (settled_at(s, t)) {
     P = s.new_numbers;
     if (rates) *rates = GaitNumbers{};
     return;
@@ -109,17 +116,27 @@ double speed_scale(const GaitNumbers& P, const double target[3]) noexcept {
     }
     const double dx = half_stance * (target[0] - target[2] * r1);
     const double dy = half_stance * (target[1] + target[2] * r0);
-    worst = std::max(worst, std::hypot(dx / room[0], dy / room[1]));
+    const double a = dx / room[0], b = dy / room[1];
+    worst = std::max(worst, std::sqrt(a * a + b * b));
   }
   return 1.0 / worst;
 }
 
-// Step 3's target: the command times `moving` times the step-fit scale.
-void target_of(const PlannerState& s, const GaitNumbers& P, double target[3]) noexcept {
+// Step 3's target: the command times `moving` times the step-fit scale (returned). Once the gait has
+// settled (P is the new gait's numbers), the scale is the state's cached one: the same numbers.
+double target_of(const PlannerState& s, const GaitNumbers& P, double target[3], bool settled) noexcept {
   for (int k = 0; k < 3; ++k) target[k] = s.command[k] * P[kMoving];
-  const double scale = speed_scale(P, target);
+  double scale;
+  if (settled && s.settled_scale >= 0.0) {
+    scale = s.settled_scale;
+  } else {
+    scale = speed_scale(P, target);
+    if (settled) s.settled_scale = scale;
+  }
   for (int k = 0; k < 3; ++k) target[k] *= scale;
+  return scale;
 }
+
 
 // The plan's own motion ahead (reference predict): steps 1-3 without the legs, kPredictionSteps
 // equal steps between successive horizons.
@@ -143,7 +160,7 @@ struct Predictor {
       const double rate1 = 1.0 / P[kPeriod];
       theta += dt * (rate + rate1) / 2.0;
       rate = rate1;
-      target_of(s, P, target);
+      target_of(s, P, target, settled_at(s, t));
       ramp(planar, target, P[kAccel], P[kYawAccel], dt);
     }
     blended(s, t, P, nullptr);
@@ -175,11 +192,11 @@ void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phas
   }
 }
 
-// [x, y, z, a, b, c] with R = Rx(a) Ry(b) Rz(c) = Rz(psi) Ry(pitch) Rx(roll), c unwrapped near psi.
-void body_pose(double x, double y, double z, double psi, double roll, double pitch,
-               double pose[6]) noexcept {
-  const double cz = std::cos(psi), sz = std::sin(psi), cy = std::cos(pitch), sy = std::sin(pitch),
-               cx = std::cos(roll), sx = std::sin(roll);
+// [x, y, z, a, b, c] with R = Rx(a) Ry(b) Rz(c) = Rz(psi) Ry(pitch) Rx(roll), c unwrapped near psi;
+// R_out (optional) that rotation.
+void body_pose(double x, double y, double z, double psi, double cz, double sz, const PlannerState& s, double pose[6],
+               double (*R_out)[3] = nullptr) noexcept {
+  const double cy = s.cos_pitch, sy = s.sin_pitch, cx = s.cos_roll, sx = s.sin_roll;
   const double R00 = cz * cy, R01 = -sz * cx + cz * sy * sx, R02 = sz * sx + cz * sy * cx;
   const double R12 = -cz * sx + sz * sy * cx, R22 = cy * cx;
   const double b = std::asin(std::min(std::max(R02, -1.0), 1.0));
@@ -187,6 +204,13 @@ void body_pose(double x, double y, double z, double psi, double roll, double pit
   double c = std::atan2(-R01, R00);
   c += kTwoPi * std::nearbyint((psi - c) / kTwoPi);
   pose[0] = x, pose[1] = y, pose[2] = z, pose[3] = a, pose[4] = b, pose[5] = c;
+  if (R_out) {
+    const double R[3][3] = {{R00, R01, R02},
+                            {sz * cy, sz * sy * sx + cz * cx, R12},
+                            {-sy, cy * sx, R22}};
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) R_out[r][k] = R[r][k];
+  }
 }
 
 const EulerSequence& xyz() noexcept {
@@ -292,7 +316,7 @@ void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int 
     const double px = planar[k].x + cp * delta[0] - sp * delta[1] + offset[0];
     const double py = planar[k].y + sp * delta[0] + cp * delta[1] + offset[1];
     double pose[6];
-    body_pose(px, py, F[kHeight] + floor_height(s, px, py), planar[k].psi, s.roll, s.pitch, pose);
+    body_pose(px, py, F[kHeight] + floor_height(s, px, py), planar[k].psi, cp, sp, s, pose);
     poses[k] = transform_of(pose);
   }
   s.step_shortened[i] = bounded_foothold(body, i, p, p_nominal, poses, kChecks + 1);
@@ -316,31 +340,76 @@ void swing(const double p0[3], const double p1[3], double s, double height, doub
   }
 }
 
-// 3x3 solve by Gaussian elimination with partial pivoting (LAPACK's getrf / getrs order); false
-// when singular or not finite.
-bool solve3(const double* J, const double* b, double* x) noexcept {
-  double A[3][4];
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) A[r][c] = J[3 * r + c];
-    A[r][3] = b[r];
-  }
-  for (int c = 0; c < 3; ++c) {
-    int pivot = c;
-    for (int r = c + 1; r < 3; ++r)
-      if (std::fabs(A[r][c]) > std::fabs(A[pivot][c])) pivot = r;
-    if (!(A[pivot][c] != 0.0) || !std::isfinite(A[pivot][c])) return false;
-    if (pivot != c) std::swap(A[pivot], A[c]);
-    for (int r = c + 1; r < 3; ++r) {
-      const double f = A[r][c] / A[c][c];
-      for (int k = c; k < 4; ++k) A[r][k] -= f * A[c][k];
-    }
-  }
-  for (int r = 2; r >= 0; --r) {
-    double v = A[r][3];
-    for (int k = r + 1; k < 3; ++k) v -= A[r][k] * x[k];
-    x[r] = v / A[r][r];
-  }
+// x = A^-1 b for a 3x3 row-major A by its adjugate (Cramer); false when singular or not finite.
+bool solve3(const double* A, const double* b, double* x) noexcept {
+  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8], A[3] * A[7] - A[4] * A[6]};
+  const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
+  if (!(det != 0.0) || !std::isfinite(det)) return false;
+  // rows of adj(A) = the cofactors' transpose
+  const double inv = 1.0 / det;
+  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) * inv;
+  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) * inv;
+  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) * inv;
   return std::isfinite(x[0] + x[1] + x[2]);
+}
+
+inline void cross(const double* a, const double* b, double* out) noexcept {
+  out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+// (W) in closed form. The minimum-norm forces with sum f_i = F and, in least squares,
+// sum (p_i - c) x f_i = 0 are f_i = F / k + y x s_i, s_i = p_i - p_mean, where K y = -m,
+// m = (p_mean - c) x F and K = sum (|s_i|^2 I - s_i s_i^T) (= (M N)(M N)^T of the reference's
+// Helmert form, so y = pinv(K) (-m) is its z = pinv(M N) (-M f_0) mapped back). Feet off one line:
+// K is invertible and the moment balances; on one line (two feet, say) along d, K = S (I - d d^T)
+// with S = sum |s_i|^2, and the moment about the line is left (the residual). k = 0: no force.
+void stance_forces(int k, const double (*p)[3], const double c[3], const double F[3], double (*f)[3],
+                   double residual[6]) noexcept {
+  if (k == 0) {
+    for (int a = 0; a < 3; ++a) residual[a] = F[a], residual[3 + a] = 0.0;
+    return;
+  }
+  double mean[3] = {0.0, 0.0, 0.0}, s[kLegs][3], K[9] = {}, S = 0.0, longest = -1.0, d[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < k; ++i)
+    for (int a = 0; a < 3; ++a) mean[a] += p[i][a];
+  for (int a = 0; a < 3; ++a) mean[a] /= k;
+  for (int i = 0; i < k; ++i) {
+    for (int a = 0; a < 3; ++a) s[i][a] = p[i][a] - mean[a];
+    const double n2 = s[i][0] * s[i][0] + s[i][1] * s[i][1] + s[i][2] * s[i][2];
+    S += n2;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) K[3 * a + b] += (a == b ? n2 : 0.0) - s[i][a] * s[i][b];
+    if (n2 > longest) longest = n2, d[0] = s[i][0], d[1] = s[i][1], d[2] = s[i][2];
+  }
+  const double r[3] = {mean[0] - c[0], mean[1] - c[1], mean[2] - c[2]};
+  double m[3], y[3] = {0.0, 0.0, 0.0};
+  cross(r, F, m);
+  const double minus_m[3] = {-m[0], -m[1], -m[2]};
+  // full rank: the smallest eigenvalue above ~1e-9 of the largest (det = l1 l2 l3 against (tr / 2)^3)
+  const double half_trace = S;  // tr K = 2 S
+  const double det = K[0] * (K[4] * K[8] - K[5] * K[7]) - K[1] * (K[3] * K[8] - K[5] * K[6]) +
+                     K[2] * (K[3] * K[7] - K[4] * K[6]);
+  if (k >= 3 && det > 1e-9 * half_trace * half_trace * half_trace) {
+    solve3(K, minus_m, y);
+  } else if (S > 0.0) {  // the feet on a line along d: y = -(m - d (d . m)) / S
+    const double n = std::sqrt(longest);
+    for (int a = 0; a < 3; ++a) d[a] /= n;
+    const double along = d[0] * m[0] + d[1] * m[1] + d[2] * m[2];
+    for (int a = 0; a < 3; ++a) y[a] = -(m[a] - d[a] * along) / S;
+  }
+  double total[3] = {0.0, 0.0, 0.0}, moment[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < k; ++i) {
+    double ys[3], arm[3], mi[3];
+    cross(y, s[i], ys);
+    for (int a = 0; a < 3; ++a) f[i][a] = F[a] / k + ys[a], total[a] += f[i][a], arm[a] = p[i][a] - c[a];
+    cross(arm, f[i], mi);
+    for (int a = 0; a < 3; ++a) moment[a] += mi[a];
+  }
+  for (int a = 0; a < 3; ++a) residual[a] = F[a] - total[a], residual[3 + a] = -moment[a];
+}
+
+inline double detail_statics_margin(const double (*flat)[2], int k, const double c[3]) noexcept {
+  return dynamics::detail_statics::support_margin(flat, k, c);
 }
 
 }  // namespace
@@ -351,6 +420,8 @@ void start(const GaitNumbers& gait, const double command[3], const double attitu
   s.clock_rate = 1.0 / gait[kPeriod];
   for (int k = 0; k < 3; ++k) s.command[k] = command[k];
   s.roll = attitude[0], s.pitch = attitude[1];
+  s.cos_roll = std::cos(s.roll), s.sin_roll = std::sin(s.roll);
+  s.cos_pitch = std::cos(s.pitch), s.sin_pitch = std::sin(s.pitch);
   s.old_numbers = gait;
   s.old_numbers[kMoving] = 0.0;  // the start: the speed blends in over the first period
   s.new_numbers = gait;
@@ -363,6 +434,7 @@ void start(const GaitNumbers& gait, const double command[3], const double attitu
 }
 
 void change(PlannerState& s, const GaitNumbers* gait, const double* command) noexcept {
+  if (command || gait) s.settled_scale = -1.0;
   if (command)
     for (int k = 0; k < 3; ++k) s.command[k] = command[k];
   if (!gait) return;
@@ -387,10 +459,8 @@ void advance(const Body& body, PlannerState& s, double dt) noexcept {
   const double rate1 = 1.0 / P[kPeriod];
   s.theta += dt * (s.clock_rate + rate1) / 2.0;
   s.clock_rate = rate1;
-  double target[3], moving[3];
-  target_of(s, P, target);
-  for (int k = 0; k < 3; ++k) moving[k] = s.command[k] * P[kMoving];
-  s.speed_scale = speed_scale(P, moving);
+  double target[3];
+  s.speed_scale = target_of(s, P, target, settled_at(s, t1));  // the scale of command * moving
   Planar planar{s.x, s.y, s.psi, {s.v[0], s.v[1]}, s.w};
   ramp(planar, target, P[kAccel], P[kYawAccel], dt);
   s.x = planar.x, s.y = planar.y, s.psi = planar.psi, s.v[0] = planar.v[0], s.v[1] = planar.v[1],
@@ -441,7 +511,7 @@ void sample(const PlannerState& s, TickKinematics& out) noexcept {
   const double c = std::cos(s.psi), sn = std::sin(s.psi);
   const double shift[2] = {c * delta[0] - sn * delta[1], sn * delta[0] + c * delta[1]};
   const double x = s.x + shift[0], y = s.y + shift[1];
-  body_pose(x, y, P[kHeight] + floor_height(s, x, y), s.psi, s.roll, s.pitch, out.pose);
+  body_pose(x, y, P[kHeight] + floor_height(s, x, y), s.psi, c, sn, s, out.pose, out.R);
   const double planar[2] = {s.v[0] + delta_rate[0], s.v[1] + delta_rate[1]};
   out.linear[0] = c * planar[0] - sn * planar[1] - s.w * shift[1];
   out.linear[1] = sn * planar[0] + c * planar[1] + s.w * shift[0];
@@ -451,13 +521,12 @@ void sample(const PlannerState& s, TickKinematics& out) noexcept {
 }
 
 template <typename Model>
-void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait,
-                  const double command[3], const double attitude[2], std::ptrdiff_t ticks,
-                  double rate, const PlanRows& out) {
+void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait, const double command[3],
+                  const double attitude[2], std::ptrdiff_t ticks, double rate, const PlanRows& out) {
   const Body& body = robot.body;
   constexpr int W = 3 * kLegs;
   std::vector<double> feet_rate(std::size_t(ticks) * W), twist(std::size_t(ticks) * 6),
-      stance(std::size_t(ticks) * kLegs), forces(std::size_t(ticks) * W);
+      rotation(std::size_t(ticks) * 9);
   std::vector<std::int8_t> leg_status(std::size_t(ticks) * kLegs);
   PlannerState s;
   start(gait, command, attitude, s);
@@ -466,49 +535,111 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
     if (n) advance(body, s, double(n) / rate - s.t);  // the tick times without drift
     sample(s, k);
     std::copy(k.pose, k.pose + 6, out.pose + 6 * n);
+    std::copy(&k.R[0][0], &k.R[0][0] + 9, rotation.data() + 9 * n);
     std::copy(&k.feet[0][0], &k.feet[0][0] + W, out.feet + W * n);
     std::copy(&k.feet_rate[0][0], &k.feet_rate[0][0] + W, feet_rate.data() + W * n);
     std::copy(k.linear, k.linear + 3, twist.data() + 6 * n);
     std::copy(k.angular, k.angular + 3, twist.data() + 6 * n + 3);
-    for (int i = 0; i < kLegs; ++i)
-      out.contact[kLegs * n + i] = k.contact[i], stance[kLegs * n + i] = k.contact[i];
+    for (int i = 0; i < kLegs; ++i) out.contact[kLegs * n + i] = k.contact[i];
     out.shortened[n] = k.shortened;
   }
   // the whole-body IK along the path, each tick seeded with the previous one
-  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz(), out.feet, nullptr,
-                                out.q, leg_status.data(), ticks, true);
-  for (std::ptrdiff_t n = 0; n < ticks; ++n) {
-    std::int8_t worst = leg_status[kLegs * n];
-    for (int i = 1; i < kLegs; ++i) worst = std::max(worst, leg_status[kLegs * n + i]);
-    out.status[n] = worst;
-    // qd_l = J_l^-1 R^T (pdot_l - v - w x (p_l - t)): the foot's velocity relative to the hip
-    const Transform T = transform_of(out.pose + 6 * n);
-    const double* v = twist.data() + 6 * n;
-    const double* w = v + 3;
-    for (int i = 0; i < kLegs; ++i) {
-      const auto& col = body.columns[std::size_t(i)];
-      const double* p = out.feet + W * n + 3 * i;
-      const double* pd = feet_rate.data() + W * n + 3 * i;
-      const double d[3] = {p[0] - T.t[0], p[1] - T.t[1], p[2] - T.t[2]};
-      const double u[3] = {pd[0] - v[0] - (w[1] * d[2] - w[2] * d[1]),
-                           pd[1] - v[1] - (w[2] * d[0] - w[0] * d[2]),
-                           pd[2] - v[2] - (w[0] * d[1] - w[1] * d[0])};
-      double relative[3], q_leg[3], J[9], qd[3];
-      for (int r = 0; r < 3; ++r)
-        relative[r] = T.R[0][r] * u[0] + T.R[1][r] * u[1] + T.R[2][r] * u[2];
-      for (int j = 0; j < 3; ++j) q_leg[j] = out.q[W * n + col[std::size_t(j)]];
-      body.legs[std::size_t(i)].jacobian(q_leg, J);
-      if (!solve3(J, relative, qd)) qd[0] = qd[1] = qd[2] = quiet_nan<double>();
-      for (int j = 0; j < 3; ++j) out.qd[W * n + col[std::size_t(j)]] = qd[j];
+  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz(), out.feet, nullptr, out.q,
+                                leg_status.data(), ticks, true);
+  // per block of ticks: the gravity torques and the centre of mass (the floating model's G(q), in
+  // lanes), then per tick qd, the stance forces (W), tau = G - J^T f and the margin (M)
+  const int nq = robot.floating.nq(), nv = robot.floating.nv();
+  constexpr int kSub = dynamics::kStaticsSubBlock;
+  std::vector<double> qf(std::size_t(nq) * kSub), wrench(std::size_t(nv) * kSub);
+  double g_body[3 * kSub], jacobians[kLegs][9 * kSub];
+  bool valid[kSub];
+  const double F[3] = {0.0, 0.0, robot.mass * kGravity};  // the weight the feet carry, -m g
+  constexpr double nan = quiet_nan<double>();
+  for (std::ptrdiff_t b0 = 0; b0 < ticks; b0 += kSub) {
+    const int m = int(std::min<std::ptrdiff_t>(kSub, ticks - b0));
+    for (int i = 0; i < m; ++i) {
+      const double* R = rotation.data() + 9 * (b0 + i);
+      const double* q = out.q + W * (b0 + i);
+      double* row = qf.data() + std::ptrdiff_t(nq) * i;
+      std::fill(row, row + nq, 0.0);
+      row[6] = 1.0;  // the body at the origin, the identity quaternion
+      bool finite = true;
+      for (int j = 0; j < W; ++j) finite = finite && std::isfinite(q[j]);
+      valid[i] = finite;
+      if (finite)
+        for (int j = 0; j < W; ++j) row[7 + j] = q[j];
+      for (int r = 0; r < 3; ++r) g_body[3 * i + r] = -kGravity * R[6 + r];  // R^T (0, 0, -g)
+    }
+    dynamics::floating_rnea_k(robot.floating, dynamics::Rows<double>{qf.data(), nq}, nullptr, nullptr,
+                              dynamics::Rows<double>{g_body, 3}, wrench.data(), 0, m, false);
+    for (int l = 0; l < kLegs; ++l) {  // each leg's d foot / d q_l, in lanes
+      const auto& col = body.columns[std::size_t(l)];
+      double q_leg[3 * kSub];
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < 3; ++j) q_leg[3 * i + j] = out.q[W * (b0 + i) + col[std::size_t(j)]];
+      kernels::leg_jacobian<double>(body.legs[std::size_t(l)], q_leg, jacobians[l], m);
+    }
+    for (int i = 0; i < m; ++i) {
+      const std::ptrdiff_t n = b0 + i;
+      const double* R = rotation.data() + 9 * n;
+      const double* pose = out.pose + 6 * n;
+      const double* feet = out.feet + W * n;
+      const double* q = out.q + W * n;
+      const double* v = twist.data() + 6 * n;
+      const double* w = v + 3;
+      const double* G = wrench.data() + std::ptrdiff_t(nv) * i;
+      std::int8_t worst = leg_status[kLegs * n];
+      for (int l = 1; l < kLegs; ++l) worst = std::max(worst, leg_status[kLegs * n + l]);
+      out.status[n] = worst;
+      // the centre of mass across gravity from G's body wrench [f; n] (f = -m g, n = c x f):
+      // c = f x n / |f|^2 (its part along g moves no moment), then in the world
+      const double ff = G[0] * G[0] + G[1] * G[1] + G[2] * G[2], inv = ff > 0.0 ? 1.0 / ff : 0.0;
+      const double cb[3] = {(G[1] * G[5] - G[2] * G[4]) * inv, (G[2] * G[3] - G[0] * G[5]) * inv,
+                            (G[0] * G[4] - G[1] * G[3]) * inv};
+      double c[3];
+      for (int r = 0; r < 3; ++r) c[r] = pose[r] + R[3 * r] * cb[0] + R[3 * r + 1] * cb[1] + R[3 * r + 2] * cb[2];
+      double down[kLegs][3], forces[kLegs][3] = {}, flat[kLegs][2], residual[6];
+      int feet_down = 0, slot[kLegs];
+      for (int l = 0; l < kLegs; ++l) {
+        slot[l] = -1;
+        if (!out.contact[kLegs * n + l]) continue;
+        slot[l] = feet_down;
+        for (int r = 0; r < 3; ++r) down[feet_down][r] = feet[3 * l + r];
+        flat[feet_down][0] = feet[3 * l], flat[feet_down][1] = feet[3 * l + 1];
+        ++feet_down;
+      }
+      double f_down[kLegs][3];
+      stance_forces(feet_down, down, c, F, f_down, residual);
+      for (int l = 0; l < kLegs; ++l)
+        if (slot[l] >= 0)
+          for (int r = 0; r < 3; ++r) forces[l][r] = f_down[slot[l]][r];
+      out.margin[n] = valid[i] ? detail_statics_margin(flat, feet_down, c) : nan;
+      for (int a = 0; a < 6; ++a) out.residual[6 * n + a] = valid[i] ? residual[a] : nan;
+      for (int l = 0; l < kLegs; ++l) {
+        const auto& col = body.columns[std::size_t(l)];
+        const double* p = feet + 3 * l;
+        const double* pd = feet_rate.data() + W * n + 3 * l;
+        // qd_l = J_l^-1 R^T (pdot_l - v - w x (p_l - t)): the foot's velocity relative to the hip
+        const double d[3] = {p[0] - pose[0], p[1] - pose[1], p[2] - pose[2]};
+        const double u[3] = {pd[0] - v[0] - (w[1] * d[2] - w[2] * d[1]), pd[1] - v[1] - (w[2] * d[0] - w[0] * d[2]),
+                             pd[2] - v[2] - (w[0] * d[1] - w[1] * d[0])};
+        double relative[3], qd[3], fb[3];
+        for (int r = 0; r < 3; ++r) {
+          relative[r] = R[r] * u[0] + R[3 + r] * u[1] + R[6 + r] * u[2];
+          fb[r] = R[r] * forces[l][0] + R[3 + r] * forces[l][1] + R[6 + r] * forces[l][2];  // R^T f
+        }
+        const double* J = jacobians[l] + 9 * i;
+        if (!solve3(J, relative, qd)) qd[0] = qd[1] = qd[2] = nan;
+        for (int j = 0; j < 3; ++j) {
+          const int column = col[std::size_t(j)];
+          out.qd[W * n + column] = qd[j];
+          // tau = G - (R J)^T f = G - J^T (R^T f)
+          out.tau[W * n + column] =
+              valid[i] ? G[6 + column] - (J[j] * fb[0] + J[3 + j] * fb[1] + J[6 + j] * fb[2]) : nan;
+        }
+      }
     }
   }
-  // the statics: tau = G - J^T f with the least-squares stance forces (W), the margin (M)
-  dynamics::StaticsRows<double> rows{out.pose, 6, BodyPoseFormat::Euler, out.q, W, false};
-  rows.stance = stance.data(), rows.stance_stride = kLegs;
-  const double gravity[3] = {0.0, 0.0, -kGravity};
-  std::vector<std::int8_t> stance_status(static_cast<std::size_t>(ticks));
-  dynamics::robot_standing(robot, xyz(), gravity, rows, out.tau, forces.data(),
-                           stance_status.data(), out.margin, out.residual, ticks);
 }
 
 #define SPOTKIN_INSTANTIATE(L)                                                                    \

@@ -21,7 +21,7 @@ One tick, from t to t + dt (:func:`advance`)
 3. The body's planar velocity (body frame: vx, vy, yaw rate) moves towards the target by at most
    accel dt (vx, vy each) and yaw_accel dt: the target is the command times ``moving`` (0 while
    standing) times the step-fit scale s = 1 / max(1, max_i lambda_i), lambda_i =
-   hypot(Dx / room_x, Dy / room_y) with D = (d T / 2) (v + omega z x r_i) the half stride of leg i
+   sqrt((Dx / room_x)^2 + (Dy / room_y)^2) with D = (d T / 2) (v + omega z x r_i) the half stride of leg i
    (r_i its nominal foot), room = max(eta rho - sway, rho / 10) per axis, rho its step reach
    (``step_reach``), eta = STEP_FIT and sway = w (|s0| + sum_j |(X_j, Y_j)|) the most the crawl's
    sway (C) moves the body: a command the legs cannot follow is slowed to what they reach (reported
@@ -311,7 +311,8 @@ def speed_scale(P: dict, target) -> float:
         room = [max(STEP_FIT * reach[k] - sway[k], 0.1 * reach[k]) for k in (0, 1)]
         dx = half_stance * (target[0] - target[2] * r[1])
         dy = half_stance * (target[1] + target[2] * r[0])
-        worst = max(worst, math.hypot(dx / room[0], dy / room[1]))
+        a, b = dx / room[0], dy / room[1]
+        worst = max(worst, math.sqrt(a * a + b * b))
     return 1.0 / worst
 
 

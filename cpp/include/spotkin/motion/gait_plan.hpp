@@ -66,6 +66,10 @@ struct PlannerState {
   double p_stance[kLegs][3] = {}, p_touchdown[kLegs][3] = {};
   bool step_shortened[kLegs] = {};
   double speed_scale = 1;
+  // derived, for speed: the settled gait's step-fit scale under the command (< 0: not yet known;
+  // change() forgets it), and the attitude's cosines and sines
+  mutable double settled_scale = -1;
+  double cos_roll = 1, sin_roll = 0, cos_pitch = 1, sin_pitch = 0;
   // closed-loop inputs (a controller's; absent in a plan)
   bool has_v_measured = false, has_ground = false, has_ground_offsets = false,
        has_p_measured = false;
@@ -76,6 +80,7 @@ struct PlannerState {
 // One tick's kinematic outputs (reference sample, before the IK).
 struct TickKinematics {
   double pose[6];  // [x, y, z, a, b, c], Euler "XYZ"
+  double R[3][3];  // its rotation
   double feet[kLegs][3], feet_rate[kLegs][3];
   bool contact[kLegs];
   double linear[3], angular[3];  // the body's twist, world axes
