@@ -20,19 +20,6 @@ namespace {
 constexpr double kPiValue = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPiValue;
 
-struct Quintic {
-  double b, db, d2b;
-};
-
-// (Q): b(x) = 10 x^3 - 15 x^4 + 6 x^5 at x clamped to [0, 1], with b' and b''.
-inline Quintic quintic(double x) noexcept {
-  x = std::min(std::max(x, 0.0), 1.0);
-  return {x * x * x * (10.0 - 15.0 * x + 6.0 * x * x), 30.0 * x * x * (1.0 - x) * (1.0 - x),
-          60.0 * x * (1.0 - x) * (1.0 - 2.0 * x)};
-}
-
-inline double frac(double x) noexcept { return x - std::floor(x); }
-
 // x mod 1 as Python's float % (the sign of the divisor).
 inline double mod1(double x) noexcept {
   double m = std::fmod(x, 1.0);
@@ -44,16 +31,25 @@ inline double mod1(double x) noexcept {
   return m;
 }
 
-inline double floor_height(const PlannerState& s, double x, double y) noexcept {
-  return s.has_ground ? s.ground[0] + s.ground[1] * x + s.ground[2] * y : 0.0;
-}
-
-// Step 1: the gait's numbers at t and (when rates) their time derivatives.
 // Whether the blend of step 1 is over at t (the gait's numbers are the new ones).
 inline bool settled_at(const PlannerState& s, double t) noexcept {
   return s.duration <= 0.0 || t >= s.t0 + s.duration;
 }
 
+}  // namespace
+
+// (Q): b(x) = 10 x^3 - 15 x^4 + 6 x^5 at x clamped to [0, 1], with b' and b''.
+Quintic quintic(double x) noexcept {
+  x = std::min(std::max(x, 0.0), 1.0);
+  return {x * x * x * (10.0 - 15.0 * x + 6.0 * x * x), 30.0 * x * x * (1.0 - x) * (1.0 - x),
+          60.0 * x * (1.0 - x) * (1.0 - 2.0 * x)};
+}
+
+double floor_height(const PlannerState& s, double x, double y) noexcept {
+  return s.has_ground ? s.ground[0] + s.ground[1] * x + s.ground[2] * y : 0.0;
+}
+
+// Step 1: the gait's numbers at t and (when rates) their time derivatives.
 void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates) noexcept {
   if (settled_at(s, t)) {
     P = s.new_numbers;
@@ -67,6 +63,8 @@ void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates
     if (rates) (*rates)[k] = delta * q.db / s.duration;
   }
 }
+
+namespace {
 
 // D of step 1: max(T_new, 2 max_i |delta o_i| max(T_old, T_new)).
 double blend_duration(const GaitNumbers& old, const GaitNumbers& nw) noexcept {
@@ -127,11 +125,16 @@ double speed_scale(const GaitNumbers& P, const double target[3]) noexcept {
 double target_of(const PlannerState& s, const GaitNumbers& P, double target[3], bool settled) noexcept {
   for (int k = 0; k < 3; ++k) target[k] = s.command[k] * P[kMoving];
   double scale;
-  if (settled && s.settled_scale >= 0.0) {
+  const bool same = s.settled_command[0] == s.command[0] && s.settled_command[1] == s.command[1] &&
+                    s.settled_command[2] == s.command[2];
+  if (settled && same && s.settled_scale >= 0.0) {
     scale = s.settled_scale;
   } else {
     scale = speed_scale(P, target);
-    if (settled) s.settled_scale = scale;
+    if (settled) {
+      s.settled_scale = scale;
+      for (int k = 0; k < 3; ++k) s.settled_command[k] = s.command[k];
+    }
   }
   for (int k = 0; k < 3; ++k) target[k] *= scale;
   return scale;
@@ -167,6 +170,8 @@ struct Predictor {
   }
 };
 
+}  // namespace
+
 // (C): the crawl's sway delta and d delta / dt (body frame), with its weight and base offset.
 void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phases,
                  const double* phase_rates, double value[2], double rate[2]) noexcept {
@@ -195,7 +200,7 @@ void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phas
 // [x, y, z, a, b, c] with R = Rx(a) Ry(b) Rz(c) = Rz(psi) Ry(pitch) Rx(roll), c unwrapped near psi;
 // R_out (optional) that rotation.
 void body_pose(double x, double y, double z, double psi, double cz, double sz, const PlannerState& s, double pose[6],
-               double (*R_out)[3] = nullptr) noexcept {
+               double (*R_out)[3]) noexcept {
   const double cy = s.cos_pitch, sy = s.sin_pitch, cx = s.cos_roll, sx = s.sin_roll;
   const double R00 = cz * cy, R01 = -sz * cx + cz * sy * sx, R02 = sz * sx + cz * sy * cx;
   const double R12 = -cz * sx + sz * sy * cx, R22 = cy * cx;
@@ -212,6 +217,8 @@ void body_pose(double x, double y, double z, double psi, double cz, double sz, c
       for (int k = 0; k < 3; ++k) R_out[r][k] = R[r][k];
   }
 }
+
+namespace {
 
 const EulerSequence& xyz() noexcept {
   static const EulerSequence seq = EulerSequence::from_code(0 + 3 * 1 + 9 * 2);  // "XYZ"
@@ -323,22 +330,27 @@ void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int 
   for (int k = 0; k < 3; ++k) s.p_touchdown[i][k] = p[k];
 }
 
-// (S): the swing foot's position and dp/ds at s.
-void swing(const double p0[3], const double p1[3], double s, double height, double p[3],
-           double dp[3]) noexcept {
+}  // namespace
+
+// (S): the swing foot's position, dp/ds and d2p/ds2 at s.
+void swing(const double p0[3], const double p1[3], double s, double height, double p[3], double dp[3],
+           double d2p[3]) noexcept {
   const Quintic h = quintic(s);
-  for (int k = 0; k < 2; ++k) p[k] = p0[k] + (p1[k] - p0[k]) * h.b, dp[k] = (p1[k] - p0[k]) * h.db;
+  for (int k = 0; k < 2; ++k)
+    p[k] = p0[k] + (p1[k] - p0[k]) * h.b, dp[k] = (p1[k] - p0[k]) * h.db, d2p[k] = (p1[k] - p0[k]) * h.d2b;
   const double apex = std::max(p0[2], p1[2]) + height;
   if (s <= 0.5) {
     const Quintic v = quintic(2.0 * s);
     const double rise = apex - p0[2];
-    p[2] = p0[2] + rise * v.b, dp[2] = 2.0 * rise * v.db;
+    p[2] = p0[2] + rise * v.b, dp[2] = 2.0 * rise * v.db, d2p[2] = 4.0 * rise * v.d2b;
   } else {
     const Quintic v = quintic(2.0 * s - 1.0);
     const double fall = p1[2] - apex;
-    p[2] = apex + fall * v.b, dp[2] = 2.0 * fall * v.db;
+    p[2] = apex + fall * v.b, dp[2] = 2.0 * fall * v.db, d2p[2] = 4.0 * fall * v.d2b;
   }
 }
+
+namespace {
 
 // x = A^-1 b for a 3x3 row-major A by its adjugate (Cramer); false when singular or not finite.
 bool solve3(const double* A, const double* b, double* x) noexcept {
@@ -419,9 +431,8 @@ void start(const GaitNumbers& gait, const double command[3], const double attitu
   s = PlannerState{};
   s.clock_rate = 1.0 / gait[kPeriod];
   for (int k = 0; k < 3; ++k) s.command[k] = command[k];
-  s.roll = attitude[0], s.pitch = attitude[1];
-  s.cos_roll = std::cos(s.roll), s.sin_roll = std::sin(s.roll);
-  s.cos_pitch = std::cos(s.pitch), s.sin_pitch = std::sin(s.pitch);
+  s.roll = s.pitch = 0.0;  // cos 1, sin 0
+  set_attitude(s, attitude[0], attitude[1]);
   s.old_numbers = gait;
   s.old_numbers[kMoving] = 0.0;  // the start: the speed blends in over the first period
   s.new_numbers = gait;
@@ -431,6 +442,11 @@ void start(const GaitNumbers& gait, const double command[3], const double attitu
     s.cycles[i] = std::floor(gait[kOffsets + i]);
     for (int k = 0; k < 3; ++k) s.p_stance[i][k] = s.p_touchdown[i][k] = gait[kStance + 3 * i + k];
   }
+}
+
+void set_attitude(PlannerState& s, double roll, double pitch) noexcept {
+  if (roll != s.roll) s.roll = roll, s.cos_roll = std::cos(roll), s.sin_roll = std::sin(roll);
+  if (pitch != s.pitch) s.pitch = pitch, s.cos_pitch = std::cos(pitch), s.sin_pitch = std::sin(pitch);
 }
 
 void change(PlannerState& s, const GaitNumbers* gait, const double* command) noexcept {
@@ -501,9 +517,9 @@ void sample(const PlannerState& s, TickKinematics& out) noexcept {
     }
     shortened = shortened || s.step_shortened[i];
     const double lift = s.lift_phase[i];
-    double dp[3];
-    swing(s.p_stance[i], s.p_touchdown[i], (phases[i] - lift) / (1.0 - lift), s.lift_height[i],
-          out.feet[i], dp);
+    double dp[3], d2p[3];
+    swing(s.p_stance[i], s.p_touchdown[i], (phases[i] - lift) / (1.0 - lift), s.lift_height[i], out.feet[i], dp,
+          d2p);
     for (int k = 0; k < 3; ++k) out.feet_rate[i][k] = dp[k] * rates[i] / (1.0 - lift);
   }
   double delta[2], delta_rate[2];
@@ -584,7 +600,6 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
       const double* R = rotation.data() + 9 * n;
       const double* pose = out.pose + 6 * n;
       const double* feet = out.feet + W * n;
-      const double* q = out.q + W * n;
       const double* v = twist.data() + 6 * n;
       const double* w = v + 3;
       const double* G = wrench.data() + std::ptrdiff_t(nv) * i;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 
 #include "spotkin/body.hpp"
@@ -68,7 +69,7 @@ struct PlannerState {
   double speed_scale = 1;
   // derived, for speed: the settled gait's step-fit scale under the command (< 0: not yet known;
   // change() forgets it), and the attitude's cosines and sines
-  mutable double settled_scale = -1;
+  mutable double settled_scale = -1, settled_command[3] = {0, 0, 0};
   double cos_roll = 1, sin_roll = 0, cos_pitch = 1, sin_pitch = 0;
   // closed-loop inputs (a controller's; absent in a plan)
   bool has_v_measured = false, has_ground = false, has_ground_offsets = false,
@@ -92,6 +93,24 @@ void start(const GaitNumbers& gait, const double command[3], const double attitu
 // A new gait (blended from now) and / or a new command; either may be null.
 void change(PlannerState& s, const GaitNumbers* gait, const double* command) noexcept;
 void advance(const Body& body, PlannerState& s, double dt) noexcept;
+// The commanded roll and pitch of the body (a controller's, tick by tick).
+void set_attitude(PlannerState& s, double roll, double pitch) noexcept;
+// Reference formulas the controller shares: (Q), (S), (C), step 1 and the body pose.
+struct Quintic {
+  double b, db, d2b;
+};
+Quintic quintic(double x) noexcept;
+void swing(const double p0[3], const double p1[3], double s, double height, double p[3], double dp[3],
+           double d2p[3]) noexcept;
+void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates) noexcept;
+void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phases, const double* phase_rates,
+                 double value[2], double rate[2]) noexcept;
+double floor_height(const PlannerState& s, double x, double y) noexcept;
+// [x, y, z, a, b, c] (Euler "XYZ") of the body at (x, y, z), heading psi (cos, sin given), the state's
+// attitude; R (optional): its rotation.
+void body_pose(double x, double y, double z, double psi, double cos_psi, double sin_psi, const PlannerState& s,
+               double pose[6], double (*R)[3] = nullptr) noexcept;
+inline double frac(double x) noexcept { return x - std::floor(x); }
 void sample(const PlannerState& s, TickKinematics& out) noexcept;
 
 // One command's plan over `ticks` ticks t_k = k / rate, written at row k of each output:
