@@ -158,7 +158,7 @@ def test_a_tick_costs_under_two_milliseconds():
 
 def command_q(controller):
     """The last planned targets (the robot following them exactly)."""
-    return controller._memories[0].q
+    return controller._last["q"][0]
 
 
 def _legs_at(robot, pose, feet):

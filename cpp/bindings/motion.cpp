@@ -5,11 +5,15 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "numpy_boundary.hpp"
 #include "robot_statics.hpp"
+#include "spotkin/motion/controller.hpp"
 #include "spotkin/motion/gait_plan.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -77,6 +81,159 @@ py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle veloc
   return py::make_tuple(pose, feet, contact, q, qd, tau, status, margin, shortened, residual);
 }
 
+// ---------------------------------------------------------------- the closed-loop controller
+
+// The controller's compiled part: the robot, its constants, its gaits (resolved, by index) and each
+// robot's state between ticks (created by the first step, dropped by reset).
+struct ControllerCore {
+  const RobotStatics& robot;
+  motion::ControllerConfig config;
+  std::vector<motion::GaitNumbers> gaits;
+  std::vector<motion::ControllerMemory> memories;
+};
+
+void copy_exact(py::handle obj, const char* name, const Shape& shape, double* out) {
+  const auto arr = exact(obj, name, shape);
+  std::copy(arr.data(), arr.data() + arr.size(), out);
+}
+
+std::unique_ptr<ControllerCore> make_controller(const RobotStatics& r, double h, double body_omega,
+                                                py::handle body_inertia, py::handle kp,
+                                                py::handle kd, py::handle stance_kp,
+                                                py::handle stance_kd, py::handle effort,
+                                                py::handle leg_inertia, py::handle attitude) {
+  using motion::kLegs;
+  if (r.body.n_legs() != kLegs)
+    throw py::value_error("the gait controller takes a quadruped (4 legs)");
+  auto core = std::unique_ptr<ControllerCore>(new ControllerCore{r, {}, {}, {}});
+  motion::ControllerConfig& c = core->config;
+  c.h = h, c.mass = r.mass, c.body_omega = body_omega;
+  const py::ssize_t W = 3 * kLegs;
+  copy_exact(body_inertia, "body_inertia", {3, 3}, c.body_inertia);
+  copy_exact(kp, "kp", {W}, c.kp);
+  copy_exact(kd, "kd", {W}, c.kd);
+  copy_exact(stance_kp, "stance_kp", {W}, c.stance_kp);
+  copy_exact(stance_kd, "stance_kd", {W}, c.stance_kd);
+  copy_exact(effort, "effort", {W}, c.effort);
+  copy_exact(leg_inertia, "leg_inertia", {kLegs, 3, 3}, &c.leg_inertia[0][0]);
+  copy_exact(attitude, "attitude", {2}, c.attitude);
+  if (!(h > 0.0) || !std::isfinite(h) || !std::isfinite(body_omega))
+    throw py::value_error("h must be finite and > 0, and body_omega finite");
+  return core;
+}
+
+int add_gait(ControllerCore& core, py::handle numbers) {
+  motion::GaitNumbers gait;
+  copy_exact(numbers, "gait", {motion::kGaitNumbers}, gait.v);
+  if (!(gait[motion::kPeriod] > 0.0) || !(gait[motion::kDuty] > 0.0 && gait[motion::kDuty] <= 1.0))
+    throw py::value_error("the gait's period must be > 0 and its duty in (0, 1]");
+  core.gaits.push_back(gait);
+  return int(core.gaits.size()) - 1;
+}
+
+// One tick of every robot: the state's arrays (B, width) each, contact (B, 4) bool or None, the
+// command (B, 3). Returns a dict of (B, ...) arrays: the command (q, qd, tau, kp, kd, contact) and
+// the details.
+py::dict controller_step(ControllerCore& core, double t, int start_gait, int new_gait,
+                         py::handle position, py::handle quaternion, py::handle linear_velocity,
+                         py::handle angular_velocity, py::handle q_obj, py::handle qd_obj,
+                         py::handle contact_obj, py::handle command) {
+  using motion::kLegs;
+  constexpr py::ssize_t W = 3 * kLegs;
+  if (!std::isfinite(t)) throw py::value_error("t must be finite");
+  const int n_gaits = int(core.gaits.size());
+  if (start_gait < 0 || start_gait >= n_gaits || new_gait < -1 || new_gait >= n_gaits)
+    throw py::value_error("gait index out of range");
+  const auto pos = exact(position, "position", {-1, 3});
+  const py::ssize_t B = pos.shape(0);
+  const auto quat = exact(quaternion, "quaternion", {B, 4});
+  const auto lin = exact(linear_velocity, "linear_velocity", {B, 3});
+  const auto ang = exact(angular_velocity, "angular_velocity", {B, 3});
+  const auto q = exact(q_obj, "q", {B, W});
+  const auto qd = exact(qd_obj, "qd", {B, W});
+  const auto cmd = exact(command, "velocity", {B, 3});
+  py::array_t<bool, py::array::c_style | py::array::forcecast> contact;
+  if (!contact_obj.is_none()) {
+    contact = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(contact_obj);
+    if (!contact || contact.ndim() != 2 || contact.shape(0) != B || contact.shape(1) != kLegs)
+      throw py::value_error("contact must have shape (" + std::to_string(B) + ", 4)");
+  }
+  for (const auto* arr : {&pos, &quat, &lin, &ang, &q, &qd, &cmd})
+    for (py::ssize_t k = 0; k < arr->size(); ++k)
+      if (!std::isfinite(arr->data()[k]))
+        throw py::value_error("the state and the command must be finite, got NaN or Inf");
+  if (core.memories.empty()) core.memories.resize(std::size_t(B));
+  if (py::ssize_t(core.memories.size()) != B)
+    throw py::value_error("the batch changed from " + std::to_string(core.memories.size()) +
+                          " to " + std::to_string(B) + " robots: call reset() first");
+  for (const auto& memory : core.memories)
+    if (memory.started && t - memory.t < -1e-9)
+      throw py::value_error("t went backwards: " + std::to_string(t) + " after " +
+                            std::to_string(memory.t) + ": call reset() first");
+  std::vector<motion::ControllerOutput> outs(static_cast<std::size_t>(B));
+  py::array_t<double> seconds(B);
+  double* wall = seconds.mutable_data();
+  {
+    ReleaseGilFor release(B);
+    on_robot(core.robot, 1, [&](const auto& robot) {
+      parallel_for(B, 64, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
+        for (std::ptrdiff_t b = begin; b < end; ++b) {
+          const auto start = std::chrono::steady_clock::now();
+          const motion::ControllerInput in{
+              t,
+              pos.data() + 3 * b,
+              quat.data() + 4 * b,
+              lin.data() + 3 * b,
+              ang.data() + 3 * b,
+              q.data() + W * b,
+              qd.data() + W * b,
+              contact_obj.is_none() ? nullptr : contact.data() + kLegs * b,
+              cmd.data() + 3 * b};
+          motion::controller_tick(robot, core.config, core.gaits.data(), start_gait, new_gait,
+                                  core.memories[std::size_t(b)], in, outs[std::size_t(b)]);
+          wall[b] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
+      });
+    });
+  }
+  py::dict result;
+  auto put = [&](const char* name, const Shape& trailing, auto member) {
+    using Field = std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>;
+    Shape shape{B};
+    shape.insert(shape.end(), trailing.begin(), trailing.end());
+    py::array_t<Field> arr(shape);
+    Field* dst = arr.mutable_data();
+    const std::size_t width = sizeof(outs[0].*member) / sizeof(Field);
+    for (py::ssize_t b = 0; b < B; ++b) {
+      const Field* src = reinterpret_cast<const Field*>(&(outs[std::size_t(b)].*member));
+      std::copy(src, src + width, dst + width * std::size_t(b));
+    }
+    result[name] = arr;
+  };
+  using Out = motion::ControllerOutput;
+  put("q", {W}, &Out::q);
+  put("qd", {W}, &Out::qd);
+  put("tau", {W}, &Out::tau);
+  put("kp", {W}, &Out::kp);
+  put("kd", {W}, &Out::kd);
+  put("contact", {kLegs}, &Out::contact);
+  put("body_pose", {6}, &Out::body_pose);
+  put("feet", {kLegs, 3}, &Out::feet);
+  put("loaded", {kLegs}, &Out::loaded);
+  put("clipped", {W}, &Out::clipped);
+  put("shortened", {}, &Out::shortened);
+  put("reaching", {kLegs}, &Out::reaching);
+  put("margin", {}, &Out::margin);
+  put("measured_margin", {}, &Out::measured_margin);
+  put("forces", {kLegs, 3}, &Out::forces);
+  put("residual", {6}, &Out::residual);
+  put("wrench", {6}, &Out::wrench);
+  put("ground", {3}, &Out::ground);
+  put("status", {}, &Out::status);
+  result["time"] = seconds;
+  return result;
+}
+
 }  // namespace
 
 void bind_motion(py::module_& m) {
@@ -85,6 +242,18 @@ void bind_motion(py::module_& m) {
         "Plans of a quadruped's walk for commands (B, 3): (pose, feet, contact, q, qd, tau, "
         "status, margin, "
         "shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,).");
+  py::class_<ControllerCore>(m, "GaitControllerCore")
+      .def(py::init(&make_controller), py::arg("robot"), py::arg("h"), py::arg("body_omega"),
+           py::arg("body_inertia"), py::arg("kp"), py::arg("kd"), py::arg("stance_kp"),
+           py::arg("stance_kd"), py::arg("effort"), py::arg("leg_inertia"), py::arg("attitude"),
+           py::keep_alive<1, 2>())
+      .def("add_gait", &add_gait, py::arg("gait"))
+      .def("reset", [](ControllerCore& c) { c.memories.clear(); })
+      .def_property_readonly("robots", [](const ControllerCore& c) { return c.memories.size(); })
+      .def("step", &controller_step, py::arg("t"), py::arg("start_gait"), py::arg("new_gait"),
+           py::arg("position"), py::arg("quaternion"), py::arg("linear_velocity"),
+           py::arg("angular_velocity"), py::arg("q"), py::arg("qd"), py::arg("contact"),
+           py::arg("velocity"));
 }
 
 }  // namespace spotkin::bindings

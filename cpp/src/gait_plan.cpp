@@ -4,7 +4,9 @@
 #include "spotkin/motion/gait_plan.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "spotkin/dynamics/kernels.hpp"
@@ -120,9 +122,10 @@ double speed_scale(const GaitNumbers& P, const double target[3]) noexcept {
   return 1.0 / worst;
 }
 
-// Step 3's target: the command times `moving` times the step-fit scale (returned). Once the gait has
-// settled (P is the new gait's numbers), the scale is the state's cached one: the same numbers.
-double target_of(const PlannerState& s, const GaitNumbers& P, double target[3], bool settled) noexcept {
+// Step 3's target: the command times `moving` times the step-fit scale (returned). Once the gait
+// has settled (P is the new gait's numbers), the scale is the state's cached one: the same numbers.
+double target_of(const PlannerState& s, const GaitNumbers& P, double target[3],
+                 bool settled) noexcept {
   for (int k = 0; k < 3; ++k) target[k] = s.command[k] * P[kMoving];
   double scale;
   const bool same = s.settled_command[0] == s.command[0] && s.settled_command[1] == s.command[1] &&
@@ -139,7 +142,6 @@ double target_of(const PlannerState& s, const GaitNumbers& P, double target[3], 
   for (int k = 0; k < 3; ++k) target[k] *= scale;
   return scale;
 }
-
 
 // The plan's own motion ahead (reference predict): steps 1-3 without the legs, kPredictionSteps
 // equal steps between successive horizons.
@@ -199,8 +201,8 @@ void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phas
 
 // [x, y, z, a, b, c] with R = Rx(a) Ry(b) Rz(c) = Rz(psi) Ry(pitch) Rx(roll), c unwrapped near psi;
 // R_out (optional) that rotation.
-void body_pose(double x, double y, double z, double psi, double cz, double sz, const PlannerState& s, double pose[6],
-               double (*R_out)[3]) noexcept {
+void body_pose(double x, double y, double z, double psi, double cz, double sz,
+               const PlannerState& s, double pose[6], double (*R_out)[3]) noexcept {
   const double cy = s.cos_pitch, sy = s.sin_pitch, cx = s.cos_roll, sx = s.sin_roll;
   const double R00 = cz * cy, R01 = -sz * cx + cz * sy * sx, R02 = sz * sx + cz * sy * cx;
   const double R12 = -cz * sx + sz * sy * cx, R22 = cy * cx;
@@ -210,9 +212,8 @@ void body_pose(double x, double y, double z, double psi, double cz, double sz, c
   c += kTwoPi * std::nearbyint((psi - c) / kTwoPi);
   pose[0] = x, pose[1] = y, pose[2] = z, pose[3] = a, pose[4] = b, pose[5] = c;
   if (R_out) {
-    const double R[3][3] = {{R00, R01, R02},
-                            {sz * cy, sz * sy * sx + cz * cx, R12},
-                            {-sy, cy * sx, R22}};
+    const double R[3][3] = {
+        {R00, R01, R02}, {sz * cy, sz * sy * sx + cz * cx, R12}, {-sy, cy * sx, R22}};
     for (int r = 0; r < 3; ++r)
       for (int k = 0; k < 3; ++k) R_out[r][k] = R[r][k];
   }
@@ -333,11 +334,12 @@ void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int 
 }  // namespace
 
 // (S): the swing foot's position, dp/ds and d2p/ds2 at s.
-void swing(const double p0[3], const double p1[3], double s, double height, double p[3], double dp[3],
-           double d2p[3]) noexcept {
+void swing(const double p0[3], const double p1[3], double s, double height, double p[3],
+           double dp[3], double d2p[3]) noexcept {
   const Quintic h = quintic(s);
   for (int k = 0; k < 2; ++k)
-    p[k] = p0[k] + (p1[k] - p0[k]) * h.b, dp[k] = (p1[k] - p0[k]) * h.db, d2p[k] = (p1[k] - p0[k]) * h.d2b;
+    p[k] = p0[k] + (p1[k] - p0[k]) * h.b, dp[k] = (p1[k] - p0[k]) * h.db,
+    d2p[k] = (p1[k] - p0[k]) * h.d2b;
   const double apex = std::max(p0[2], p1[2]) + height;
   if (s <= 0.5) {
     const Quintic v = quintic(2.0 * s);
@@ -354,19 +356,24 @@ namespace {
 
 // x = A^-1 b for a 3x3 row-major A by its adjugate (Cramer); false when singular or not finite.
 bool solve3(const double* A, const double* b, double* x) noexcept {
-  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8], A[3] * A[7] - A[4] * A[6]};
+  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8],
+                        A[3] * A[7] - A[4] * A[6]};
   const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
   if (!(det != 0.0) || !std::isfinite(det)) return false;
   // rows of adj(A) = the cofactors' transpose
   const double inv = 1.0 / det;
-  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) * inv;
-  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) * inv;
-  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) * inv;
+  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) *
+         inv;
+  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) *
+         inv;
+  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) *
+         inv;
   return std::isfinite(x[0] + x[1] + x[2]);
 }
 
 inline void cross(const double* a, const double* b, double* out) noexcept {
-  out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
+  out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2],
+  out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
 // (W) in closed form. The minimum-norm forces with sum f_i = F and, in least squares,
@@ -375,13 +382,14 @@ inline void cross(const double* a, const double* b, double* out) noexcept {
 // Helmert form, so y = pinv(K) (-m) is its z = pinv(M N) (-M f_0) mapped back). Feet off one line:
 // K is invertible and the moment balances; on one line (two feet, say) along d, K = S (I - d d^T)
 // with S = sum |s_i|^2, and the moment about the line is left (the residual). k = 0: no force.
-void stance_forces(int k, const double (*p)[3], const double c[3], const double F[3], double (*f)[3],
-                   double residual[6]) noexcept {
+void stance_forces(int k, const double (*p)[3], const double c[3], const double F[3],
+                   double (*f)[3], double residual[6]) noexcept {
   if (k == 0) {
     for (int a = 0; a < 3; ++a) residual[a] = F[a], residual[3 + a] = 0.0;
     return;
   }
-  double mean[3] = {0.0, 0.0, 0.0}, s[kLegs][3], K[9] = {}, S = 0.0, longest = -1.0, d[3] = {0.0, 0.0, 0.0};
+  double mean[3] = {0.0, 0.0, 0.0}, s[kLegs][3], K[9] = {}, S = 0.0, longest = -1.0,
+         d[3] = {0.0, 0.0, 0.0};
   for (int i = 0; i < k; ++i)
     for (int a = 0; a < 3; ++a) mean[a] += p[i][a];
   for (int a = 0; a < 3; ++a) mean[a] /= k;
@@ -397,7 +405,8 @@ void stance_forces(int k, const double (*p)[3], const double c[3], const double 
   double m[3], y[3] = {0.0, 0.0, 0.0};
   cross(r, F, m);
   const double minus_m[3] = {-m[0], -m[1], -m[2]};
-  // full rank: the smallest eigenvalue above ~1e-9 of the largest (det = l1 l2 l3 against (tr / 2)^3)
+  // full rank: the smallest eigenvalue above ~1e-9 of the largest (det = l1 l2 l3 against (tr /
+  // 2)^3)
   const double half_trace = S;  // tr K = 2 S
   const double det = K[0] * (K[4] * K[8] - K[5] * K[7]) - K[1] * (K[3] * K[8] - K[5] * K[6]) +
                      K[2] * (K[3] * K[7] - K[4] * K[6]);
@@ -413,15 +422,12 @@ void stance_forces(int k, const double (*p)[3], const double c[3], const double 
   for (int i = 0; i < k; ++i) {
     double ys[3], arm[3], mi[3];
     cross(y, s[i], ys);
-    for (int a = 0; a < 3; ++a) f[i][a] = F[a] / k + ys[a], total[a] += f[i][a], arm[a] = p[i][a] - c[a];
+    for (int a = 0; a < 3; ++a)
+      f[i][a] = F[a] / k + ys[a], total[a] += f[i][a], arm[a] = p[i][a] - c[a];
     cross(arm, f[i], mi);
     for (int a = 0; a < 3; ++a) moment[a] += mi[a];
   }
   for (int a = 0; a < 3; ++a) residual[a] = F[a] - total[a], residual[3 + a] = -moment[a];
-}
-
-inline double detail_statics_margin(const double (*flat)[2], int k, const double c[3]) noexcept {
-  return dynamics::detail_statics::support_margin(flat, k, c);
 }
 
 }  // namespace
@@ -444,9 +450,59 @@ void start(const GaitNumbers& gait, const double command[3], const double attitu
   }
 }
 
+namespace {
+
+double cross2(const double* o, const double* a, const double* b) noexcept {
+  return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+double segment_distance(const double* c, const double* a, const double* b) noexcept {
+  const double ab[2] = {b[0] - a[0], b[1] - a[1]};
+  const double length2 = ab[0] * ab[0] + ab[1] * ab[1];
+  double t = length2 == 0.0 ? 0.0 : ((c[0] - a[0]) * ab[0] + (c[1] - a[1]) * ab[1]) / length2;
+  t = std::min(std::max(t, 0.0), 1.0);
+  return std::hypot(c[0] - a[0] - t * ab[0], c[1] - a[1] - t * ab[1]);
+}
+
+}  // namespace
+
+double support_margin(const double (*points)[2], int k, const double c[2]) noexcept {
+  // the distinct points in lexicographic order, then Andrew's monotone chain (counter-clockwise)
+  std::array<double, 2> pts[kLegs];
+  int n = 0;
+  for (int i = 0; i < k; ++i) pts[n++] = {points[i][0], points[i][1]};
+  std::sort(pts, pts + n);
+  n = int(std::unique(pts, pts + n) - pts);
+  if (n == 0) return -std::numeric_limits<double>::infinity();
+  const double* hull[2 * kLegs];
+  int h = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const double* chain[kLegs];
+    int m = 0;
+    for (int j = 0; j < n; ++j) {
+      const double* p = pts[pass == 0 ? j : n - 1 - j].data();
+      while (m >= 2 && cross2(chain[m - 2], chain[m - 1], p) <= 1e-12) --m;
+      chain[m++] = p;
+    }
+    for (int j = 0; j + 1 < m; ++j) hull[h++] = chain[j];
+  }
+  if (h < 3) return -segment_distance(c, pts[0].data(), pts[n - 1].data());
+  double inside = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < h; ++j) {
+    const double *a = hull[j], *b = hull[(j + 1) % h];
+    inside = std::min(inside, cross2(a, b, c) / std::hypot(b[0] - a[0], b[1] - a[1]));
+  }
+  if (inside >= 0.0) return inside;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < h; ++j)
+    nearest = std::min(nearest, segment_distance(c, hull[j], hull[(j + 1) % h]));
+  return -nearest;
+}
+
 void set_attitude(PlannerState& s, double roll, double pitch) noexcept {
   if (roll != s.roll) s.roll = roll, s.cos_roll = std::cos(roll), s.sin_roll = std::sin(roll);
-  if (pitch != s.pitch) s.pitch = pitch, s.cos_pitch = std::cos(pitch), s.sin_pitch = std::sin(pitch);
+  if (pitch != s.pitch)
+    s.pitch = pitch, s.cos_pitch = std::cos(pitch), s.sin_pitch = std::sin(pitch);
 }
 
 void change(PlannerState& s, const GaitNumbers* gait, const double* command) noexcept {
@@ -518,8 +574,8 @@ void sample(const PlannerState& s, TickKinematics& out) noexcept {
     shortened = shortened || s.step_shortened[i];
     const double lift = s.lift_phase[i];
     double dp[3], d2p[3];
-    swing(s.p_stance[i], s.p_touchdown[i], (phases[i] - lift) / (1.0 - lift), s.lift_height[i], out.feet[i], dp,
-          d2p);
+    swing(s.p_stance[i], s.p_touchdown[i], (phases[i] - lift) / (1.0 - lift), s.lift_height[i],
+          out.feet[i], dp, d2p);
     for (int k = 0; k < 3; ++k) out.feet_rate[i][k] = dp[k] * rates[i] / (1.0 - lift);
   }
   double delta[2], delta_rate[2];
@@ -537,8 +593,9 @@ void sample(const PlannerState& s, TickKinematics& out) noexcept {
 }
 
 template <typename Model>
-void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait, const double command[3],
-                  const double attitude[2], std::ptrdiff_t ticks, double rate, const PlanRows& out) {
+void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait,
+                  const double command[3], const double attitude[2], std::ptrdiff_t ticks,
+                  double rate, const PlanRows& out) {
   const Body& body = robot.body;
   constexpr int W = 3 * kLegs;
   std::vector<double> feet_rate(std::size_t(ticks) * W), twist(std::size_t(ticks) * 6),
@@ -560,8 +617,8 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
     out.shortened[n] = k.shortened;
   }
   // the whole-body IK along the path, each tick seeded with the previous one
-  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz(), out.feet, nullptr, out.q,
-                                leg_status.data(), ticks, true);
+  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz(), out.feet, nullptr,
+                                out.q, leg_status.data(), ticks, true);
   // per block of ticks: the gravity torques and the centre of mass (the floating model's G(q), in
   // lanes), then per tick qd, the stance forces (W), tau = G - J^T f and the margin (M)
   const int nq = robot.floating.nq(), nv = robot.floating.nv();
@@ -586,8 +643,9 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
         for (int j = 0; j < W; ++j) row[7 + j] = q[j];
       for (int r = 0; r < 3; ++r) g_body[3 * i + r] = -kGravity * R[6 + r];  // R^T (0, 0, -g)
     }
-    dynamics::floating_rnea_k(robot.floating, dynamics::Rows<double>{qf.data(), nq}, nullptr, nullptr,
-                              dynamics::Rows<double>{g_body, 3}, wrench.data(), 0, m, false);
+    dynamics::floating_rnea_k(robot.floating, dynamics::Rows<double>{qf.data(), nq}, nullptr,
+                              nullptr, dynamics::Rows<double>{g_body, 3}, wrench.data(), 0, m,
+                              false);
     for (int l = 0; l < kLegs; ++l) {  // each leg's d foot / d q_l, in lanes
       const auto& col = body.columns[std::size_t(l)];
       double q_leg[3 * kSub];
@@ -612,7 +670,8 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
       const double cb[3] = {(G[1] * G[5] - G[2] * G[4]) * inv, (G[2] * G[3] - G[0] * G[5]) * inv,
                             (G[0] * G[4] - G[1] * G[3]) * inv};
       double c[3];
-      for (int r = 0; r < 3; ++r) c[r] = pose[r] + R[3 * r] * cb[0] + R[3 * r + 1] * cb[1] + R[3 * r + 2] * cb[2];
+      for (int r = 0; r < 3; ++r)
+        c[r] = pose[r] + R[3 * r] * cb[0] + R[3 * r + 1] * cb[1] + R[3 * r + 2] * cb[2];
       double down[kLegs][3], forces[kLegs][3] = {}, flat[kLegs][2], residual[6];
       int feet_down = 0, slot[kLegs];
       for (int l = 0; l < kLegs; ++l) {
@@ -628,7 +687,7 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
       for (int l = 0; l < kLegs; ++l)
         if (slot[l] >= 0)
           for (int r = 0; r < 3; ++r) forces[l][r] = f_down[slot[l]][r];
-      out.margin[n] = valid[i] ? detail_statics_margin(flat, feet_down, c) : nan;
+      out.margin[n] = valid[i] ? support_margin(flat, feet_down, c) : nan;
       for (int a = 0; a < 6; ++a) out.residual[6 * n + a] = valid[i] ? residual[a] : nan;
       for (int l = 0; l < kLegs; ++l) {
         const auto& col = body.columns[std::size_t(l)];
@@ -636,7 +695,8 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
         const double* pd = feet_rate.data() + W * n + 3 * l;
         // qd_l = J_l^-1 R^T (pdot_l - v - w x (p_l - t)): the foot's velocity relative to the hip
         const double d[3] = {p[0] - pose[0], p[1] - pose[1], p[2] - pose[2]};
-        const double u[3] = {pd[0] - v[0] - (w[1] * d[2] - w[2] * d[1]), pd[1] - v[1] - (w[2] * d[0] - w[0] * d[2]),
+        const double u[3] = {pd[0] - v[0] - (w[1] * d[2] - w[2] * d[1]),
+                             pd[1] - v[1] - (w[2] * d[0] - w[0] * d[2]),
                              pd[2] - v[2] - (w[0] * d[1] - w[1] * d[0])};
         double relative[3], qd[3], fb[3];
         for (int r = 0; r < 3; ++r) {

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'plan_gait', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'GaitControllerCore', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'plan_gait', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -229,6 +229,18 @@ class RobotStatics:
     def com(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, out: typing.Any = None) -> typing.Any:
         ...
     def standing(self, body_pose: typing.Any, sequence: typing.SupportsInt | typing.SupportsIndex, q: typing.Any, stance: typing.Any, gravity: typing.Any, out: typing.Any = None) -> typing.Any:
+        ...
+class GaitControllerCore:
+    def __init__(self, robot: RobotStatics, h: typing.SupportsFloat | typing.SupportsIndex, body_omega: typing.SupportsFloat | typing.SupportsIndex, body_inertia: typing.Any, kp: typing.Any, kd: typing.Any, stance_kp: typing.Any, stance_kd: typing.Any, effort: typing.Any, leg_inertia: typing.Any, attitude: typing.Any) -> None:
+        ...
+    def add_gait(self, gait: typing.Any) -> int:
+        ...
+    def reset(self) -> None:
+        ...
+    def step(self, t: typing.SupportsFloat | typing.SupportsIndex, start_gait: typing.SupportsInt | typing.SupportsIndex, new_gait: typing.SupportsInt | typing.SupportsIndex, position: typing.Any, quaternion: typing.Any, linear_velocity: typing.Any, angular_velocity: typing.Any, q: typing.Any, qd: typing.Any, contact: typing.Any, velocity: typing.Any) -> dict:
+        ...
+    @property
+    def robots(self) -> int:
         ...
 def _core_method(function: typing.Any, target: str, method: str, names: tuple, defaults: tuple, converters: tuple, n_positional: typing.SupportsInt | typing.SupportsIndex, order: tuple, constants: tuple, required: typing.Any) -> typing.Any:
     """

@@ -1,4 +1,7 @@
-"""The closed-loop gait controller: :class:`GaitController`, one control tick at a time.
+"""The closed-loop gait controller: :class:`GaitController`, one control tick at a time, for one robot or
+a batch of them in one compiled call (cpp/src/gait_controller.cpp, the robots on the threads). The
+compiled tick mirrors the pure-Python reference (:mod:`spotkin.reference.controller`), which the tests
+compare it with tick by tick.
 
 It runs the reference planner's state machine (:mod:`spotkin.reference.gait_plan`: the gait clock,
 the latched contacts, the footholds) one tick at a time and closes the loop on the measured state
@@ -60,91 +63,69 @@ the same gains relative to their gait).
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
+from .. import _core
 from .._support.boundary import as_real, as_scalar
 from ..model.robot import Robot
-from ..reference import gait_plan
-from ..reference.gait import G, frac, support_margin, swing, torque_weighted_forces
+from ..reference.controller import (
+    ACCEL_TIME,
+    ANCHOR,
+    BODY_BANDWIDTH,
+    DAMPING_RATIO,
+    FRICTION,
+    GROUND_TIME,
+    MAX_GAP,
+    REACH_DOWN,
+    STANCE_BANDWIDTH,
+    SWING_BANDWIDTH,
+    TERRAIN_FOLLOW,
+    TERRAIN_ROLL,
+    TIP_INERTIA,
+    YAW_ANCHOR,
+    ReferenceController,
+)
 from .gait import Gait, ResolvedGait
+from .plan import gait_numbers
 from .state import JointCommand, RobotState
 
 __all__ = ["GaitController"]
 
-SWING_BANDWIDTH = 16.0
-"""kappa of a swinging leg's joints: w = kappa sqrt(g / h)."""
-STANCE_BANDWIDTH = 6.0
-"""kappa of a stance leg's joints."""
-DAMPING_RATIO = 1.0
-"""zeta of the joints' PD (kd = 2 zeta I w)."""
-BODY_BANDWIDTH = 1.5
-"""The virtual body wrench's natural frequency, in sqrt(g / h)."""
-TIP_INERTIA = 0.3
-"""The virtual moment's roll and pitch inertia adds TIP_INERTIA m h^2 to the body's own."""
-ANCHOR = 0.1
-"""The body reference stays within this fraction of h of the measured body (horizontally)."""
-YAW_ANCHOR = 0.1
-"""... and within this many radians of its yaw."""
-TERRAIN_FOLLOW = 1.0
-"""The body's pitch follows this fraction of the ground plane's slope along the heading."""
-TERRAIN_ROLL = 0.0
-"""... and its roll this fraction of the slope across it (none: a plane through four feet, two on a
-step and two below, tilts sideways too)."""
-REACH_DOWN = 0.3
-"""A foot that finds no ground at its touch-down reaches at most this fraction of h further down."""
-FRICTION = 0.6
-"""The feedforward's contact forces keep |f_xy| <= FRICTION f_z (a friction pyramid, on the safe side)."""
-ACCEL_TIME = 0.02
-"""The body reference's acceleration (fed forward, m a) low-passes over this fraction of the period."""
-MAX_GAP = 0.1
-"""A longer time between two ticks (s) moves the gait by this much only."""
-GROUND_TIME = 0.25
-"""The ground plane low-passes over this fraction of the gait's period."""
-
-
-def _rotation(quaternion) -> np.ndarray:
-    x, y, z, w = (float(v) for v in quaternion)
-    norm = x * x + y * y + z * z + w * w
-    s = 2.0 / norm if norm > 0 else 0.0
-    return np.array(
-        [
-            [1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
-            [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
-            [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)],
-        ]
-    )
-
-
-def _rotation_vector(R: np.ndarray) -> np.ndarray:
-    """The rotation vector (axis times angle) of R."""
-    c = min(max((np.trace(R) - 1.0) / 2.0, -1.0), 1.0)
-    angle = math.acos(c)
-    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    s = math.sin(angle)
-    return 0.5 * axis if s < 1e-9 else axis * (angle / (2.0 * s))
-
-
-class _Memory:
-    """One robot's controller state between ticks."""
-
-    def __init__(self, n: int) -> None:
-        self.plan: gait_plan.PlannerState | None = None
-        self.reaching = np.zeros(n, dtype=bool)  # planned stance, no ground found yet
-        self.landed = np.ones(n, dtype=bool)  # touched since its touch-down
-        self.shift = np.zeros(2)  # the planner's shift (C) at the last tick, world
-        self.shift_rate = np.zeros(2)  # and its rate
-        self.depth = np.zeros(n)  # how far each reaching foot went below its foothold
-        self.ground_points = np.zeros((n, 3))  # the feet's last contacts
-        self.ground = np.zeros(3)  # (c, a, b), low-passed
-        self.q = None  # the last targets (the next IK's seed)
-        self.v_ref = None  # the last reference velocity (world)
-        self.a_ref = np.zeros(3)  # its rate, low-passed
-        self.gait = None
-        self.last = None
-        self.t = -math.inf  # the last tick's time
-        self.settle = -math.inf  # the gait clock starts then
+CONSTANTS = (
+    ACCEL_TIME,
+    ANCHOR,
+    BODY_BANDWIDTH,
+    DAMPING_RATIO,
+    FRICTION,
+    GROUND_TIME,
+    MAX_GAP,
+    REACH_DOWN,
+    STANCE_BANDWIDTH,
+    SWING_BANDWIDTH,
+    TERRAIN_FOLLOW,
+    TERRAIN_ROLL,
+    TIP_INERTIA,
+    YAW_ANCHOR,
+)
+"""The controller's documented constants (defined with the reference tick, compiled into the core)."""
+DETAILS = (
+    "body_pose",
+    "feet",
+    "contact",
+    "loaded",
+    "margin",
+    "measured_margin",
+    "forces",
+    "residual",
+    "wrench",
+    "clipped",
+    "status",
+    "shortened",
+    "ground",
+    "reaching",
+    "time",
+)
 
 
 class GaitController:
@@ -172,33 +153,31 @@ class GaitController:
         if attitude.shape != (2,) or not np.isfinite(attitude).all():
             raise ValueError(f"attitude must be finite (roll, pitch), got {attitude.tolist()}")
         self.attitude = (float(attitude[0]), float(attitude[1]))
-        n = robot.n_legs
-        names = list(robot.leg_joint_names)
-        self._columns = [[names.index(j) for j in leg.joint_names] for leg in robot.legs]
-        self._order = np.concatenate(self._columns)  # leg-major slot -> joint index
-        self.h = base.hip_height
-        pose = np.array([0.0, 0.0, base.height, 0.0, 0.0, 0.0])
-        q0 = robot.body_ik(pose, base.stance).q
-        A = robot.floating_base.mass_matrix(robot.floating_q(pose, q0))
-        inertia = np.diag(A)[6 : 6 + 3 * n].copy()
-        # each leg's own block of A at the nominal stance: the swing's inertial feedforward
-        self._leg_inertia = [A[6:, 6:][np.ix_(cols, cols)] for cols in self._columns]
-        scale = math.sqrt(G / self.h)
-        self.kp, self.kd = self._gains(inertia, SWING_BANDWIDTH * scale)
-        self.stance_kp, self.stance_kd = self._gains(inertia, STANCE_BANDWIDTH * scale)
-        # the body's rotational inertia for the virtual moment: its own (the composite, about the body
-        # origin, body axes) plus m h^2 about the horizontal axes (the body tips about its feet)
-        self.body_inertia = A[3:6, 3:6] + np.diag([1.0, 1.0, 0.0]) * robot.mass * self.h**2 * TIP_INERTIA
-        self.body_omega = BODY_BANDWIDTH * scale
-        self.effort = np.array([_effort(robot, name) for name in robot.leg_joint_names], dtype=np.float64)
-        self._memories: list[_Memory] = []
+        constants = ReferenceController(robot, base, self.attitude)
+        self.h = constants.h
+        self.kp, self.kd = constants.kp, constants.kd
+        self.stance_kp, self.stance_kd = constants.stance_kp, constants.stance_kd
+        self.body_inertia, self.body_omega = constants.body_inertia, constants.body_omega
+        self.effort = constants.effort
+        self._core = _core.GaitControllerCore(
+            robot._statics,
+            self.h,
+            self.body_omega,
+            self.body_inertia,
+            self.kp,
+            self.kd,
+            self.stance_kp,
+            self.stance_kd,
+            self.effort,
+            np.array(constants.leg_inertia),
+            np.array(self.attitude),
+        )
+        self._indices: dict[Gait, int] = {}
+        self._start_index = self._index(self.gait)
         self._batch: tuple | None = None
+        self._last: dict | None = None
         self.clipped = 0
         self.ticks = 0
-
-    @staticmethod
-    def _gains(inertia: np.ndarray, omega: float) -> tuple[np.ndarray, np.ndarray]:
-        return inertia * omega**2, 2.0 * DAMPING_RATIO * inertia * omega
 
     def _gait(self, gait) -> Gait:
         if isinstance(gait, str):
@@ -211,17 +190,19 @@ class GaitController:
         """The gait resolved for the robot, its centre-of-mass shift s0 applied in every gait (a
         weight of 1 with no sway where the gait has none)."""
         if gait not in self._resolved:
-            resolved = gait.resolve(self.robot)
-            if resolved.com_shift == 0.0:
-                import dataclasses
-
-                resolved = dataclasses.replace(resolved, com_shift=1.0, sway=np.zeros_like(resolved.sway))
-            self._resolved[gait] = resolved
+            self._resolved[gait] = ReferenceController.resolved(gait.resolve(self.robot))
         return self._resolved[gait]
+
+    def _index(self, gait: Gait) -> int:
+        """The gait's index in the compiled controller's table (added on first use)."""
+        if gait not in self._indices:
+            self._indices[gait] = self._core.add_gait(gait_numbers(self._resolve(gait)))
+        return self._indices[gait]
 
     def reset(self) -> None:
         """Forget the robots' states: the next :meth:`step` starts afresh from the measured state."""
-        self._memories, self._batch = [], None
+        self._core.reset()
+        self._batch, self._last = None, None
         self.clipped = self.ticks = 0
 
     @property
@@ -231,10 +212,19 @@ class GaitController:
         measured centre of mass's), the stance ``forces`` (world), the unbalanced ``residual`` wrench,
         ``clipped`` (the joints whose feedforward was clipped to its effort), ``status`` (the worst IK
         status), ``shortened`` (the command or a foothold was cut to fit the legs) and ``time`` (s, the
-        tick's wall time)."""
-        if not self._memories:
+        tick's compiled time)."""
+        if self._last is None:
             return None
-        lasts = [memory.last for memory in self._memories]
+        out = self._last
+        lasts = []
+        for k in range(len(out["q"])):
+            last = {"t": out["t"]}
+            for name in DETAILS:
+                value = out[name][k]
+                last[name] = value.item() if value.ndim == 0 else value
+            last["status"] = int(last["status"])
+            last["shortened"] = bool(last["shortened"])
+            lasts.append(last)
         return lasts[0] if self._batch == () else lasts
 
     def step(self, t, state: RobotState, velocity=(0.0, 0.0, 0.0), gait=None) -> JointCommand:
@@ -271,284 +261,34 @@ class GaitController:
         new_gait = None if gait is None else self._gait(gait)
         if self._batch is None:
             self._batch = shape
-            self._memories = [_Memory(legs) for _ in range(math.prod(shape))]
         elif self._batch != shape:
             raise ValueError(f"the batch changed from {self._batch} to {shape}: call reset() first")
+        new_index = -1 if new_gait is None else self._index(new_gait)
 
         def flat(a, width):
-            return np.broadcast_to(a, (*shape, width)).reshape(-1, width)
+            return np.ascontiguousarray(
+                np.broadcast_to(a, (*shape, width)).reshape(-1, width), dtype=np.float64
+            )
 
-        fields = [
+        out = self._core.step(
+            t,
+            self._start_index,
+            new_index,
             flat(state.position, 3),
             flat(state.quaternion, 4),
             flat(state.linear_velocity, 3),
             flat(state.angular_velocity, 3),
             flat(state.q, n),
             flat(state.qd, n),
-            None if state.contact is None else flat(state.contact, legs),
+            None
+            if state.contact is None
+            else np.broadcast_to(state.contact, (*shape, legs)).reshape(-1, legs),
             flat(velocity, 3),
-        ]
-        out = []
-        for k, memory in enumerate(self._memories):
-            values = [None if f is None else f[k] for f in fields]
-            out.append(self._tick(memory, t, *values, new_gait))
-        stacked = [np.stack([o[j] for o in out]).reshape(*shape, -1) for j in range(4)]
-        kp = out[0][4] if len(out) == 1 else np.stack([o[4] for o in out]).reshape(*shape, -1)
-        kd = out[0][5] if len(out) == 1 else np.stack([o[5] for o in out]).reshape(*shape, -1)
-        return JointCommand(stacked[0], stacked[1], stacked[2], kp, kd, stacked[3].astype(bool))
-
-    # ------------------------------------------------------------------ one robot, one tick
-
-    def _start(self, memory: _Memory, t, position, yaw, feet, gait: ResolvedGait) -> None:
-        plan = gait_plan.start(self.robot, gait)
-        plan.t, plan.t0 = t, t
-        plan.x, plan.y, plan.psi = float(position[0]), float(position[1]), yaw
-        plan.p_stance = feet.copy()
-        plan.p_touchdown = feet.copy()
-        plan.old = dict(plan.old, com_shift=np.zeros_like(plan.old["com_shift"]))  # the shift blends in
-        memory.plan, memory.t = plan, t
-        memory.settle = t + plan.duration  # every foot down while the body moves to its shifted place
-        memory.ground_points = feet.copy()
-        memory.ground = self._plane(feet, np.asarray(gait.stance)[:, 2])
-
-    @staticmethod
-    def _plane(points: np.ndarray, foot_z: np.ndarray) -> np.ndarray:
-        """(c, a, b) of the least-squares plane z = c + a x + b y through the ground under the foot
-        ``points`` (each ``foot_z`` above it)."""
-        ground = points[:, 2] - foot_z
-        X = np.column_stack([np.ones(len(points)), points[:, 0], points[:, 1]])
-        return np.linalg.lstsq(X, ground, rcond=None)[0]
-
-    def _tick(self, memory, t, position, quaternion, v, w, q, qd, contact, command, new_gait):
-        start_time = time.perf_counter()
-        robot, legs = self.robot, self.robot.n_legs
-        R = _rotation(quaternion)
-        yaw = math.atan2(R[1, 0], R[0, 0])
-        T_meas = np.eye(4)
-        T_meas[:3, :3], T_meas[:3, 3] = R, position
-        feet_meas = robot.body_fk(T_meas, q)
-        if memory.plan is None:
-            memory.gait = new_gait or self.gait
-            self._start(memory, t, position, yaw, feet_meas, self._resolve(memory.gait))
-        plan = memory.plan
-        if new_gait is not None and new_gait != memory.gait:
-            memory.gait = new_gait
-            gait_plan.change(plan, self._resolve(new_gait))
-        dt = t - memory.t
-        if dt < -1e-9:
-            raise ValueError(f"t went backwards: {t} after {memory.t}: call reset() first")
-        memory.t = t
-        dt = min(max(dt, 0.0), MAX_GAP)  # a gap between ticks is walked as MAX_GAP at most
-        plan.command = np.array(command, dtype=np.float64)
-        # the measured body less the planner's own shift (C) and its rate: the errors the footholds correct
-        plan.v_measured = v[:2] - memory.shift_rate
-        plan.p_measured = position[:2] - memory.shift
-        plan.ground = memory.ground
-        before = plan.contact.copy()
-        settling = min(dt, max(0.0, memory.settle - plan.t))  # the start: the clock held
-        if (memory.reaching & (memory.depth < REACH_DOWN * self.h)).any():
-            settling = dt  # a foot still reaching for the ground: no other leg lifts off meanwhile
-        plan.t += settling
-        if dt - settling > 0.0:
-            gait_plan.advance(robot, plan, dt - settling)
-        P, Pd = gait_plan.blended(plan, plan.t)
-        period, duty = float(P["period"]), float(P["duty"])
-        nominal_z = np.asarray(P["stance"])[:, 2]
-        # --- contacts: touch-downs (planned, early, late) and the stance feet
-        phases = np.array([frac(plan.theta + o) for o in P["offsets"]])
-        phase_rates = plan.clock_rate + np.asarray(Pd["offsets"], dtype=np.float64)
-        swing_time = max((1.0 - duty) * period, 1e-3)
-        descent = 2.0 * (float(P["step_height"]) + 1e-3 * self.h) / swing_time
-        touched = np.ones(legs, dtype=bool) if contact is None else np.asarray(contact, dtype=bool)
-        for i in range(legs):
-            if plan.contact[i] and not before[i]:  # the planned touch-down
-                memory.reaching[i], memory.depth[i] = not touched[i], 0.0
-                if touched[i]:
-                    plan.p_stance[i] = feet_meas[i]
-            elif not plan.contact[i]:
-                lift = plan.lift_phase[i]
-                progress = (phases[i] - lift) / (1.0 - lift)
-                if contact is not None and touched[i] and 0.5 < progress < 1.0:  # early: lands here
-                    plan.contact[i], memory.reaching[i] = True, False
-                    plan.p_stance[i] = feet_meas[i]
-            elif memory.reaching[i]:
-                if touched[i]:
-                    memory.reaching[i] = False
-                    plan.p_stance[i] = feet_meas[i]
-                elif memory.depth[i] < REACH_DOWN * self.h:
-                    step = min(descent * max(dt, 0.0), REACH_DOWN * self.h - memory.depth[i])
-                    memory.depth[i] += step
-                    plan.p_stance[i, 2] -= step
-            elif touched[i]:
-                plan.p_stance[i] = feet_meas[i]  # held where it is measured
-            if plan.contact[i] and touched[i] and not memory.reaching[i]:
-                memory.ground_points[i] = feet_meas[i]
-                memory.landed[i] = True
-            memory.landed[i] &= bool(plan.contact[i])
-        # a stance foot carries load from its first touch to its lift-off (a flickering contact, a foot
-        # on an edge, stays loaded)
-        loaded = memory.landed & ~memory.reaching
-        # --- the ground plane, low-passed
-        target = self._plane(memory.ground_points, nominal_z)
-        memory.ground += (target - memory.ground) * min(1.0, max(dt, 0.0) / (GROUND_TIME * period))
-        # each leg's footholds: the plane's slope through its own last contact
-        own = memory.ground_points[:, 2] - nominal_z
-        plane = memory.ground[0] + memory.ground[1] * memory.ground_points[:, 0]
-        plan.ground_offsets = own - plane - memory.ground[2] * memory.ground_points[:, 1]
-        c, s = math.cos(yaw), math.sin(yaw)
-        slope_x = memory.ground[1] * c + memory.ground[2] * s
-        slope_y = -memory.ground[1] * s + memory.ground[2] * c
-        roll = self.attitude[0] + TERRAIN_ROLL * math.atan(slope_y)
-        pitch = self.attitude[1] - TERRAIN_FOLLOW * math.atan(slope_x)
-        plan.attitude = (roll, pitch)
-        # --- re-anchor the planar reference (with its shift) to the measured body
-        epsi = (plan.psi - yaw + math.pi) % (2.0 * math.pi) - math.pi
-        if abs(epsi) > YAW_ANCHOR:
-            plan.psi -= epsi - math.copysign(YAW_ANCHOR, epsi)
-        delta, delta_rate = gait_plan._crawl_shift(P, Pd, phases, phase_rates)
-        cp, sp = math.cos(plan.psi), math.sin(plan.psi)
-        shift = np.array([cp * delta[0] - sp * delta[1], sp * delta[0] + cp * delta[1]])
-        memory.shift = shift
-        ex, ey = plan.x + shift[0] - position[0], plan.y + shift[1] - position[1]
-        bound = ANCHOR * self.h
-        norm = math.hypot(ex, ey)
-        if norm > bound:
-            plan.x -= ex * (1.0 - bound / norm)
-            plan.y -= ey * (1.0 - bound / norm)
-        # --- the body reference
-        x_ref, y_ref = plan.x + shift[0], plan.y + shift[1]
-        floor = gait_plan.floor_height(plan, x_ref, y_ref)
-        pose_ref = gait_plan.body_pose(x_ref, y_ref, floor + float(P["height"]), plan.psi, plan.attitude)
-        T_ref = gait_plan.body_transform(pose_ref)
-        planar = plan.v + delta_rate
-        v_ref = np.array(
-            [
-                cp * planar[0] - sp * planar[1] - plan.w * shift[1],
-                sp * planar[0] + cp * planar[1] + plan.w * shift[0],
-                0.0,
-            ]
         )
-        v_ref[2] = memory.ground[1] * v_ref[0] + memory.ground[2] * v_ref[1] + float(Pd["height"])
-        w_ref = np.array([0.0, 0.0, plan.w])
-        memory.shift_rate = v_ref[:2] - (cp * plan.v[0] - sp * plan.v[1], sp * plan.v[0] + cp * plan.v[1])
-        # --- the feet
-        feet = plan.p_stance.copy()
-        feet_rate = np.zeros((legs, 3))
-        feet_accel = np.zeros((legs, 3))
-        for i in range(legs):
-            if plan.contact[i]:
-                if memory.reaching[i] and memory.depth[i] < REACH_DOWN * self.h:
-                    feet_rate[i, 2] = -descent
-                continue
-            lift = plan.lift_phase[i]
-            progress = (phases[i] - lift) / (1.0 - lift)
-            feet[i], dp, d2p = swing(plan.p_stance[i], plan.p_touchdown[i], progress, plan.lift_height[i])
-            feet_rate[i] = dp * phase_rates[i] / (1.0 - lift)
-            feet_accel[i] = d2p * (phase_rates[i] / (1.0 - lift)) ** 2
-        # --- joints: loaded legs at the reference pose, the others (swinging, reaching) at the measured one
-        seed = q if memory.q is None else memory.q
-        solved = robot.body_ik(np.stack([T_ref, T_meas]), feet, seed=np.stack([seed, seed]))
-        q_ref, q_sw = solved.q
-        stance_cols = np.zeros(3 * legs, dtype=bool)
-        for i in range(legs):
-            stance_cols[self._columns[i]] = loaded[i]
-        q_des = np.where(stance_cols, q_ref, q_sw)
-        q_des = np.where(np.isfinite(q_des), q_des, q)  # a leg without an answer holds where it is
-        memory.q = q_des.copy()
-        plan.q = q_des.copy()
-        Jb = robot.body_jacobian(T_meas, q)  # (3 n, 6 + 3 n): world feet by [v; w; q]
-        qd_des = np.zeros(3 * legs)
-        jac = []
-        for i in range(legs):
-            cols = self._columns[i]
-            Jw = Jb[3 * i : 3 * i + 3, 6:][:, cols]
-            jac.append(Jw)
-            if loaded[i]:
-                rel = feet_rate[i] - v_ref - np.cross(w_ref, feet[i] - T_ref[:3, 3])
-            else:
-                rel = feet_rate[i] - v - np.cross(w, feet[i] - position)
-            try:
-                qd_des[cols] = np.linalg.solve(Jw, rel)
-            except np.linalg.LinAlgError:
-                qd_des[cols] = 0.0
-        qd_des = np.where(np.isfinite(qd_des), qd_des, 0.0)
-        # --- feedforward: gravity, the weight and the virtual body wrench on the loaded feet
-        com = robot.center_of_mass(T_meas, q)
-        mass = robot.mass
-        e_p = T_ref[:3, 3] - position
-        wb = self.body_omega
-        if memory.v_ref is not None and dt > 0.0:  # the reference's acceleration, low-passed
-            blend = min(1.0, dt / (ACCEL_TIME * period))
-            memory.a_ref += ((v_ref - memory.v_ref) / dt - memory.a_ref) * blend
-        memory.v_ref = v_ref
-        force = mass * (wb * wb * e_p + 2.0 * wb * (v_ref - v) + memory.a_ref)
-        inertia = R @ self.body_inertia @ R.T
-        e_R = _rotation_vector(T_ref[:3, :3] @ R.T)
-        moment = inertia @ (wb * wb * e_R + 2.0 * wb * (w_ref - w))
-        gravity = robot.floating_base.gravity(robot.floating_q(T_meas, q))[6 : 6 + 3 * legs]
-        leg_gravity = [gravity[cols] for cols in self._columns]
-        limits = [np.minimum(self.effort[cols], 1e12) for cols in self._columns]
-        forces, residual = torque_weighted_forces(
-            feet_meas, loaded, com, mass, jac, leg_gravity, limits, self.h, np.r_[force, moment]
-        )
-        forces = _friction(forces)
-        tau = gravity.copy()
-        for i in range(legs):
-            if loaded[i]:
-                tau[self._columns[i]] -= jac[i].T @ forces[i]
-            elif not plan.contact[i]:  # a swing leg: M_leg qdd, qdd from the swing's acceleration
-                try:
-                    qdd = np.linalg.solve(jac[i], feet_accel[i])
-                except np.linalg.LinAlgError:
-                    continue
-                if np.isfinite(qdd).all():
-                    tau[self._columns[i]] += self._leg_inertia[i] @ qdd
-        clipped = np.abs(tau) > self.effort
-        tau = np.clip(tau, -self.effort, self.effort)
-        self.clipped += int(clipped.any())
-        self.ticks += 1
-        kp = np.where(stance_cols, self.stance_kp, self.kp)
-        kd = np.where(stance_cols, self.stance_kd, self.kd)
-        down = [feet[i, :2] for i in range(legs) if plan.contact[i]]
-        com_ref = robot.center_of_mass(T_ref, q_des)
-        memory.last = {
-            "t": t,
-            "body_pose": pose_ref,
-            "feet": feet,
-            "contact": plan.contact.copy(),
-            "loaded": loaded,
-            "margin": support_margin(down, com_ref[:2]),
-            "measured_margin": support_margin(down, com[:2]),
-            "forces": forces,
-            "residual": residual,
-            "wrench": np.r_[force, moment],
-            "clipped": clipped,
-            "status": int(np.max(solved.status[0])),
-            "shortened": bool(plan.speed_scale < 1.0 or (plan.step_shortened & ~plan.contact).any()),
-            "ground": memory.ground.copy(),
-            "reaching": memory.reaching.copy(),
-            "time": time.perf_counter() - start_time,
-        }
-        return q_des, qd_des, tau, plan.contact.copy(), kp, kd
-
-
-def _friction(forces: np.ndarray) -> np.ndarray:
-    """Each force with f_z >= 0 and its horizontal part within FRICTION f_z."""
-    out = forces.copy()
-    out[:, 2] = np.maximum(out[:, 2], 0.0)
-    horizontal = np.hypot(out[:, 0], out[:, 1])
-    limit = FRICTION * out[:, 2]
-    scale = np.where(horizontal > limit, limit / np.maximum(horizontal, 1e-300), 1.0)
-    out[:, :2] *= scale[:, None]
-    return out
-
-
-def _effort(robot, name: str) -> float:
-    """The effort limit (N m) of the joint ``name`` of ``robot.leg_joint_names`` (inf when none)."""
-    model = robot.model
-    if model is None:
-        return math.inf
-    actuated = [joint.name for joint in model.actuated_joints]
-    index = robot.q_from_names(actuated, np.arange(len(actuated), dtype=float), joints=[name])
-    effort = model.joint(actuated[int(index[0])]).effort
-    return math.inf if effort is None or not effort > 0 else float(effort)
+        out["t"] = t
+        self._last = out
+        self.clipped += int(out["clipped"].any(axis=1).sum())
+        self.ticks += len(out["q"])
+        fields = [out[name].reshape(*shape, -1) for name in ("q", "qd", "tau", "contact")]
+        kp, kd = (out[name][0] if shape == () else out[name].reshape(*shape, -1) for name in ("kp", "kd"))
+        return JointCommand(fields[0], fields[1], fields[2], kp, kd, fields[3])

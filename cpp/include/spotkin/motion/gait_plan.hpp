@@ -9,8 +9,8 @@
 // Everything is double; a command's ticks are sequential, commands are independent (threads).
 #pragma once
 
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "spotkin/body.hpp"
@@ -100,17 +100,21 @@ struct Quintic {
   double b, db, d2b;
 };
 Quintic quintic(double x) noexcept;
-void swing(const double p0[3], const double p1[3], double s, double height, double p[3], double dp[3],
-           double d2p[3]) noexcept;
+void swing(const double p0[3], const double p1[3], double s, double height, double p[3],
+           double dp[3], double d2p[3]) noexcept;
 void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates) noexcept;
-void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phases, const double* phase_rates,
-                 double value[2], double rate[2]) noexcept;
+void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phases,
+                 const double* phase_rates, double value[2], double rate[2]) noexcept;
 double floor_height(const PlannerState& s, double x, double y) noexcept;
-// [x, y, z, a, b, c] (Euler "XYZ") of the body at (x, y, z), heading psi (cos, sin given), the state's
-// attitude; R (optional): its rotation.
-void body_pose(double x, double y, double z, double psi, double cos_psi, double sin_psi, const PlannerState& s,
-               double pose[6], double (*R)[3] = nullptr) noexcept;
+// [x, y, z, a, b, c] (Euler "XYZ") of the body at (x, y, z), heading psi (cos, sin given), the
+// state's attitude; R (optional): its rotation.
+void body_pose(double x, double y, double z, double psi, double cos_psi, double sin_psi,
+               const PlannerState& s, double pose[6], double (*R)[3] = nullptr) noexcept;
 inline double frac(double x) noexcept { return x - std::floor(x); }
+// (M): the signed distance of c to the convex hull of the points (k <= 4), positive inside;
+// outside, minus the distance to the hull; fewer than three points off one line: minus the distance
+// to their segment or point; -inf with none.
+double support_margin(const double (*points)[2], int k, const double c[2]) noexcept;
 void sample(const PlannerState& s, TickKinematics& out) noexcept;
 
 // One command's plan over `ticks` ticks t_k = k / rate, written at row k of each output:

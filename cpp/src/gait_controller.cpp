@@ -1,0 +1,494 @@
+// The closed-loop gait controller (spotkin/motion/controller.hpp): the reference controller's tick
+// (python/spotkin/reference/controller.py) in double, for one robot; the binding runs robots on
+// threads.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "spotkin/dynamics/kernels.hpp"
+#include "spotkin/dynamics/statics.hpp"
+#include "spotkin/kernels/body.hpp"
+#include "spotkin/motion/controller.hpp"
+
+namespace spotkin::motion {
+
+namespace {
+
+constexpr double kPiValue = 3.14159265358979323846;
+constexpr int W = 3 * kLegs;
+
+const EulerSequence& xyz() noexcept {
+  static const EulerSequence seq = EulerSequence::from_code(0 + 3 * 1 + 9 * 2);  // "XYZ"
+  return seq;
+}
+
+// R of a quaternion (x, y, z, w), s = 2 / |q|^2 (a non-unit quaternion scaled).
+void rotation_of(const double* quaternion, double R[3][3]) noexcept {
+  const double x = quaternion[0], y = quaternion[1], z = quaternion[2], w = quaternion[3];
+  const double norm = x * x + y * y + z * z + w * w;
+  const double s = norm > 0 ? 2.0 / norm : 0.0;
+  R[0][0] = 1 - s * (y * y + z * z), R[0][1] = s * (x * y - w * z), R[0][2] = s * (x * z + w * y);
+  R[1][0] = s * (x * y + w * z), R[1][1] = 1 - s * (x * x + z * z), R[1][2] = s * (y * z - w * x);
+  R[2][0] = s * (x * z - w * y), R[2][1] = s * (y * z + w * x), R[2][2] = 1 - s * (x * x + y * y);
+}
+
+// The rotation vector (axis times angle) of R.
+void rotation_vector(const double R[3][3], double out[3]) noexcept {
+  const double c = std::min(std::max((R[0][0] + R[1][1] + R[2][2] - 1.0) / 2.0, -1.0), 1.0);
+  const double angle = std::acos(c);
+  const double axis[3] = {R[2][1] - R[1][2], R[0][2] - R[2][0], R[1][0] - R[0][1]};
+  const double s = std::sin(angle);
+  for (int k = 0; k < 3; ++k) out[k] = s < 1e-9 ? 0.5 * axis[k] : axis[k] * (angle / (2.0 * s));
+}
+
+// (c, a, b) of the least-squares plane z = c + a x + b y through the ground under the feet (each
+// foot_z above it), the minimum-norm one when the feet do not fix it (as lstsq).
+void ground_plane(const double (*points)[3], const double* foot_z, double out[3]) noexcept {
+  Eigen::Matrix<double, kLegs, 3> X;
+  Eigen::Matrix<double, kLegs, 1> z;
+  for (int i = 0; i < kLegs; ++i)
+    X(i, 0) = 1.0, X(i, 1) = points[i][0], X(i, 2) = points[i][1], z(i) = points[i][2] - foot_z[i];
+  const Eigen::Vector3d plane = X.completeOrthogonalDecomposition().solve(z);
+  for (int k = 0; k < 3; ++k) out[k] = plane(k);
+}
+
+inline void skew_into(const double* r, Eigen::Ref<Eigen::Matrix<double, 3, 3>> S) {
+  S << 0.0, -r[2], r[1], r[2], 0.0, -r[0], -r[1], r[0], 0.0;
+}
+
+// (T): the loaded feet's forces minimising alpha |S (A f - b)|^2 + sum_l |(G_l - J_l^T f_l) /
+// tau_max|^2
+// + eps |f / (m g)|^2, a foot that would pull unloaded and the rest solved again; the residual b -
+// A f.
+void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const double* com,
+                            double mass, const double (*jacobians)[9],
+                            const double (*leg_gravity)[3], const double (*limits)[3], double h,
+                            const double* wrench, double (*forces)[3], double residual[6]) {
+  const double weight = mass * kGravity;
+  double b[6] = {0.0, 0.0, weight, 0.0, 0.0, 0.0};
+  for (int a = 0; a < 6; ++a) b[a] += wrench[a];
+  bool down[kLegs];
+  for (int j = 0; j < kLegs; ++j)
+    down[j] = loaded[j], forces[j][0] = forces[j][1] = forces[j][2] = 0.0;
+  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, W, W>;
+  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, W, 1>;
+  using Wide = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, W>;
+  Vec f;
+  Wide A;
+  int slots[kLegs], k = 0;
+  while (true) {
+    k = 0;
+    for (int j = 0; j < kLegs; ++j)
+      if (down[j]) slots[k++] = j;
+    if (k == 0) {
+      for (int a = 0; a < 6; ++a) residual[a] = b[a];
+      return;
+    }
+    A.setZero(6, 3 * k);
+    Mat D = Mat::Zero(3 * k, 3 * k);
+    Vec g(3 * k);
+    for (int slot = 0; slot < k; ++slot) {
+      const int j = slots[slot];
+      A.block<3, 3>(0, 3 * slot).setIdentity();
+      const double r[3] = {feet[j][0] - com[0], feet[j][1] - com[1], feet[j][2] - com[2]};
+      skew_into(r, A.block<3, 3>(3, 3 * slot));
+      for (int row = 0; row < 3; ++row) {
+        const double scale = 1.0 / limits[j][row];
+        for (int col = 0; col < 3; ++col)
+          D(3 * slot + row, 3 * slot + col) = scale * jacobians[j][3 * col + row];
+        g(3 * slot + row) = scale * leg_gravity[j][row];
+      }
+    }
+    Eigen::Matrix<double, 6, 1> S2, bv;
+    for (int a = 0; a < 3; ++a)
+      S2(a) = 1.0 / (weight * weight), S2(3 + a) = 1.0 / ((weight * h) * (weight * h));
+    S2(0) *= kTorqueHorizontal, S2(1) *= kTorqueHorizontal;
+    for (int a = 0; a < 6; ++a) bv(a) = b[a];
+    const Mat H = kTorqueAlpha * A.transpose() * S2.asDiagonal() * A + D.transpose() * D +
+                  Mat::Identity(3 * k, 3 * k) * (kTorqueEps / (weight * weight));
+    const Vec rhs = kTorqueAlpha * A.transpose() * S2.cwiseProduct(bv) + D.transpose() * g;
+    f = H.partialPivLu().solve(rhs);
+    bool pulling = false;
+    for (int slot = 0; slot < k; ++slot)
+      if (f(3 * slot + 2) < 0.0) down[slots[slot]] = false, pulling = true;
+    if (!pulling) break;
+  }
+  for (int slot = 0; slot < k; ++slot)
+    for (int a = 0; a < 3; ++a) forces[slots[slot]][a] = f(3 * slot + a);
+  const Eigen::Matrix<double, 6, 1> left = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(b) - A * f;
+  for (int a = 0; a < 6; ++a) residual[a] = left(a);
+}
+
+// Each force with f_z >= 0 and its horizontal part within kFriction f_z.
+void friction(double (*forces)[3]) noexcept {
+  for (int j = 0; j < kLegs; ++j) {
+    double* f = forces[j];
+    f[2] = std::max(f[2], 0.0);
+    const double horizontal = std::hypot(f[0], f[1]), limit = kFriction * f[2];
+    const double scale = horizontal > limit ? limit / std::max(horizontal, 1e-300) : 1.0;
+    f[0] *= scale, f[1] *= scale;
+  }
+}
+
+// x = A^-1 b (3x3 row-major) by partial pivoting; false when singular (as LAPACK's getrf: an
+// exact zero pivot).
+bool solve3(const double* A, const double* b, double* x) noexcept {
+  const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> M(A);
+  const Eigen::PartialPivLU<Eigen::Matrix3d> lu(M);
+  const Eigen::Matrix3d& U = lu.matrixLU();
+  if (U(0, 0) == 0.0 || U(1, 1) == 0.0 || U(2, 2) == 0.0) return false;
+  const Eigen::Vector3d v = lu.solve(Eigen::Map<const Eigen::Vector3d>(b));
+  for (int k = 0; k < 3; ++k) x[k] = v(k);
+  return true;
+}
+
+void transform_matrix(const double R[3][3], const double* t, double* M) noexcept {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) M[4 * r + c] = R[r][c];
+    M[4 * r + 3] = t[r];
+  }
+  M[12] = M[13] = M[14] = 0.0, M[15] = 1.0;
+}
+
+double py_mod(double x, double m) noexcept {  // Python's float % for m > 0
+  double r = std::fmod(x, m);
+  if (r != 0.0 && r < 0.0) r += m;
+  return r;
+}
+
+}  // namespace
+
+template <typename Model>
+void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
+                     const ControllerConfig& config, const GaitNumbers* gaits, int start_gait,
+                     int new_gait, ControllerMemory& memory, const ControllerInput& in,
+                     ControllerOutput& out) {
+  const Body& body = robot.body;
+  const double h = config.h, t = in.t;
+  const double* position = in.position;
+  const double* v = in.linear_velocity;
+  const double* w = in.angular_velocity;
+  const double* q = in.q;
+  double R[3][3];
+  rotation_of(in.quaternion, R);
+  const double yaw = std::atan2(R[1][0], R[0][0]);
+  // 1. the measured feet: t + R (hip + FK)
+  double feet_meas[kLegs][3];
+  for (int l = 0; l < kLegs; ++l) {
+    const auto& col = body.columns[std::size_t(l)];
+    const double q_leg[3] = {q[col[0]], q[col[1]], q[col[2]]};
+    double p[3];
+    body.legs[std::size_t(l)].forward(q_leg, p);
+    for (int r = 0; r < 3; ++r) p[r] += body.hips[std::size_t(l)][std::size_t(r)];
+    for (int r = 0; r < 3; ++r)
+      feet_meas[l][r] = position[r] + R[r][0] * p[0] + R[r][1] * p[1] + R[r][2] * p[2];
+  }
+  PlannerState& plan = memory.plan;
+  if (!memory.started) {  // start: the robot where it stands, the shift blending in
+    memory.started = true;
+    memory.gait = new_gait >= 0 ? new_gait : start_gait;
+    const GaitNumbers& gait = gaits[memory.gait];
+    const double zero[3] = {0.0, 0.0, 0.0}, level[2] = {0.0, 0.0};
+    start(gait, zero, level, plan);
+    plan.t = plan.t0 = t;
+    plan.x = position[0], plan.y = position[1], plan.psi = yaw;
+    for (int l = 0; l < kLegs; ++l)
+      for (int r = 0; r < 3; ++r) plan.p_stance[l][r] = plan.p_touchdown[l][r] = feet_meas[l][r];
+    plan.old_numbers[kComShift] = 0.0;
+    memory.t = t;
+    memory.settle = t + plan.duration;
+    double foot_z[kLegs];
+    for (int l = 0; l < kLegs; ++l) foot_z[l] = gait[kStance + 3 * l + 2];
+    for (int l = 0; l < kLegs; ++l)
+      for (int r = 0; r < 3; ++r) memory.ground_points[l][r] = feet_meas[l][r];
+    ground_plane(memory.ground_points, foot_z, memory.ground);
+  }
+  if (new_gait >= 0 && new_gait != memory.gait) {
+    memory.gait = new_gait;
+    change(plan, &gaits[new_gait], nullptr);
+  }
+  double dt = t - memory.t;
+  memory.t = t;
+  dt = std::min(std::max(dt, 0.0), kMaxGap);
+  for (int k = 0; k < 3; ++k) plan.command[k] = in.command[k];
+  plan.has_v_measured = plan.has_p_measured = plan.has_ground = true;
+  for (int k = 0; k < 2; ++k)
+    plan.v_measured[k] = v[k] - memory.shift_rate[k],
+    plan.p_measured[k] = position[k] - memory.shift[k];
+  for (int k = 0; k < 3; ++k) plan.ground[k] = memory.ground[k];
+  bool before[kLegs];
+  for (int l = 0; l < kLegs; ++l) before[l] = plan.contact[l];
+  double settling =
+      std::min(dt, std::max(0.0, memory.settle - plan.t));  // the start: the clock held
+  for (int l = 0; l < kLegs; ++l)
+    if (memory.reaching[l] && memory.depth[l] < kReachDown * h)
+      settling = dt;  // a foot still reaching
+  plan.t += settling;
+  if (dt - settling > 0.0) advance(body, plan, dt - settling);
+  GaitNumbers P, Pd;
+  blended(plan, plan.t, P, &Pd);
+  const double period = P[kPeriod], duty = P[kDuty];
+  double nominal_z[kLegs], phases[kLegs], phase_rates[kLegs];
+  for (int l = 0; l < kLegs; ++l) {
+    nominal_z[l] = P[kStance + 3 * l + 2];
+    phases[l] = frac(plan.theta + P[kOffsets + l]);
+    phase_rates[l] = plan.clock_rate + Pd[kOffsets + l];
+  }
+  const double swing_time = std::max((1.0 - duty) * period, 1e-3);
+  const double descent = 2.0 * (P[kStepHeight] + 1e-3 * h) / swing_time;
+  // 2. contacts: touch-downs (planned, early, late) and the stance feet
+  bool touched[kLegs];
+  for (int l = 0; l < kLegs; ++l) touched[l] = in.contact ? in.contact[l] : true;
+  for (int i = 0; i < kLegs; ++i) {
+    if (plan.contact[i] && !before[i]) {  // the planned touch-down
+      memory.reaching[i] = !touched[i], memory.depth[i] = 0.0;
+      if (touched[i])
+        for (int r = 0; r < 3; ++r) plan.p_stance[i][r] = feet_meas[i][r];
+    } else if (!plan.contact[i]) {
+      const double lift = plan.lift_phase[i];
+      const double progress = (phases[i] - lift) / (1.0 - lift);
+      if (in.contact && touched[i] && 0.5 < progress && progress < 1.0) {  // early: lands here
+        plan.contact[i] = true, memory.reaching[i] = false;
+        for (int r = 0; r < 3; ++r) plan.p_stance[i][r] = feet_meas[i][r];
+      }
+    } else if (memory.reaching[i]) {
+      if (touched[i]) {
+        memory.reaching[i] = false;
+        for (int r = 0; r < 3; ++r) plan.p_stance[i][r] = feet_meas[i][r];
+      } else if (memory.depth[i] < kReachDown * h) {
+        const double step = std::min(descent * std::max(dt, 0.0), kReachDown * h - memory.depth[i]);
+        memory.depth[i] += step;
+        plan.p_stance[i][2] -= step;
+      }
+    } else if (touched[i]) {
+      for (int r = 0; r < 3; ++r)
+        plan.p_stance[i][r] = feet_meas[i][r];  // held where it is measured
+    }
+    if (plan.contact[i] && touched[i] && !memory.reaching[i]) {
+      for (int r = 0; r < 3; ++r) memory.ground_points[i][r] = feet_meas[i][r];
+      memory.landed[i] = true;
+    }
+    memory.landed[i] = memory.landed[i] && plan.contact[i];
+  }
+  bool loaded[kLegs];
+  for (int l = 0; l < kLegs; ++l) loaded[l] = memory.landed[l] && !memory.reaching[l];
+  // the ground plane, low-passed; each leg's footholds on its slope through its own last contact
+  double target[3];
+  ground_plane(memory.ground_points, nominal_z, target);
+  const double ground_blend = std::min(1.0, std::max(dt, 0.0) / (kGroundTime * period));
+  for (int k = 0; k < 3; ++k) memory.ground[k] += (target[k] - memory.ground[k]) * ground_blend;
+  const double* g = memory.ground;
+  plan.has_ground_offsets = true;
+  for (int l = 0; l < kLegs; ++l) {
+    const double own = memory.ground_points[l][2] - nominal_z[l];
+    const double plane = g[0] + g[1] * memory.ground_points[l][0];
+    plan.ground_offsets[l] = own - plane - g[2] * memory.ground_points[l][1];
+  }
+  const double cy = std::cos(yaw), sy = std::sin(yaw);
+  const double slope_x = g[1] * cy + g[2] * sy, slope_y = -g[1] * sy + g[2] * cy;
+  set_attitude(plan, config.attitude[0] + kTerrainRoll * std::atan(slope_y),
+               config.attitude[1] - kTerrainFollow * std::atan(slope_x));
+  for (int k = 0; k < 3; ++k) plan.ground[k] = g[k];
+  // 3. re-anchor the planar reference (with its shift) to the measured body
+  const double epsi = py_mod(plan.psi - yaw + kPiValue, 2.0 * kPiValue) - kPiValue;
+  if (std::fabs(epsi) > kYawAnchor) plan.psi -= epsi - std::copysign(kYawAnchor, epsi);
+  double delta[2], delta_rate[2];
+  crawl_shift(P, Pd, phases, phase_rates, delta, delta_rate);
+  const double cp = std::cos(plan.psi), sp = std::sin(plan.psi);
+  const double shift[2] = {cp * delta[0] - sp * delta[1], sp * delta[0] + cp * delta[1]};
+  memory.shift[0] = shift[0], memory.shift[1] = shift[1];
+  const double ex = plan.x + shift[0] - position[0], ey = plan.y + shift[1] - position[1];
+  const double bound = kAnchor * h, norm = std::hypot(ex, ey);
+  if (norm > bound) {
+    plan.x -= ex * (1.0 - bound / norm);
+    plan.y -= ey * (1.0 - bound / norm);
+  }
+  // 4. the body reference
+  const double x_ref = plan.x + shift[0], y_ref = plan.y + shift[1];
+  const double floor = floor_height(plan, x_ref, y_ref);
+  double R_ref[3][3];
+  body_pose(x_ref, y_ref, floor + P[kHeight], plan.psi, cp, sp, plan, out.body_pose);
+  Body::euler_rotation(xyz(), out.body_pose + 3, R_ref);  // body_transform of the pose
+  const double* t_ref = out.body_pose;
+  const double planar[2] = {plan.v[0] + delta_rate[0], plan.v[1] + delta_rate[1]};
+  double v_ref[3] = {cp * planar[0] - sp * planar[1] - plan.w * shift[1],
+                     sp * planar[0] + cp * planar[1] + plan.w * shift[0], 0.0};
+  v_ref[2] = g[1] * v_ref[0] + g[2] * v_ref[1] + Pd[kHeight];
+  const double w_ref[3] = {0.0, 0.0, plan.w};
+  memory.shift_rate[0] = v_ref[0] - (cp * plan.v[0] - sp * plan.v[1]);
+  memory.shift_rate[1] = v_ref[1] - (sp * plan.v[0] + cp * plan.v[1]);
+  // the feet
+  double feet_rate[kLegs][3] = {}, feet_accel[kLegs][3] = {};
+  for (int i = 0; i < kLegs; ++i) {
+    for (int r = 0; r < 3; ++r) out.feet[i][r] = plan.p_stance[i][r];
+    if (plan.contact[i]) {
+      if (memory.reaching[i] && memory.depth[i] < kReachDown * h) feet_rate[i][2] = -descent;
+      continue;
+    }
+    const double lift = plan.lift_phase[i];
+    const double progress = (phases[i] - lift) / (1.0 - lift);
+    double dp[3], d2p[3];
+    swing(plan.p_stance[i], plan.p_touchdown[i], progress, plan.lift_height[i], out.feet[i], dp,
+          d2p);
+    const double rate = phase_rates[i] / (1.0 - lift);
+    for (int r = 0; r < 3; ++r)
+      feet_rate[i][r] = dp[r] * phase_rates[i] / (1.0 - lift),
+      feet_accel[i][r] = d2p[r] * (rate * rate);
+  }
+  // 5. joints: loaded legs at the reference pose, the others (swinging, reaching) at the measured
+  // one
+  double poses[32], seed[2 * W], solved[2 * W];
+  std::int8_t status[2 * kLegs];
+  transform_matrix(R_ref, t_ref, poses);
+  transform_matrix(R, position, poses + 16);
+  const double* seed_row = memory.has_q ? memory.q : q;
+  std::copy(seed_row, seed_row + W, seed), std::copy(seed_row, seed_row + W, seed + W);
+  kernels::body_ik<double>(body, poses, BodyPoseFormat::Matrix, xyz(), &out.feet[0][0], true, seed,
+                           solved, status, 2, true);
+  bool stance_column[W];
+  for (int l = 0; l < kLegs; ++l)
+    for (int j = 0; j < 3; ++j)
+      stance_column[body.columns[std::size_t(l)][std::size_t(j)]] = loaded[l];
+  for (int j = 0; j < W; ++j) {
+    const double chosen = stance_column[j] ? solved[j] : solved[W + j];
+    out.q[j] = std::isfinite(chosen) ? chosen : q[j];  // a leg without an answer holds where it is
+  }
+  std::copy(out.q, out.q + W, memory.q);
+  memory.has_q = true;
+  // joint velocities: qd_l = (R J_l)^-1 (pdot_l - v - w x (p_l - t)), the reference twist for
+  // loaded legs
+  double jacobians[kLegs][9];
+  for (int l = 0; l < kLegs; ++l) {
+    const auto& col = body.columns[std::size_t(l)];
+    const double q_leg[3] = {q[col[0]], q[col[1]], q[col[2]]};
+    double J[9];
+    body.legs[std::size_t(l)].jacobian(q_leg, J);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        jacobians[l][3 * r + c] = R[r][0] * J[c] + R[r][1] * J[3 + c] + R[r][2] * J[6 + c];
+    const double* vl = loaded[l] ? v_ref : v;
+    const double* wl = loaded[l] ? w_ref : w;
+    const double* origin = loaded[l] ? t_ref : position;
+    const double d[3] = {out.feet[l][0] - origin[0], out.feet[l][1] - origin[1],
+                         out.feet[l][2] - origin[2]};
+    const double rel[3] = {feet_rate[l][0] - vl[0] - (wl[1] * d[2] - wl[2] * d[1]),
+                           feet_rate[l][1] - vl[1] - (wl[2] * d[0] - wl[0] * d[2]),
+                           feet_rate[l][2] - vl[2] - (wl[0] * d[1] - wl[1] * d[0])};
+    double qd[3];
+    if (!solve3(jacobians[l], rel, qd)) qd[0] = qd[1] = qd[2] = 0.0;
+    for (int j = 0; j < 3; ++j) out.qd[col[std::size_t(j)]] = std::isfinite(qd[j]) ? qd[j] : 0.0;
+  }
+  // 6. feedforward: gravity, the weight and the virtual body wrench on the loaded feet
+  const int nq = robot.floating.nq();
+  double qf[2 * dynamics::kStaticsMaxQ], wrench_rows[dynamics::kStaticsMaxQ], com2[6], g_body[3];
+  for (int k = 0; k < 3; ++k) g_body[k] = -kGravity * R[2][k];  // R^T (0, 0, -g)
+  {
+    double* row = qf;
+    std::fill(row, row + nq, 0.0);
+    row[6] = 1.0;
+    for (int j = 0; j < W; ++j) row[7 + j] = q[j];
+    dynamics::floating_rnea_k(robot.floating, dynamics::Rows<double>{qf, nq}, nullptr, nullptr,
+                              dynamics::Rows<double>{g_body, 3}, wrench_rows, 0, 1, false);
+    double q2[2 * W];  // the centre of mass at the measured and at the reference pose
+    std::copy(q, q + W, q2), std::copy(out.q, out.q + W, q2 + W);
+    double poses2[32];
+    std::copy(poses + 16, poses + 32, poses2), std::copy(poses, poses + 16, poses2 + 16);
+    const dynamics::StaticsRows<double> rows{poses2, 16, BodyPoseFormat::Matrix, q2, W, false};
+    dynamics::robot_com(robot, xyz(), rows, com2, 2);
+  }
+  const double* com = com2;
+  const double* com_ref = com2 + 3;
+  const double mass = robot.mass, wb = config.body_omega;
+  if (memory.has_v_ref && dt > 0.0) {  // the reference's acceleration, low-passed
+    const double blend = std::min(1.0, dt / (kAccelTime * period));
+    for (int k = 0; k < 3; ++k)
+      memory.a_ref[k] += ((v_ref[k] - memory.v_ref[k]) / dt - memory.a_ref[k]) * blend;
+  }
+  std::copy(v_ref, v_ref + 3, memory.v_ref);
+  memory.has_v_ref = true;
+  double* wrench = out.wrench;
+  for (int k = 0; k < 3; ++k)
+    wrench[k] = mass * (wb * wb * (t_ref[k] - position[k]) + 2.0 * wb * (v_ref[k] - v[k]) +
+                        memory.a_ref[k]);
+  double inertia[3][3], RI[3][3];  // R I R^T
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      RI[r][c] = R[r][0] * config.body_inertia[c] + R[r][1] * config.body_inertia[3 + c] +
+                 R[r][2] * config.body_inertia[6 + c];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      inertia[r][c] = RI[r][0] * R[c][0] + RI[r][1] * R[c][1] + RI[r][2] * R[c][2];
+  double error_R[3][3], e_R[3];  // R_ref R^T
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      error_R[r][c] = R_ref[r][0] * R[c][0] + R_ref[r][1] * R[c][1] + R_ref[r][2] * R[c][2];
+  rotation_vector(error_R, e_R);
+  double angular[3];
+  for (int k = 0; k < 3; ++k) angular[k] = wb * wb * e_R[k] + 2.0 * wb * (w_ref[k] - w[k]);
+  for (int r = 0; r < 3; ++r)
+    wrench[3 + r] =
+        inertia[r][0] * angular[0] + inertia[r][1] * angular[1] + inertia[r][2] * angular[2];
+  double leg_gravity[kLegs][3], limits[kLegs][3];
+  for (int l = 0; l < kLegs; ++l)
+    for (int j = 0; j < 3; ++j) {
+      const int column = body.columns[std::size_t(l)][std::size_t(j)];
+      leg_gravity[l][j] = wrench_rows[6 + column];
+      limits[l][j] = std::min(config.effort[column], 1e12);
+    }
+  torque_weighted_forces(feet_meas, loaded, com, mass, jacobians, leg_gravity, limits, h, wrench,
+                         out.forces, out.residual);
+  friction(out.forces);
+  for (int j = 0; j < W; ++j) out.tau[j] = wrench_rows[6 + j];
+  for (int l = 0; l < kLegs; ++l) {
+    const auto& col = body.columns[std::size_t(l)];
+    const double* J = jacobians[l];
+    if (loaded[l]) {
+      for (int j = 0; j < 3; ++j)
+        out.tau[col[std::size_t(j)]] -=
+            J[j] * out.forces[l][0] + J[3 + j] * out.forces[l][1] + J[6 + j] * out.forces[l][2];
+    } else if (!plan.contact[l]) {  // a swing leg: M_leg qdd, qdd from the swing's acceleration
+      double qdd[3];
+      if (!solve3(J, feet_accel[l], qdd) || !std::isfinite(qdd[0] + qdd[1] + qdd[2])) continue;
+      for (int j = 0; j < 3; ++j)
+        out.tau[col[std::size_t(j)]] += config.leg_inertia[l][3 * j] * qdd[0] +
+                                        config.leg_inertia[l][3 * j + 1] * qdd[1] +
+                                        config.leg_inertia[l][3 * j + 2] * qdd[2];
+    }
+  }
+  for (int j = 0; j < W; ++j) {
+    out.clipped[j] = std::fabs(out.tau[j]) > config.effort[j];
+    out.tau[j] = std::min(std::max(out.tau[j], -config.effort[j]), config.effort[j]);
+    out.kp[j] = stance_column[j] ? config.stance_kp[j] : config.kp[j];
+    out.kd[j] = stance_column[j] ? config.stance_kd[j] : config.kd[j];
+  }
+  // the details
+  double flat[kLegs][2];
+  int k = 0;
+  for (int l = 0; l < kLegs; ++l)
+    if (plan.contact[l]) flat[k][0] = out.feet[l][0], flat[k][1] = out.feet[l][1], ++k;
+  out.margin = support_margin(flat, k, com_ref);
+  out.measured_margin = support_margin(flat, k, com);
+  std::int8_t worst = status[0];
+  for (int l = 1; l < kLegs; ++l) worst = std::max(worst, status[l]);
+  out.status = worst;
+  bool shortened = plan.speed_scale < 1.0;
+  for (int l = 0; l < kLegs; ++l) {
+    shortened = shortened || (plan.step_shortened[l] && !plan.contact[l]);
+    out.contact[l] = plan.contact[l], out.loaded[l] = loaded[l],
+    out.reaching[l] = memory.reaching[l];
+  }
+  out.shortened = shortened;
+  std::copy(g, g + 3, out.ground);
+}
+
+#define SPOTKIN_INSTANTIATE(L)                                                  \
+  template void controller_tick<dynamics::FloatingModel<double, L>>(            \
+      const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&,   \
+      const ControllerConfig&, const GaitNumbers*, int, int, ControllerMemory&, \
+      const ControllerInput&, ControllerOutput&);
+SPOTKIN_INSTANTIATE(dynamics::kLanes64)
+SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
+SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)
+#undef SPOTKIN_INSTANTIATE
+
+}  // namespace spotkin::motion
