@@ -49,7 +49,9 @@ def test_plan_generation(name, gait, capsys):
     sk.set_num_threads(1)
     try:
         plan = robot.plan_gait(gait, velocity=velocity, duration=DURATION, rate=RATE)
-        compiled = median_time(lambda: robot.plan_gait(gait, velocity=velocity, duration=DURATION, rate=RATE), 7)
+        compiled = median_time(
+            lambda: robot.plan_gait(gait, velocity=velocity, duration=DURATION, rate=RATE), 7
+        )
         poses = plan.body_pose.reshape(-1, 6)
         feet = plan.feet.reshape(-1, 4, 3)
         seed = np.concatenate([plan.q[:, :1], plan.q[:, :-1]], axis=1).reshape(-1, 12)  # the previous tick's

@@ -82,6 +82,16 @@ def main() -> list[tuple[str, float, float, str, float | None]]:
     out_J = np.empty((12, 18))
     out_g = np.empty(3)
 
+    # the gait controller's tick: one robot, its state standing (the controller walks on)
+    controller = sk.GaitController(go2, "trot")
+    state = sk.motion.RobotState(
+        pose[:3], np.array([0.0, 0.0, 0.0, 1.0]), np.zeros(3), np.zeros(3), q_legs, np.zeros(12)
+    )
+    clock = iter(np.arange(1_000_000_000) * 0.002)
+
+    def gait_step():
+        controller.step(next(clock), state, (0.2, 0.0, 0.0))
+
     def pin_tick():
         pin.forwardKinematics(pin_ff, data_ff, q_ff)
         pin.computeJointJacobians(pin_ff, data_ff, q_ff)
@@ -124,6 +134,7 @@ def main() -> list[tuple[str, float, float, str, float | None]]:
         ("center_of_mass (Go2)", lambda: go2.center_of_mass(pose, q_legs), "pin centerOfMass(ff)", 1.0),
         ("body_transform", lambda: sk.body_transform(pose), "pin FK(12)", 1.0),
         ("control tick (Go2, out=)", sk_tick, "pin tick(ff)", 1.5),
+        ("GaitController.step (Go2)", gait_step, "pin tick(ff)", 2.0),
     ]
     ref_us = {name: best_us(call) for name, call in pins.items()}
     rows = []

@@ -90,6 +90,9 @@ struct ControllerCore {
   motion::ControllerConfig config;
   std::vector<motion::GaitNumbers> gaits;
   std::vector<motion::ControllerMemory> memories;
+  std::vector<motion::ControllerOutput> last;  // the last step's outputs, for details()
+  std::vector<double> seconds;                 // and each robot's compiled time
+  long long ticks = 0, clipped = 0;            // robot-ticks, and those with a clipped feedforward
 };
 
 void copy_exact(py::handle obj, const char* name, const Shape& shape, double* out) {
@@ -105,7 +108,7 @@ std::unique_ptr<ControllerCore> make_controller(const RobotStatics& r, double h,
   using motion::kLegs;
   if (r.body.n_legs() != kLegs)
     throw py::value_error("the gait controller takes a quadruped (4 legs)");
-  auto core = std::unique_ptr<ControllerCore>(new ControllerCore{r, {}, {}, {}});
+  auto core = std::unique_ptr<ControllerCore>(new ControllerCore{r, {}, {}, {}, {}, {}, 0, 0});
   motion::ControllerConfig& c = core->config;
   c.h = h, c.mass = r.mass, c.body_omega = body_omega;
   const py::ssize_t W = 3 * kLegs;
@@ -132,36 +135,56 @@ int add_gait(ControllerCore& core, py::handle numbers) {
 }
 
 // One tick of every robot: the state's arrays (B, width) each, contact (B, 4) bool or None, the
-// command (B, 3). Returns a dict of (B, ...) arrays: the command (q, qd, tau, kp, kd, contact) and
-// the details.
-py::dict controller_step(ControllerCore& core, double t, int start_gait, int new_gait,
-                         py::handle position, py::handle quaternion, py::handle linear_velocity,
-                         py::handle angular_velocity, py::handle q_obj, py::handle qd_obj,
-                         py::handle contact_obj, py::handle command) {
+// command (B, 3). Returns the command (q, qd, tau, kp, kd, contact), (B, ...) arrays each;
+// details() gives the rest of the tick.
+py::tuple controller_step(ControllerCore& core, double t, int start_gait, int new_gait,
+                          py::handle position, py::handle quaternion, py::handle linear_velocity,
+                          py::handle angular_velocity, py::handle q_obj, py::handle qd_obj,
+                          py::handle contact_obj, py::handle command) {
   using motion::kLegs;
   constexpr py::ssize_t W = 3 * kLegs;
-  if (!std::isfinite(t)) throw py::value_error("t must be finite");
+  if (!std::isfinite(t)) throw py::value_error("t must be finite, got " + std::to_string(t));
   const int n_gaits = int(core.gaits.size());
   if (start_gait < 0 || start_gait >= n_gaits || new_gait < -1 || new_gait >= n_gaits)
     throw py::value_error("gait index out of range");
-  const auto pos = exact(position, "position", {-1, 3});
-  const py::ssize_t B = pos.shape(0);
-  const auto quat = exact(quaternion, "quaternion", {B, 4});
-  const auto lin = exact(linear_velocity, "linear_velocity", {B, 3});
-  const auto ang = exact(angular_velocity, "angular_velocity", {B, 3});
-  const auto q = exact(q_obj, "q", {B, W});
-  const auto qd = exact(qd_obj, "qd", {B, W});
-  const auto cmd = exact(command, "velocity", {B, 3});
+  // rows (B, width), or one row (width,) for B = 1; finite
+  py::ssize_t B = -1;
+  auto rows = [&](py::handle obj, const char* name, py::ssize_t width, const char* what,
+                  const char* hint = "") {
+    auto arr = contiguous<double>(as_real_array(obj, name));
+    const bool one = arr.ndim() == 1 && arr.shape(0) == width;
+    const bool many = arr.ndim() == 2 && arr.shape(1) == width && (B < 0 || arr.shape(0) == B);
+    if (!one && !many)
+      throw py::value_error(std::string(name) + " must have shape (" +
+                            (B < 0 ? std::string("B") : std::to_string(B)) + ", " +
+                            std::to_string(width) + ") or (" + std::to_string(width) + ",), got " +
+                            format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())) + hint);
+    const py::ssize_t count = one ? 1 : arr.shape(0);
+    if (B < 0) B = count;
+    if (count != B)
+      throw py::value_error(std::string(name) + " has " + std::to_string(count) + " rows, not " +
+                            std::to_string(B));
+    for (py::ssize_t k = 0; k < arr.size(); ++k)
+      if (!std::isfinite(arr.data()[k]))
+        throw py::value_error(std::string(name) + " must be finite" + what + ", got NaN or Inf");
+    return arr;
+  };
+  const auto pos = rows(position, "state.position", 3, "");
+  const auto quat = rows(quaternion, "state.quaternion", 4, "");
+  const auto lin = rows(linear_velocity, "state.linear_velocity", 3, "");
+  const auto ang = rows(angular_velocity, "state.angular_velocity", 3, "");
+  const auto q = rows(q_obj, "state.q", W, "", ": 12 joints, in robot.leg_joint_names order");
+  const auto qd = rows(qd_obj, "state.qd", W, "", ": 12 joints, in robot.leg_joint_names order");
+  const auto cmd = rows(command, "velocity", 3, " (vx, vy, yaw rate)");
   py::array_t<bool, py::array::c_style | py::array::forcecast> contact;
   if (!contact_obj.is_none()) {
     contact = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(contact_obj);
-    if (!contact || contact.ndim() != 2 || contact.shape(0) != B || contact.shape(1) != kLegs)
-      throw py::value_error("contact must have shape (" + std::to_string(B) + ", 4)");
+    const bool fits =
+        contact && ((contact.ndim() == 1 && B == 1 && contact.shape(0) == kLegs) ||
+                    (contact.ndim() == 2 && contact.shape(0) == B && contact.shape(1) == kLegs));
+    if (!fits)
+      throw py::value_error("state.contact must have shape (" + std::to_string(B) + ", 4)");
   }
-  for (const auto* arr : {&pos, &quat, &lin, &ang, &q, &qd, &cmd})
-    for (py::ssize_t k = 0; k < arr->size(); ++k)
-      if (!std::isfinite(arr->data()[k]))
-        throw py::value_error("the state and the command must be finite, got NaN or Inf");
   if (core.memories.empty()) core.memories.resize(std::size_t(B));
   if (py::ssize_t(core.memories.size()) != B)
     throw py::value_error("the batch changed from " + std::to_string(core.memories.size()) +
@@ -170,9 +193,10 @@ py::dict controller_step(ControllerCore& core, double t, int start_gait, int new
     if (memory.started && t - memory.t < -1e-9)
       throw py::value_error("t went backwards: " + std::to_string(t) + " after " +
                             std::to_string(memory.t) + ": call reset() first");
-  std::vector<motion::ControllerOutput> outs(static_cast<std::size_t>(B));
-  py::array_t<double> seconds(B);
-  double* wall = seconds.mutable_data();
+  std::vector<motion::ControllerOutput>& outs = core.last;
+  outs.resize(static_cast<std::size_t>(B));
+  core.seconds.resize(static_cast<std::size_t>(B));
+  double* wall = core.seconds.data();
   {
     ReleaseGilFor release(B);
     on_robot(core.robot, 1, [&](const auto& robot) {
@@ -196,9 +220,42 @@ py::dict controller_step(ControllerCore& core, double t, int start_gait, int new
       });
     });
   }
+  const auto B_ = py::ssize_t(outs.size());
+  for (const auto& out : outs) {
+    bool any = false;
+    for (bool c : out.clipped) any = any || c;
+    core.clipped += any;
+  }
+  core.ticks += B_;
+  auto field = [&](const Shape& trailing, auto member) {
+    using Field = std::remove_const_t<
+        std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>>;
+    Shape shape{B_};
+    shape.insert(shape.end(), trailing.begin(), trailing.end());
+    py::array_t<Field> arr(shape);
+    Field* dst = arr.mutable_data();
+    const std::size_t width = sizeof(outs[0].*member) / sizeof(Field);
+    for (py::ssize_t b = 0; b < B_; ++b) {
+      const Field* src = reinterpret_cast<const Field*>(&(outs[std::size_t(b)].*member));
+      std::copy(src, src + width, dst + width * std::size_t(b));
+    }
+    return arr;
+  };
+  using Out = motion::ControllerOutput;
+  return py::make_tuple(field({W}, &Out::q), field({W}, &Out::qd), field({W}, &Out::tau),
+                        field({W}, &Out::kp), field({W}, &Out::kd), field({kLegs}, &Out::contact));
+}
+
+// The last step's details, (B, ...) arrays by name (the façade's `last`).
+py::dict controller_details(const ControllerCore& core) {
+  using motion::kLegs;
+  constexpr py::ssize_t W = 3 * kLegs;
+  const auto& outs = core.last;
+  const py::ssize_t B = py::ssize_t(outs.size());
   py::dict result;
   auto put = [&](const char* name, const Shape& trailing, auto member) {
-    using Field = std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>;
+    using Field = std::remove_const_t<
+        std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>>;
     Shape shape{B};
     shape.insert(shape.end(), trailing.begin(), trailing.end());
     py::array_t<Field> arr(shape);
@@ -230,7 +287,7 @@ py::dict controller_step(ControllerCore& core, double t, int start_gait, int new
   put("wrench", {6}, &Out::wrench);
   put("ground", {3}, &Out::ground);
   put("status", {}, &Out::status);
-  result["time"] = seconds;
+  result["time"] = py::array_t<double>(B, core.seconds.data());
   return result;
 }
 
@@ -248,7 +305,14 @@ void bind_motion(py::module_& m) {
            py::arg("stance_kd"), py::arg("effort"), py::arg("leg_inertia"), py::arg("attitude"),
            py::keep_alive<1, 2>())
       .def("add_gait", &add_gait, py::arg("gait"))
-      .def("reset", [](ControllerCore& c) { c.memories.clear(); })
+      .def("reset",
+           [](ControllerCore& c) {
+             c.memories.clear(), c.last.clear(), c.seconds.clear();
+             c.ticks = c.clipped = 0;
+           })
+      .def_property_readonly("ticks", [](const ControllerCore& c) { return c.ticks; })
+      .def_property_readonly("clipped", [](const ControllerCore& c) { return c.clipped; })
+      .def("details", &controller_details)
       .def_property_readonly("robots", [](const ControllerCore& c) { return c.memories.size(); })
       .def("step", &controller_step, py::arg("t"), py::arg("start_gait"), py::arg("new_gait"),
            py::arg("position"), py::arg("quaternion"), py::arg("linear_velocity"),

@@ -52,30 +52,72 @@ void ground_plane(const double (*points)[3], const double* foot_z, double out[3]
   for (int k = 0; k < 3; ++k) out[k] = plane(k);
 }
 
-inline void skew_into(const double* r, Eigen::Ref<Eigen::Matrix<double, 3, 3>> S) {
-  S << 0.0, -r[2], r[1], r[2], 0.0, -r[0], -r[1], r[0], 0.0;
+// x = H^-1 rhs for a symmetric positive definite H (n x n, n <= W, row-major) by Cholesky; false
+// when H is not positive definite.
+bool cholesky_solve(double* H, int n, double* x) noexcept {
+  for (int j = 0; j < n; ++j) {
+    double d = H[j * W + j];
+    for (int k = 0; k < j; ++k) d -= H[j * W + k] * H[j * W + k];
+    if (!(d > 0.0)) return false;
+    const double l = std::sqrt(d);
+    H[j * W + j] = l;
+    for (int i = j + 1; i < n; ++i) {
+      double v = H[i * W + j];
+      for (int k = 0; k < j; ++k) v -= H[i * W + k] * H[j * W + k];
+      H[i * W + j] = v / l;
+    }
+  }
+  for (int i = 0; i < n; ++i) {  // L y = rhs, then L^T x = y
+    double v = x[i];
+    for (int k = 0; k < i; ++k) v -= H[i * W + k] * x[k];
+    x[i] = v / H[i * W + i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    double v = x[i];
+    for (int k = i + 1; k < n; ++k) v -= H[k * W + i] * x[k];
+    x[i] = v / H[i * W + i];
+  }
+  return true;
 }
 
 // (T): the loaded feet's forces minimising alpha |S (A f - b)|^2 + sum_l |(G_l - J_l^T f_l) /
 // tau_max|^2
 // + eps |f / (m g)|^2, a foot that would pull unloaded and the rest solved again; the residual b -
-// A f.
+// A f. The normal equations by blocks: A's block of foot j is [I; [r_j]x], so (A^T S A)_jk = S_f +
+// s_m ((r_j . r_k) I - r_k r_j^T) (S = diag(S_f, s_m I)) and (A^T y)_j = y_f + y_m x r_j; D_j =
+// diag(1 / tau_max) J_j^T.
 void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const double* com,
                             double mass, const double (*jacobians)[9],
                             const double (*leg_gravity)[3], const double (*limits)[3], double h,
-                            const double* wrench, double (*forces)[3], double residual[6]) {
+                            const double* wrench, double (*forces)[3],
+                            double residual[6]) noexcept {
   const double weight = mass * kGravity;
   double b[6] = {0.0, 0.0, weight, 0.0, 0.0, 0.0};
   for (int a = 0; a < 6; ++a) b[a] += wrench[a];
+  const double s_f[3] = {kTorqueHorizontal / (weight * weight),
+                         kTorqueHorizontal / (weight * weight), 1.0 / (weight * weight)};
+  const double s_m = 1.0 / ((weight * h) * (weight * h));
+  const double y[6] = {kTorqueAlpha * s_f[0] * b[0], kTorqueAlpha * s_f[1] * b[1],
+                       kTorqueAlpha * s_f[2] * b[2], kTorqueAlpha * s_m * b[3],
+                       kTorqueAlpha * s_m * b[4],    kTorqueAlpha * s_m * b[5]};
   bool down[kLegs];
-  for (int j = 0; j < kLegs; ++j)
+  double r[kLegs][3], D[kLegs][9], Dg[kLegs][3];
+  for (int j = 0; j < kLegs; ++j) {
     down[j] = loaded[j], forces[j][0] = forces[j][1] = forces[j][2] = 0.0;
-  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, W, W>;
-  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, W, 1>;
-  using Wide = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, W>;
-  Vec f;
-  Wide A;
+    for (int a = 0; a < 3; ++a) r[j][a] = feet[j][a] - com[a];
+    for (int row = 0; row < 3; ++row) {  // D_j[row][col] = J_j[col][row] / tau_max[row]
+      const double scale = 1.0 / limits[j][row];
+      for (int col = 0; col < 3; ++col) D[j][3 * row + col] = scale * jacobians[j][3 * col + row];
+    }
+    for (int col = 0; col < 3; ++col) {
+      double v = 0.0;
+      for (int row = 0; row < 3; ++row)
+        v += D[j][3 * row + col] * (leg_gravity[j][row] / limits[j][row]);
+      Dg[j][col] = v;
+    }
+  }
   int slots[kLegs], k = 0;
+  double f[W];
   while (true) {
     k = 0;
     for (int j = 0; j < kLegs; ++j)
@@ -84,39 +126,49 @@ void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const d
       for (int a = 0; a < 6; ++a) residual[a] = b[a];
       return;
     }
-    A.setZero(6, 3 * k);
-    Mat D = Mat::Zero(3 * k, 3 * k);
-    Vec g(3 * k);
-    for (int slot = 0; slot < k; ++slot) {
-      const int j = slots[slot];
-      A.block<3, 3>(0, 3 * slot).setIdentity();
-      const double r[3] = {feet[j][0] - com[0], feet[j][1] - com[1], feet[j][2] - com[2]};
-      skew_into(r, A.block<3, 3>(3, 3 * slot));
-      for (int row = 0; row < 3; ++row) {
-        const double scale = 1.0 / limits[j][row];
-        for (int col = 0; col < 3; ++col)
-          D(3 * slot + row, 3 * slot + col) = scale * jacobians[j][3 * col + row];
-        g(3 * slot + row) = scale * leg_gravity[j][row];
+    double H[W * W];
+    for (int sj = 0; sj < k; ++sj)
+      for (int sk = 0; sk <= sj; ++sk) {
+        const double* rj = r[slots[sj]];
+        const double* rk = r[slots[sk]];
+        const double dot = rj[0] * rk[0] + rj[1] * rk[1] + rj[2] * rk[2];
+        for (int p = 0; p < 3; ++p)
+          for (int q = 0; q < 3; ++q) {
+            double v = kTorqueAlpha * s_m * ((p == q ? dot : 0.0) - rk[p] * rj[q]);
+            if (p == q) v += kTorqueAlpha * s_f[p];
+            if (sj == sk) {
+              const double* Dj = D[slots[sj]];
+              v += Dj[p] * Dj[q] + Dj[3 + p] * Dj[3 + q] + Dj[6 + p] * Dj[6 + q];
+              if (p == q) v += kTorqueEps / (weight * weight);
+            }
+            H[(3 * sj + p) * W + 3 * sk + q] = v;
+            H[(3 * sk + q) * W + 3 * sj + p] = v;
+          }
       }
+    for (int sj = 0; sj < k; ++sj) {  // alpha A^T (S b) + D^T g
+      const double* rj = r[slots[sj]];
+      const double ym_x_r[3] = {y[4] * rj[2] - y[5] * rj[1], y[5] * rj[0] - y[3] * rj[2],
+                                y[3] * rj[1] - y[4] * rj[0]};
+      for (int p = 0; p < 3; ++p) f[3 * sj + p] = y[p] + ym_x_r[p] + Dg[slots[sj]][p];
     }
-    Eigen::Matrix<double, 6, 1> S2, bv;
-    for (int a = 0; a < 3; ++a)
-      S2(a) = 1.0 / (weight * weight), S2(3 + a) = 1.0 / ((weight * h) * (weight * h));
-    S2(0) *= kTorqueHorizontal, S2(1) *= kTorqueHorizontal;
-    for (int a = 0; a < 6; ++a) bv(a) = b[a];
-    const Mat H = kTorqueAlpha * A.transpose() * S2.asDiagonal() * A + D.transpose() * D +
-                  Mat::Identity(3 * k, 3 * k) * (kTorqueEps / (weight * weight));
-    const Vec rhs = kTorqueAlpha * A.transpose() * S2.cwiseProduct(bv) + D.transpose() * g;
-    f = H.partialPivLu().solve(rhs);
+    if (!cholesky_solve(H, 3 * k, f)) {  // not reached: eps I keeps H positive definite
+      for (int a = 0; a < 3 * k; ++a) f[a] = 0.0;
+    }
     bool pulling = false;
     for (int slot = 0; slot < k; ++slot)
-      if (f(3 * slot + 2) < 0.0) down[slots[slot]] = false, pulling = true;
+      if (f[3 * slot + 2] < 0.0) down[slots[slot]] = false, pulling = true;
     if (!pulling) break;
   }
-  for (int slot = 0; slot < k; ++slot)
-    for (int a = 0; a < 3; ++a) forces[slots[slot]][a] = f(3 * slot + a);
-  const Eigen::Matrix<double, 6, 1> left = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(b) - A * f;
-  for (int a = 0; a < 6; ++a) residual[a] = left(a);
+  double total[3] = {0.0, 0.0, 0.0}, moment[3] = {0.0, 0.0, 0.0};
+  for (int slot = 0; slot < k; ++slot) {
+    const int j = slots[slot];
+    const double* fj = f + 3 * slot;
+    for (int a = 0; a < 3; ++a) forces[j][a] = fj[a], total[a] += fj[a];
+    moment[0] += r[j][1] * fj[2] - r[j][2] * fj[1];
+    moment[1] += r[j][2] * fj[0] - r[j][0] * fj[2];
+    moment[2] += r[j][0] * fj[1] - r[j][1] * fj[0];
+  }
+  for (int a = 0; a < 3; ++a) residual[a] = b[a] - total[a], residual[3 + a] = b[3 + a] - moment[a];
 }
 
 // Each force with f_z >= 0 and its horizontal part within kFriction f_z.
@@ -130,15 +182,29 @@ void friction(double (*forces)[3]) noexcept {
   }
 }
 
-// x = A^-1 b (3x3 row-major) by partial pivoting; false when singular (as LAPACK's getrf: an
-// exact zero pivot).
+// x = A^-1 b (3x3 row-major) by partial pivoting; false when singular (as LAPACK's getrf: an exact
+// zero pivot).
 bool solve3(const double* A, const double* b, double* x) noexcept {
-  const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> M(A);
-  const Eigen::PartialPivLU<Eigen::Matrix3d> lu(M);
-  const Eigen::Matrix3d& U = lu.matrixLU();
-  if (U(0, 0) == 0.0 || U(1, 1) == 0.0 || U(2, 2) == 0.0) return false;
-  const Eigen::Vector3d v = lu.solve(Eigen::Map<const Eigen::Vector3d>(b));
-  for (int k = 0; k < 3; ++k) x[k] = v(k);
+  double M[3][4];
+  for (int r = 0; r < 3; ++r)
+    M[r][0] = A[3 * r], M[r][1] = A[3 * r + 1], M[r][2] = A[3 * r + 2], M[r][3] = b[r];
+  for (int c = 0; c < 3; ++c) {
+    int pivot = c;
+    for (int r = c + 1; r < 3; ++r)
+      if (std::fabs(M[r][c]) > std::fabs(M[pivot][c])) pivot = r;
+    if (M[pivot][c] == 0.0) return false;
+    if (pivot != c)
+      for (int k = 0; k < 4; ++k) std::swap(M[pivot][k], M[c][k]);
+    for (int r = c + 1; r < 3; ++r) {
+      const double factor = M[r][c] / M[c][c];
+      for (int k = c + 1; k < 4; ++k) M[r][k] -= factor * M[c][k];
+    }
+  }
+  for (int r = 2; r >= 0; --r) {
+    double v = M[r][3];
+    for (int k = r + 1; k < 3; ++k) v -= M[r][k] * x[k];
+    x[r] = v / M[r][r];
+  }
   return true;
 }
 

@@ -175,9 +175,6 @@ class GaitController:
         self._indices: dict[Gait, int] = {}
         self._start_index = self._index(self.gait)
         self._batch: tuple | None = None
-        self._last: dict | None = None
-        self.clipped = 0
-        self.ticks = 0
 
     def _gait(self, gait) -> Gait:
         if isinstance(gait, str):
@@ -202,8 +199,17 @@ class GaitController:
     def reset(self) -> None:
         """Forget the robots' states: the next :meth:`step` starts afresh from the measured state."""
         self._core.reset()
-        self._batch, self._last = None, None
-        self.clipped = self.ticks = 0
+        self._batch = None
+
+    @property
+    def ticks(self) -> int:
+        """Robot-ticks since the start or :meth:`reset`."""
+        return self._core.ticks
+
+    @property
+    def clipped(self) -> int:
+        """Robot-ticks whose feedforward was clipped to an effort limit, of :attr:`ticks`."""
+        return self._core.clipped
 
     @property
     def last(self) -> dict | None:
@@ -213,12 +219,12 @@ class GaitController:
         ``clipped`` (the joints whose feedforward was clipped to its effort), ``status`` (the worst IK
         status), ``shortened`` (the command or a foothold was cut to fit the legs) and ``time`` (s, the
         tick's compiled time)."""
-        if self._last is None:
+        if not self._core.robots or self._batch is None:
             return None
-        out = self._last
+        out = self._core.details()
         lasts = []
-        for k in range(len(out["q"])):
-            last = {"t": out["t"]}
+        for k in range(len(out["body_pose"])):
+            last = {}
             for name in DETAILS:
                 value = out[name][k]
                 last[name] = value.item() if value.ndim == 0 else value
@@ -233,8 +239,24 @@ class GaitController:
         gait (blended). A state with leading dimensions holds a batch of robots (each keeps its own
         controller state; the batch must keep its shape until :meth:`reset`); ``velocity`` broadcasts.
         ``ValueError`` for a NaN or misshapen state or command, or a time that goes backwards."""
-        if not isinstance(state, RobotState):
+        if type(state) is not RobotState and not isinstance(state, RobotState):
             raise TypeError(f"state must be a spotkin.motion.RobotState, got {type(state).__name__}")
+        if gait is None and self._batch in (None, ()) and state.q.ndim == 1 and isinstance(t, float):
+            # one robot, one sample per field: the compiled step checks shapes and values itself
+            position, quaternion = state.position, state.quaternion
+            v, w, qd, contact = state.linear_velocity, state.angular_velocity, state.qd, state.contact
+            if position.ndim == quaternion.ndim == v.ndim == w.ndim == qd.ndim == 1 and (
+                contact is None or contact.ndim == 1
+            ):
+                q, qd, tau, kp, kd, planned = self._core.step(
+                    t, self._start_index, -1, position, quaternion, v, w, state.q, qd, contact, velocity
+                )
+                self._batch = ()
+                return JointCommand(q[0], qd[0], tau[0], kp[0], kd[0], planned[0])
+        return self._step(t, state, velocity, gait)
+
+    def _step(self, t, state: RobotState, velocity, gait) -> JointCommand:
+        """:meth:`step` in general: checks and broadcasts the state, the command and the gait."""
         t = as_scalar(t, "t")
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t}")
@@ -247,30 +269,22 @@ class GaitController:
             shape = np.broadcast_shapes(lead, *(a.shape[:-1] for a in arrays))
         except ValueError:
             raise ValueError("the state's fields do not broadcast to one batch of robots") from None
-        for name in ("position", "quaternion", "linear_velocity", "angular_velocity", "q", "qd"):
-            if not np.isfinite(getattr(state, name)).all():
-                raise ValueError(f"state.{name} must be finite, got NaN or Inf")
         if state.contact is not None and state.contact.shape[-1] != legs:
             raise ValueError(f"state.contact must have {legs} feet, got {state.contact.shape[-1]}")
         velocity = as_real(velocity, "velocity", np.float64)
         if velocity.shape[-1:] != (3,):
             raise ValueError(f"velocity must be (vx, vy, yaw rate), got shape {velocity.shape}")
-        if not np.isfinite(velocity).all():
-            raise ValueError("velocity must be finite (vx, vy, yaw rate), got NaN or Inf")
         shape = np.broadcast_shapes(shape, velocity.shape[:-1])
         new_gait = None if gait is None else self._gait(gait)
-        if self._batch is None:
-            self._batch = shape
-        elif self._batch != shape:
+        if self._batch is not None and self._batch != shape:
             raise ValueError(f"the batch changed from {self._batch} to {shape}: call reset() first")
         new_index = -1 if new_gait is None else self._index(new_gait)
 
         def flat(a, width):
-            return np.ascontiguousarray(
-                np.broadcast_to(a, (*shape, width)).reshape(-1, width), dtype=np.float64
-            )
+            return np.ascontiguousarray(np.broadcast_to(a, (*shape, width)).reshape(-1, width))
 
-        out = self._core.step(
+        contact = None if state.contact is None else flat(state.contact, legs)
+        q, qd, tau, kp, kd, planned = self._core.step(
             t,
             self._start_index,
             new_index,
@@ -280,15 +294,10 @@ class GaitController:
             flat(state.angular_velocity, 3),
             flat(state.q, n),
             flat(state.qd, n),
-            None
-            if state.contact is None
-            else np.broadcast_to(state.contact, (*shape, legs)).reshape(-1, legs),
+            contact,
             flat(velocity, 3),
         )
-        out["t"] = t
-        self._last = out
-        self.clipped += int(out["clipped"].any(axis=1).sum())
-        self.ticks += len(out["q"])
-        fields = [out[name].reshape(*shape, -1) for name in ("q", "qd", "tau", "contact")]
-        kp, kd = (out[name][0] if shape == () else out[name].reshape(*shape, -1) for name in ("kp", "kd"))
-        return JointCommand(fields[0], fields[1], fields[2], kp, kd, fields[3])
+        self._batch = shape
+        if shape == ():
+            return JointCommand(q[0], qd[0], tau[0], kp[0], kd[0], planned[0])
+        return JointCommand(*(a.reshape(*shape, -1) for a in (q, qd, tau, kp, kd, planned)))
