@@ -68,6 +68,21 @@ void blended(const PlannerState& s, double t, GaitNumbers& P, GaitNumbers* rates
 
 namespace {
 
+// blended() without a copy once the gait has settled: the new gait's numbers themselves (rates,
+// when asked: zero).
+const GaitNumbers& numbers_at(const PlannerState& s, double t, GaitNumbers& scratch,
+                              const GaitNumbers** rates = nullptr,
+                              GaitNumbers* rate_scratch = nullptr) noexcept {
+  static const GaitNumbers zero{};
+  if (settled_at(s, t)) {
+    if (rates) *rates = &zero;
+    return s.new_numbers;
+  }
+  blended(s, t, scratch, rate_scratch);
+  if (rates) *rates = rate_scratch;
+  return scratch;
+}
+
 // D of step 1: max(T_new, 2 max_i |delta o_i| max(T_old, T_new)).
 double blend_duration(const GaitNumbers& old, const GaitNumbers& nw) noexcept {
   double worst_delta = 0.0;
@@ -526,8 +541,8 @@ void change(PlannerState& s, const GaitNumbers* gait, const double* command) noe
 
 void advance(const Body& body, PlannerState& s, double dt) noexcept {
   const double t1 = s.t + dt;
-  GaitNumbers P;
-  blended(s, t1, P, nullptr);
+  GaitNumbers scratch;
+  const GaitNumbers& P = numbers_at(s, t1, scratch);
   const double rate1 = 1.0 / P[kPeriod];
   s.theta += dt * (s.clock_rate + rate1) / 2.0;
   s.clock_rate = rate1;
@@ -559,8 +574,10 @@ void advance(const Body& body, PlannerState& s, double dt) noexcept {
 }
 
 void sample(const PlannerState& s, TickKinematics& out) noexcept {
-  GaitNumbers P, Pd;
-  blended(s, s.t, P, &Pd);
+  GaitNumbers scratch, rate_scratch;
+  const GaitNumbers* rates_of = nullptr;
+  const GaitNumbers& P = numbers_at(s, s.t, scratch, &rates_of, &rate_scratch);
+  const GaitNumbers& Pd = *rates_of;
   double phases[kLegs], rates[kLegs];
   bool shortened = s.speed_scale < 1.0;
   for (int i = 0; i < kLegs; ++i) {
