@@ -162,3 +162,14 @@ def test_the_compiled_entry_point_checks_its_arrays():
     period[0] = -1.0
     with pytest.raises(ValueError, match="period"):
         _core.plan_gait(statics, **{**ok, "gait": period})
+
+
+def test_float32_commands_give_a_float32_plan():
+    robot = robot_named("go2")
+    velocity = np.float32([[0.1, 0.0, 0.1]])
+    plan = robot.plan_gait("trot", velocity=velocity, duration=0.2, rate=100.0)
+    wide = robot.plan_gait("trot", velocity=velocity.astype(np.float64), duration=0.2, rate=100.0)
+    for name in ("body_pose", "feet", "q", "qd", "tau", "margin", "residual"):
+        assert getattr(plan, name).dtype == np.float32, name
+        np.testing.assert_array_equal(getattr(plan, name), getattr(wide, name).astype(np.float32))
+    assert plan.contact.dtype == bool and plan.status.dtype == np.int8

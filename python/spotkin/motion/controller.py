@@ -241,7 +241,14 @@ class GaitController:
         ``ValueError`` for a NaN or misshapen state or command, or a time that goes backwards."""
         if type(state) is not RobotState and not isinstance(state, RobotState):
             raise TypeError(f"state must be a spotkin.motion.RobotState, got {type(state).__name__}")
-        if gait is None and self._batch in (None, ()) and state.q.ndim == 1 and isinstance(t, float):
+        q_in = state.q
+        if (
+            gait is None
+            and self._batch in (None, ())
+            and q_in.ndim == 1
+            and q_in.dtype == np.float64
+            and isinstance(t, float)
+        ):
             # one robot, one sample per field: the compiled step checks shapes and values itself
             position, quaternion = state.position, state.quaternion
             v, w, qd, contact = state.linear_velocity, state.angular_velocity, state.qd, state.contact
@@ -271,7 +278,7 @@ class GaitController:
             raise ValueError("the state's fields do not broadcast to one batch of robots") from None
         if state.contact is not None and state.contact.shape[-1] != legs:
             raise ValueError(f"state.contact must have {legs} feet, got {state.contact.shape[-1]}")
-        velocity = as_real(velocity, "velocity", np.float64)
+        velocity = as_real(velocity, "velocity")
         if velocity.shape[-1:] != (3,):
             raise ValueError(f"velocity must be (vx, vy, yaw rate), got shape {velocity.shape}")
         shape = np.broadcast_shapes(shape, velocity.shape[:-1])
@@ -298,6 +305,17 @@ class GaitController:
             flat(velocity, 3),
         )
         self._batch = shape
+        # float32 in (every field of the state and the command), float32 out, as NumPy
+        inputs = (
+            state.position,
+            state.quaternion,
+            state.linear_velocity,
+            state.angular_velocity,
+            state.q,
+            state.qd,
+        )
+        if np.result_type(*inputs, velocity) == np.float32:
+            q, qd, tau, kp, kd = (a.astype(np.float32) for a in (q, qd, tau, kp, kd))
         if shape == ():
             return JointCommand(q[0], qd[0], tau[0], kp[0], kd[0], planned[0])
-        return JointCommand(*(a.reshape(*shape, -1) for a in (q, qd, tau, kp, kd, planned)))
+        return JointCommand(*(a.reshape(*shape, a.shape[-1]) for a in (q, qd, tau, kp, kd, planned)))

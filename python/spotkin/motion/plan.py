@@ -71,7 +71,9 @@ def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
         gait = Gait(gait)
     if not isinstance(gait, Gait):
         raise TypeError(f"gait must be a spotkin.Gait or a preset name, got {type(gait).__name__}")
-    velocity = as_real(velocity, "velocity", np.float64)
+    velocity = as_real(velocity, "velocity")
+    single = velocity.dtype == np.float32  # float32 in, float32 out (as NumPy); computed in float64
+    velocity = velocity.astype(np.float64, copy=False)
     lead = check_trailing(velocity, "velocity", (3,))
     if not np.isfinite(velocity).all():
         raise ValueError("velocity must be finite (vx, vy, yaw rate), got NaN or Inf")
@@ -92,6 +94,8 @@ def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
     fields = {"t": np.arange(ticks) / rate}
     for name, array in zip(GaitPlan._fields[1:], arrays):
         fields[name] = array.reshape(*lead, *array.shape[1:])
+    if single:
+        fields = {k: v.astype(np.float32) if v.dtype == np.float64 else v for k, v in fields.items()}
     return GaitPlan(**fields)
 
 
