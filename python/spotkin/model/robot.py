@@ -477,7 +477,7 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         (IK seeded with the previous tick's), qd, feedforward torques, the worst IK status, the support
         margin and whether a step was shortened. A quadruped only (``ValueError`` otherwise), and at most
         1e8 ticks; a NaN or Inf command is a ``ValueError``. The gait model is in the guide's *Walking*
-        page. Computed by the pure-Python reference planner for now.
+        page. Computed by the compiled planner, each command of a batch on the threads.
         """
         return _MOTION["plan_gait"](self, gait, velocity, duration, rate, attitude)
 

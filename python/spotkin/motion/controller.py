@@ -173,6 +173,7 @@ class GaitController:
             np.array(self.attitude),
         )
         self._indices: dict[Gait, int] = {}
+        self._by_key: dict = {}
         self._start_index = self._index(self.gait)
         self._batch: tuple | None = None
 
@@ -195,6 +196,18 @@ class GaitController:
         if gait not in self._indices:
             self._indices[gait] = self._core.add_gait(gait_numbers(self._resolve(gait)))
         return self._indices[gait]
+
+    def _new_index(self, gait) -> int:
+        """The table index of a gait given to :meth:`step` (a Gait or a preset name), cached by the
+        object given: a controller called with the same gait every tick looks it up once."""
+        try:
+            return self._by_key[gait]
+        except KeyError:
+            index = self._index(self._gait(gait))  # TypeError / ValueError for a bad gait
+            self._by_key[gait] = index
+            return index
+        except TypeError:  # not hashable: not a gait
+            return self._index(self._gait(gait))
 
     def reset(self) -> None:
         """Forget the robots' states: the next :meth:`step` starts afresh from the measured state."""
@@ -255,8 +268,9 @@ class GaitController:
             if position.ndim == quaternion.ndim == v.ndim == w.ndim == qd.ndim == 1 and (
                 contact is None or contact.ndim == 1
             ):
+                index = -1 if gait is None else self._new_index(gait)
                 q, qd, tau, kp, kd, planned = self._core.step(
-                    t, self._start_index, -1, position, quaternion, v, w, state.q, qd, contact, velocity
+                    t, self._start_index, index, position, quaternion, v, w, state.q, qd, contact, velocity
                 )
                 self._batch = ()
                 return JointCommand(q[0], qd[0], tau[0], kp[0], kd[0], planned[0])
@@ -282,10 +296,9 @@ class GaitController:
         if velocity.shape[-1:] != (3,):
             raise ValueError(f"velocity must be (vx, vy, yaw rate), got shape {velocity.shape}")
         shape = np.broadcast_shapes(shape, velocity.shape[:-1])
-        new_gait = None if gait is None else self._gait(gait)
+        new_index = -1 if gait is None else self._new_index(gait)
         if self._batch is not None and self._batch != shape:
             raise ValueError(f"the batch changed from {self._batch} to {shape}: call reset() first")
-        new_index = -1 if new_gait is None else self._index(new_gait)
 
         def flat(a, width):
             return np.ascontiguousarray(np.broadcast_to(a, (*shape, width)).reshape(-1, width))
