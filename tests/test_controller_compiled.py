@@ -6,28 +6,14 @@ instruction-set level. The commands and every detail of a tick agree to 1e-8."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
-from urdf_helpers import quadruped_urdf
+from urdf_helpers import robot_named
 
 import spotkin as sk
 from spotkin.motion import RobotState
 from spotkin.motion.controller import DETAILS
 from spotkin.reference import controller as reference
-
-_robots: dict = {}
-
-
-def robot_named(name: str):
-    if name not in _robots:
-        _robots[name] = {
-            "spot": sk.Spot,
-            "go2": lambda: sk.Robot.from_urdf(Path(sk.__file__).parent / "robots" / "go2.urdf"),
-            "heavy": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.4, 90.0, 200.0)),
-        }[name]()
-    return _robots[name]
 
 
 def assert_close(got, want, name: str, scale: float = 1.0) -> None:

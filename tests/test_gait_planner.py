@@ -8,13 +8,12 @@ own checks."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from urdf_helpers import quadruped_urdf
+from urdf_helpers import robot_named
 
 import spotkin as sk
 from spotkin import _core
@@ -23,18 +22,6 @@ from spotkin.reference import gait_plan
 
 PRESETS = ("stand", "walk", "trot", "pace", "bound", "pronk", "gallop")
 FLAGS = ("contact", "status", "shortened")
-_robots: dict = {}
-
-
-def robot_named(name: str):
-    if name not in _robots:
-        _robots[name] = {
-            "spot": sk.Spot,
-            "go2": lambda: sk.Robot.from_urdf(Path(sk.__file__).parent / "robots" / "go2.urdf"),
-            "heavy": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.4, 90.0, 200.0)),
-            "small": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.1, 2.0, 5.0)),
-        }[name]()
-    return _robots[name]
 
 
 def assert_same_plan(robot, gait, velocity, duration, rate, attitude=(0.0, 0.0)) -> None:

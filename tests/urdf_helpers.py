@@ -105,3 +105,21 @@ def quadruped_urdf(
             f'<child link="{name}_foot"/><origin xyz="0 0 {-L}"/></joint>',
         ]
     return '<robot name="test_quadruped">' + "".join(parts) + "</robot>"
+
+
+_named: dict = {}
+
+
+def robot_named(name: str):
+    """A robot by name, made once: "spot" (built in), "go2" (packaged), "heavy" (the tests' own 90 kg
+    quadruped: 0.4 m segments, 200 N m motors, no meshes) and "small" (2 kg, 0.1 m segments)."""
+    import spotkin as sk
+
+    if name not in _named:
+        _named[name] = {
+            "spot": sk.Spot,
+            "go2": lambda: sk.Robot.from_urdf(sk.robots.path("go2")),
+            "heavy": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.4, 90.0, 200.0)),
+            "small": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.1, 2.0, 5.0)),
+        }[name]()
+    return _named[name]

@@ -279,6 +279,21 @@ SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& 
   leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
 )
 
+// read_poses, then whole vectors (as leg_batch::pad_block): the padding repeats the last pose, so
+// that a pose's answer never comes from a loop's scalar remainder. Returns the padded count.
+template <typename T, typename C>
+SPOTKIN_INLINE std::ptrdiff_t read_padded_poses(const T* poses, BodyPoseFormat format,
+                                                const EulerSequence& seq, std::ptrdiff_t stride,
+                                                std::ptrdiff_t m, BlockPoses<C>& P) noexcept {
+  read_poses(poses, format, seq, stride, m, P);
+  const std::ptrdiff_t padded = leg_batch::padded_count<C>(m);
+  for (std::ptrdiff_t k = m; k < padded; ++k) {
+    for (int r = 0; r < 9; ++r) P.R[r][k] = P.R[r][m - 1];
+    for (int r = 0; r < 3; ++r) P.t[r][k] = P.t[r][m - 1];
+  }
+  return padded;
+}
+
 // Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
 // (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:
 // null or (count, w). q (count, w) in the body's column order, status
@@ -297,13 +312,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   leg_batch::OpenTargets<C> open;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    read_poses(poses + stride * b0, format, seq, stride, m, P);
-    // whole vectors (as leg_batch::pad_block): the padding repeats the last pose and foot
-    const std::ptrdiff_t padded = leg_batch::padded_count<C>(m);
-    for (std::ptrdiff_t k = m; k < padded; ++k) {
-      for (int r = 0; r < 9; ++r) P.R[r][k] = P.R[r][m - 1];
-      for (int r = 0; r < 3; ++r) P.t[r][k] = P.t[r][m - 1];
-    }
+    const std::ptrdiff_t padded = read_padded_poses(poses + stride * b0, format, seq, stride, m, P);
     for (int l = 0; l < n; ++l) {
       const Leg& leg = body.legs[std::size_t(l)];
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
@@ -388,12 +397,7 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
         running[3 * l + j] = seed[body.columns[std::size_t(l)][std::size_t(j)]];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    read_poses(poses + stride * b0, format, seq, stride, m, P);
-    const std::ptrdiff_t padded = leg_batch::padded_count<C>(m);
-    for (std::ptrdiff_t k = m; k < padded; ++k) {
-      for (int r = 0; r < 9; ++r) P.R[r][k] = P.R[r][m - 1];
-      for (int r = 0; r < 3; ++r) P.t[r][k] = P.t[r][m - 1];
-    }
+    const std::ptrdiff_t padded = read_padded_poses(poses + stride * b0, format, seq, stride, m, P);
     const bool block_seeded = seeded;
     for (int l = 0; l < n; ++l) {
       const Leg& leg = body.legs[std::size_t(l)];

@@ -1,63 +1,14 @@
 """The closed-loop gait controller: :class:`GaitController`, one control tick at a time, for one robot or
-a batch of them in one compiled call (cpp/src/gait_controller.cpp, the robots on the threads). The
-compiled tick mirrors the pure-Python reference (:mod:`spotkin.reference.controller`), which the tests
-compare it with tick by tick.
+a batch of them in one compiled call (cpp/src/gait_controller.cpp, the robots on the threads).
 
-It runs the reference planner's state machine (:mod:`spotkin.reference.gait_plan`: the gait clock,
-the latched contacts, the footholds) one tick at a time and closes the loop on the measured state
-(:class:`spotkin.motion.RobotState`); each tick gives a :class:`spotkin.motion.JointCommand`
-(``tau_joint = kp (q - q_meas) + kd (qd - qd_meas) + tau``). What it does, tick by tick:
-
-1. **Measure.** The body's pose and twist; the feet by forward kinematics (``robot.body_fk``); the
-   ground: a plane through the feet's last contact points (less the nominal foot height), low-passed
-   over ``GROUND_TIME`` of a period.
-2. **Plan.** The planner advances by the tick: gait clock, ramped velocity (the command, with the
-   gait's acceleration limits), lift-offs and touch-downs, with its closed-loop inputs set
-   (``PlannerState.v_measured``, ``p_measured``, ``ground``, ``ground_offsets``): the footholds (F)
-   get the measured velocity in the capture-point term k (v_meas - v_cmd) sqrt(h / g); the body pose
-   predicted for a touch-down moves by the measured position and velocity errors (the planner's own
-   sway taken out); footholds lie on the ground plane's slope through each leg's own last contact;
-   every one is bounded by the leg's workspace (B). With measured contacts, a swing foot that
-   touches the ground in the second half of its swing lands there; a foot that finds no ground at
-   its planned touch-down keeps reaching down (at the swing's mean descent speed, at most
-   ``REACH_DOWN`` h), carries no load until it touches, and holds the gait clock meanwhile (no other
-   leg lifts off). A stance foot carries load from its first touch to its lift-off. The first
-   period is a settling: the clock held, every foot down, while the centre-of-mass shift blends in.
-3. **Re-anchor.** The planner's planar pose is the body's reference; it is kept within
-   ``ANCHOR`` h (position) and ``YAW_ANCHOR`` (yaw) of the measured body, so that drift, pushes and
-   slopes never accumulate an error the legs would try to undo. Stance feet are held where they
-   are measured.
-4. **Body reference.** Position: the anchored planar pose plus the centre-of-mass shift s0 (in every
-   gait) and the crawl's sway (C); height: the gait's above the ground plane; attitude: the commanded
-   roll and pitch, the pitch plus ``TERRAIN_FOLLOW`` of the ground's slope along the heading; yaw:
-   the planner's.
-5. **Joints.** ``robot.body_ik`` at the reference pose for the loaded legs (so that their PD pushes
-   the body towards it) and at the measured pose for the others (so that a swing foot reaches its
-   world foothold whatever the body's error), seeded with the previous tick. Joint velocities from
-   the feet's and the body's velocities: qd_l = (R J_l)^-1 (pdot_l - v - w x (p_l - t)), with the
-   reference twist for loaded legs and the measured one for the others.
-6. **Feedforward torques.** tau = G - (R J_l)^T f_l per leg (G the generalised gravity at the
-   measured configuration); a swing leg adds A_l qdd (its block of the mass matrix at the nominal
-   stance, qdd from the swing curve's acceleration). The stance forces carry the weight plus a
-   virtual body wrench, by the torque-weighted least squares (T)
-   (:func:`spotkin.reference.gait.torque_weighted_forces`) over the loaded feet, then kept in a
-   friction pyramid of ``FRICTION`` with f_z >= 0. The wrench is a critically damped PD on the body
-   pose about the reference: F = m (wb^2 e_p + 2 wb e_v + a_ref), M = I (wb^2 e_R + 2 wb e_w), e_R
-   the rotation vector of R_ref R^T, a_ref the reference's acceleration (low-passed), I the body's
-   composite rotational inertia plus ``TIP_INERTIA`` m h^2 about the horizontal axes, wb =
-   ``BODY_BANDWIDTH`` sqrt(g / h). The feedforward is clipped to the joints' effort limits
-   (:attr:`GaitController.last` says which were).
-
-Gains, from the robot's own inertias (no per-robot table): I_j, the diagonal of the floating base's
-mass matrix ``A(q)`` at the nominal stance for joint j (the inertia of the leg below the joint about
-its axis), sets
-
-    kp_j = I_j w^2,   kd_j = 2 zeta I_j w,   w = kappa sqrt(g / h),   zeta = ``DAMPING_RATIO`` (1),
-
-with kappa = ``SWING_BANDWIDTH`` (16) for a swinging leg and ``STANCE_BANDWIDTH`` (6) for a loaded
-one: each joint's natural frequency on its own leg's inertia is a fixed multiple of sqrt(g / h),
-which the gaits' period T = c sqrt(h / g) also scales with (Froude similarity: robots of any size get
-the same gains relative to their gait).
+Each tick measures the body, the feet and the ground, advances the gait planner's state machine with
+those measurements (footholds with the capture point, touch-downs from the measured contacts),
+re-anchors the reference to the measured body, solves the joints and their velocities, and gives the
+feedforward torques (gravity, the weight and a virtual body wrench on the loaded feet, the swing legs'
+inertia), with PD gains chosen from the robot's own inertias. The guide's *Walking* page explains it;
+the pure-Python reference tick (:mod:`spotkin.reference.controller`, whose docstring lists every step,
+constant and gain) is its definition: the compiled tick mirrors it, and the tests compare them tick by
+tick.
 """
 
 from __future__ import annotations
@@ -69,21 +20,12 @@ import numpy as np
 from .. import _core
 from .._support.boundary import as_real, as_scalar
 from ..model.robot import Robot
-from ..reference.controller import (
-    ACCEL_TIME,
-    ANCHOR,
-    BODY_BANDWIDTH,
+
+# the gains' constants are defined with the reference tick and compiled into the core; named here too
+from ..reference.controller import (  # noqa: F401
     DAMPING_RATIO,
-    FRICTION,
-    GROUND_TIME,
-    MAX_GAP,
-    REACH_DOWN,
     STANCE_BANDWIDTH,
     SWING_BANDWIDTH,
-    TERRAIN_FOLLOW,
-    TERRAIN_ROLL,
-    TIP_INERTIA,
-    YAW_ANCHOR,
     ReferenceController,
 )
 from .gait import Gait, ResolvedGait
@@ -92,23 +34,6 @@ from .state import JointCommand, RobotState
 
 __all__ = ["GaitController"]
 
-CONSTANTS = (
-    ACCEL_TIME,
-    ANCHOR,
-    BODY_BANDWIDTH,
-    DAMPING_RATIO,
-    FRICTION,
-    GROUND_TIME,
-    MAX_GAP,
-    REACH_DOWN,
-    STANCE_BANDWIDTH,
-    SWING_BANDWIDTH,
-    TERRAIN_FOLLOW,
-    TERRAIN_ROLL,
-    TIP_INERTIA,
-    YAW_ANCHOR,
-)
-"""The controller's documented constants (defined with the reference tick, compiled into the core)."""
 DETAILS = (
     "body_pose",
     "feet",
@@ -130,7 +55,7 @@ DETAILS = (
 
 class GaitController:
     """A closed-loop gait controller for a quadruped: ``step(t, state, velocity) -> JointCommand``
-    (module :mod:`spotkin.motion.controller` documents each tick and the gains).
+    (:mod:`spotkin.reference.controller` documents each tick and the gains).
 
     ``robot``: a quadruped :class:`spotkin.Robot`; ``gait``: a :class:`spotkin.Gait` or a preset
     name; ``rate``: the control rate (Hz), the tick of the first step; ``attitude``: the commanded
