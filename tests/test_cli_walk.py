@@ -39,7 +39,16 @@ def test_a_walk_prints_its_figures_and_writes_its_pictures(tmp_path):
         assert line in out, out
     assert "h = 0.341 m" in out and "trot" in out
     written = sorted(path.name for path in tmp_path.iterdir())
-    assert written == ["go2_foot_paths.png", "go2_gait.png"], written
+    assert written == ["go2_foot_paths.png", "go2_gait.png", "go2_walk.gif"], written
+    for name in written:
+        assert f"wrote {tmp_path / name}" in out
+    gif = (tmp_path / "go2_walk.gif").read_bytes()
+    assert gif.startswith(b"GIF89a")
+    from PIL import Image
+
+    with Image.open(tmp_path / "go2_walk.gif") as image:
+        assert image.size == (720, 450)
+        assert image.n_frames == 40  # 2 s at 20 frames a second
 
 
 def test_spot_walks_from_the_command_line():

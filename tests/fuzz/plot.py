@@ -5,13 +5,16 @@ matplotlib nothing is registered (and nothing of ``spotkin.plot`` is public ther
 draw with the Agg backend, in memory; every case closes its figures.
 
 Each function is called on real robots (Spot, Spot from its URDF, Go2, the six-legged robot), legs, arms,
-chains and trajectories, with hostile poses, joints, targets, options, axes and figures. The probes read
-the drawings back: the drawn feet are ``body_fk``'s, each drawn branch is one that ``ik_all`` finds, the
-map's counts are ``ik_all``'s at sampled pixels, the curves are the trajectory's own samples.
+chains, trajectories and a walk of Go2 in the simulator (when spotkin[sim] is installed), with hostile
+poses, joints, targets, options, axes and figures. The probes read the drawings back: the drawn feet are
+``body_fk``'s (of the walk's recorded pose and joints for its animation), each drawn branch is one that
+``ik_all`` finds, the map's counts are ``ik_all``'s at sampled pixels, the curves are the trajectory's own
+samples.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -21,7 +24,7 @@ import spotkin as sk
 from .entry import register, seq_slot
 from .objects import ROBOT_ARMS, STANCE_HEIGHT
 from .outputs import close, describe
-from .slots import ACCEPT, REJECT, Arg, Array, Choice, Custom, Int, Real
+from .slots import ACCEPT, REJECT, Arg, Array, Choice, Custom, Flag, Int, Real
 
 PLOT_ARM_Q = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
 
@@ -519,4 +522,86 @@ def register_entries() -> None:
         after=_close_figures,
         combos=(),
         pairs=8,
+    )
+
+    # plot.walk_animation: a short trot of Go2 in the simulator (spotkin[sim]); without MuJoCo there is no
+    # SimResult to give it, and every call is refused (a plan in its place)
+    try:
+        from spotkin import sim
+    except ImportError:
+        sim = None
+
+    def simulated(c, record=True):
+        def make():
+            go2 = c.robot("go2")
+            return sim.run(
+                go2, sk.GaitController(go2, "trot"), duration=0.2, velocity=(0.2, 0.0, 0.0), record=record
+            )
+
+        return c._get(("plot-walk", record), make)
+
+    def poked_q(c):
+        result = simulated(c)
+        q = result.q.copy()
+        q[1, 0] = math.nan
+        return dataclasses.replace(result, q=q)
+
+    if sim is not None:
+        results = {
+            "valid": const(simulated),
+            "unrecorded": const(lambda c: simulated(c, record=False), REJECT, "value"),
+            "fewer_joints": const(
+                lambda c: dataclasses.replace(simulated(c), q=simulated(c).q[:, :9]), REJECT, "value"
+            ),
+            "nan_q": const(poked_q, REJECT, "value"),
+        }
+    else:
+        results = {"valid": const(lambda c: trot(c), REJECT, "type")}
+    results.update({"plan": const(trot, REJECT, "type"), "str": const("walk", REJECT, "type")})
+    results["none"] = const(None, REJECT, "type")
+
+    def walk_probe(anim, kw, c):
+        fig = rendered(anim)
+        if fig is None:
+            return f"not an animation: {describe(anim)}"
+        result, robot, tick = kw["result"], kw["robot"], int(anim.ticks[0])
+        pose = np.concatenate([result.position[tick], result.quaternion[tick]])  # [x, y, z, qx, qy, qz, qw]
+        want = robot.body_fk(pose, result.q[tick])
+        view = str(kw.get("view", "3d"))
+        if view != "3d":  # a 2D view draws the feet's projection
+            want = want[:, list({"side": (0, 2), "front": (1, 2), "top": (0, 1)}[view])]
+        got = _gid_data(fig, "feet")
+        if got is None or not close(got, want, False):
+            return f"drawn feet {describe(got)} are not the recorded walk's {describe(want)}"
+        return None
+
+    walk_robots = robot_table("go2")
+    walk_robots["hexapod"] = const(lambda c: c.robot("hexapod"), REJECT, "value")  # another robot's walk
+    register(
+        name="plot.walk_animation",
+        covers="spotkin.plot.walk_animation",
+        call=lambda c, **k: plot.walk_animation(**k),
+        slots=[
+            Custom("robot", walk_robots),
+            Custom("result", results),
+            Custom(
+                "q_arm", {"none": const(None), "given": const(PLOT_ARM_Q, REJECT, "value")}, default="omit"
+            ),
+            Real("fps", 20.0, default="omit"),
+            Int("max_frames", 300, 1, default="omit"),
+            Choice("view", "3d", ("3d", "side", "front", "top"), default="omit"),
+            Flag("follow", True, default="omit"),
+            Custom("fig", fig_table, default="omit"),
+            Custom(
+                "title",
+                {"text": const("a title"), "none": const(None), "int": const(3, REJECT, "type")},
+                default="omit",
+            ),
+        ],
+        probe=walk_probe,
+        after=_close_figures,
+        combos=(),
+        pairs=8,
+        expect=ACCEPT if sim is not None else REJECT,
+        why="" if sim is not None else "type",
     )

@@ -143,7 +143,8 @@ def main(argv: list[str] | None = None) -> int:
     walk_parser.add_argument(
         "--plots",
         metavar="DIR",
-        help=f"also write the gait diagram and the foot paths into DIR ({PLOT_EXTRA})",
+        help=f"also write the gait diagram, the foot paths and an animation of the walk (GIF) into DIR "
+        f"({PLOT_EXTRA})",
     )
     walk_parser.add_argument("--dpi", type=_positive_int, default=100, help=dpi_help)
     batch_operations.add_parser(commands)  # spotkin batch OPERATION ... (spotkin/scale/batch_*.py)

@@ -12,7 +12,9 @@
   limit-blocked regions, the singular sets and contours of ``|det J|``.
 - :func:`trajectory`: a point-to-point motion's q, qd and qdd against time with the speed and
   acceleration limits, or a Cartesian path's position and velocities.
-- :func:`animate`: a matplotlib animation of the robot along a body path (``.save("path.gif")``).
+- :func:`animate`: a matplotlib animation of the robot along a body path (``.save("path.gif")``);
+  :func:`walk_animation`: one of a walk in the simulator (a :class:`spotkin.sim.SimResult`), the feet
+  in contact marked, the camera following the body.
 - :func:`gait_diagram`: a walk's contacts, a bar per leg against time (planned and measured);
   :func:`foot_paths`: the feet's paths in side view over each leg's sagittal workspace.
 
@@ -28,8 +30,9 @@ leg's geometry, a chain's frames), not for its class.
 """
 
 # One module per picture family: _robot (with _stance, one configuration in the world, and _artists, its
-# drawing), _branches, _workspace_map, _trajectory, _animation, _gait (walks); _common (style, argument
-# checks, axes) and _solvers (the solver interface as the pictures read it) hold what they share.
+# drawing), _branches, _workspace_map, _trajectory, _animation, _gait (walks), _walk (a simulated walk,
+# animated); _common (style, argument checks, axes) and _solvers (the solver interface as the pictures
+# read it) hold what they share.
 
 from __future__ import annotations
 
@@ -55,6 +58,16 @@ from ._stance import _nominal_stance as _nominal_stance
 from ._stance import _robot_name as _robot_name
 from ._stance import _zero_stance as _zero_stance
 from ._trajectory import trajectory
+from ._walk import walk_animation
 from ._workspace_map import workspace
 
-__all__ = ["animate", "branches", "foot_paths", "gait_diagram", "robot", "trajectory", "workspace"]
+__all__ = [
+    "animate",
+    "branches",
+    "foot_paths",
+    "gait_diagram",
+    "robot",
+    "trajectory",
+    "walk_animation",
+    "workspace",
+]

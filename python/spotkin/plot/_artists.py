@@ -272,10 +272,13 @@ class _RobotArtists:
         handles.extend(extra)
         return handles
 
-    def legend(self, extra=(), fontsize: float = 7, outside: bool = False) -> None:
+    def legend(self, extra=(), fontsize: float = 7, outside: bool = False, replace=None) -> None:
         """The legend: beside the axes, right of their box (``outside``: the figure leaves room for it), or
-        in the axes' upper left corner (a 2D view: where it hides the least of the drawing)."""
+        in the axes' upper left corner (a 2D view: where it hides the least of the drawing). ``replace``:
+        label -> the entries that stand for that one (a picture where the feet mean more)."""
         handles = self.handles(extra)
+        if replace:
+            handles = [entry for handle in handles for entry in replace.get(handle.get_label(), [handle])]
         if outside:  # in figure coordinates, by the box as drawn (a 3D Axes' labels spill out of it)
             self.ax.apply_aspect()
             box = self.ax.get_position()
