@@ -93,8 +93,8 @@ SPOT_HIPS = (
     "each stance foot travels 14 cm either side of its hip under about 300 N"
 )
 PUSH = (
-    "a lateral kick of 0.5 m/s is recovered by stepping, without a fall, but the stance forces that stop "
-    "it take the hip-pitch motors past their limits for about a second"
+    "a lateral kick of 0.5 m/s is recovered by stepping, without a fall, but on Spot (45 N m hip motors "
+    "for 56 kg) the stance forces that stop it take the hip-pitch motors past their limits"
 )
 PACE_BOUND = (
     "the pace and the bound are not stabilised: two feet on one side (or one end) cannot hold the roll "
@@ -105,9 +105,7 @@ FAILING = {
         f"{SPOT_HIPS}; measured: speed 100 %, no fall, torques within on 59 % of ticks (the feedforward "
         "clipped on 24 %)"
     ),
-    ("push", "spot"): f"{PUSH}; measured on Spot: torques within on 75 % of ticks, speed 89 %",
-    ("push", "go2"): f"{PUSH}; measured on Go2: torques within on 98.1 % of ticks",
-    ("push", "own"): f"{PUSH}; measured on the tests' quadruped: torques within on 94 % of ticks",
+    ("push", "spot"): f"{PUSH}; measured on Spot: torques within on 91 % of ticks, speed 83 %",
     ("transition", "spot", "pace"): f"{PACE_BOUND}; measured: Spot falls 3.5 s into the pace",
     ("transition", "go2", "pace"): f"{PACE_BOUND}; measured: Go2 falls 2.8 s into the pace",
     ("transition", "own", "pace"): f"{PACE_BOUND}; measured: the tests' quadruped falls 2.2 s into the pace",

@@ -364,7 +364,12 @@ void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
   const double shift[2] = {cp * delta[0] - sp * delta[1], sp * delta[0] + cp * delta[1]};
   memory.shift[0] = shift[0], memory.shift[1] = shift[1];
   const double ex = plan.x + shift[0] - position[0], ey = plan.y + shift[1] - position[1];
-  const double bound = kAnchor * h, norm = std::hypot(ex, ey);
+  // the bound: kAnchor h, plus the most the crawl's sway (C) moves the body (its planned lead)
+  double sway[2] = {0.0, 0.0};
+  for (int l = 0; l < kLegs; ++l)
+    sway[0] += std::fabs(P[kSway + 2 * l]), sway[1] += std::fabs(P[kSway + 2 * l + 1]);
+  const double bound = kAnchor * h + P[kComShift] * std::hypot(sway[0], sway[1]),
+               norm = std::hypot(ex, ey);
   if (norm > bound) {
     plan.x -= ex * (1.0 - bound / norm);
     plan.y -= ey * (1.0 - bound / norm);

@@ -24,9 +24,11 @@ the latched contacts, the footholds) one tick at a time and closes the loop on t
    leg lifts off). A stance foot carries load from its first touch to its lift-off. The first
    period is a settling: the clock held, every foot down, while the centre-of-mass shift blends in.
 3. **Re-anchor.** The planner's planar pose is the body's reference; it is kept within
-   ``ANCHOR`` h (position) and ``YAW_ANCHOR`` (yaw) of the measured body, so that drift, pushes and
-   slopes never accumulate an error the legs would try to undo. Stance feet are held where they
-   are measured.
+   ``ANCHOR`` h plus the most the crawl's sway moves the body (position; the sway's lead is the
+   reference's to keep) and ``YAW_ANCHOR`` (yaw) of the measured body, so that drift, pushes and
+   slopes never accumulate an error the legs would try to undo (after a push, the stance legs' PD
+   pulls back by no more than that: their torques stay within the motors' limits). Stance feet are
+   held where they are measured.
 4. **Body reference.** Position: the anchored planar pose plus the centre-of-mass shift s0 (in every
    gait) and the crawl's sway (C); height: the gait's above the ground plane; attitude: the commanded
    roll and pitch, the pitch plus ``TERRAIN_FOLLOW`` of the ground's slope along the heading; yaw:
@@ -83,8 +85,9 @@ BODY_BANDWIDTH = 1.5
 """The virtual body wrench's natural frequency, in sqrt(g / h)."""
 TIP_INERTIA = 0.3
 """The virtual moment's roll and pitch inertia adds TIP_INERTIA m h^2 to the body's own."""
-ANCHOR = 0.1
-"""The body reference stays within this fraction of h of the measured body (horizontally)."""
+ANCHOR = 0.03
+"""The body reference stays within this fraction of h (plus the crawl's sway) of the measured body,
+horizontally."""
 YAW_ANCHOR = 0.1
 """... and within this many radians of its yaw."""
 TERRAIN_FOLLOW = 1.0
@@ -307,7 +310,8 @@ class ReferenceController:
         shift = np.array([cp * delta[0] - sp * delta[1], sp * delta[0] + cp * delta[1]])
         memory.shift = shift
         ex, ey = plan.x + shift[0] - position[0], plan.y + shift[1] - position[1]
-        bound = ANCHOR * self.h
+        sway = np.abs(np.asarray(P["sway"], dtype=np.float64)).sum(axis=0)  # the most (C) moves the body
+        bound = ANCHOR * self.h + float(P["com_shift"]) * math.hypot(sway[0], sway[1])
         norm = math.hypot(ex, ey)
         if norm > bound:
             plan.x -= ex * (1.0 - bound / norm)

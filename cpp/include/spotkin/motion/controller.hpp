@@ -14,7 +14,7 @@
 namespace spotkin::motion {
 
 constexpr double kSwingBandwidth = 16.0;  // reference SWING_BANDWIDTH ...
-constexpr double kAnchor = 0.1;
+constexpr double kAnchor = 0.03;
 constexpr double kYawAnchor = 0.1;
 constexpr double kTerrainFollow = 1.0;
 constexpr double kTerrainRoll = 0.0;
@@ -23,8 +23,8 @@ constexpr double kFriction = 0.6;
 constexpr double kAccelTime = 0.02;
 constexpr double kMaxGap = 0.1;
 constexpr double kGroundTime = 0.25;
-constexpr double kTorqueAlpha = 1e4;  // (T)'s alpha, beta and eps
-constexpr double kTorqueHorizontal = 1e-2;
+constexpr double kTorqueAlpha = 1e4;        // (T)'s alpha, beta and eps
+constexpr double kTorqueHorizontal = 3e-3;  // beta of (T)
 constexpr double kTorqueEps = 1e-6;
 
 // What a controller knows of its robot, computed once (the reference's constructor): the speed
