@@ -58,8 +58,8 @@ Support margin, stance forces
          alpha |S (A f - b)|^2 + sum_l |(G_l - J_l^T f_l) / tau_max,l|^2 + eps |f / (m g)|^2,
      A f = [sum f_j; sum (p_j - c) x f_j] the wrench of the forces, b = [-m g + F_w; M_w] the one
      wanted (W), S = diag(sqrt(beta) / (m g), sqrt(beta) / (m g), 1 / (m g), 1 / (m g h) I_3) its
-     scale, alpha = 1e4 (the wrench first), beta = 3e-3 (the horizontal force softer: a fifth of the
-     weight missed costs about as much as a joint at its limit), eps = 1e-6; G_l and J_l as in (W),
+     scale, alpha = 1e4 (the wrench first), beta = 1e-2 (the horizontal force softer: a tenth of the
+     weight missed costs as much as a joint at its limit), eps = 1e-6; G_l and J_l as in (W),
      tau_max,l the joints' effort limits. Among the forces that give the wrench (the vertical force
      and the moments exactly when the feet can: three feet or more), the ones that keep the joint
      torques smallest against their limits: a foot displaced from under its hip pushes partly along
@@ -93,7 +93,7 @@ OK = 0
 """The code of ``spotkin.Status.OK``."""
 TORQUE_ALPHA = 1e4
 """alpha of (T): the weight of the wrench against the torques."""
-TORQUE_HORIZONTAL = 3e-3
+TORQUE_HORIZONTAL = 1e-2
 """beta of (T): the horizontal force's rows weigh beta alpha (the vertical force and the moments alpha)."""
 TORQUE_EPS = 1e-6
 """eps of (T): the forces' own (regularising) weight."""
