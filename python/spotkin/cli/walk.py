@@ -9,11 +9,14 @@ import os
 
 import numpy as np
 
-from .pictures import GIF_SIZE, PLOT_EXTRA, _load_robot, _plotting, save_png
+from .pictures import PLOT_EXTRA, _load_robot, _plotting, save_png
 
 SIM_EXTRA = 'pip install "spotkin[sim]"'
-ANIMATED_SECONDS = 10.0  # --plots animates the walk's last 10 s at most: 200 frames, about 2 MB
+# --plots animates the walk's last 2 s (four or five steps of each leg) at 20 frames a second, the camera
+# fixed on them, 600 x 375 pixels at 100 dpi: about 150 KB, as small as the repository keeps its pictures
+ANIMATED_SECONDS = 2.0
 ANIMATION_FPS = 20.0
+ANIMATION_SIZE = (6.0, 3.75)  # in
 
 
 def _simulator():
@@ -109,10 +112,10 @@ def walk(
 
 def write_walk_plots(folder: str, robot, name: str, result, planned, dpi: int = 100) -> list[str]:
     """The walk's gait diagram (the last 3 s: planned stance and measured contacts), its foot paths in
-    side view over the legs' workspaces, and an animation of the walk (its last 10 s at most, 20 frames
-    a second, the camera following the body; 720 x 450 pixels at 100 dpi), as ``NAME_gait.png``,
-    ``NAME_foot_paths.png`` and ``NAME_walk.gif`` in ``folder`` (NAME: the robot argument's file name
-    without its extension, or spot, go2); ImportError naming the plot extra without matplotlib."""
+    side view over the legs' workspaces, and an animation of its last 2 s (20 frames a second, the camera
+    fixed on them; 600 x 375 pixels at 100 dpi), as ``NAME_gait.png``, ``NAME_foot_paths.png`` and
+    ``NAME_walk.gif`` in ``folder`` (NAME: the robot argument's file name without its extension, or spot,
+    go2); ImportError naming the plot extra without matplotlib."""
     try:
         plot = _plotting()
     except ImportError:
@@ -140,12 +143,11 @@ def write_walk_plots(folder: str, robot, name: str, result, planned, dpi: int = 
         save_png(fig, written[-1], dpi)
     finally:
         plt.close(fig)
-    fig = plt.figure(figsize=GIF_SIZE)
+    fig = plt.figure(figsize=ANIMATION_SIZE)
     try:
         shown = _last(result, ANIMATED_SECONDS)
-        animation = plot.walk_animation(
-            robot, shown, fps=ANIMATION_FPS, fig=fig, title=f"{name}, simulated walk"
-        )
+        title = f"{name}, simulated walk"
+        animation = plot.walk_animation(robot, shown, fps=ANIMATION_FPS, follow=False, fig=fig, title=title)
         written.append(os.path.join(folder, f"{name}_walk.gif"))
         animation.save(written[-1], dpi=dpi)
     finally:

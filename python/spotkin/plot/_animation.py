@@ -32,13 +32,14 @@ from ._stance import _frame, _frame_points, _robot_name
 
 
 class _GifWriter(AbstractMovieWriter):
-    """Writes a GIF with Pillow, every frame on one palette of 128 colours without dithering: the static
-    parts (axes, legend) stay identical between frames, so the file holds little more than what moves (a
-    few times smaller than a per-frame dithered palette; line art needs no more colours)."""
+    """Writes a GIF with Pillow, every frame on one palette of ``colors`` colours (128) without dithering:
+    the static parts (axes, legend) stay identical between frames, so the file holds little more than what
+    moves (a few times smaller than a per-frame dithered palette; line art needs no more colours)."""
 
-    def __init__(self, fps: float = 10.0):
+    def __init__(self, fps: float = 10.0, colors: int = 128):
         super().__init__(fps=fps)
         self._frames: list = []
+        self.colors = colors
 
     def setup(self, fig, outfile, dpi=None):
         super().setup(fig, outfile, dpi=dpi)
@@ -55,7 +56,7 @@ class _GifWriter(AbstractMovieWriter):
         sample = Image.new("RGB", (frames[0].width, frames[0].height * len(picks)))
         for row, k in enumerate(picks):
             sample.paste(frames[k], (0, row * frames[0].height))
-        palette = sample.quantize(colors=128, method=0, dither=0)  # median cut, no dithering
+        palette = sample.quantize(colors=self.colors, method=0, dither=0)  # median cut, no dithering
         images = [frame.quantize(palette=palette, dither=0) for frame in frames]
         images[0].save(
             self.outfile, save_all=True, append_images=images[1:], duration=round(1000 / self.fps), loop=0
@@ -63,10 +64,12 @@ class _GifWriter(AbstractMovieWriter):
 
 
 class _Animation(FuncAnimation):
-    """A FuncAnimation whose ``save`` writes a ``.gif`` with :class:`_GifWriter` unless given a writer,
-    and draws each frame once while saving (the writer's grab draws it; the idle redraw is skipped)."""
+    """A FuncAnimation whose ``save`` writes a ``.gif`` with :class:`_GifWriter` (on ``gif_colors``
+    colours) unless given a writer, and draws each frame once while saving (the writer's grab draws it;
+    the idle redraw is skipped)."""
 
     _saving = False
+    gif_colors = 128
 
     def __init__(self, fig, func, *, frames: int, interval: float):
         self.figure = fig
@@ -75,7 +78,8 @@ class _Animation(FuncAnimation):
 
     def save(self, filename, writer=None, *args, **kwargs):
         if writer is None and str(filename).lower().endswith(".gif"):
-            writer = _GifWriter(fps=kwargs.pop("fps", None) or 1000.0 / self.frame_interval)
+            fps = kwargs.pop("fps", None) or 1000.0 / self.frame_interval
+            writer = _GifWriter(fps=fps, colors=self.gif_colors)
         self._saving = True
         try:
             return super().save(filename, writer, *args, **kwargs)
