@@ -160,3 +160,48 @@ def test_float32_commands_give_a_float32_plan():
         assert getattr(plan, name).dtype == np.float32, name
         np.testing.assert_array_equal(getattr(plan, name), getattr(wide, name).astype(np.float32))
     assert plan.contact.dtype == bool and plan.status.dtype == np.int8
+
+
+@pytest.mark.parametrize("name", ["spot", "go2"])
+def test_a_schedule_of_gaits_and_commands_is_the_reference_plan(name):
+    """walk, then trot, a new command, then the pace with another: each change at the first tick at or
+    after its time, as the reference plans it."""
+    robot = robot_named(name)
+    h = sk.motion.hip_height(robot)
+    gaits = {preset: sk.Gait(preset) for preset in ("walk", "trot", "pace")}
+    changes = [
+        (2.6, gaits["pace"], [0.2 * h, 0.0, 0.0]),  # out of order: sorted by time, as the reference does
+        (1.2, gaits["trot"], None),
+        (2.0, None, [0.3 * h, 0.1 * h, 0.2]),
+    ]
+    plan = robot.plan_gait("walk", velocity=[0.2 * h, 0.0, 0.0], duration=3.5, rate=200.0, changes=changes)
+    resolved = [(t, None if g is None else g.resolve(robot), v) for t, g, v in changes]
+    ref = gait_plan.plan(
+        robot, gaits["walk"].resolve(robot), [0.2 * h, 0.0, 0.0], 3.5, 200.0, changes=resolved
+    )
+    for field in gait_plan.OUTPUTS[1:]:
+        got, want = getattr(plan, field), ref[field]
+        if field in FLAGS:
+            assert np.array_equal(got, want), field
+        else:
+            finite = np.isfinite(want)
+            assert np.array_equal(finite, np.isfinite(got)), field
+            np.testing.assert_allclose(got[finite], want[finite], rtol=1e-9, atol=1e-9 * robot.mass * 9.81)
+    # the pace's two-foot support after its blend, the crawl's three before the trot
+    assert plan.contact[plan.t < 1.2].sum(axis=-1).min() >= 3
+    assert plan.contact[plan.t > 3.2].sum(axis=-1).min() <= 2
+
+
+def test_a_bad_schedule_gets_a_clear_answer():
+    robot = robot_named("go2")
+    for changes, error, match in (
+        (3, TypeError, "changes"),
+        ([(1.0, "trot")], ValueError, r"changes\[0\]"),
+        ([(np.nan, "trot", None)], ValueError, r"changes\[0\] time"),
+        ([(1.0, "canter", None)], ValueError, "canter"),
+        ([(1.0, 4, None)], TypeError, r"changes\[0\] gait"),
+        ([(1.0, None, [0.1, 0.0])], ValueError, r"changes\[0\] velocity"),
+        ([(1.0, None, [np.inf, 0.0, 0.0])], ValueError, r"changes\[0\] velocity"),
+    ):
+        with pytest.raises(error, match=match):
+            robot.plan_gait("trot", duration=0.5, rate=50.0, changes=changes)

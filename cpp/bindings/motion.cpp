@@ -5,6 +5,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -36,7 +38,8 @@ py::array_t<double, py::array::c_style> exact(py::handle obj, const char* name,
 }
 
 py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle velocity_obj,
-                    py::handle attitude_obj, py::ssize_t ticks, double rate) {
+                    py::handle attitude_obj, py::ssize_t ticks, double rate, py::handle times_obj,
+                    py::handle gaits_obj, py::handle velocities_obj) {
   using motion::kLegs;
   if (r.body.n_legs() != kLegs)
     throw py::value_error("the gait planner takes a quadruped (4 legs)");
@@ -63,6 +66,34 @@ py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle veloc
                               shortened.mutable_data(), residual.mutable_data()};
   const double* v = velocity.data();
   const double att[2] = {attitude.data()[0], attitude.data()[1]};
+  // the changes (time, gait numbers or a NaN row, velocity or a NaN row), in time order (stable)
+  std::vector<motion::GaitNumbers> change_gaits;
+  std::vector<std::array<double, 3>> change_velocities;
+  std::vector<motion::PlanChange> changes;
+  if (!times_obj.is_none()) {
+    const auto times = exact(times_obj, "change_times", {-1});
+    const py::ssize_t k = times.shape(0);
+    const auto gaits = exact(gaits_obj, "change_gaits", {k, motion::kGaitNumbers});
+    const auto velocities = exact(velocities_obj, "change_velocities", {k, 3});
+    change_gaits.resize(std::size_t(k));
+    change_velocities.resize(std::size_t(k));
+    for (py::ssize_t i = 0; i < k; ++i) {
+      const double* g = gaits.data() + motion::kGaitNumbers * i;
+      const double* w = velocities.data() + 3 * i;
+      if (!std::isfinite(times.data()[i])) throw py::value_error("change_times must be finite");
+      std::copy(g, g + motion::kGaitNumbers, change_gaits[std::size_t(i)].v);
+      std::copy(w, w + 3, change_velocities[std::size_t(i)].begin());
+      const bool has_gait = std::isfinite(g[0]), has_velocity = std::isfinite(w[0] + w[1] + w[2]);
+      if (has_gait &&
+          (!(g[motion::kPeriod] > 0.0) || !(g[motion::kDuty] > 0.0 && g[motion::kDuty] <= 1.0)))
+        throw py::value_error("a changed gait's period must be > 0 and its duty in (0, 1]");
+      changes.push_back({times.data()[i], has_gait ? &change_gaits[std::size_t(i)] : nullptr,
+                         has_velocity ? change_velocities[std::size_t(i)].data() : nullptr});
+    }
+    std::stable_sort(
+        changes.begin(), changes.end(),
+        [](const motion::PlanChange& a, const motion::PlanChange& b) { return a.time < b.time; });
+  }
   {
     py::gil_scoped_release release;
     on_robot(r, ticks, [&](const auto& robot) {
@@ -73,7 +104,8 @@ py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle veloc
               rows.pose + 6 * n,  rows.feet + W * n,    rows.contact + kLegs * n, rows.q + W * n,
               rows.qd + W * n,    rows.tau + W * n,     rows.status + n,          rows.margin + n,
               rows.shortened + n, rows.residual + 6 * n};
-          motion::plan_command(robot, gait, v + 3 * b, att, ticks, rate, at);
+          motion::plan_command(robot, gait, v + 3 * b, att, ticks, rate, at, changes.data(),
+                               int(changes.size()));
         }
       });
     });
@@ -296,9 +328,13 @@ py::dict controller_details(const ControllerCore& core) {
 void bind_motion(py::module_& m) {
   m.def("plan_gait", &plan_gait, py::arg("robot"), py::arg("gait"), py::arg("velocity"),
         py::arg("attitude"), py::arg("ticks"), py::arg("rate"),
+        py::arg("change_times") = py::none(), py::arg("change_gaits") = py::none(),
+        py::arg("change_velocities") = py::none(),
         "Plans of a quadruped's walk for commands (B, 3): (pose, feet, contact, q, qd, tau, "
         "status, margin, "
-        "shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,).");
+        "shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,); "
+        "changes: "
+        "times (k,), gaits (k, 44) and velocities (k, 3), a NaN row where unchanged.");
   py::class_<ControllerCore>(m, "GaitControllerCore")
       .def(py::init(&make_controller), py::arg("robot"), py::arg("h"), py::arg("body_omega"),
            py::arg("body_inertia"), py::arg("kp"), py::arg("kd"), py::arg("stance_kp"),

@@ -612,7 +612,7 @@ void sample(const PlannerState& s, TickKinematics& out) noexcept {
 template <typename Model>
 void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait,
                   const double command[3], const double attitude[2], std::ptrdiff_t ticks,
-                  double rate, const PlanRows& out) {
+                  double rate, const PlanRows& out, const PlanChange* changes, int n_changes) {
   const Body& body = robot.body;
   constexpr int W = 3 * kLegs;
   std::vector<double> feet_rate(std::size_t(ticks) * W), twist(std::size_t(ticks) * 6),
@@ -621,8 +621,11 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
   PlannerState s;
   start(gait, command, attitude, s);
   TickKinematics k;
+  int pending = 0;  // changes sorted by time (the binding sorts them)
   for (std::ptrdiff_t n = 0; n < ticks; ++n) {
     if (n) advance(body, s, double(n) / rate - s.t);  // the tick times without drift
+    for (; pending < n_changes && changes[pending].time <= s.t + 1e-12; ++pending)
+      change(s, changes[pending].gait, changes[pending].command);
     sample(s, k);
     std::copy(k.pose, k.pose + 6, out.pose + 6 * n);
     std::copy(&k.R[0][0], &k.R[0][0] + 9, rotation.data() + 9 * n);
@@ -737,7 +740,8 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
 #define SPOTKIN_INSTANTIATE(L)                                                                    \
   template void plan_command<dynamics::FloatingModel<double, L>>(                                 \
       const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const GaitNumbers&, \
-      const double*, const double*, std::ptrdiff_t, double, const PlanRows&);
+      const double*, const double*, std::ptrdiff_t, double, const PlanRows&, const PlanChange*,   \
+      int);
 SPOTKIN_INSTANTIATE(dynamics::kLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)

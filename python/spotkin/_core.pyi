@@ -308,9 +308,9 @@ def paul_type6(W: typing.Any, X: typing.Any, Y: typing.Any, Z1: typing.Any, Z2: 
     ...
 def pinv(J: typing.Any) -> typing.Any:
     ...
-def plan_gait(robot: RobotStatics, gait: typing.Any, velocity: typing.Any, attitude: typing.Any, ticks: typing.SupportsInt | typing.SupportsIndex, rate: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+def plan_gait(robot: RobotStatics, gait: typing.Any, velocity: typing.Any, attitude: typing.Any, ticks: typing.SupportsInt | typing.SupportsIndex, rate: typing.SupportsFloat | typing.SupportsIndex, change_times: typing.Any = None, change_gaits: typing.Any = None, change_velocities: typing.Any = None) -> tuple:
     """
-    Plans of a quadruped's walk for commands (B, 3): (pose, feet, contact, q, qd, tau, status, margin, shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,).
+    Plans of a quadruped's walk for commands (B, 3): (pose, feet, contact, q, qd, tau, status, margin, shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,); changes: times (k,), gaits (k, 44) and velocities (k, 3), a NaN row where unchanged.
     """
 def rank(J: typing.Any, tol: typing.SupportsFloat | typing.SupportsIndex = -1.0) -> typing.Any:
     ...

@@ -173,6 +173,23 @@ def gait_entries():
         },
     )
     attitude = attitude_slot()
+    changes = Custom(
+        "changes",
+        {
+            "valid": _arg(()),
+            "schedule": _arg([(0.02, "walk", None), (0.05, None, [0.1, 0.0, 0.2])]),
+            "gait_object": _arg([(0.0, sk.Gait("pace"), np.zeros(3))]),
+            "unsorted": _arg([(0.05, "trot", None), (0.01, None, (0.0, 0.1, 0.0))]),
+            "late": _arg([(100.0, "walk", None)]),
+            "pair": _arg([(0.02, "walk")], REJECT, "value"),
+            "nan_time": _arg([(math.nan, "walk", None)], REJECT, "value"),
+            "unknown": _arg([(0.02, "canter", None)], REJECT, "value"),
+            "bad_gait": _arg([(0.02, 5, None)], REJECT, "type"),
+            "short_velocity": _arg([(0.02, None, [0.1, 0.0])], REJECT, "value"),
+            "inf_velocity": _arg([(0.02, None, [math.inf, 0.0, 0.0])], REJECT, "value"),
+            "int": _arg(3, REJECT, "type"),
+        },
+    )
     for key, covers in (("go2", "spotkin.Robot.plan_gait"), ("spot", "spotkin.Spot.plan_gait")):
         register(
             name=f"{covers.split('.', 1)[1]}[{key}]",
@@ -184,6 +201,7 @@ def gait_entries():
                 Real("duration", DURATION),
                 Real("rate", RATE),
                 attitude,
+                changes,
             ],
             probe=_plan_probe,
         )

@@ -468,18 +468,22 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         rate: float = 500.0,
         *,
         attitude=(0.0, 0.0),
+        changes=(),
     ):
         """A walk planned open loop: ``gait`` (a :class:`spotkin.Gait` or a preset name) following
         ``velocity`` (..., 3) = (vx, vy, yaw rate) in the body frame (m/s, rad/s; a batch of commands
         broadcasts, one plan each) for ``duration`` s at ``rate`` ticks per second, starting at rest on
         the gait's nominal feet with the body at the origin; ``attitude`` (roll, pitch) of the body
-        (rad). Returns a :class:`spotkin.GaitPlan`: per tick the body pose, the feet, the contacts, q
+        (rad); ``changes``: a schedule of ``(time, gait, velocity)`` (either may be None: unchanged),
+        each applied at the first tick at or after its time, the gait blended in as the guide describes,
+        the velocity (3,) replacing every command's. Returns a :class:`spotkin.GaitPlan`: per tick the
+        body pose, the feet, the contacts, q
         (IK seeded with the previous tick's), qd, feedforward torques, the worst IK status, the support
         margin and whether a step was shortened. A quadruped only (``ValueError`` otherwise), and at most
         1e8 ticks; a NaN or Inf command is a ``ValueError``. The gait model is in the guide's *Walking*
         page. Computed by the compiled planner, each command of a batch on the threads.
         """
-        return _MOTION["plan_gait"](self, gait, velocity, duration, rate, attitude)
+        return _MOTION["plan_gait"](self, gait, velocity, duration, rate, attitude, changes)
 
     def __reduce__(self):
         return (_rebuild_robot, self._source)

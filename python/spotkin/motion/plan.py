@@ -22,6 +22,8 @@ from .gait import Gait
 
 __all__ = ["GaitPlan"]
 
+GAIT_NUMBERS = 44
+"""The length of :func:`gait_numbers`."""
 MAX_TICKS = 1e8
 """The most ticks a plan may have (duration * rate)."""
 
@@ -64,13 +66,49 @@ def gait_numbers(resolved) -> np.ndarray:
     return np.concatenate([np.ravel(np.asarray(getattr(resolved, key), dtype=np.float64)) for key in KEYS])
 
 
-def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
-    """:meth:`spotkin.Robot.plan_gait`: checks the arguments, resolves the gait, and runs the compiled
-    planner over the commands (..., 3), one plan each."""
+def _as_gait(gait, name: str = "gait") -> Gait:
     if isinstance(gait, str):
         gait = Gait(gait)
     if not isinstance(gait, Gait):
-        raise TypeError(f"gait must be a spotkin.Gait or a preset name, got {type(gait).__name__}")
+        raise TypeError(f"{name} must be a spotkin.Gait or a preset name, got {type(gait).__name__}")
+    return gait
+
+
+def _changes(robot, changes) -> tuple:
+    """The schedule as the compiled planner takes it: times (k,), gaits (k, 44) and velocities (k, 3),
+    a NaN row where unchanged; (None, None, None) for none."""
+    try:
+        items = list(changes)
+    except TypeError:
+        kind = type(changes).__name__
+        raise TypeError(f"changes must be a sequence of (time, gait, velocity), got {kind}") from None
+    if not items:
+        return None, None, None
+    times = np.empty(len(items))
+    gaits = np.full((len(items), GAIT_NUMBERS), np.nan)
+    velocities = np.full((len(items), 3), np.nan)
+    for k, item in enumerate(items):
+        try:
+            time, gait, velocity = item
+        except (TypeError, ValueError):
+            raise ValueError(f"changes[{k}] must be (time, gait, velocity), got {item!r}") from None
+        times[k] = as_scalar(time, f"changes[{k}] time")
+        if not math.isfinite(times[k]):
+            raise ValueError(f"changes[{k}] time must be finite, got {times[k]}")
+        if gait is not None:
+            gaits[k] = gait_numbers(_as_gait(gait, f"changes[{k}] gait").resolve(robot))
+        if velocity is not None:
+            v = as_real(velocity, f"changes[{k}] velocity", np.float64)
+            if v.shape != (3,) or not np.isfinite(v).all():
+                raise ValueError(f"changes[{k}] velocity must be finite (vx, vy, yaw rate), got {v.tolist()}")
+            velocities[k] = v
+    return times, gaits, velocities
+
+
+def _plan_gait(robot, gait, velocity, duration, rate, attitude, changes=()) -> GaitPlan:
+    """:meth:`spotkin.Robot.plan_gait`: checks the arguments, resolves the gait, and runs the compiled
+    planner over the commands (..., 3), one plan each."""
+    gait = _as_gait(gait)
     velocity = as_real(velocity, "velocity")
     single = velocity.dtype == np.float32  # float32 in, float32 out (as NumPy); computed in float64
     velocity = velocity.astype(np.float64, copy=False)
@@ -88,9 +126,12 @@ def _plan_gait(robot, gait, velocity, duration, rate, attitude) -> GaitPlan:
     if attitude.shape != (2,) or not np.isfinite(attitude).all():
         raise ValueError(f"attitude must be finite (roll, pitch), got {attitude.tolist()}")
     resolved = gait.resolve(robot)
+    schedule = _changes(robot, changes)
     ticks = round(duration * rate) + 1
     commands = np.ascontiguousarray(velocity.reshape(-1, 3))
-    arrays = _core.plan_gait(robot._statics, gait_numbers(resolved), commands, attitude, ticks, rate)
+    arrays = _core.plan_gait(
+        robot._statics, gait_numbers(resolved), commands, attitude, ticks, rate, *schedule
+    )
     fields = {"t": np.arange(ticks) / rate}
     for name, array in zip(GaitPlan._fields[1:], arrays):
         fields[name] = array.reshape(*lead, *array.shape[1:])

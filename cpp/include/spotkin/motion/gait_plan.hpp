@@ -133,9 +133,19 @@ struct PlanRows {
   double* residual;
 };
 
+// A change during a plan (reference plan's `changes`): at the first tick at or after `time` (after
+// its advance, before its sample), the gait (null: unchanged) and / or the command (null:
+// unchanged).
+struct PlanChange {
+  double time;
+  const GaitNumbers* gait;
+  const double* command;
+};
+
 template <typename Model>
 void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNumbers& gait,
                   const double command[3], const double attitude[2], std::ptrdiff_t ticks,
-                  double rate, const PlanRows& out);
+                  double rate, const PlanRows& out, const PlanChange* changes = nullptr,
+                  int n_changes = 0);
 
 }  // namespace spotkin::motion
