@@ -54,11 +54,14 @@ py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle veloc
     throw py::value_error("the gait's period must be > 0 and its duty in (0, 1]");
   const py::ssize_t B = velocity.shape(0);
   constexpr py::ssize_t W = 3 * kLegs;
-  py::array_t<double> pose({B, ticks, py::ssize_t(6)}),
-      feet({B, ticks, py::ssize_t(kLegs), py::ssize_t(3)}), q({B, ticks, W}), qd({B, ticks, W}),
-      tau({B, ticks, W}), margin({B, ticks}), residual({B, ticks, py::ssize_t(6)});
-  py::array_t<bool> contact({B, ticks, py::ssize_t(kLegs)}), shortened({B, ticks});
-  py::array_t<std::int8_t> status({B, ticks});
+  // outputs from the buffer cache (large ones reuse freed buffers: no page faults on a rerun)
+  const Shape lead{B, ticks};
+  auto pose = new_array<double>(lead, {6}), feet = new_array<double>(lead, {kLegs, 3}),
+       q = new_array<double>(lead, {W}), qd = new_array<double>(lead, {W}),
+       tau = new_array<double>(lead, {W}), margin = new_array<double>(lead, {}),
+       residual = new_array<double>(lead, {6});
+  auto contact = new_array<bool>(lead, {kLegs}), shortened = new_array<bool>(lead, {});
+  auto status = new_array<std::int8_t>(lead, {});
   const motion::PlanRows rows{pose.mutable_data(),      feet.mutable_data(),
                               contact.mutable_data(),   q.mutable_data(),
                               qd.mutable_data(),        tau.mutable_data(),
