@@ -169,6 +169,24 @@ int add_gait(ControllerCore& core, py::handle numbers) {
   return int(core.gaits.size()) - 1;
 }
 
+// One field of every robot's output, as a (B, trailing...) array.
+template <typename Member>
+auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trailing,
+            Member member) {
+  using Field = std::remove_const_t<
+      std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>>;
+  Shape shape{py::ssize_t(outs.size())};
+  shape.insert(shape.end(), trailing.begin(), trailing.end());
+  py::array_t<Field> arr(shape);
+  Field* dst = arr.mutable_data();
+  const std::size_t width = sizeof(outs[0].*member) / sizeof(Field);
+  for (std::size_t b = 0; b < outs.size(); ++b) {
+    const Field* src = reinterpret_cast<const Field*>(&(outs[b].*member));
+    std::copy(src, src + width, dst + width * b);
+  }
+  return arr;
+}
+
 // One tick of every robot: the state's arrays (B, width) each, contact (B, 4) bool or None, the
 // command (B, 3). Returns the command (q, qd, tau, kp, kd, contact), (B, ...) arrays each;
 // details() gives the rest of the tick.
@@ -262,23 +280,10 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
     core.clipped += any;
   }
   core.ticks += B_;
-  auto field = [&](const Shape& trailing, auto member) {
-    using Field = std::remove_const_t<
-        std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>>;
-    Shape shape{B_};
-    shape.insert(shape.end(), trailing.begin(), trailing.end());
-    py::array_t<Field> arr(shape);
-    Field* dst = arr.mutable_data();
-    const std::size_t width = sizeof(outs[0].*member) / sizeof(Field);
-    for (py::ssize_t b = 0; b < B_; ++b) {
-      const Field* src = reinterpret_cast<const Field*>(&(outs[std::size_t(b)].*member));
-      std::copy(src, src + width, dst + width * std::size_t(b));
-    }
-    return arr;
-  };
   using Out = motion::ControllerOutput;
-  return py::make_tuple(field({W}, &Out::q), field({W}, &Out::qd), field({W}, &Out::tau),
-                        field({W}, &Out::kp), field({W}, &Out::kd), field({kLegs}, &Out::contact));
+  return py::make_tuple(gather(outs, {W}, &Out::q), gather(outs, {W}, &Out::qd),
+                        gather(outs, {W}, &Out::tau), gather(outs, {W}, &Out::kp),
+                        gather(outs, {W}, &Out::kd), gather(outs, {kLegs}, &Out::contact));
 }
 
 // The last step's details, (B, ...) arrays by name (the façade's `last`).
@@ -289,18 +294,7 @@ py::dict controller_details(const ControllerCore& core) {
   const py::ssize_t B = py::ssize_t(outs.size());
   py::dict result;
   auto put = [&](const char* name, const Shape& trailing, auto member) {
-    using Field = std::remove_const_t<
-        std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>>;
-    Shape shape{B};
-    shape.insert(shape.end(), trailing.begin(), trailing.end());
-    py::array_t<Field> arr(shape);
-    Field* dst = arr.mutable_data();
-    const std::size_t width = sizeof(outs[0].*member) / sizeof(Field);
-    for (py::ssize_t b = 0; b < B; ++b) {
-      const Field* src = reinterpret_cast<const Field*>(&(outs[std::size_t(b)].*member));
-      std::copy(src, src + width, dst + width * std::size_t(b));
-    }
-    result[name] = arr;
+    result[name] = gather(outs, trailing, member);
   };
   using Out = motion::ControllerOutput;
   put("q", {W}, &Out::q);
