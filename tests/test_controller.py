@@ -121,6 +121,8 @@ def test_bad_input_gets_a_clear_answer():
         controller.step(0.0, standing(GO2, q=np.zeros(9), qd=np.zeros(9)))
     with pytest.raises(TypeError, match="RobotState"):
         controller.step(0.0, np.zeros(12))
+    with pytest.raises(ValueError, match="quaternion"):
+        controller.step(0.0, standing(GO2, quaternion=np.zeros(4)))
     controller.step(1.0, state)
     with pytest.raises(ValueError, match="backwards"):
         controller.step(0.5, state)

@@ -224,6 +224,12 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
   };
   const auto pos = rows(position, "state.position", 3, "");
   const auto quat = rows(quaternion, "state.quaternion", 4, "");
+  for (py::ssize_t b = 0; b < B; ++b) {  // a rotation: any non-zero length (scaled), not zero
+    const double* x = quat.data() + 4 * b;
+    if (!(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3] > 1e-12))
+      throw py::value_error(
+          "state.quaternion must be a rotation (x, y, z, w) of non-zero length, got a zero one");
+  }
   const auto lin = rows(linear_velocity, "state.linear_velocity", 3, "");
   const auto ang = rows(angular_velocity, "state.angular_velocity", 3, "");
   const auto q = rows(q_obj, "state.q", W, "", ": 12 joints, in robot.leg_joint_names order");
