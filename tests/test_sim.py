@@ -364,3 +364,13 @@ def test_without_mujoco_the_import_says_what_to_install():
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
     assert 'pip install "spotkin[sim]"' in run.stdout
+
+
+def test_a_run_of_one_tick_has_its_metrics_without_a_warning():
+    go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = sim.run(go2, sk.GaitController(go2), duration=0.002)
+    assert len(result.t) == 1 and np.isfinite(result.metrics.velocity).all()
