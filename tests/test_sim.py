@@ -8,6 +8,7 @@ import math
 import re
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -368,8 +369,6 @@ def test_without_mujoco_the_import_says_what_to_install():
 
 def test_a_run_of_one_tick_has_its_metrics_without_a_warning():
     go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
-    import warnings
-
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         result = sim.run(go2, sk.GaitController(go2), duration=0.002)

@@ -169,13 +169,15 @@ int add_gait(ControllerCore& core, py::handle numbers) {
   return int(core.gaits.size()) - 1;
 }
 
-// One field of every robot's output, as a (B, trailing...) array.
+// One field of every robot's output, as a (B, trailing...) array, or (trailing...) for one robot
+// given as single rows.
 template <typename Member>
-auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trailing,
-            Member member) {
+auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trailing, Member member,
+            bool one_row = false) {
   using Field = std::remove_const_t<
       std::remove_all_extents_t<std::remove_reference_t<decltype(outs[0].*member)>>>;
-  Shape shape{py::ssize_t(outs.size())};
+  Shape shape;
+  if (!one_row) shape.push_back(py::ssize_t(outs.size()));
   shape.insert(shape.end(), trailing.begin(), trailing.end());
   py::array_t<Field> arr(shape);
   Field* dst = arr.mutable_data();
@@ -188,8 +190,8 @@ auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trai
 }
 
 // One tick of every robot: the state's arrays (B, width) each, contact (B, 4) bool or None, the
-// command (B, 3). Returns the command (q, qd, tau, kp, kd, contact), (B, ...) arrays each;
-// details() gives the rest of the tick.
+// command (B, 3). Returns the command (q, qd, tau, kp, kd, contact), (B, ...) arrays each, or
+// (...) ones when the state came as single rows; details() gives the rest of the tick.
 py::tuple controller_step(ControllerCore& core, double t, int start_gait, int new_gait,
                           py::handle position, py::handle quaternion, py::handle linear_velocity,
                           py::handle angular_velocity, py::handle q_obj, py::handle qd_obj,
@@ -202,6 +204,7 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
     throw py::value_error("gait index out of range");
   // rows (B, width), or one row (width,) for B = 1; finite
   py::ssize_t B = -1;
+  bool one_row = false;  // the state given as single rows (width,): the command's arrays are too
   auto rows = [&](py::handle obj, const char* name, py::ssize_t width, const char* what,
                   const char* hint = "") {
     auto arr = contiguous<double>(as_real_array(obj, name));
@@ -223,6 +226,7 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
     return arr;
   };
   const auto pos = rows(position, "state.position", 3, "");
+  one_row = pos.ndim() == 1;
   const auto quat = rows(quaternion, "state.quaternion", 4, "");
   for (py::ssize_t b = 0; b < B; ++b) {  // a rotation: any non-zero length (scaled), not zero
     const double* x = quat.data() + 4 * b;
@@ -287,9 +291,10 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
   }
   core.ticks += B_;
   using Out = motion::ControllerOutput;
-  return py::make_tuple(gather(outs, {W}, &Out::q), gather(outs, {W}, &Out::qd),
-                        gather(outs, {W}, &Out::tau), gather(outs, {W}, &Out::kp),
-                        gather(outs, {W}, &Out::kd), gather(outs, {kLegs}, &Out::contact));
+  return py::make_tuple(gather(outs, {W}, &Out::q, one_row), gather(outs, {W}, &Out::qd, one_row),
+                        gather(outs, {W}, &Out::tau, one_row), gather(outs, {W}, &Out::kp, one_row),
+                        gather(outs, {W}, &Out::kd, one_row),
+                        gather(outs, {kLegs}, &Out::contact, one_row));
 }
 
 // The last step's details, (B, ...) arrays by name (the façade's `last`).

@@ -194,11 +194,11 @@ class GaitController:
                 contact is None or contact.ndim == 1
             ):
                 index = -1 if gait is None else self._new_index(gait)
-                q, qd, tau, kp, kd, planned = self._core.step(
+                out = self._core.step(
                     t, self._start_index, index, position, quaternion, v, w, state.q, qd, contact, velocity
                 )
                 self._batch = ()
-                return JointCommand(q[0], qd[0], tau[0], kp[0], kd[0], planned[0])
+                return JointCommand(*out)  # one robot given as single rows: (12,) and (4,) arrays
         return self._step(t, state, velocity, gait)
 
     def _step(self, t, state: RobotState, velocity, gait) -> JointCommand:
