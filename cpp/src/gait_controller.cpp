@@ -17,11 +17,6 @@ namespace {
 constexpr double kPiValue = 3.14159265358979323846;
 constexpr int W = 3 * kLegs;
 
-const EulerSequence& xyz() noexcept {
-  static const EulerSequence seq = EulerSequence::from_code(0 + 3 * 1 + 9 * 2);  // "XYZ"
-  return seq;
-}
-
 // R of a quaternion (x, y, z, w), s = 2 / |q|^2 (a non-unit quaternion scaled).
 void rotation_of(const double* quaternion, double R[3][3]) noexcept {
   const double x = quaternion[0], y = quaternion[1], z = quaternion[2], w = quaternion[3];
@@ -182,44 +177,12 @@ void friction(double (*forces)[3]) noexcept {
   }
 }
 
-// x = A^-1 b (3x3 row-major) by partial pivoting; false when singular (as LAPACK's getrf: an exact
-// zero pivot).
-bool solve3(const double* A, const double* b, double* x) noexcept {
-  double M[3][4];
-  for (int r = 0; r < 3; ++r)
-    M[r][0] = A[3 * r], M[r][1] = A[3 * r + 1], M[r][2] = A[3 * r + 2], M[r][3] = b[r];
-  for (int c = 0; c < 3; ++c) {
-    int pivot = c;
-    for (int r = c + 1; r < 3; ++r)
-      if (std::fabs(M[r][c]) > std::fabs(M[pivot][c])) pivot = r;
-    if (M[pivot][c] == 0.0) return false;
-    if (pivot != c)
-      for (int k = 0; k < 4; ++k) std::swap(M[pivot][k], M[c][k]);
-    for (int r = c + 1; r < 3; ++r) {
-      const double factor = M[r][c] / M[c][c];
-      for (int k = c + 1; k < 4; ++k) M[r][k] -= factor * M[c][k];
-    }
-  }
-  for (int r = 2; r >= 0; --r) {
-    double v = M[r][3];
-    for (int k = r + 1; k < 3; ++k) v -= M[r][k] * x[k];
-    x[r] = v / M[r][r];
-  }
-  return true;
-}
-
 void transform_matrix(const double R[3][3], const double* t, double* M) noexcept {
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) M[4 * r + c] = R[r][c];
     M[4 * r + 3] = t[r];
   }
   M[12] = M[13] = M[14] = 0.0, M[15] = 1.0;
-}
-
-double py_mod(double x, double m) noexcept {  // Python's float % for m > 0
-  double r = std::fmod(x, m);
-  if (r != 0.0 && r < 0.0) r += m;
-  return r;
 }
 
 }  // namespace
@@ -379,7 +342,7 @@ void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
   const double floor = floor_height(plan, x_ref, y_ref);
   double R_ref[3][3];
   body_pose(x_ref, y_ref, floor + P[kHeight], plan.psi, cp, sp, plan, out.body_pose);
-  Body::euler_rotation(xyz(), out.body_pose + 3, R_ref);  // body_transform of the pose
+  Body::euler_rotation(xyz_sequence(), out.body_pose + 3, R_ref);  // body_transform of the pose
   const double* t_ref = out.body_pose;
   const double planar[2] = {plan.v[0] + delta_rate[0], plan.v[1] + delta_rate[1]};
   double v_ref[3] = {cp * planar[0] - sp * planar[1] - plan.w * shift[1],
@@ -414,8 +377,8 @@ void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
   transform_matrix(R, position, poses + 16);
   const double* seed_row = memory.has_q ? memory.q : q;
   std::copy(seed_row, seed_row + W, seed), std::copy(seed_row, seed_row + W, seed + W);
-  kernels::body_ik<double>(body, poses, BodyPoseFormat::Matrix, xyz(), &out.feet[0][0], true, seed,
-                           solved, status, 2, true);
+  kernels::body_ik<double>(body, poses, BodyPoseFormat::Matrix, xyz_sequence(), &out.feet[0][0],
+                           true, seed, solved, status, 2, true);
   bool stance_column[W];
   for (int l = 0; l < kLegs; ++l)
     for (int j = 0; j < 3; ++j)
@@ -465,7 +428,7 @@ void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
     double poses2[32];
     std::copy(poses + 16, poses + 32, poses2), std::copy(poses, poses + 16, poses2 + 16);
     const dynamics::StaticsRows<double> rows{poses2, 16, BodyPoseFormat::Matrix, q2, W, false};
-    dynamics::robot_com(robot, xyz(), rows, com2, 2);
+    dynamics::robot_com(robot, xyz_sequence(), rows, com2, 2);
   }
   const double* com = com2;
   const double* com_ref = com2 + 3;

@@ -22,17 +22,6 @@ namespace {
 constexpr double kPiValue = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPiValue;
 
-// x mod 1 as Python's float % (the sign of the divisor).
-inline double mod1(double x) noexcept {
-  double m = std::fmod(x, 1.0);
-  if (m != 0.0) {
-    if (m < 0.0) m += 1.0;
-  } else {
-    m = 0.0;
-  }
-  return m;
-}
-
 // Whether the blend of step 1 is over at t (the gait's numbers are the new ones).
 inline bool settled_at(const PlannerState& s, double t) noexcept {
   return s.duration <= 0.0 || t >= s.t0 + s.duration;
@@ -87,8 +76,8 @@ const GaitNumbers& numbers_at(const PlannerState& s, double t, GaitNumbers& scra
 double blend_duration(const GaitNumbers& old, const GaitNumbers& nw) noexcept {
   double worst_delta = 0.0;
   for (int i = 0; i < kLegs; ++i)
-    worst_delta =
-        std::max(worst_delta, std::fabs(mod1(nw[kOffsets + i] - old[kOffsets + i] + 0.5) - 0.5));
+    worst_delta = std::max(
+        worst_delta, std::fabs(py_mod(nw[kOffsets + i] - old[kOffsets + i] + 0.5, 1.0) - 0.5));
   const double worst = std::max(old[kPeriod], nw[kPeriod]);
   return std::max(nw[kPeriod], 2.0 * worst_delta * worst);
 }
@@ -236,18 +225,13 @@ void body_pose(double x, double y, double z, double psi, double cz, double sz,
 
 namespace {
 
-const EulerSequence& xyz() noexcept {
-  static const EulerSequence seq = EulerSequence::from_code(0 + 3 * 1 + 9 * 2);  // "XYZ"
-  return seq;
-}
-
 struct Transform {
   double R[3][3], t[3];
 };
 
 Transform transform_of(const double pose[6]) noexcept {
   Transform T;
-  Body::euler_rotation(xyz(), pose + 3, T.R);
+  Body::euler_rotation(xyz_sequence(), pose + 3, T.R);
   for (int k = 0; k < 3; ++k) T.t[k] = pose[k];
   return T;
 }
@@ -368,23 +352,6 @@ void swing(const double p0[3], const double p1[3], double s, double height, doub
 }
 
 namespace {
-
-// x = A^-1 b for a 3x3 row-major A by its adjugate (Cramer); false when singular or not finite.
-bool solve3(const double* A, const double* b, double* x) noexcept {
-  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8],
-                        A[3] * A[7] - A[4] * A[6]};
-  const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
-  if (!(det != 0.0) || !std::isfinite(det)) return false;
-  // rows of adj(A) = the cofactors' transpose
-  const double inv = 1.0 / det;
-  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) *
-         inv;
-  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) *
-         inv;
-  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) *
-         inv;
-  return std::isfinite(x[0] + x[1] + x[2]);
-}
 
 inline void cross(const double* a, const double* b, double* out) noexcept {
   out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2],
@@ -514,6 +481,41 @@ double support_margin(const double (*points)[2], int k, const double c[2]) noexc
   return -nearest;
 }
 
+double py_mod(double x, double m) noexcept {
+  const double r = std::fmod(x, m);
+  if (r == 0.0) return 0.0;  // +0, as Python
+  return r < 0.0 ? r + m : r;
+}
+
+bool solve3(const double* A, const double* b, double* x) noexcept {
+  double M[3][4];
+  for (int r = 0; r < 3; ++r)
+    M[r][0] = A[3 * r], M[r][1] = A[3 * r + 1], M[r][2] = A[3 * r + 2], M[r][3] = b[r];
+  for (int c = 0; c < 3; ++c) {
+    int pivot = c;
+    for (int r = c + 1; r < 3; ++r)
+      if (std::fabs(M[r][c]) > std::fabs(M[pivot][c])) pivot = r;
+    if (M[pivot][c] == 0.0) return false;
+    if (pivot != c)
+      for (int k = 0; k < 4; ++k) std::swap(M[pivot][k], M[c][k]);
+    for (int r = c + 1; r < 3; ++r) {
+      const double factor = M[r][c] / M[c][c];
+      for (int k = c + 1; k < 4; ++k) M[r][k] -= factor * M[c][k];
+    }
+  }
+  for (int r = 2; r >= 0; --r) {
+    double v = M[r][3];
+    for (int k = r + 1; k < 3; ++k) v -= M[r][k] * x[k];
+    x[r] = v / M[r][r];
+  }
+  return true;
+}
+
+const EulerSequence& xyz_sequence() noexcept {
+  static const EulerSequence seq = EulerSequence::from_code(0 + 3 * 1 + 9 * 2);  // "XYZ"
+  return seq;
+}
+
 void set_attitude(PlannerState& s, double roll, double pitch) noexcept {
   if (roll != s.roll) s.roll = roll, s.cos_roll = std::cos(roll), s.sin_roll = std::sin(roll);
   if (pitch != s.pitch)
@@ -530,7 +532,8 @@ void change(PlannerState& s, const GaitNumbers* gait, const double* command) noe
   GaitNumbers nw = *gait;
   // the offsets move the shorter way round, and end there (floor(theta + o_i) never jumps)
   for (int i = 0; i < kLegs; ++i)
-    nw[kOffsets + i] = old[kOffsets + i] + (mod1(nw[kOffsets + i] - old[kOffsets + i] + 0.5) - 0.5);
+    nw[kOffsets + i] =
+        old[kOffsets + i] + (py_mod(nw[kOffsets + i] - old[kOffsets + i] + 0.5, 1.0) - 0.5);
   bool all_down = true;
   for (int i = 0; i < kLegs; ++i) all_down = all_down && s.contact[i];
   if (old[kDuty] >= 1.0 && all_down)  // no swing: the new offsets at once
@@ -637,8 +640,8 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
     out.shortened[n] = k.shortened;
   }
   // the whole-body IK along the path, each tick seeded with the previous one
-  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz(), out.feet, nullptr,
-                                out.q, leg_status.data(), ticks, true);
+  kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz_sequence(), out.feet,
+                                nullptr, out.q, leg_status.data(), ticks, true);
   // per block of ticks: the gravity torques and the centre of mass (the floating model's G(q), in
   // lanes), then per tick qd, the stance forces (W), tau = G - J^T f and the margin (M)
   const int nq = robot.floating.nq(), nv = robot.floating.nv();

@@ -111,6 +111,13 @@ double floor_height(const PlannerState& s, double x, double y) noexcept;
 void body_pose(double x, double y, double z, double psi, double cos_psi, double sin_psi,
                const PlannerState& s, double pose[6], double (*R)[3] = nullptr) noexcept;
 inline double frac(double x) noexcept { return x - std::floor(x); }
+// x mod m as Python's float % (m > 0: the result in [0, m)).
+double py_mod(double x, double m) noexcept;
+// x = A^-1 b (3x3 row-major) by partial pivoting, as LAPACK's getrf / getrs (and the references'
+// np.linalg.solve); false when singular (an exact zero pivot).
+bool solve3(const double* A, const double* b, double* x) noexcept;
+// The Euler sequence "XYZ" of the plans' body poses.
+const EulerSequence& xyz_sequence() noexcept;
 // (M): the signed distance of c to the convex hull of the points (k <= 4), positive inside;
 // outside, minus the distance to the hull; fewer than three points off one line: minus the distance
 // to their segment or point; -inf with none.
