@@ -488,27 +488,20 @@ double py_mod(double x, double m) noexcept {
 }
 
 bool solve3(const double* A, const double* b, double* x) noexcept {
-  double M[3][4];
-  for (int r = 0; r < 3; ++r)
-    M[r][0] = A[3 * r], M[r][1] = A[3 * r + 1], M[r][2] = A[3 * r + 2], M[r][3] = b[r];
-  for (int c = 0; c < 3; ++c) {
-    int pivot = c;
-    for (int r = c + 1; r < 3; ++r)
-      if (std::fabs(M[r][c]) > std::fabs(M[pivot][c])) pivot = r;
-    if (M[pivot][c] == 0.0) return false;
-    if (pivot != c)
-      for (int k = 0; k < 4; ++k) std::swap(M[pivot][k], M[c][k]);
-    for (int r = c + 1; r < 3; ++r) {
-      const double factor = M[r][c] / M[c][c];
-      for (int k = c + 1; k < 4; ++k) M[r][k] -= factor * M[c][k];
-    }
-  }
-  for (int r = 2; r >= 0; --r) {
-    double v = M[r][3];
-    for (int k = r + 1; k < 3; ++k) v -= M[r][k] * x[k];
-    x[r] = v / M[r][r];
-  }
-  return true;
+  // by the adjugate (Cramer): branch-free, a hot path of the plan (four legs a tick); singular: det
+  // 0
+  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8],
+                        A[3] * A[7] - A[4] * A[6]};
+  const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
+  if (!(det != 0.0) || !std::isfinite(det)) return false;
+  const double inv = 1.0 / det;  // the rows of adj(A), the cofactors' transpose
+  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) *
+         inv;
+  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) *
+         inv;
+  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) *
+         inv;
+  return std::isfinite(x[0] + x[1] + x[2]);
 }
 
 const EulerSequence& xyz_sequence() noexcept {

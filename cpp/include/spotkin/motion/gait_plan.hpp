@@ -113,8 +113,8 @@ void body_pose(double x, double y, double z, double psi, double cos_psi, double 
 inline double frac(double x) noexcept { return x - std::floor(x); }
 // x mod m as Python's float % (m > 0: the result in [0, m)).
 double py_mod(double x, double m) noexcept;
-// x = A^-1 b (3x3 row-major) by partial pivoting, as LAPACK's getrf / getrs (and the references'
-// np.linalg.solve); false when singular (an exact zero pivot).
+// x = A^-1 b (3x3 row-major) by Cramer's rule; false when singular (det 0) or not finite. The
+// references' np.linalg.solve agrees to rounding away from singular matrices.
 bool solve3(const double* A, const double* b, double* x) noexcept;
 // The Euler sequence "XYZ" of the plans' body poses.
 const EulerSequence& xyz_sequence() noexcept;
