@@ -5,39 +5,10 @@ trips and against the chain's own DH-free POE reference."""
 from __future__ import annotations
 
 import numpy as np
+from urdf_helpers import go2_with_z1
 
 import spotkin as sk
 from spotkin.reference import ik6r
-
-# A Unitree Z1-like arm (its URDF's joint origins and axes, rounded), mounted on Go2's body.
-Z1_JOINTS = [
-    ("z1_joint1", "base", "z1_link01", "0.1 0 0.08", "0 0 1"),
-    ("z1_joint2", "z1_link01", "z1_link02", "0 0 0.045", "0 1 0"),
-    ("z1_joint3", "z1_link02", "z1_link03", "-0.35 0 0", "0 1 0"),
-    ("z1_joint4", "z1_link03", "z1_link04", "0.218 0 0.057", "0 1 0"),
-    ("z1_joint5", "z1_link04", "z1_link05", "0.07 0 0", "0 0 1"),
-    ("z1_joint6", "z1_link05", "z1_link06", "0.0492 0 0", "1 0 0"),
-]
-
-
-def go2_with_z1() -> str:
-    with open(sk.robots.path("go2"), encoding="utf-8") as file:
-        text = file.read()
-    parts = []
-    for name, parent, child, xyz, axis in Z1_JOINTS:
-        parts.append(
-            f'<link name="{child}"><inertial><mass value="0.5"/><origin xyz="0 0 0"/>'
-            f'<inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-3" iyz="0" izz="1e-3"/></inertial></link>'
-            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
-            f'<origin xyz="{xyz}" rpy="0 0 0"/><axis xyz="{axis}"/>'
-            f'<limit lower="-2.9" upper="2.9" effort="30" velocity="3"/></joint>'
-        )
-    parts.append(
-        '<link name="z1_gripper"/><joint name="z1_gripper_fixed" type="fixed"><parent link="z1_link06"/>'
-        '<child link="z1_gripper"/><origin xyz="0.051 0 0" rpy="0 0 0"/></joint>'
-    )
-    end = text.rindex("</robot>")
-    return text[:end] + "\n".join(parts) + "\n" + text[end:]
 
 
 def test_quadruped_with_z1_has_a_closed_form_arm():

@@ -107,12 +107,51 @@ def quadruped_urdf(
     return '<robot name="test_quadruped">' + "".join(parts) + "</robot>"
 
 
+# A Unitree Z1-like arm (its URDF's joint origins and axes, rounded), mounted on Go2's body.
+Z1_JOINTS = [
+    ("z1_joint1", "base", "z1_link01", "0.1 0 0.08", "0 0 1"),
+    ("z1_joint2", "z1_link01", "z1_link02", "0 0 0.045", "0 1 0"),
+    ("z1_joint3", "z1_link02", "z1_link03", "-0.35 0 0", "0 1 0"),
+    ("z1_joint4", "z1_link03", "z1_link04", "0.218 0 0.057", "0 1 0"),
+    ("z1_joint5", "z1_link04", "z1_link05", "0.07 0 0", "0 0 1"),
+    ("z1_joint6", "z1_link05", "z1_link06", "0.0492 0 0", "1 0 0"),
+]
+Z1_LIMITS = ((-2.618, 2.618), (0.0, 2.967), (-2.880, 0.0), (-1.518, 1.518), (-1.344, 1.344), (-2.793, 2.793))
+"""The Unitree Z1's own joint ranges (rad), from its URDF (rounded)."""
+
+
+def go2_with_z1(limits=None) -> str:
+    """Go2's packaged URDF with a Z1-like arm on its body: 0.5 kg links, ``limits`` (6 (lower, upper)
+    pairs; default -2.9..2.9 on every joint)."""
+    import spotkin as sk
+
+    with open(sk.robots.path("go2"), encoding="utf-8") as file:
+        text = file.read()
+    parts = []
+    for k, (name, parent, child, xyz, axis) in enumerate(Z1_JOINTS):
+        lower, upper = (-2.9, 2.9) if limits is None else limits[k]
+        parts.append(
+            f'<link name="{child}"><inertial><mass value="0.5"/><origin xyz="0 0 0"/>'
+            f'<inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-3" iyz="0" izz="1e-3"/></inertial></link>'
+            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}" rpy="0 0 0"/><axis xyz="{axis}"/>'
+            f'<limit lower="{lower}" upper="{upper}" effort="30" velocity="3"/></joint>'
+        )
+    parts.append(
+        '<link name="z1_gripper"/><joint name="z1_gripper_fixed" type="fixed"><parent link="z1_link06"/>'
+        '<child link="z1_gripper"/><origin xyz="0.051 0 0" rpy="0 0 0"/></joint>'
+    )
+    end = text.rindex("</robot>")
+    return text[:end] + "\n".join(parts) + "\n" + text[end:]
+
+
 _named: dict = {}
 
 
 def robot_named(name: str):
     """A robot by name, made once: "spot" (built in), "go2" (packaged), "heavy" (the tests' own 90 kg
-    quadruped: 0.4 m segments, 200 N m motors, no meshes) and "small" (2 kg, 0.1 m segments)."""
+    quadruped: 0.4 m segments, 200 N m motors, no meshes), "small" (2 kg, 0.1 m segments) and "go2_z1"
+    (Go2 carrying a Z1-like arm with the Z1's joint ranges)."""
     import spotkin as sk
 
     if name not in _named:
@@ -121,5 +160,6 @@ def robot_named(name: str):
             "go2": lambda: sk.Robot.from_urdf(sk.robots.path("go2")),
             "heavy": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.4, 90.0, 200.0)),
             "small": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.1, 2.0, 5.0)),
+            "go2_z1": lambda: sk.Robot.from_urdf_string(go2_with_z1(Z1_LIMITS)),
         }[name]()
     return _named[name]

@@ -38,7 +38,7 @@ from .model.robot import Robot
 from .model.robot_body import BodyFrames, BodyIK, BodyRates
 from .model.robot_statics import StanceStatus, Standing
 from .model.spot import Spot
-from .motion import Gait, GaitController, GaitPlan
+from .motion import Gait, GaitController, GaitPlan, ReachBox, ReachResult, ReachStatus
 
 # What the models' pickles call to rebuild them, at this path (publish below) whichever file defines
 # them: a pickle names "spotkin" only.
@@ -80,6 +80,9 @@ __all__ = [
     "Leg",
     "LegSolutions",
     "LinkInertials",
+    "ReachBox",
+    "ReachResult",
+    "ReachStatus",
     "Robot",
     "Spot",
     "SpotArm",

@@ -13,6 +13,7 @@ from .entry import REGISTRY
 EXCLUDED = {
     "spotkin.Status": "IntEnum of result codes: int methods only, no spotkin code",
     "spotkin.StanceStatus": "IntEnum of result codes: int methods only, no spotkin code",
+    "spotkin.ReachStatus": "IntEnum of result codes: int methods only, no spotkin code",
 }
 
 # Optional modules (each needs an extra's dependency, which requirements-test.txt installs): their

@@ -111,6 +111,10 @@ class Context:
         def make():
             if key == "hexapod":
                 return sk.Robot.from_urdf_string(HEXAPOD_URDF)
+            if key == "go2_z1":  # Go2 carrying a Z1-like arm with the Z1's joint ranges
+                from urdf_helpers import Z1_LIMITS, go2_with_z1
+
+                return sk.Robot.from_urdf_string(go2_with_z1(Z1_LIMITS))
             if key == "go2_feet":  # two of the legs, with a contact offset
                 return sk.Robot.from_urdf(
                     sk.robots.path("go2"), feet=["FL_foot", "RR_foot"], contact_offset=(0.0, 0.0, -0.02)

@@ -353,6 +353,24 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         return self._leg_joint_names
 
     @property
+    def limits(self) -> np.ndarray:
+        """(3 n_legs + n_arm, 2) joint limits (lower, upper) in the order of a whole-body q: the legs'
+        joints (:attr:`leg_joint_names`), then the arm's (:attr:`arm_joint_names`); ±inf where
+        unlimited. A copy."""
+        n_legs = 3 * len(self._legs)
+        out = np.empty((n_legs + (0 if self._arm is None else self._arm.dof), 2))
+        for columns, leg in zip(self._columns, self._legs):
+            out[columns] = leg.limits
+        if self._arm is not None:
+            out[n_legs:] = self._arm.limits
+        return out
+
+    @property
+    def leg_columns(self) -> np.ndarray:
+        """(n_legs, 3) int: where each leg's joints (hip roll, hip pitch, knee) sit in a whole-body q."""
+        return self._columns.copy()
+
+    @property
     def hip_positions(self) -> np.ndarray:
         """(n, 3) hip-roll joint origins in the body frame."""
         return self._hips.copy()
@@ -484,6 +502,30 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         page. Computed by the compiled planner, each command of a batch on the threads.
         """
         return _MOTION["plan_gait"](self, gait, velocity, duration, rate, attitude, changes)
+
+    def reach(self, T_hand_world, feet=None, seed=None, margin=None, box=None):
+        """Whole-body reach: the body pose, the legs' joints and the arm's that put the hand exactly at
+        ``T_hand_world`` (..., 4, 4) in the world with the feet fixed at ``feet`` (..., n, 3) (default:
+        the nominal stance, :meth:`stance_feet` at the nominal height), every joint within its limits,
+        no collision between the arm and the body or the legs (:mod:`spotkin.motion.capsules`), the
+        centre of mass at least ``margin`` m (default 5 % of the hip height) inside the feet's support
+        polygon, and the body pose within ``box`` (a :class:`spotkin.ReachBox` of offsets from the
+        nominal pose in the stance frame; default :func:`spotkin.motion.reach.default_box`).
+
+        Among the answers, the one nearest to the joints' mid-ranges and the nominal body pose (in the
+        least-squares sense, each as a fraction of its range); with ``seed`` (a previous
+        :class:`spotkin.ReachResult`, or a (body_pose, q) pair), the one nearest to the seed, so that a
+        moving target gets a continuous answer. Leading dimensions of every argument broadcast.
+
+        Returns a :class:`spotkin.ReachResult`: ``body_pose`` (..., 6) [x, y, z, Euler "XYZ"], ``q``
+        (..., 3 n_legs + n_arm), ``status`` (:class:`spotkin.ReachStatus`), ``margin``, ``distance``
+        and ``angle`` (how far the hand is from the target: 0 unless UNREACHABLE, where the answer is the
+        nearest pose the search reached), and the arm's branches at the chosen body pose. The method is
+        in the guide's *Reach* page. A robot without an arm, a target of another shape or a
+        ``box`` that is not (2, 6) with lower <= upper is a ``ValueError``; NaN or Inf in a sample, or a
+        target that is not a rigid transform, gives INVALID_INPUT and NaN in that sample only.
+        """
+        return _MOTION["reach"](self, T_hand_world, feet, seed, margin, box)
 
     def __reduce__(self):
         return (_rebuild_robot, self._source)

@@ -1,0 +1,369 @@
+"""Whole-body reach (``Robot.reach``): the batched search against its pure-Python reference, the
+success rate on targets made from random feasible configurations, round trips through FK (hand and
+feet), every constraint checked by independent code (joint limits, the box, the support margin from
+``standing_torques``, the capsules), statuses, bad input and batch semantics. On Spot (built in, its
+arm's dedicated closed form) and on Go2 carrying a Z1-like arm (three parallel axes) with the Z1's
+joint ranges."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from urdf_helpers import robot_named
+
+import spotkin as sk
+from spotkin.motion import reach as reach_module
+from spotkin.motion import reach_geometry
+from spotkin.motion.capsules import capsule_model
+from spotkin.reference import reach as ref
+
+ROBOTS = ("spot", "go2_z1")
+
+
+def feasible_targets(robot, n: int, seed: int):
+    """n hand targets (n, 4, 4) from random feasible configurations: a body pose uniform in the default
+    box, the legs on the nominal feet within their limits, the arm's joints uniform within theirs, no
+    collision, the centre of mass at least the default margin inside the feet. Also the generating
+    (body offsets (n, 6), q (n, m))."""
+    rng = np.random.default_rng(seed)
+    problem = reach_module.reference_problem(robot, np.eye(4))
+    arm = robot.limits[3 * robot.n_legs :]
+    targets, offsets, qs = [], [], []
+    while len(targets) < n:
+        p = problem.lower + rng.random(6) * (problem.upper - problem.lower)
+        T = ref.body_T(problem, p)
+        q_legs, ok = ref._legs(problem, T)
+        q = np.concatenate([q_legs, arm[:, 0] + rng.random(6) * (arm[:, 1] - arm[:, 0])])
+        if not ok or ref.collides(problem, q):
+            continue
+        com = np.asarray(robot.center_of_mass(T, q))
+        if ref.support_margin(problem.feet[:, :2], com[:2]) < problem.margin:
+            continue
+        targets.append(T @ problem.mount @ np.asarray(robot.arm.fk(q[3 * robot.n_legs :])))
+        offsets.append(p - problem.nominal)
+        qs.append(q)
+    return np.array(targets), np.array(offsets), np.array(qs)
+
+
+_TARGETS: dict = {}
+
+
+def targets_of(name: str, n: int = 1000, seed: int = 11):
+    key = (name, n, seed)
+    if key not in _TARGETS:
+        _TARGETS[key] = feasible_targets(robot_named(name), n, seed)
+    return _TARGETS[key]
+
+
+def check_answers(robot, T, res, feet=None, margin=None, stance=None):
+    """Every OK answer: the hand on the target and the feet on theirs (1e-10), joints within limits, the
+    body within the default box (offsets in the ``stance`` frame, default the world's), the support
+    margin (from standing_torques) at least ``margin``, and no collision (the reference's capsule
+    check)."""
+    h0, L, nominal_feet = reach_module._scales(robot)
+    feet = nominal_feet if feet is None else feet
+    margin = reach_module.MARGIN_FRACTION * L if margin is None else margin
+    ok = np.asarray(res.status) == sk.ReachStatus.OK
+    pose, q = res.body_pose[ok], res.q[ok]
+    frames = robot.fk_all(pose, q)
+    assert np.abs(frames.hand - T[ok]).max(initial=0.0) < 1e-10
+    assert np.abs(frames.feet - feet).max(initial=0.0) < 1e-10
+    limits = robot.limits
+    assert ((q >= limits[:, 0] - 1e-12) & (q <= limits[:, 1] + 1e-12)).all()
+    box = reach_module.default_box(robot)
+    if stance is not None:
+        local = np.linalg.solve(stance, sk.body_transform(pose))
+        pose_in_stance = np.array([ref.pose_of(T_local) for T_local in local]).reshape(-1, 6)
+    else:
+        pose_in_stance = pose
+    offset = pose_in_stance - [0.0, 0.0, h0, 0.0, 0.0, 0.0]
+    assert ((offset >= box.lower - 1e-9) & (offset <= box.upper + 1e-9)).all()
+    standing = robot.standing_torques(pose, q)
+    assert np.all(np.asarray(standing.margin) >= margin - 1e-9)
+    np.testing.assert_allclose(standing.margin, np.asarray(res.margin)[ok], atol=1e-9)
+    problem = reach_module.reference_problem(robot, np.eye(4))
+    assert not any(ref.collides(problem, row) for row in q)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_success_rate_on_feasible_targets(name):
+    """At least 99.5 % of targets made from feasible configurations are reached exactly, with every
+    constraint held."""
+    robot = robot_named(name)
+    T, _, _ = targets_of(name)
+    res = robot.reach(T)
+    solved = np.mean(res.status == sk.ReachStatus.OK)
+    assert solved >= 0.995, f"{name}: {solved:.2%} solved"
+    assert set(np.unique(res.status)) <= {sk.ReachStatus.OK, sk.ReachStatus.UNREACHABLE}
+    check_answers(robot, T, res)
+
+
+def _compare(robot, T, feet=None, seed=None, margin=None):
+    res = robot.reach(T, feet=feet, seed=seed, margin=margin)
+    for k in range(len(T)):
+        problem = reach_module.reference_problem(
+            robot,
+            T[k],
+            None if feet is None else feet[k],
+            None if seed is None else (seed[0][k], seed[1][k]),
+            margin,
+        )
+        want = ref.reach(problem)
+        assert res.status[k] == want["status"], k
+        assert res.arm_branch[k] == want["slot"], k
+        np.testing.assert_allclose(res.body_pose[k], want["body_pose"], atol=1e-7, err_msg=str(k))
+        np.testing.assert_allclose(res.q[k], want["q"], atol=1e-7, err_msg=str(k))
+        np.testing.assert_allclose(res.margin[k], want["margin"], atol=1e-7, err_msg=str(k))
+        np.testing.assert_allclose(res.distance[k], want["distance"], atol=1e-7, err_msg=str(k))
+        np.testing.assert_allclose(res.arm_branches[k], want["branches"], atol=1e-7, err_msg=str(k))
+        np.testing.assert_array_equal(res.arm_valid[k], want["valid"])
+    return res
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_batched_search_matches_the_reference(name):
+    robot = robot_named(name)
+    T, _, _ = targets_of(name, 8, seed=3)
+    far = T[:2].copy()
+    far[:, :3, 3] += [[0.0, 0.0, 3.0], [-2.5, 1.0, 0.0]]  # out of reach: the repair and its fallback
+    bad = T[:1].copy()
+    bad[0, 0, 0] = math.nan
+    res = _compare(robot, np.concatenate([T, far, bad]))
+    assert list(res.status[-3:]) == [sk.ReachStatus.UNREACHABLE] * 2 + [sk.ReachStatus.INVALID_INPUT]
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_seeded_search_matches_the_reference(name):
+    robot = robot_named(name)
+    T, _, _ = targets_of(name, 5, seed=4)
+    first = robot.reach(T)
+    moved = T.copy()
+    moved[:, :3, 3] += [0.01, -0.01, 0.005]
+    _compare(robot, moved, seed=(first.body_pose, first.q))
+
+
+def _planar_motion(yaw, shift):
+    G = np.eye(4)
+    G[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
+    G[:3, 3] = shift
+    return G
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_moving_the_feet_and_the_target_together_moves_the_answer_only(name):
+    """(S): a stance turned and shifted (feet and target by the same planar motion) gives the same
+    joints, and the body pose moved by that motion; the reference agrees on the moved problem."""
+    robot = robot_named(name)
+    T, _, _ = targets_of(name, 6, seed=5)
+    G = _planar_motion(0.7, [1.5, -2.0, 0.3])
+    feet = reach_module._scales(robot)[2]
+    moved_feet = feet @ G[:3, :3].T + G[:3, 3]
+    here = robot.reach(T)
+    there = _compare(robot, G @ T, feet=np.broadcast_to(moved_feet, (6, robot.n_legs, 3)))
+    np.testing.assert_allclose(there.q, here.q, atol=1e-7)
+    np.testing.assert_allclose(
+        sk.body_transform(there.body_pose), G @ sk.body_transform(here.body_pose), atol=1e-9
+    )
+    check_answers(robot, G @ T, there, feet=moved_feet, stance=G)
+
+
+def test_unreachable_target_gets_the_nearest_pose_reached():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 1, seed=6)
+    far = T[0].copy()
+    far[:3, 3] = [3.0, 0.5, 0.6]
+    res = robot.reach(far)
+    assert res.status == sk.ReachStatus.UNREACHABLE and res.arm_branch == -1
+    hand = robot.fk_all(res.body_pose, res.q).hand
+    assert res.distance == pytest.approx(np.linalg.norm(hand[:3, 3] - far[:3, 3]), abs=1e-9)
+    assert 1.5 < res.distance < 3.0
+    angle = np.linalg.norm(ref.rotation_log(far[:3, :3] @ hand[:3, :3].T))
+    assert res.angle == pytest.approx(angle, abs=1e-9)
+    limits = robot.limits
+    assert ((res.q >= limits[:, 0] - 1e-12) & (res.q <= limits[:, 1] + 1e-12)).all()
+    np.testing.assert_allclose(
+        robot.body_fk(res.body_pose, res.q), reach_module._scales(robot)[2], atol=1e-10
+    )
+
+
+def test_unstable_when_only_poses_below_the_margin_reach():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 3, seed=7)
+    res = robot.reach(T, margin=5.0)  # no centre of mass is 5 m inside Spot's feet
+    assert (res.status == sk.ReachStatus.UNSTABLE).all()
+    frames = robot.fk_all(res.body_pose, res.q)
+    assert np.abs(frames.hand - T).max() < 1e-10  # the hand still on the target
+    assert (res.distance == 0.0).all() and (res.margin < 5.0).all()
+    check_answers(robot, T, robot.reach(T, margin=np.array([0.0, 5.0, 0.0])), margin=0.0)
+
+
+def test_bad_samples_get_invalid_input_alone():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 1, seed=8)
+    good = T[0]
+    nan = good.copy()
+    nan[1, 3] = math.nan
+    scaled = good.copy()
+    scaled[:3, :3] *= 1.01
+    reflected = good.copy()
+    reflected[:3, 0] *= -1.0
+    last_row = good.copy()
+    last_row[3, 2] = 0.5
+    batch = np.stack([good, nan, scaled, reflected, last_row, good])
+    res = robot.reach(batch)
+    assert list(res.status) == [0, 3, 3, 3, 3, 0]
+    assert (
+        np.isnan(res.q[1:5]).all()
+        and np.isnan(res.body_pose[1:5]).all()
+        and (res.arm_branch[1:5] == -1).all()
+    )
+    feet = np.broadcast_to(reach_module._scales(robot)[2], (2, 4, 3)).copy()
+    feet[1, 2, 0] = math.inf
+    assert list(robot.reach(good, feet=feet).status) == [0, 3]
+    assert list(robot.reach(good, margin=[0.02, math.nan]).status) == [0, 3]
+    first = robot.reach(good)
+    seed_q = np.stack([first.q, first.q])
+    seed_q[1, 0] = math.nan
+    assert list(robot.reach(good, seed=(first.body_pose, seed_q)).status) == [0, 3]
+
+
+def test_bad_arguments_raise_naming_them():
+    spot = robot_named("spot")
+    with pytest.raises(ValueError, match="T_hand_world"):
+        spot.reach(np.eye(3))
+    with pytest.raises(ValueError, match="feet"):
+        spot.reach(np.eye(4), feet=np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="box"):
+        spot.reach(np.eye(4), box=np.zeros((2, 5)))
+    with pytest.raises(ValueError, match="box"):
+        spot.reach(np.eye(4), box=np.array([np.ones(6), -np.ones(6)]))
+    with pytest.raises(ValueError, match="seed q"):
+        spot.reach(np.eye(4), seed=(np.zeros(6), np.zeros(12)))
+    with pytest.raises(TypeError, match="seed"):
+        spot.reach(np.eye(4), seed="previous")
+    with pytest.raises(TypeError, match="T_hand_world"):
+        spot.reach("eye")
+    with pytest.raises(ValueError, match="do not broadcast"):
+        spot.reach(np.broadcast_to(np.eye(4), (3, 4, 4)), margin=np.zeros(2))
+    with pytest.raises(ValueError, match="reach needs an arm"):
+        robot_named("go2").reach(np.eye(4))
+
+
+@pytest.mark.parametrize("lead", [(), (1,), (3, 1, 2), (0,)])
+def test_batch_shapes_broadcast(lead):
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 2, seed=9)
+    margins = np.array([0.02, 0.03])  # broadcasts against the targets' leading dimensions
+    targets = np.broadcast_to(T[0], (*lead, 4, 4))
+    res = robot.reach(targets) if lead != (3, 1, 2) else robot.reach(targets, margin=margins)
+    assert res.body_pose.shape == (*lead, 6) and res.q.shape == (*lead, 18)
+    assert res.arm_branches.shape == (*lead, 8, 6) and res.arm_valid.shape == (*lead, 8)
+    if lead == ():
+        assert isinstance(res.status, sk.ReachStatus) and isinstance(res.margin, float)
+        assert isinstance(res.arm_branch, int)
+    else:
+        expected = (3, 1, 2) if lead == (3, 1, 2) else lead  # the margins' (2,) broadcasts into (3, 1, 2)
+        assert res.status.shape == expected and res.status.dtype == np.int8
+    if math.prod(lead):
+        single = robot.reach(T[0])
+        flat = res.q.reshape(-1, 18)
+        np.testing.assert_allclose(flat, np.broadcast_to(single.q, flat.shape), atol=1e-12)
+
+
+def test_float32_noncontiguous_and_empty():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 4, seed=10)
+    res32 = robot.reach(T.astype(np.float32))
+    assert res32.body_pose.dtype == np.float32 and res32.q.dtype == np.float32
+    assert (res32.status == sk.ReachStatus.OK).all()
+    strided = np.repeat(T, 2, axis=0)[::2]
+    assert not strided.flags.c_contiguous
+    np.testing.assert_allclose(robot.reach(strided).q, robot.reach(T).q, atol=1e-12)
+    empty = robot.reach(np.zeros((0, 4, 4)))
+    assert empty.q.shape == (0, 18) and empty.status.shape == (0,)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.integers(1, 3), min_size=0, max_size=3), st.integers(0, 3))
+def test_any_batch_shape_answers_each_sample_as_alone(lead, pick):
+    robot = robot_named("go2_z1")
+    T, _, _ = targets_of("go2_z1", 4, seed=12)
+    lead = tuple(lead)
+    count = math.prod(lead)
+    chosen = np.array([T[(pick + k) % 4] for k in range(count)]).reshape(*lead, 4, 4)
+    res = robot.reach(chosen)
+    assert res.q.shape == (*lead, 18)
+    statuses = np.reshape(res.status, lead)
+    for k, index in enumerate(np.ndindex(*lead)):
+        alone = robot.reach(T[(pick + k) % 4])
+        # the arm's closed form alone differs by an ulp or so between one pose and a batch (its scalar
+        # and lane paths), which the refinement's differences can grow to ~1e-10
+        np.testing.assert_allclose(res.q[index], alone.q, atol=1e-8)
+        assert statuses[index] == alone.status
+
+
+def test_a_moving_target_with_seeds_gives_a_continuous_answer():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 1, seed=13)
+    result, jumps = robot.reach(T[0]), []
+    for step in range(1, 30):
+        target = T[0].copy()
+        target[:3, 3] += step * np.array([0.004, -0.003, 0.002])
+        nxt = robot.reach(target, seed=result)
+        assert nxt.status == sk.ReachStatus.OK
+        jumps.append(np.abs(np.asarray(nxt.q) - np.asarray(result.q)).max())
+        result = nxt
+    assert max(jumps) < 0.1, max(jumps)
+
+
+def test_capsule_distances_against_dense_sampling():
+    rng = np.random.default_rng(2)
+    s = np.linspace(0.0, 1.0, 801)
+    for _ in range(200):
+        a, b, c, d = rng.normal(size=(4, 3))
+        centre, half = rng.normal(size=3) * 0.3, rng.random(3) * 0.5
+        p = a + s[:, None] * (b - a)
+        outside = np.maximum(np.abs(p - centre) - half, 0.0)
+        dense_box = np.sqrt((outside**2).sum(-1)).min()
+        box = ref.segment_box_distance(a, b, centre, half)
+        assert box <= dense_box + 1e-12 and dense_box - box < 5e-3
+        q = c + s[:, None] * (d - c)
+        dense = np.sqrt(((p[:, None, :] - q[None, :, :]) ** 2).sum(-1)).min()
+        seg = ref.segment_distance(a, b, c, d)
+        assert seg <= dense + 1e-12 and dense - seg < 5e-3
+    assert ref.segment_distance([0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0]) == pytest.approx(1.0)
+    assert ref.segment_box_distance([2, 0, 0], [2, 0, 0], [0, 0, 0], [1, 1, 1]) == pytest.approx(1.0)
+
+
+def test_capsule_model_flags_an_arm_through_the_body():
+    spot = robot_named("spot")
+    model = capsule_model(spot, spot.chain("arm_hand"))
+    assert model.radius == pytest.approx(0.04 * min(leg.reach[1] for leg in spot.legs))
+    assert len(model.arm_points) >= 3 and model.arm_vs_body.any()
+    problem = reach_module.reference_problem(spot, np.eye(4))
+    stance = np.asarray(spot.body_ik(problem.nominal, problem.feet).q)
+    forward = np.concatenate([stance, [0.0, -0.5, 0.5, 0.0, 0.0, 0.0]])  # the arm up and forward
+    assert not ref.collides(problem, forward)
+    through = np.concatenate([stance, [math.pi, 0.5, 0.3, 0.0, 0.0, 0.0]])  # down behind, into the body
+    assert ref.collides(problem, through)
+    # the batched check agrees on a spread of arm configurations, colliding or not
+    rng = np.random.default_rng(3)
+    limits = spot.limits[12:]
+    arms = limits[:, 0] + rng.random((300, 6)) * (limits[:, 1] - limits[:, 0])
+    q = np.concatenate([np.broadcast_to(stance, (300, 12)), arms], axis=1)
+    numbers = reach_module._batch(
+        spot,
+        np.broadcast_to(np.eye(4), (1, 4, 4)).copy(),
+        problem.feet[None],
+        None,
+        None,
+        np.zeros(1),
+        reach_module.default_box(spot),
+    )
+    hits = reach_geometry.collisions(numbers, q)
+    assert 0 < hits.sum() < 300
+    np.testing.assert_array_equal(hits, [ref.collides(problem, row) for row in q])
