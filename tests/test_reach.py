@@ -17,36 +17,10 @@ from urdf_helpers import robot_named
 
 import spotkin as sk
 from spotkin.motion import reach as reach_module
-from spotkin.motion import reach_geometry
 from spotkin.motion.capsules import capsule_model
 from spotkin.reference import reach as ref
 
 ROBOTS = ("spot", "go2_z1")
-
-
-def feasible_targets(robot, n: int, seed: int):
-    """n hand targets (n, 4, 4) from random feasible configurations: a body pose uniform in the default
-    box, the legs on the nominal feet within their limits, the arm's joints uniform within theirs, no
-    collision, the centre of mass at least the default margin inside the feet. Also the generating
-    (body offsets (n, 6), q (n, m))."""
-    rng = np.random.default_rng(seed)
-    problem = reach_module.reference_problem(robot, np.eye(4))
-    arm = robot.limits[3 * robot.n_legs :]
-    targets, offsets, qs = [], [], []
-    while len(targets) < n:
-        p = problem.lower + rng.random(6) * (problem.upper - problem.lower)
-        T = ref.body_T(problem, p)
-        q_legs, ok = ref._legs(problem, T)
-        q = np.concatenate([q_legs, arm[:, 0] + rng.random(6) * (arm[:, 1] - arm[:, 0])])
-        if not ok or ref.collides(problem, q):
-            continue
-        com = np.asarray(robot.center_of_mass(T, q))
-        if ref.support_margin(problem.feet[:, :2], com[:2]) < problem.margin:
-            continue
-        targets.append(T @ problem.mount @ np.asarray(robot.arm.fk(q[3 * robot.n_legs :])))
-        offsets.append(p - problem.nominal)
-        qs.append(q)
-    return np.array(targets), np.array(offsets), np.array(qs)
 
 
 _TARGETS: dict = {}
@@ -55,7 +29,8 @@ _TARGETS: dict = {}
 def targets_of(name: str, n: int = 1000, seed: int = 11):
     key = (name, n, seed)
     if key not in _TARGETS:
-        _TARGETS[key] = feasible_targets(robot_named(name), n, seed)
+        robot = robot_named(name)
+        _TARGETS[key] = ref.feasible_samples(reach_module.reference_problem(robot, np.eye(4)), n, seed)
     return _TARGETS[key]
 
 
@@ -350,20 +325,3 @@ def test_capsule_model_flags_an_arm_through_the_body():
     assert not ref.collides(problem, forward)
     through = np.concatenate([stance, [math.pi, 0.5, 0.3, 0.0, 0.0, 0.0]])  # down behind, into the body
     assert ref.collides(problem, through)
-    # the batched check agrees on a spread of arm configurations, colliding or not
-    rng = np.random.default_rng(3)
-    limits = spot.limits[12:]
-    arms = limits[:, 0] + rng.random((300, 6)) * (limits[:, 1] - limits[:, 0])
-    q = np.concatenate([np.broadcast_to(stance, (300, 12)), arms], axis=1)
-    numbers = reach_module._batch(
-        spot,
-        np.broadcast_to(np.eye(4), (1, 4, 4)).copy(),
-        problem.feet[None],
-        None,
-        None,
-        np.zeros(1),
-        reach_module.default_box(spot),
-    )
-    hits = reach_geometry.collisions(numbers, q)
-    assert 0 < hits.sum() < 300
-    np.testing.assert_array_equal(hits, [ref.collides(problem, row) for row in q])

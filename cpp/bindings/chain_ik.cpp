@@ -1,48 +1,24 @@
 // Bindings for the closed-form IK of chains (DH or URDF): 3-joint position
 // IK and 6R IK by family (spherical wrist, parallel 2-3-4, spherical shoulder).
 #include "spotkin/chain_ik.hpp"
-#include "spotkin/chain_ik/arm6.hpp"
-#include "spotkin/chain_ik/free_joint.hpp"
-#include "spotkin/chain_ik/kernels.hpp"
 
 #include <algorithm>
 #include <memory>
 #include <optional>
 
-#include "bindings.hpp"
-#include "dispatch.hpp"
-#include "chain_model.hpp"
 #include "binder.hpp"
+#include "bindings.hpp"
+#include "chain_ik_glue.hpp"
+#include "chain_model.hpp"
+#include "dispatch.hpp"
 #include "numpy_boundary.hpp"
+#include "spotkin/chain_ik/arm6.hpp"
+#include "spotkin/chain_ik/free_joint.hpp"
+#include "spotkin/chain_ik/kernels.hpp"
 
 namespace spotkin::bindings {
 
 namespace chain_ik_glue {
-
-using chain_ik::Limits;
-using chain_ik::Position3;
-using chain_ik::Arm6;
-
-struct ChainIK {
-  std::optional<Position3> position;  // 3-joint chains
-  std::optional<Arm6> arm;            // 6-joint chains
-  Limits limits;
-  std::uint64_t revolute_columns = 0;  // huge seed angles are reduced exactly
-
-  std::string kind() const { return position ? position->name() : arm->kind(); }
-  std::string position_kind() const { return position ? position->name() : arm->position_kind(); }
-  bool idealised() const { return arm && arm->idealised(); }
-  py::dict geometry() const {
-    py::dict out;
-    if (arm) {
-      const auto& g = arm->geometry();
-      out["wrist_meeting"] = g.wrist, out["shoulder_meeting"] = g.shoulder;
-      out["parallel_234"] = g.parallel234, out["parallel_123"] = g.parallel123;
-      out["axes_5_6_gap"] = g.gap56, out["axes_4_5_gap"] = g.gap45;
-    }
-    return out;
-  }
-};
 
 ChainIK make_chain_ik(const ChainPair& pair, py::handle lower_obj, py::handle upper_obj, double angle_tolerance,
                       double distance_tolerance) {

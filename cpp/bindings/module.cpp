@@ -11,6 +11,7 @@ void bind_dynamics(pybind11::module_& m);  // dynamics.cpp
 void bind_statics(pybind11::module_& m);   // statics.cpp
 void bind_core_method(pybind11::module_& m);  // forward.cpp
 void bind_motion(pybind11::module_& m);       // motion.cpp
+void bind_reach(pybind11::module_& m);        // reach.cpp
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -30,4 +31,5 @@ PYBIND11_MODULE(_core, m) {
   spotkin::bindings::bind_statics(m);
   spotkin::bindings::bind_core_method(m);
   spotkin::bindings::bind_motion(m);
+  spotkin::bindings::bind_reach(m);
 }

@@ -23,20 +23,6 @@ namespace spotkin::bindings {
 
 namespace {
 
-// A float64 C-contiguous copy (or view) of obj with exactly `shape`; ValueError naming it
-// otherwise.
-py::array_t<double, py::array::c_style> exact(py::handle obj, const char* name,
-                                              const Shape& shape) {
-  auto arr = contiguous<double>(as_real_array(obj, name));
-  const Shape got(arr.shape(), arr.shape() + arr.ndim());
-  bool same = got.size() == shape.size();
-  for (std::size_t k = 0; same && k < shape.size(); ++k) same = shape[k] < 0 || got[k] == shape[k];
-  if (!same)
-    throw py::value_error(std::string(name) + " must have shape " + format_shape(shape) + ", got " +
-                          format_shape(got));
-  return arr;
-}
-
 py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle velocity_obj,
                     py::handle attitude_obj, py::ssize_t ticks, double rate, py::handle times_obj,
                     py::handle gaits_obj, py::handle velocities_obj) {
@@ -130,10 +116,6 @@ struct ControllerCore {
   long long ticks = 0, clipped = 0;            // robot-ticks, and those with a clipped feedforward
 };
 
-void copy_exact(py::handle obj, const char* name, const Shape& shape, double* out) {
-  const auto arr = exact(obj, name, shape);
-  std::copy(arr.data(), arr.data() + arr.size(), out);
-}
 
 std::unique_ptr<ControllerCore> make_controller(const RobotStatics& r, double h, double body_omega,
                                                 py::handle body_inertia, py::handle kp,

@@ -136,6 +136,26 @@ py::array_t<T> new_array(const Shape& leading, const Shape& trailing) {
   return cached_array<T>(shape);
 }
 
+// A float64 C-contiguous copy (or view) of obj with exactly `shape` (-1: any length); ValueError
+// naming it otherwise.
+inline py::array_t<double, py::array::c_style> exact(py::handle obj, const char* name,
+                                                     const Shape& shape) {
+  auto arr = contiguous<double>(as_real_array(obj, name));
+  const Shape got(arr.shape(), arr.shape() + arr.ndim());
+  bool same = got.size() == shape.size();
+  for (std::size_t k = 0; same && k < shape.size(); ++k) same = shape[k] < 0 || got[k] == shape[k];
+  if (!same)
+    throw py::value_error(std::string(name) + " must have shape " + format_shape(shape) + ", got " +
+                          format_shape(got));
+  return arr;
+}
+
+// obj's numbers, of exactly `shape`, copied into out (ValueError naming it otherwise).
+inline void copy_exact(py::handle obj, const char* name, const Shape& shape, double* out) {
+  const auto arr = exact(obj, name, shape);
+  std::copy_n(arr.data(), arr.size(), out);
+}
+
 // Releases the GIL for batches big enough to gain from it; for a handful of
 // samples the release and re-acquire cost more than the computation.
 class ReleaseGilFor {

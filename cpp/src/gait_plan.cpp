@@ -450,16 +450,16 @@ double segment_distance(const double* c, const double* a, const double* b) noexc
 
 double support_margin(const double (*points)[2], int k, const double c[2]) noexcept {
   // the distinct points in lexicographic order, then Andrew's monotone chain (counter-clockwise)
-  std::array<double, 2> pts[kLegs];
+  std::array<double, 2> pts[Body::kMaxLegs];
   int n = 0;
   for (int i = 0; i < k; ++i) pts[n++] = {points[i][0], points[i][1]};
   std::sort(pts, pts + n);
   n = int(std::unique(pts, pts + n) - pts);
   if (n == 0) return -std::numeric_limits<double>::infinity();
-  const double* hull[2 * kLegs];
+  const double* hull[2 * Body::kMaxLegs];
   int h = 0;
   for (int pass = 0; pass < 2; ++pass) {
-    const double* chain[kLegs];
+    const double* chain[Body::kMaxLegs];
     int m = 0;
     for (int j = 0; j < n; ++j) {
       const double* p = pts[pass == 0 ? j : n - 1 - j].data();

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'GaitControllerCore', 'Leg', 'MAX_THREADS', 'PointToPoint', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'plan_gait', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
+__all__: list[str] = ['Arm', 'Body', 'Chain', 'ChainDynamics', 'ChainIK', 'Convention', 'FloatingDynamics', 'FreeJointIK', 'GaitControllerCore', 'Leg', 'MAX_THREADS', 'PointToPoint', 'ReachModel', 'RobotStatics', 'WaypointPath', 'available_isas', 'body_transform', 'compatible', 'dls', 'get_isa', 'get_num_threads', 'manipulability', 'nullspace_projector', 'paul_type2', 'paul_type3', 'paul_type6', 'pinv', 'plan_gait', 'rank', 'set_isa', 'set_num_threads', 'singular_values', 'trajectory_min_duration']
 class Convention:
     """
     Members:
@@ -250,6 +250,13 @@ class GaitControllerCore:
     @property
     def ticks(self) -> int:
         ...
+class ReachModel:
+    def __init__(self, statics: RobotStatics, arm: typing.Any, chain: Chain, mount: typing.Any, capsules: typing.Any, nominal: typing.Any, lower: typing.Any, upper: typing.Any, scale: typing.SupportsFloat | typing.SupportsIndex, q_lower: typing.Any, q_upper: typing.Any, halton: typing.Any) -> None:
+        ...
+    def solve(self, targets: typing.Any, feet: typing.Any, stance: typing.Any, p_ref: typing.Any, q_ref: typing.Any, seed_pose: typing.Any, margin: typing.Any) -> tuple:
+        """
+        Reach answers for targets (N, 4, 4): (body_pose, q, status, margin, distance, angle, branches, valid, slot), each (N, ...).
+        """
 def _core_method(function: typing.Any, target: str, method: str, names: tuple, defaults: tuple, converters: tuple, n_positional: typing.SupportsInt | typing.SupportsIndex, order: tuple, constants: tuple, required: typing.Any) -> typing.Any:
     """
     A façade method that calls self.<target>.<method>(...) from C (spotkin._support.forward).

@@ -133,6 +133,7 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         "_leg_names",
         "_legs",
         "_model",
+        "_reach_core",
         "_report",
         "_roles",
         "_source",

@@ -10,14 +10,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import _core
 from .._support.boundary import as_real, broadcast_lead, check_trailing
 from ..model import robot as robot_module
+from ..model.arm import SpotArm
 from ..model.body import body_transform
 from ..reference import reach as ref
 from .capsules import capsule_model
 from .gait import _nominal_height
-from .reach_geometry import Batch, hull_edges
-from .reach_search import poses_of, search
 
 __all__ = ["ReachBox", "ReachResult", "ReachStatus", "default_box", "reach"]
 
@@ -62,15 +62,33 @@ def default_box(robot) -> ReachBox:
     return ReachBox(lower, upper)
 
 
+class _Numbers:
+    """A robot's reach numbers, made on first use and kept on the robot: its scales, its arm's chain from
+    the body and capsules, and a compiled model per box."""
+
+    def __init__(self, robot) -> None:
+        self.h0 = _nominal_height(robot)
+        self.feet = robot.stance_feet(self.h0)
+        self.L = self.h0 + float(robot.hip_positions[:, 2].mean()) - float(self.feet[:, 2].mean())
+        specs = robot._specs[1] if robot.model is not None else ()
+        self.chain = robot.chain(specs[0].tip) if specs else None
+        self.capsules = None if self.chain is None else capsule_model(robot, self.chain)
+        self.models: dict = {}
+        self.single = None  # reach's arrays for one target with the defaults (set on first use)
+
+
+def _numbers(robot) -> _Numbers:
+    numbers = getattr(robot, "_reach_core", None)
+    if numbers is None:
+        numbers = _Numbers(robot)
+        robot._reach_core = numbers
+    return numbers
+
+
 def _scales(robot) -> tuple[float, float, np.ndarray]:
     """(h0 the nominal body height, L the hip height above the feet, the nominal feet (n, 3))."""
-    cache = getattr(robot, "_reach_scales", None)
-    if cache is None:
-        h0 = _nominal_height(robot)
-        feet = robot.stance_feet(h0)
-        L = h0 + float(robot.hip_positions[:, 2].mean()) - float(feet[:, 2].mean())
-        cache = (h0, L, feet)
-    return cache
+    numbers = _numbers(robot)
+    return numbers.h0, numbers.L, numbers.feet.copy()
 
 
 class ReachResult(NamedTuple):
@@ -134,54 +152,54 @@ def reference_problem(robot, target, feet=None, seed=None, margin=None, box=None
 
 
 def _arm_chain(robot):
-    specs = robot._specs[1] if robot.model is not None else ()
-    return robot.chain(specs[0].tip) if specs else None
+    return _numbers(robot).chain
 
 
 def _capsules(robot):
-    chain = _arm_chain(robot)
-    return None if chain is None else capsule_model(robot, chain)
+    return _numbers(robot).capsules
 
 
-def _batch(robot, target, feet, seed_pose, seed_q, margin, box) -> Batch:
-    """The :class:`Batch` of N targets: target (N, 4, 4), feet (N, n, 3), seeds (N, 6) and (N, m) or
-    None, margin (N,) (all float64, finite where the target is valid)."""
-    h0, L, nominal_feet = _scales(robot)
-    N = len(target)
-    stance = stance_frames(feet, nominal_feet)
-    nominal = np.array([0.0, 0.0, h0, 0.0, 0.0, 0.0])
-    limits = robot.limits
-    lower, upper = nominal + box[0], nominal + box[1]
-    finite = np.isfinite(limits).all(axis=1)
-    if seed_q is not None:
-        T = np.linalg.solve(stance, body_transform(seed_pose))
-        p_ref, q_ref, seed_p = poses_of(T), seed_q, poses_of(T)
-    else:
-        p_ref = np.broadcast_to(nominal, (N, 6))
-        q_ref = np.broadcast_to(np.where(finite, 0.5 * (limits[:, 0] + limits[:, 1]), 0.0), (N, len(limits)))
-        seed_p = None
-    chain = _arm_chain(robot)
-    return Batch(
-        robot=robot,
-        arm=robot.arm,
-        chain=chain,
-        capsules=_capsules(robot),
-        mount=robot.arm_mount,
-        target=target,
-        feet=feet,
-        stance=stance,
-        nominal=nominal,
-        lower=lower,
-        upper=upper,
-        margin=margin,
-        scale=L,
-        q_lower=limits[:, 0],
-        q_upper=limits[:, 1],
-        p_ref=p_ref,
-        q_ref=q_ref,
-        seed_pose=seed_p,
-        hull=hull_edges(feet[:, :, :2]),
-    )
+def _compiled(robot, box: ReachBox):
+    """The robot's compiled reach model for ``box`` (made once per box)."""
+    numbers = _numbers(robot)
+    key = (tuple(box[0]), tuple(box[1]))
+    model = numbers.models.get(key)
+    if model is None:
+        if numbers.chain is None:
+            raise ValueError("reach needs the robot's description (a URDF) for its arm's chain and capsules")
+        arm = robot.arm
+        arm_core = arm._core if isinstance(arm, SpotArm) else arm._ik_core()
+        caps = numbers.capsules
+        capsules = (
+            None
+            if caps is None or not caps.arm_points
+            else (
+                caps.radius,
+                caps.box_centre,
+                caps.box_half,
+                np.array(caps.arm_points, float),
+                caps.arm_vs_body.astype(float),
+                caps.arm_vs_legs.astype(float),
+            )
+        )
+        nominal = np.array([0.0, 0.0, numbers.h0, 0.0, 0.0, 0.0])
+        limits = robot.limits
+        model = _core.ReachModel(
+            robot._statics,
+            arm_core,
+            numbers.chain._core,
+            robot.arm_mount,
+            capsules,
+            nominal,
+            nominal + box[0],
+            nominal + box[1],
+            numbers.L,
+            limits[:, 0],
+            limits[:, 1],
+            ref.candidate_units(),
+        )
+        numbers.models[key] = model
+    return model
 
 
 def stance_frames(feet: np.ndarray, nominal_feet: np.ndarray) -> np.ndarray:
@@ -228,6 +246,32 @@ def _seed_parts(seed):
 
 def reach(robot, T_hand_world, feet=None, seed=None, margin=None, box=None) -> ReachResult:
     """:meth:`spotkin.Robot.reach` (documented there)."""
+    if (
+        type(T_hand_world) is np.ndarray
+        and T_hand_world.shape == (4, 4)
+        and T_hand_world.dtype == np.float64
+        and feet is None
+        and seed is None
+        and margin is None
+        and box is None
+    ):
+        fast = _numbers(robot).single  # one target with the defaults: the other arrays are made once
+        if fast is not None:
+            model, feet1, stance1, p_ref1, q_ref1, margin1 = fast
+            pose, q, status, margins, distance, angle, branches, valid, slot = model.solve(
+                T_hand_world.reshape(1, 4, 4), feet1, stance1, p_ref1, q_ref1, None, margin1
+            )
+            return ReachResult(
+                pose[0],
+                q[0],
+                ReachStatus(int(status[0])),
+                float(margins[0]),
+                float(distance[0]),
+                float(angle[0]),
+                branches[0],
+                valid[0],
+                int(slot[0]),
+            )
     arm = robot.arm
     if arm is None:
         raise ValueError("reach needs an arm: this robot has none (robot.arm is None)")
@@ -253,58 +297,78 @@ def reach(robot, T_hand_world, feet=None, seed=None, margin=None, box=None) -> R
     box = _as_box(box, robot)
     lead = broadcast_lead(**leads)
     N = math.prod(lead)
-    flat_target = np.broadcast_to(target, (*lead, 4, 4)).reshape(N, 4, 4).astype(np.float64)
-    flat_feet = np.broadcast_to(nominal_feet if feet is None else feet, (*lead, n, 3)).reshape(N, n, 3)
-    flat_margin = np.broadcast_to(MARGIN_FRACTION * L if margin is None else margin, lead).reshape(N)
-    valid = _rigid_rows(flat_target) & np.isfinite(flat_feet).all(axis=(1, 2)) & np.isfinite(flat_margin)
-    if seed_pose is not None:
+    model = _compiled(robot, box)
+    flat_target = np.ascontiguousarray(np.broadcast_to(target, (*lead, 4, 4)).reshape(N, 4, 4), np.float64)
+    flat_feet = np.ascontiguousarray(
+        np.broadcast_to(nominal_feet if feet is None else feet, (*lead, n, 3)).reshape(N, n, 3)
+    )
+    flat_margin = np.ascontiguousarray(
+        np.broadcast_to(MARGIN_FRACTION * L if margin is None else margin, lead).reshape(N), np.float64
+    )
+    with np.errstate(invalid="ignore"):  # NaN feet: NaN stance frames (the core answers INVALID_INPUT)
+        stance = stance_frames(flat_feet, nominal_feet)
+    h0 = _numbers(robot).h0
+    if seed_pose is None:
+        limits = robot.limits
+        finite = np.isfinite(limits).all(axis=1)
+        p_ref = np.broadcast_to(np.array([0.0, 0.0, h0, 0.0, 0.0, 0.0]), (N, 6))
+        q_ref = np.broadcast_to(np.where(finite, 0.5 * (limits[:, 0] + limits[:, 1]), 0.0), (N, m))
+        seed_in_stance = None
+    else:
         seed_pose = np.broadcast_to(seed_pose, (*lead, 6)).reshape(N, 6)
-        seed_q = np.broadcast_to(seed_q, (*lead, m)).reshape(N, m)
-        valid &= np.isfinite(seed_pose).all(axis=1) & np.isfinite(seed_q).all(axis=1)
-        seed_pose, seed_q = np.where(valid[:, None], seed_pose, 0.0), np.where(valid[:, None], seed_q, 0.0)
-    flat_feet = np.where(valid[:, None, None], flat_feet, nominal_feet)
-    flat_margin = np.where(valid, flat_margin, 0.0)
-    batch = _batch(robot, flat_target, np.ascontiguousarray(flat_feet), seed_pose, seed_q, flat_margin, box)
-    out = search(batch, valid)
+        q_ref = np.broadcast_to(seed_q, (*lead, m)).reshape(N, m)
+        with np.errstate(invalid="ignore"):
+            local = np.linalg.solve(
+                np.where(np.isfinite(stance), stance, np.eye(4)), body_transform(seed_pose)
+            )
+        p_ref = seed_in_stance = np.where(
+            np.isfinite(stance).all(axis=(1, 2))[:, None], poses_of(local), np.nan
+        )
+    p_ref, q_ref = np.ascontiguousarray(p_ref), np.ascontiguousarray(q_ref)
+    pose, q, status, margins, distance, angle, branches, valid, slot = model.solve(
+        flat_target, flat_feet, stance, p_ref, q_ref, seed_in_stance, flat_margin
+    )
+    numbers = _numbers(robot)
+    defaults = N == 1 and feet is None and seed_in_stance is None and margin is None
+    if numbers.single is None and defaults and np.array_equal(np.array(box), np.array(default_box(robot))):
+        numbers.single = (model, flat_feet, stance, p_ref, q_ref, flat_margin)
     dtype = np.float32 if target.dtype == np.float32 else np.float64
-    body_pose = out["body_pose"].reshape(*lead, 6).astype(dtype)
-    q = out["q"].reshape(*lead, m).astype(dtype)
-    branches = out["branches"].reshape(*lead, 8, arm.dof).astype(dtype)
-    arm_valid = out["valid"].reshape(*lead, 8)
+    body_pose = pose.reshape(*lead, 6).astype(dtype, copy=False)
+    q = q.reshape(*lead, m).astype(dtype, copy=False)
+    branches = branches.reshape(*lead, 8, arm.dof).astype(dtype, copy=False)
+    arm_valid = valid.reshape(*lead, 8)
     if lead == ():
         return ReachResult(
             body_pose,
             q,
-            ReachStatus(int(out["status"][0])),
-            float(out["margin"][0]),
-            float(out["distance"][0]),
-            float(out["angle"][0]),
+            ReachStatus(int(status[0])),
+            float(margins[0]),
+            float(distance[0]),
+            float(angle[0]),
             branches,
             arm_valid,
-            int(out["slot"][0]),
+            int(slot[0]),
         )
     return ReachResult(
         body_pose,
         q,
-        out["status"].reshape(lead),
-        out["margin"].reshape(lead).astype(dtype),
-        out["distance"].reshape(lead).astype(dtype),
-        out["angle"].reshape(lead).astype(dtype),
+        status.reshape(lead),
+        margins.reshape(lead).astype(dtype, copy=False),
+        distance.reshape(lead).astype(dtype, copy=False),
+        angle.reshape(lead).astype(dtype, copy=False),
         branches,
         arm_valid,
-        out["slot"].reshape(lead),
+        slot.reshape(lead),
     )
 
 
-def _rigid_rows(T: np.ndarray) -> np.ndarray:
-    """(N,) bool: finite, last row [0, 0, 0, 1] and a rotation part within 1e-6 of a rotation (det > 0),
-    as :func:`spotkin.reference.reach.rigid`."""
-    finite = np.isfinite(T).all(axis=(1, 2))
-    T = np.where(finite[:, None, None], T, np.eye(4))
-    last = np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) <= 1e-6
+def poses_of(T) -> np.ndarray:
+    """Row-wise :func:`spotkin.reference.reach.pose_of`: [x, y, z, a, b, c] (Euler "XYZ") of (N, 4, 4)."""
     R = T[:, :3, :3]
-    orthonormal = np.abs(np.transpose(R, (0, 2, 1)) @ R - np.eye(3)).max(axis=(1, 2)) <= 1e-6
-    return finite & last & orthonormal & (np.linalg.det(R) > 0.0)
+    b = np.arcsin(np.clip(R[:, 0, 2], -1.0, 1.0))
+    a = np.arctan2(-R[:, 1, 2], R[:, 2, 2])
+    c = np.arctan2(-R[:, 0, 1], R[:, 0, 0])
+    return np.concatenate([T[:, :3, 3], np.stack([a, b, c], -1)], -1)
 
 
 robot_module._MOTION["reach"] = reach

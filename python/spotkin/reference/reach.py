@@ -35,16 +35,20 @@ It **reaches** when all of that but the margin holds.
 
 The search
 ----------
-(C) Candidates: the seed's pose (clipped into the box) when there is one, p0, then ``CANDIDATES``
-    points of the Halton sequence (bases 2, 3, 5, 7, 11, 13, indices 1..) mapped into the box.
+(C) Candidates, in three stages: the seed's pose (clipped into the box) when there is one and p0;
+    then the first 8 points of the Halton sequence (bases 2, 3, 5, 7, 11, 13, indices 1..) mapped
+    into the box; then the rest, up to ``CANDIDATES``. A stage is evaluated only when the options of
+    the stages before have no feasible one.
 (E) At each candidate: the legs' IK (without a seed: each leg's preferred branch), the arm's target
     in the arm's base frame, (world <- body <- arm base)^-1 T_target, and every branch of the arm's
     IK; each valid branch is an option, with its margin, collision and cost.
-(A) The answer: the feasible option of least cost (ties to the earlier candidate, then the lower
-    branch); if none, the reaching option of largest margin (status UNSTABLE); if none, the repair (F).
+(A) The answer: the feasible option of least cost among the stages evaluated (ties to the earlier
+    candidate, then the lower branch); if none after the last stage, the reaching option of largest
+    margin (status UNSTABLE); if none, the repair (F).
 (R) Refinement: ``REFINE_STEPS`` Gauss-Newton steps on p for r(p), the arm following its branch (the
-    valid solution nearest the current one) and the legs seeded with the current ones. J by forward
-    differences (step ``FD_STEP``); delta = -(J^T J + mu I)^-1 J^T r, mu = ``GN_DAMPING``; the step is
+    valid solution nearest the current one) and the legs seeded with the current ones. J = dr/dp from
+    the joints' sensitivities dq/dp, the feet and the hand held (:func:`sensitivities`: the legs' and the
+    arm's Jacobians); delta = -(J^T J + mu I)^-1 J^T r, mu = ``GN_DAMPING``; the step is
     tried at 1, 1/2, 1/4 of its length (p clipped into the box) and taken when the option there is
     feasible and cheaper; else refinement stops.
 (F) Repair, when no candidate reaches: damped least squares on z = (p, q_a) for the hand's pose error
@@ -69,11 +73,15 @@ from .gait import support_margin
 
 CANDIDATES = 64
 """Halton points in the box, after the seed's pose and the nominal one."""
+STAGES = (0, 8)
+"""(C)'s stages: the seed's and the nominal pose; then the first 8 Halton points; then the rest."""
 REFINE_STEPS = 3
 FD_STEP = 1e-6
 GN_DAMPING = 1e-6
 REPAIR_ITERATIONS = 60
 REPAIR_DAMPING = 1e-2
+REPAIR_STALL = 1e4
+"""(F) stops when its damping has grown past this (no step has helped for several tries)."""
 REPAIR_STARTS = 6
 ACTIVE_SET_PASSES = 3
 REPAIR_INSET = 1e-6
@@ -360,18 +368,53 @@ def follow(problem: Problem, p, option: Option) -> Option | None:
     return _option(problem, p, T_body, q_legs, q_all[slot], slot, option.order)
 
 
+def euler_rates(angles) -> np.ndarray:
+    """E (3, 3): the angular velocity w = E (a', b', c') of R = Rx(a) Ry(b) Rz(c), in the frame R is
+    given in: w = a' x + Rx(a) (b' y) + Rx(a) Ry(b) (c' z)."""
+    a, b = float(angles[0]), float(angles[1])
+    ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
+    return np.array([[1.0, 0.0, sb], [0.0, ca, -sa * cb], [0.0, sa, ca * cb]])
+
+
+def sensitivities(problem: Problem, option: Option) -> np.ndarray | None:
+    """dq/dp (m, 6) at an option, the feet and the hand held (R). In the stance frame S, with the body
+    at (t, R) moving at v = t' and w = E (a', b', c') (:func:`euler_rates`):
+
+    - leg l, its foot f_l fixed: J_l q_l' = -R^T (v + w x (f_l - t)) (J_l its Jacobian, body axes);
+    - the arm, its hand on the fixed target (p_t, R_t): J_a q_a' = [-R^T (v + w x (p_t - t)); -R^T w],
+      J_a the geometric Jacobian of its chain from the body (the hand point, body axes).
+
+    None where a Jacobian is singular."""
+    robot, n3 = problem.robot, 3 * problem.robot.n_legs
+    inverse = np.linalg.inv(problem.stance)
+    feet = problem.feet @ inverse[:3, :3].T + inverse[:3, 3]
+    target = inverse @ problem.target
+    T = body_transform(option.p)
+    R, t = T[:3, :3], T[:3, 3]
+    E = euler_rates(option.p[3:])
+    v, w = np.hstack([np.eye(3), np.zeros((3, 3))]), np.hstack([np.zeros((3, 3)), E])  # (3, 6) each
+    out = np.empty((len(option.q), 6))
+    try:
+        for columns, leg, foot in zip(robot.leg_columns, robot.legs, feet):
+            J = np.asarray(leg.jacobian(option.q[columns]), float)
+            out[columns] = np.linalg.solve(J, -R.T @ (v + np.cross(w.T, foot - t).T))
+        J = np.asarray(problem.chain.jacobian(option.q[n3:]), float)
+        rhs = np.vstack([-R.T @ (v + np.cross(w.T, target[:3, 3] - t).T), -R.T @ w])
+        out[n3:] = np.linalg.solve(J, rhs)
+    except np.linalg.LinAlgError:
+        return None
+    return out
+
+
 def refine(problem: Problem, option: Option) -> Option:
     """(R): Gauss-Newton steps on p."""
+    w_p, w_q = problem.widths
     for _ in range(REFINE_STEPS):
         r0 = residual(problem, option.p, option.q)
-        J = np.empty((len(r0), 6))
-        for j in range(6):
-            step = np.zeros(6)
-            step[j] = FD_STEP
-            plus = follow(problem, option.p + step, option)
-            if plus is None:
-                return option
-            J[:, j] = (residual(problem, plus.p, plus.q) - r0) / FD_STEP
+        dq = sensitivities(problem, option)
+        if dq is None:
+            return option
+        J = np.vstack([np.diag(1.0 / w_p), dq / w_q[:, None]])
         delta = np.linalg.solve(J.T @ J + GN_DAMPING * np.eye(6), -(J.T @ r0))
         for alpha in (1.0, 0.5, 0.25):
             p_new = np.clip(option.p + alpha * delta, problem.lower, problem.upper)
@@ -384,15 +427,13 @@ def refine(problem: Problem, option: Option) -> Option:
     return option
 
 
-def candidates(problem: Problem) -> list[np.ndarray]:
-    """(C)."""
-    out = []
-    if problem.seed_pose is not None:
-        out.append(np.clip(problem.seed_pose, problem.lower, problem.upper))
-    out.append(problem.nominal.copy())
-    for u in candidate_units():
-        out.append(problem.lower + u * (problem.upper - problem.lower))
-    return out
+def candidates(problem: Problem) -> list[list[np.ndarray]]:
+    """(C), in stages: the seed's pose (clipped into the box) when there is one and the nominal pose;
+    then the first ``STAGES[1]`` Halton points; then the rest, up to ``CANDIDATES``."""
+    first = [] if problem.seed_pose is None else [np.clip(problem.seed_pose, problem.lower, problem.upper)]
+    first.append(problem.nominal.copy())
+    points = [problem.lower + u * (problem.upper - problem.lower) for u in candidate_units()]
+    return [first, points[: STAGES[1]], points[STAGES[1] :]]
 
 
 def _choose(problem: Problem, options: list[Option]) -> tuple[Option | None, int]:
@@ -459,15 +500,13 @@ def descend(problem: Problem, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     e = hand_error(problem, z[:6], z[6:])
     lam = REPAIR_DAMPING
     for _ in range(REPAIR_ITERATIONS):
-        if float(e @ e) < 1e-24:
+        if float(e @ e) < 1e-24 or lam > REPAIR_STALL:
             break
-        J = np.empty((6, 12))
+        J = np.empty((6, 12))  # d hand / dz = -d e / dz, forward differences
         for j in range(12):
             step = np.zeros(12)
             step[j] = FD_STEP
-            plus = hand_error(problem, (z + step)[:6], (z + step)[6:])
-            minus = hand_error(problem, (z - step)[:6], (z - step)[6:])
-            J[:, j] = -(plus - minus) / (2.0 * FD_STEP)
+            J[:, j] = -(hand_error(problem, (z + step)[:6], (z + step)[6:]) - e) / FD_STEP
         toward = np.concatenate([NULL_GAIN * (problem.nominal - z[:6]), np.zeros(6)])
         free = np.ones(12, bool)  # a variable on its bound that the step pushes out is held there
         for _ in range(ACTIVE_SET_PASSES):
@@ -533,10 +572,14 @@ def reach(problem: Problem) -> dict:
     ``branches`` (8, 6) and ``valid`` (8,): every arm solution at the chosen pose."""
     if not rigid(problem.target) or not np.isfinite(problem.feet).all():
         return nan_result(problem.robot)
-    options, misses = [], []
-    for order, p in enumerate(candidates(problem)):
-        options += evaluate(problem, p, order, misses)
-    option, status = _choose(problem, options)
+    options, misses, order = [], [], 0
+    for stage in candidates(problem):
+        for p in stage:
+            options += evaluate(problem, p, order, misses)
+            order += 1
+        option, status = _choose(problem, options)
+        if status == OK:
+            break
     if option is None:
         ends = repair(problem, misses)
         repaired = []
@@ -557,3 +600,30 @@ def reach(problem: Problem) -> dict:
     if status == OK:
         option = refine(problem, option)
     return _result(problem, option, status)
+
+
+def feasible_samples(problem: Problem, n: int, seed: int = 0):
+    """n hand targets (n, 4, 4) from random feasible configurations of ``problem``'s robot (its target
+    unused): a body pose uniform in the box, the legs on the problem's feet (each leg's IK OK), the
+    arm's joints uniform within their limits, no collision, and the centre of mass at least the margin
+    inside the feet. Also the generating body offsets from the nominal pose (n, 6) and joints (n, m).
+    What the success rate of a reach is measured on."""
+    robot = problem.robot
+    rng = np.random.default_rng(seed)
+    n3 = 3 * robot.n_legs
+    lo, hi = problem.q_lower[n3:], problem.q_upper[n3:]
+    targets, offsets, qs = [], [], []
+    while len(targets) < n:
+        p = problem.lower + rng.random(6) * (problem.upper - problem.lower)
+        T = body_T(problem, p)
+        q_legs, ok = _legs(problem, T)
+        q = np.concatenate([q_legs, lo + rng.random(len(lo)) * (hi - lo)])
+        if not ok or collides(problem, q):
+            continue
+        com = np.asarray(robot.center_of_mass(T, q), float)
+        if support_margin(problem.feet[:, :2], com[:2]) < problem.margin:
+            continue
+        targets.append(T @ problem.mount @ np.asarray(problem.arm.fk(q[n3:]), float))
+        offsets.append(p - problem.nominal)
+        qs.append(q)
+    return np.array(targets), np.array(offsets), np.array(qs)

@@ -118,9 +118,9 @@ double py_mod(double x, double m) noexcept;
 bool solve3(const double* A, const double* b, double* x) noexcept;
 // The Euler sequence "XYZ" of the plans' body poses.
 const EulerSequence& xyz_sequence() noexcept;
-// (M): the signed distance of c to the convex hull of the points (k <= 4), positive inside;
-// outside, minus the distance to the hull; fewer than three points off one line: minus the distance
-// to their segment or point; -inf with none.
+// (M): the signed distance of c to the convex hull of the points (k <= Body::kMaxLegs), positive
+// inside; outside, minus the distance to the hull; fewer than three points off one line: minus the
+// distance to their segment or point; -inf with none.
 double support_margin(const double (*points)[2], int k, const double c[2]) noexcept;
 void sample(const PlannerState& s, TickKinematics& out) noexcept;
 

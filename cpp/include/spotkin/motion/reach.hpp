@@ -1,0 +1,111 @@
+// Whole-body reach: the body pose, legs and arm that put a legged robot's hand on a target with the
+// feet fixed. The search of python/spotkin/reference/reach.py, step for step (its letters (S) ...
+// (F) are cited in reach.cpp): candidates in the body-pose box, the legs' and the arm's closed
+// forms at each (the batched kernels over a target's candidates), the feasible option of least
+// cost, a few Gauss-Newton steps on the body pose, and a damped least-squares repair when no
+// candidate reaches. One target per call; the binding runs targets on the threads.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "spotkin/arm.hpp"
+#include "spotkin/body.hpp"
+#include "spotkin/chain.hpp"
+#include "spotkin/chain_ik/arm6.hpp"
+#include "spotkin/dynamics/robot_statics.hpp"
+
+namespace spotkin::motion {
+
+constexpr int kReachCandidates =
+    64;  // CANDIDATES: Halton points after the seed's pose and the nominal
+constexpr int kReachStageTwo = 8;             // STAGES[1]: the Halton points of (C)'s second stage
+constexpr int kReachRefineSteps = 3;          // REFINE_STEPS
+constexpr double kReachFdStep = 1e-6;         // FD_STEP
+constexpr double kReachGnDamping = 1e-6;      // GN_DAMPING
+constexpr int kReachRepairIterations = 60;    // REPAIR_ITERATIONS
+constexpr double kReachRepairDamping = 1e-2;  // REPAIR_DAMPING
+constexpr double kReachRepairStall = 1e4;     // REPAIR_STALL
+constexpr int kReachRepairStarts = 6;         // REPAIR_STARTS
+constexpr int kReachActiveSetPasses = 3;      // ACTIVE_SET_PASSES
+constexpr double kReachRepairInset = 1e-6;    // REPAIR_INSET
+constexpr double kReachNullGain = 0.2;        // NULL_GAIN
+constexpr int kReachMaxQ = 3 * Body::kMaxLegs + 6;
+constexpr int kReachMaxSegments = 8;
+
+// The statuses (ReachStatus).
+enum ReachCode : std::int8_t {
+  kReachOk = 0,
+  kReachUnreachable = 1,
+  kReachUnstable = 2,
+  kReachInvalid = 3
+};
+
+// The arm: its closed form (exactly one of spot and six), and its chain from the body (body <-
+// hand: the FK of the repair and the capsules' frames).
+struct ReachArm {
+  const Arm* spot = nullptr;
+  const chain_ik::Arm6* six = nullptr;
+  const chain_ik::Limits* six_limits = nullptr;
+  const Chain<double>* chain = nullptr;
+  double mount[16];  // body <- arm base, row-major
+};
+
+// The capsule model (spotkin/motion/capsules.py): segment k of the arm runs from frame points[k] to
+// frame points[k + 1] of the chain's frames; checked against the body box where vs_body[k], against
+// leg l's upper (0) and lower (1) capsule where vs_legs[k][l][part].
+struct ReachCapsules {
+  bool enabled = false;
+  double radius = 0.0;
+  double box_centre[3] = {}, box_half[3] = {};
+  int n_points = 0;
+  int points[kReachMaxSegments + 1] = {};
+  bool vs_body[kReachMaxSegments] = {};
+  bool vs_legs[kReachMaxSegments][Body::kMaxLegs][2] = {};
+};
+
+// The numbers shared by every target of a call: the box (absolute, in the stance frame), the
+// nominal pose, the scale L, the whole-body limits (m = 3 legs + 6), the residual's widths.
+struct ReachShared {
+  double nominal[6], lower[6], upper[6], w_p[6];
+  double scale;
+  int m;
+  double q_lower[kReachMaxQ], q_upper[kReachMaxQ], w_q[kReachMaxQ];
+  double halton[kReachCandidates][6];  // the unit points of (C)
+};
+
+// One target's inputs (row-major): world <- hand target (16), feet (legs, 3), world <- S (16), the
+// residual's references p_ref (6) and q_ref (m), the seed's pose in S (6, or null) and the margin.
+struct ReachInput {
+  const double* target;
+  const double* feet;
+  const double* stance;
+  const double* p_ref;
+  const double* q_ref;
+  const double* seed_pose;
+  double margin;
+};
+
+// One target's outputs: body pose (6, world, Euler "XYZ"), q (m), status, margin, distance, angle,
+// the arm's branches at the chosen pose (8 x 6) and their validity (8), the chosen branch (-1:
+// none).
+struct ReachOutput {
+  double* body_pose;
+  double* q;
+  std::int8_t* status;
+  double* margin;
+  double* distance;
+  double* angle;
+  double* branches;
+  std::uint8_t* valid;
+  std::int64_t* slot;
+};
+
+// The answer for one target (NaN and INVALID_INPUT for a target that is not a finite rigid
+// transform, or non-finite feet, margin or references).
+template <typename Model>
+void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+                  const ReachCapsules& capsules, const ReachShared& shared, const ReachInput& in,
+                  const ReachOutput& out);
+
+}  // namespace spotkin::motion
