@@ -325,3 +325,90 @@ def test_capsule_model_flags_an_arm_through_the_body():
     assert not ref.collides(problem, forward)
     through = np.concatenate([stance, [math.pi, 0.5, 0.3, 0.0, 0.0, 0.0]])  # down behind, into the body
     assert ref.collides(problem, through)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_reach_path_holds_every_constraint_at_every_sample(name):
+    robot = robot_named(name)
+    T, _, _ = targets_of(name, 12, seed=14)
+    feet = reach_module._scales(robot)[2]
+    problem = reach_module.reference_problem(robot, np.eye(4))
+    limits = robot.limits
+    margin = reach_module.MARGIN_FRACTION * reach_module._scales(robot)[1]
+    done = 0
+    for k in range(len(T) - 1):
+        start = robot.reach(T[k])
+        path = robot.reach_path(start, T[k + 1], n=30)
+        assert path.body_pose.shape == (30, 6) and path.q.shape == (30, 18) and path.t.shape == (30,)
+        np.testing.assert_array_equal(path.body_pose[0], start.body_pose)
+        np.testing.assert_allclose(path.q[0], start.q, atol=1e-12)
+        if path.status != sk.ReachStatus.OK:
+            assert not path.ok.all()
+            continue
+        done += 1
+        assert path.ok.all() and path.order in (
+            "together",
+            "body_first",
+            "arm_first",
+            "via_zero",
+            "via_middle",
+        )
+        np.testing.assert_array_equal(path.body_pose[-1], path.answer.body_pose)
+        np.testing.assert_array_equal(path.q[-1], path.answer.q)
+        hand = robot.fk_all(path.body_pose[-1], path.q[-1]).hand
+        assert np.abs(hand - T[k + 1]).max() < 1e-10
+        assert np.abs(robot.body_fk(path.body_pose, path.q) - feet).max() < 1e-10  # the feet never move
+        assert ((path.q >= limits[:, 0] - 1e-12) & (path.q <= limits[:, 1] + 1e-12)).all()
+        standing = robot.standing_torques(path.body_pose, path.q)
+        assert (np.asarray(standing.margin) >= margin - 1e-9).all()
+        np.testing.assert_allclose(standing.margin, path.margin, atol=1e-9)
+        assert not any(ref.collides(problem, row) for row in path.q)
+        steps = np.abs(np.diff(path.q, axis=0)).max(axis=1)
+        assert steps[0] < 0.05 * steps.max() + 1e-12 and steps[-1] < 0.05 * steps.max() + 1e-12  # at rest
+    assert done >= len(T) - 3
+
+
+def test_reach_path_stays_at_the_start_when_the_target_is_out_of_reach():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 1, seed=15)
+    start = robot.reach(T[0])
+    far = T[0].copy()
+    far[:3, 3] += [3.0, 0.0, 0.0]
+    path = robot.reach_path(start, far, n=5)
+    assert path.status == sk.ReachStatus.UNREACHABLE and path.order == "start"
+    np.testing.assert_array_equal(path.q, np.broadcast_to(start.q, (5, 18)))
+    assert path.ok.all()  # the start itself holds
+
+
+def test_reach_path_bad_arguments():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 1, seed=15)
+    start = robot.reach(T[0])
+    with pytest.raises(ValueError, match="n must be at least 2"):
+        robot.reach_path(start, T[0], n=1)
+    with pytest.raises(ValueError, match="start q"):
+        robot.reach_path((start.body_pose, start.q[:12]), T[0])
+    with pytest.raises(TypeError, match="start"):
+        robot.reach_path("here", T[0])
+    with pytest.raises(ValueError, match="target"):
+        robot.reach_path(start, np.eye(3))
+    with pytest.raises(ValueError, match="start must be finite"):
+        robot.reach_path((start.body_pose * np.nan, start.q), T[0])
+    with pytest.raises(ValueError, match="reach_path needs an arm"):
+        robot_named("go2").reach_path((np.zeros(6), np.zeros(12)), T[0])
+
+
+def test_reach_is_bit_identical_for_any_thread_count():
+    robot = robot_named("go2_z1")
+    T, _, _ = targets_of("go2_z1", 300, seed=16)
+    threads = sk.get_num_threads()
+    try:
+        sk.set_num_threads(1)
+        one = robot.reach(T)
+        sk.set_num_threads(2)
+        two = robot.reach(T)
+    finally:
+        sk.set_num_threads(threads)
+    np.testing.assert_array_equal(one.q, two.q)
+    np.testing.assert_array_equal(one.body_pose, two.body_pose)
+    np.testing.assert_array_equal(one.status, two.status)

@@ -155,6 +155,34 @@ py::tuple solve(const ReachModel& model, py::handle target_obj, py::handle feet_
   return py::make_tuple(pose, q, status, margins, distance, angle, branches, valid, slot);
 }
 
+// (margin (N,), collides (N,)) of whole-body samples: body transforms (N, 4, 4), q (N, m), feet (N,
+// legs, 3).
+py::tuple constraints(const ReachModel& model, py::handle T_obj, py::handle q_obj,
+                      py::handle feet_obj) {
+  const int legs = model.robot.body.n_legs();
+  const int m = model.shared.m;
+  const auto T = exact(T_obj, "T_body", {-1, 4, 4});
+  const py::ssize_t N = T.shape(0);
+  const auto q = exact(q_obj, "q", {N, m});
+  const auto feet = exact(feet_obj, "feet", {N, legs, 3});
+  auto margin = new_array<double>({N}, {});
+  auto collides = new_array<bool>({N}, {});
+  double* out_margin = margin.mutable_data();
+  bool* out_collides = collides.mutable_data();
+  {
+    py::gil_scoped_release release;
+    on_robot(model.robot, 1, [&](const auto& robot) {
+      parallel_for(N, 16, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
+        for (std::ptrdiff_t i = begin; i < end; ++i)
+          motion::reach_constraints(robot, model.arm, model.capsules, model.shared,
+                                    T.data() + 16 * i, q.data() + m * i, feet.data() + 3 * legs * i,
+                                    out_margin + i, out_collides + i);
+      });
+    });
+  }
+  return py::make_tuple(margin, collides);
+}
+
 }  // namespace
 
 void bind_reach(py::module_& m) {
@@ -167,7 +195,10 @@ void bind_reach(py::module_& m) {
       .def("solve", &solve, py::arg("targets"), py::arg("feet"), py::arg("stance"),
            py::arg("p_ref"), py::arg("q_ref"), py::arg("seed_pose"), py::arg("margin"),
            "Reach answers for targets (N, 4, 4): (body_pose, q, status, margin, distance, angle, "
-           "branches, valid, slot), each (N, ...).");
+           "branches, valid, slot), each (N, ...).")
+      .def("constraints", &constraints, py::arg("T_body"), py::arg("q"), py::arg("feet"),
+           "(margin, collides) of whole-body samples: body transforms (N, 4, 4), q (N, m), feet "
+           "(N, legs, 3).");
 }
 
 }  // namespace spotkin::bindings

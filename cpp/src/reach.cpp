@@ -868,10 +868,27 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
   arm_ik_all(arm, target, out.branches, out.valid, exists, exact_flags, &arm_status, 1);
 }
 
+template <typename Model>
+void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+                       const ReachCapsules& capsules, const ReachShared& shared,
+                       const double* T_body, const double* q, const double* feet, double* margin,
+                       bool* hits) {
+  const double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  const double zeros[kReachMaxQ] = {};
+  const ReachInput in{identity, feet, identity, zeros, zeros, nullptr, 0.0};
+  const Search<Model> s{robot, arm, capsules, shared, in, robot.body.n_legs(), shared.m};
+  *margin = margin_of(s, T_body, q);
+  *hits = collides(s, q);
+}
+
 #define SPOTKIN_INSTANTIATE(L)                                                                 \
   template void reach_target<dynamics::FloatingModel<double, L>>(                              \
       const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const ReachArm&, \
-      const ReachCapsules&, const ReachShared&, const ReachInput&, const ReachOutput&);
+      const ReachCapsules&, const ReachShared&, const ReachInput&, const ReachOutput&);        \
+  template void reach_constraints<dynamics::FloatingModel<double, L>>(                         \
+      const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const ReachArm&, \
+      const ReachCapsules&, const ReachShared&, const double*, const double*, const double*,   \
+      double*, bool*);
 SPOTKIN_INSTANTIATE(dynamics::kLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)

@@ -38,7 +38,7 @@ from .model.robot import Robot
 from .model.robot_body import BodyFrames, BodyIK, BodyRates
 from .model.robot_statics import StanceStatus, Standing
 from .model.spot import Spot
-from .motion import Gait, GaitController, GaitPlan, ReachBox, ReachResult, ReachStatus
+from .motion import Gait, GaitController, GaitPlan, ReachBox, ReachPath, ReachResult, ReachStatus
 
 # What the models' pickles call to rebuild them, at this path (publish below) whichever file defines
 # them: a pickle names "spotkin" only.
@@ -81,6 +81,7 @@ __all__ = [
     "LegSolutions",
     "LinkInertials",
     "ReachBox",
+    "ReachPath",
     "ReachResult",
     "ReachStatus",
     "Robot",

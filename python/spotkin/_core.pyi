@@ -253,6 +253,10 @@ class GaitControllerCore:
 class ReachModel:
     def __init__(self, statics: RobotStatics, arm: typing.Any, chain: Chain, mount: typing.Any, capsules: typing.Any, nominal: typing.Any, lower: typing.Any, upper: typing.Any, scale: typing.SupportsFloat | typing.SupportsIndex, q_lower: typing.Any, q_upper: typing.Any, halton: typing.Any) -> None:
         ...
+    def constraints(self, T_body: typing.Any, q: typing.Any, feet: typing.Any) -> tuple:
+        """
+        (margin, collides) of whole-body samples: body transforms (N, 4, 4), q (N, m), feet (N, legs, 3).
+        """
     def solve(self, targets: typing.Any, feet: typing.Any, stance: typing.Any, p_ref: typing.Any, q_ref: typing.Any, seed_pose: typing.Any, margin: typing.Any) -> tuple:
         """
         Reach answers for targets (N, 4, 4): (body_pose, q, status, margin, distance, angle, branches, valid, slot), each (N, ...).

@@ -1,6 +1,7 @@
-"""Entries for whole-body reach: ``Robot.reach`` (Go2 carrying a Z1-like arm, from its URDF) and
-``Spot.reach``. Each argument's variants, valid or not; the probe checks the result's shapes, its
-statuses, and the hand's round trip through FK wherever the status is OK."""
+"""Entries for whole-body reach: ``Robot.reach`` and ``Robot.reach_path`` (Go2 carrying a Z1-like arm,
+from its URDF), ``Spot.reach`` and ``Spot.reach_path``. Each argument's variants, valid or not; the
+probes check the results' shapes, their statuses, the hand's round trip through FK wherever a reach is
+OK, and that an OK path holds at every sample."""
 
 from __future__ import annotations
 
@@ -74,7 +75,9 @@ def _target_slot(key):
     )
 
 
-def _feet_slot(key):
+def _feet_slot(key, nan=ACCEPT):
+    """The feet; NaN feet: INVALID_INPUT for a reach (``nan`` ACCEPT), a ValueError for a path."""
+
     def feet(c, shift=(0.0, 0.0, 0.0)):
         return _nominal(c, key)[1] + shift
 
@@ -83,7 +86,9 @@ def _feet_slot(key):
         {
             "valid": lambda c, r, b: Arg(feet(c)),
             "shifted": lambda c, r, b: Arg(feet(c, (0.3, -0.2, 0.05))),
-            "nan": lambda c, r, b: Arg(np.where(np.eye(4, 3, dtype=bool), math.nan, feet(c))),
+            "nan": lambda c, r, b: Arg(
+                np.where(np.eye(4, 3, dtype=bool), math.nan, feet(c)), nan, "" if nan == ACCEPT else "value"
+            ),
             "wrong_shape": lambda c, r, b: Arg(feet(c)[:3], REJECT, "value"),
             "str": _arg("stance", REJECT, "type"),
         },
@@ -118,6 +123,18 @@ _MARGIN = Custom(
         "negative": _arg(-0.05),
         "huge": _arg(10.0),
         "nan": _arg(math.nan),
+        "str": _arg("wide", REJECT, "type"),
+    },
+    default="omit",
+)
+
+_PATH_MARGIN = Custom(
+    "margin",
+    {
+        "valid": _arg(0.02),
+        "negative": _arg(-0.05),
+        "huge": _arg(10.0),
+        "nan": _arg(math.nan, REJECT, "value"),
         "str": _arg("wide", REJECT, "type"),
     },
     default="omit",
@@ -176,4 +193,92 @@ def reach_entries():
             call=lambda c, key=key, **k: c.robot(key).reach(**k),
             slots=[_target_slot(key), _feet_slot(key), _seed_slot(key), _MARGIN, _BOX],
             probe=_probe_for(key),
+        )
+
+
+def _start_slot(key):
+    def pair(c):
+        pose, feet, _ = _nominal(c, key)
+        q = np.concatenate([np.asarray(c.robot(key).body_ik(pose, feet).q), ARM_Q[key]])
+        return pose, q
+
+    return Custom(
+        "start",
+        {
+            "valid": lambda c, r, b: Arg(pair(c)),
+            "result": lambda c, r, b: Arg(c.robot(key).reach(_nominal(c, key)[2])),
+            "nan": lambda c, r, b: Arg((pair(c)[0] * math.nan, pair(c)[1]), REJECT, "value"),
+            "legs_only": lambda c, r, b: Arg((pair(c)[0], pair(c)[1][:12]), REJECT, "value"),
+            "batch": lambda c, r, b: Arg(
+                (np.stack([pair(c)[0]] * 2), np.stack([pair(c)[1]] * 2)), REJECT, "value"
+            ),
+            "str": _arg("here", REJECT, "type"),
+        },
+    )
+
+
+def _path_target_slot(key):
+    def moved(c, shift):
+        T = _nominal(c, key)[2].copy()
+        T[:3, 3] += shift
+        return T
+
+    return Custom(
+        "target",
+        {
+            "valid": lambda c, r, b: Arg(moved(c, (0.05, -0.03, 0.04))),
+            "far": lambda c, r, b: Arg(moved(c, (3.0, 0.0, 0.0))),
+            "nan": lambda c, r, b: Arg(moved(c, (math.nan, 0.0, 0.0))),
+            "batch": lambda c, r, b: Arg(np.stack([moved(c, (0.0, 0.0, 0.0))] * 2), REJECT, "value"),
+            "str": _arg("there", REJECT, "type"),
+        },
+    )
+
+
+_SAMPLES = Custom(
+    "n",
+    {
+        "valid": _arg(6),
+        "two": _arg(2),
+        "one": _arg(1, REJECT, "value"),
+        "float": _arg(6.0, REJECT, "type"),
+        "str": _arg("six", REJECT, "type"),
+    },
+    default="omit",
+)
+
+
+def _path_probe_for(key):
+    def probe(path, kw, c):
+        if not isinstance(path, sk.ReachPath):
+            return f"not a ReachPath: {describe(path)}"
+        n = kw.get("n", 50)
+        robot = c.robot(key)
+        m = 3 * robot.n_legs + 6
+        if path.q.shape != (n, m) or path.body_pose.shape != (n, 6) or path.ok.shape != (n,):
+            return f"q {path.q.shape}, body_pose {path.body_pose.shape}, ok {path.ok.shape}"
+        if not (np.isfinite(path.q[path.ok]).all() and np.isfinite(path.body_pose).all()):
+            return "a path with non-finite poses, or non-finite joints at a sample that holds"
+        if path.status == sk.ReachStatus.OK and not path.ok.all():
+            return "an OK path with a sample that does not hold"
+        return None
+
+    return probe
+
+
+def reach_path_entries():
+    for key, covers in (("go2_z1", "spotkin.Robot.reach_path"), ("spot", "spotkin.Spot.reach_path")):
+        register(
+            name=f"{covers.split('.', 1)[1]}[{key}]",
+            covers=covers,
+            call=lambda c, key=key, **k: c.robot(key).reach_path(**k),
+            slots=[
+                _start_slot(key),
+                _path_target_slot(key),
+                _SAMPLES,
+                _feet_slot(key, nan=REJECT),
+                _PATH_MARGIN,
+                _BOX,
+            ],
+            probe=_path_probe_for(key),
         )

@@ -528,6 +528,17 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         """
         return _MOTION["reach"](self, T_hand_world, feet, seed, margin, box)
 
+    def reach_path(self, start, target, n: int = 50, feet=None, margin=None, box=None):
+        """A motion from ``start`` (a :class:`spotkin.ReachResult` of one target, or a (body_pose (6,), q)
+        pair) to the reach answer for ``target`` (4, 4) (:meth:`reach`, seeded with the start), in ``n``
+        samples, the feet fixed at ``feet`` (default the nominal stance), every constraint of
+        :meth:`reach` held at every sample: the body pose and the arm's joints along straight lines
+        timed by a quintic, the legs from the leg IK; together, else the body first, else the arm first.
+        Returns a :class:`spotkin.ReachPath` (``t``, ``body_pose``, ``q``, ``margin``, ``ok`` per sample,
+        ``status``, ``order``, ``answer``). The method is in the guide's *Reach* page.
+        """
+        return _MOTION["reach_path"](self, start, target, n, feet, margin, box)
+
     def __reduce__(self):
         return (_rebuild_robot, self._source)
 

@@ -11,6 +11,7 @@ from .controller import GaitController
 from .gait import Gait, ResolvedGait, hip_height
 from .plan import GaitPlan
 from .reach import ReachBox, ReachResult, ReachStatus
+from .reach_path import ReachPath
 from .state import JointCommand, RobotState
 
 __all__ = [
@@ -19,6 +20,7 @@ __all__ = [
     "GaitPlan",
     "JointCommand",
     "ReachBox",
+    "ReachPath",
     "ReachResult",
     "ReachStatus",
     "ResolvedGait",

@@ -108,4 +108,12 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
                   const ReachCapsules& capsules, const ReachShared& shared, const ReachInput& in,
                   const ReachOutput& out);
 
+// The constraints of (A) at one whole-body sample: world <- body T_body (16), q (m) and the feet
+// (legs, 3): its support margin (M), and whether an arm capsule collides.
+template <typename Model>
+void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+                       const ReachCapsules& capsules, const ReachShared& shared,
+                       const double* T_body, const double* q, const double* feet, double* margin,
+                       bool* collides);
+
 }  // namespace spotkin::motion
