@@ -107,7 +107,7 @@ ReachModel make_reach_model(const RobotStatics& robot, py::handle arm_obj, const
 
 py::tuple solve(const ReachModel& model, py::handle target_obj, py::handle feet_obj,
                 py::handle stance_obj, py::handle p_ref_obj, py::handle q_ref_obj,
-                py::handle seed_obj, py::handle margin_obj) {
+                py::handle seed_obj, py::handle margin_obj, bool refine, bool repair) {
   const int legs = model.robot.body.n_legs();
   const int m = model.shared.m;
   const auto target = exact(target_obj, "targets", {-1, 4, 4});
@@ -139,11 +139,15 @@ py::tuple solve(const ReachModel& model, py::handle target_obj, py::handle feet_
     on_robot(model.robot, 1, [&](const auto& robot) {
       parallel_for(N, 1, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
         for (std::ptrdiff_t i = begin; i < end; ++i) {
-          const motion::ReachInput in{
-              target.data() + 16 * i, feet.data() + 3 * legs * i,
-              stance.data() + 16 * i, p_ref.data() + 6 * i,
-              q_ref.data() + m * i,   seed_data ? seed_data + 6 * i : nullptr,
-              margin.data()[i]};
+          const motion::ReachInput in{target.data() + 16 * i,
+                                      feet.data() + 3 * legs * i,
+                                      stance.data() + 16 * i,
+                                      p_ref.data() + 6 * i,
+                                      q_ref.data() + m * i,
+                                      seed_data ? seed_data + 6 * i : nullptr,
+                                      margin.data()[i],
+                                      refine,
+                                      repair};
           const motion::ReachOutput out{rows.body_pose + 6 * i, rows.q + m * i,     rows.status + i,
                                         rows.margin + i,        rows.distance + i,  rows.angle + i,
                                         rows.branches + 48 * i, rows.valid + 8 * i, rows.slot + i};
@@ -194,7 +198,11 @@ void bind_reach(py::module_& m) {
            py::keep_alive<1, 4>())
       .def("solve", &solve, py::arg("targets"), py::arg("feet"), py::arg("stance"),
            py::arg("p_ref"), py::arg("q_ref"), py::arg("seed_pose"), py::arg("margin"),
-           "Reach answers for targets (N, 4, 4): (body_pose, q, status, margin, distance, angle, "
+           py::arg("refine") = true, py::arg("repair") = true,
+           "Reach answers for targets (N, 4, 4) (refine: the Gauss-Newton steps; repair: the "
+           "damped least squares "
+           "when no candidate reaches, else NaN answers): (body_pose, q, status, margin, distance, "
+           "angle, "
            "branches, valid, slot), each (N, ...).")
       .def("constraints", &constraints, py::arg("T_body"), py::arg("q"), py::arg("feet"),
            "(margin, collides) of whole-body samples: body transforms (N, 4, 4), q (N, m), feet "

@@ -787,6 +787,14 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
   std::vector<Option> repaired;
   const Option* picked = chosen >= 0 ? &options[std::size_t(chosen)] : nullptr;
   double nearest_e[6] = {};
+  if (!picked && !in.repair) {
+    std::fill(out.body_pose, out.body_pose + 6, kNan), std::fill(out.q, out.q + m, kNan);
+    *out.status = kReachUnreachable, *out.margin = *out.distance = *out.angle = kNan;
+    std::fill(out.branches, out.branches + 48, kNan),
+        std::fill(out.valid, out.valid + 8, std::uint8_t(0));
+    *out.slot = -1;
+    return;
+  }
   if (!picked) {  // (F)
     double lo[6], hi[6];
     for (int k = 0; k < 6; ++k) {
@@ -844,7 +852,7 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
     whole_q(s, ev, picked->pose, picked->slot, a.q);
     std::copy_n(&ev.T[std::size_t(16 * picked->pose)], 16, a.T);
     a.slot = picked->slot, a.cost = picked->cost, a.margin = picked->margin;
-    if (status == kReachOk) refine(s, a);
+    if (status == kReachOk && in.refine) refine(s, a);
   }
   // the answer
   pose_of(a.T, out.body_pose);

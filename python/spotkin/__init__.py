@@ -38,7 +38,16 @@ from .model.robot import Robot
 from .model.robot_body import BodyFrames, BodyIK, BodyRates
 from .model.robot_statics import StanceStatus, Standing
 from .model.spot import Spot
-from .motion import Gait, GaitController, GaitPlan, ReachBox, ReachPath, ReachResult, ReachStatus
+from .motion import (
+    Gait,
+    GaitController,
+    GaitPlan,
+    Reachability,
+    ReachBox,
+    ReachPath,
+    ReachResult,
+    ReachStatus,
+)
 
 # What the models' pickles call to rebuild them, at this path (publish below) whichever file defines
 # them: a pickle names "spotkin" only.
@@ -84,6 +93,7 @@ __all__ = [
     "ReachPath",
     "ReachResult",
     "ReachStatus",
+    "Reachability",
     "Robot",
     "Spot",
     "SpotArm",

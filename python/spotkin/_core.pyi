@@ -257,9 +257,9 @@ class ReachModel:
         """
         (margin, collides) of whole-body samples: body transforms (N, 4, 4), q (N, m), feet (N, legs, 3).
         """
-    def solve(self, targets: typing.Any, feet: typing.Any, stance: typing.Any, p_ref: typing.Any, q_ref: typing.Any, seed_pose: typing.Any, margin: typing.Any) -> tuple:
+    def solve(self, targets: typing.Any, feet: typing.Any, stance: typing.Any, p_ref: typing.Any, q_ref: typing.Any, seed_pose: typing.Any, margin: typing.Any, refine: bool = True, repair: bool = True) -> tuple:
         """
-        Reach answers for targets (N, 4, 4): (body_pose, q, status, margin, distance, angle, branches, valid, slot), each (N, ...).
+        Reach answers for targets (N, 4, 4) (refine: the Gauss-Newton steps; repair: the damped least squares when no candidate reaches, else NaN answers): (body_pose, q, status, margin, distance, angle, branches, valid, slot), each (N, ...).
         """
 def _core_method(function: typing.Any, target: str, method: str, names: tuple, defaults: tuple, converters: tuple, n_positional: typing.SupportsInt | typing.SupportsIndex, order: tuple, constants: tuple, required: typing.Any) -> typing.Any:
     """

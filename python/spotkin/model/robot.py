@@ -539,6 +539,42 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         """
         return _MOTION["reach_path"](self, start, target, n, feet, margin, box)
 
+    def reachability(
+        self,
+        points=None,
+        approach=None,
+        *,
+        spacing=None,
+        axis="x",
+        feet=None,
+        margin=None,
+        box=None,
+        directions=14,
+        rolls=4,
+    ):
+        """Which hand positions ``points`` (..., 3) (world; default a grid around the arm at ``spacing``,
+        15 % of the hip height unless given) the whole body reaches with the feet fixed at ``feet``, with
+        the hand's ``axis`` ("x", "y" or "z") along ``approach`` (..., 3) when given, else along any of
+        ``directions`` directions, each turned about it by ``rolls`` angles. Every answer found holds
+        every constraint of :meth:`reach`; a point not found may be reached by an orientation between
+        those tried (an inner estimate). Returns a :class:`spotkin.Reachability`: ``reachable``, the
+        hand pose, body pose and joints found, and the ``volume`` (m^3) when the points are a grid of
+        known ``spacing``. Drawn by :func:`spotkin.plot.reachability`. The method is in the guide's
+        *Reach* page.
+        """
+        return _MOTION["reachability"](
+            self,
+            points,
+            approach,
+            spacing=spacing,
+            axis=axis,
+            feet=feet,
+            margin=margin,
+            box=box,
+            directions=directions,
+            rolls=rolls,
+        )
+
     def __reduce__(self):
         return (_rebuild_robot, self._source)
 

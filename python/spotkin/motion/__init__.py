@@ -12,6 +12,7 @@ from .gait import Gait, ResolvedGait, hip_height
 from .plan import GaitPlan
 from .reach import ReachBox, ReachResult, ReachStatus
 from .reach_path import ReachPath
+from .reachability import Reachability
 from .state import JointCommand, RobotState
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "ReachPath",
     "ReachResult",
     "ReachStatus",
+    "Reachability",
     "ResolvedGait",
     "RobotState",
     "hip_height",

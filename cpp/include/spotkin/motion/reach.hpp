@@ -84,6 +84,8 @@ struct ReachInput {
   const double* q_ref;
   const double* seed_pose;
   double margin;
+  bool refine = true;  // (R); false: the chosen option as it is
+  bool repair = true;  // (F); false: UNREACHABLE with NaN answers when no candidate reaches
 };
 
 // One target's outputs: body pose (6, world, Euler "XYZ"), q (m), status, margin, distance, angle,
