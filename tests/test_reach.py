@@ -412,3 +412,87 @@ def test_reach_is_bit_identical_for_any_thread_count():
     np.testing.assert_array_equal(one.q, two.q)
     np.testing.assert_array_equal(one.body_pose, two.body_pose)
     np.testing.assert_array_equal(one.status, two.status)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_reachability_answers_hold_every_constraint(name):
+    robot = robot_named(name)
+    _, _, qs = targets_of(name, 40, seed=17)
+    problem = reach_module.reference_problem(robot, np.eye(4))
+    # the hands of feasible arm configurations at the nominal body pose, and two points out of any reach
+    hands = robot.fk_all(problem.nominal, qs).hand
+    points = np.concatenate([hands[:, :3, 3], [[4.0, 0.0, 0.5], [0.0, -3.0, 2.0]]])
+    result = robot.reachability(points, spacing=0.1)
+    assert result.reachable.shape == (42,) and result.q.shape == (42, 18) and result.hand.shape == (42, 4, 4)
+    assert not result.reachable[-2:].any()
+    assert result.reachable[:-2].mean() > 0.5
+    assert result.volume == pytest.approx(result.reachable.sum() * 0.1**3)
+    ok = result.reachable
+    frames = robot.fk_all(result.body_pose[ok], result.q[ok])
+    assert np.abs(frames.hand - result.hand[ok]).max() < 1e-10
+    assert np.abs(frames.hand[:, :3, 3] - points[ok]).max() < 1e-10
+    assert np.abs(robot.body_fk(result.body_pose[ok], result.q[ok]) - problem.feet).max() < 1e-10
+    limits = robot.limits
+    assert ((result.q[ok] >= limits[:, 0] - 1e-12) & (result.q[ok] <= limits[:, 1] + 1e-12)).all()
+    standing = robot.standing_torques(result.body_pose[ok], result.q[ok])
+    assert (np.asarray(standing.margin) >= problem.margin - 1e-9).all()
+    assert not any(ref.collides(problem, row) for row in result.q[ok])
+    assert np.isnan(result.q[~ok]).all()
+
+
+def test_reachability_along_an_approach_and_on_a_grid():
+    spot = robot_named("spot")
+    points = np.array([[0.9, 0.0, 0.6], [0.8, 0.3, 0.3], [0.6, -0.2, 0.9]])
+    down = spot.reachability(points, approach=[0.0, 0.0, -1.0])
+    ok = down.reachable
+    assert ok.any()
+    np.testing.assert_allclose(
+        down.hand[ok][:, :3, 0], np.broadcast_to([0.0, 0.0, -1.0], (ok.sum(), 3)), atol=1e-12
+    )
+    per_point = spot.reachability(
+        points, approach=[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], axis="x"
+    )
+    assert per_point.reachable.shape == (3,)
+    grid = spot.reachability(spacing=0.25)
+    assert grid.points.ndim == 4 and grid.reachable.shape == grid.points.shape[:-1]
+    assert grid.spacing == 0.25 and grid.volume == pytest.approx(grid.reachable.sum() * 0.25**3)
+    assert 0.5 < grid.volume < 10.0  # Spot's arm reaches about a metre
+    assert (grid.points[..., 2] >= reach_module._scales(spot)[2][:, 2].min() - 1e-12).all()
+
+
+def test_reachability_prunes_only_what_no_reach_attains():
+    """The points searched lie within the arm's length plus the box's motion of its nominal base: every
+    hand of a feasible configuration does."""
+    from spotkin.motion import reachability as module
+
+    for name in ROBOTS:
+        robot = robot_named(name)
+        T, _, _ = targets_of(name, 1000, seed=11)
+        numbers = reach_module._numbers(robot)
+        box = reach_module.default_box(robot)
+        base = module._arm_base(robot, numbers.feet)
+        first = np.asarray(numbers.chain.frames(np.zeros(6)))[1, :3, 3]
+        lo, hi = np.abs(box.lower), np.abs(box.upper)
+        limit = module._arm_length(numbers.chain) + np.linalg.norm(np.maximum(lo[:3], hi[:3]))
+        limit += np.maximum(lo[3:], hi[3:]).sum() * np.linalg.norm(first)
+        assert np.linalg.norm(T[:, :3, 3] - base, axis=1).max() <= limit
+
+
+def test_reachability_bad_arguments():
+    spot = robot_named("spot")
+    with pytest.raises(ValueError, match="approach"):
+        spot.reachability([[0.9, 0.0, 0.6]], approach=[0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="axis"):
+        spot.reachability([[0.9, 0.0, 0.6]], axis="w")
+    with pytest.raises(ValueError, match="spacing"):
+        spot.reachability([[0.9, 0.0, 0.6]], spacing=-0.1)
+    with pytest.raises(ValueError, match="points"):
+        spot.reachability(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="do not broadcast"):
+        spot.reachability(np.zeros((4, 3)), approach=np.ones((3, 3)))
+    with pytest.raises(TypeError, match="directions"):
+        spot.reachability([[0.9, 0.0, 0.6]], directions=2.5)
+    with pytest.raises(ValueError, match="reachability needs an arm"):
+        robot_named("go2").reachability([[0.3, 0.0, 0.3]])
+    nan = spot.reachability([[math.nan, 0.0, 0.5], [0.9, 0.0, 0.6]])
+    assert not nan.reachable[0]

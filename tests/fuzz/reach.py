@@ -282,3 +282,106 @@ def reach_path_entries():
             ],
             probe=_path_probe_for(key),
         )
+
+
+def _points_slot(key):
+    def near(c):
+        return _nominal(c, key)[2][:3, 3]
+
+    return Custom(
+        "points",
+        {
+            "valid": lambda c, r, b: Arg(near(c)[None]),
+            "one": lambda c, r, b: Arg(near(c)),
+            "batch2x1": lambda c, r, b: Arg(np.stack([near(c), near(c) + [3.0, 0.0, 0.0]])[:, None]),
+            "far": lambda c, r, b: Arg(near(c)[None] + [[5.0, 0.0, 0.0]]),
+            "nan": lambda c, r, b: Arg(np.array([[math.nan, 0.0, 0.5]])),
+            "empty": _arg(np.zeros((0, 3))),
+            "float32": lambda c, r, b: Arg(near(c)[None].astype(np.float32)),
+            "wrong_shape": _arg(np.zeros((2, 2)), REJECT, "value"),
+            "str": _arg("grid", REJECT, "type"),
+        },
+    )
+
+
+_APPROACH = Custom(
+    "approach",
+    {
+        "valid": _arg([1.0, 0.0, 0.0]),
+        "unnormalised": _arg([0.0, 0.0, -3.0]),
+        "zero": _arg([0.0, 0.0, 0.0], REJECT, "value"),
+        "nan": _arg([math.nan, 0.0, 1.0], REJECT, "value"),
+        "wrong_shape": _arg([1.0, 0.0], REJECT, "value"),
+        "str": _arg("down", REJECT, "type"),
+    },
+    default="omit",
+)
+
+_SPACING = Custom(
+    "spacing",
+    {
+        "valid": _arg(0.1),
+        "zero": _arg(0.0, REJECT, "value"),
+        "nan": _arg(math.nan, REJECT, "value"),
+        "str": _arg("fine", REJECT, "type"),
+    },
+    default="omit",
+)
+
+_AXIS = Custom(
+    "axis",
+    {"valid": _arg("x"), "z": _arg("z"), "w": _arg("w", REJECT, "value"), "int": _arg(0, REJECT, "value")},
+    default="omit",
+)
+
+
+def _count_slot(name):
+    return Custom(
+        name,
+        {
+            "valid": _arg(3),
+            "one": _arg(1),
+            "zero": _arg(0, REJECT, "value"),
+            "float": _arg(2.5, REJECT, "type"),
+        },
+        default="omit",
+    )
+
+
+def _map_probe_for(key):
+    def probe(result, kw, c):
+        if not isinstance(result, sk.Reachability):
+            return f"not a Reachability: {describe(result)}"
+        lead = np.shape(result.reachable)
+        if result.points.shape != (*lead, 3) or result.q.shape[: len(lead)] != lead:
+            return f"points {result.points.shape}, reachable {lead}, q {result.q.shape}"
+        ok = np.asarray(result.reachable)
+        if ok.any():
+            robot = c.robot(key)
+            hand = robot.fk_all(result.body_pose[ok], result.q[ok]).hand
+            if np.abs(hand[..., :3, 3] - result.points[ok]).max() > 1e-6:
+                return "a reachable point's hand misses it"
+        return None
+
+    return probe
+
+
+def reachability_entries():
+    for key, covers in (("go2_z1", "spotkin.Robot.reachability"), ("spot", "spotkin.Spot.reachability")):
+        register(
+            name=f"{covers.split('.', 1)[1]}[{key}]",
+            covers=covers,
+            call=lambda c, key=key, **k: c.robot(key).reachability(**k),
+            slots=[
+                _points_slot(key),
+                _APPROACH,
+                _SPACING,
+                _AXIS,
+                _feet_slot(key, nan=REJECT),
+                _PATH_MARGIN,
+                _BOX,
+                _count_slot("directions"),
+                _count_slot("rolls"),
+            ],
+            probe=_map_probe_for(key),
+        )

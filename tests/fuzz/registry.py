@@ -26,7 +26,7 @@ from .gait import gait_entries
 from .joint_names import joint_name_entries
 from .legs import leg_entries
 from .paul import paul_entries
-from .reach import reach_entries, reach_path_entries
+from .reach import reach_entries, reach_path_entries, reachability_entries
 from .robots import robot_entries
 from .roundtrip import roundtrip_entries
 from .spot import spot_entries
@@ -48,6 +48,7 @@ gait_entries()
 controller_entries()
 reach_entries()
 reach_path_entries()
+reachability_entries()
 roundtrip_entries()
 joint_name_entries()
 fuzz_sdk.register_entries()  # spotkin.sdk, when its optional SDK is installed
