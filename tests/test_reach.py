@@ -19,6 +19,7 @@ import spotkin as sk
 from spotkin.motion import reach as reach_module
 from spotkin.motion.capsules import capsule_model
 from spotkin.reference import reach as ref
+from spotkin.reference import reach_geometry
 
 ROBOTS = ("spot", "go2_z1")
 
@@ -304,14 +305,16 @@ def test_capsule_distances_against_dense_sampling():
         p = a + s[:, None] * (b - a)
         outside = np.maximum(np.abs(p - centre) - half, 0.0)
         dense_box = np.sqrt((outside**2).sum(-1)).min()
-        box = ref.segment_box_distance(a, b, centre, half)
+        box = reach_geometry.segment_box_distance(a, b, centre, half)
         assert box <= dense_box + 1e-12 and dense_box - box < 5e-3
         q = c + s[:, None] * (d - c)
         dense = np.sqrt(((p[:, None, :] - q[None, :, :]) ** 2).sum(-1)).min()
-        seg = ref.segment_distance(a, b, c, d)
+        seg = reach_geometry.segment_distance(a, b, c, d)
         assert seg <= dense + 1e-12 and dense - seg < 5e-3
-    assert ref.segment_distance([0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0]) == pytest.approx(1.0)
-    assert ref.segment_box_distance([2, 0, 0], [2, 0, 0], [0, 0, 0], [1, 1, 1]) == pytest.approx(1.0)
+    assert reach_geometry.segment_distance([0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0]) == pytest.approx(1.0)
+    assert reach_geometry.segment_box_distance([2, 0, 0], [2, 0, 0], [0, 0, 0], [1, 1, 1]) == pytest.approx(
+        1.0
+    )
 
 
 def test_capsule_model_flags_an_arm_through_the_body():

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..reference.reach import leg_segments, segment_box_distance, segment_distance
+from ..reference.reach_geometry import leg_segments, segment_box_distance, segment_distance
 
 __all__ = ["LINK_FRACTION", "CapsuleModel", "body_box", "capsule_model"]
 

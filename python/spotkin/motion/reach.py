@@ -16,6 +16,7 @@ from ..model import robot as robot_module
 from ..model.arm import SpotArm
 from ..model.body import body_transform
 from ..reference import reach as ref
+from ..reference.reach_geometry import stance_frame
 from .capsules import capsule_model
 from .gait import _nominal_height
 
@@ -121,7 +122,7 @@ def reference_problem(robot, target, feet=None, seed=None, margin=None, box=None
     feet = nominal_feet if feet is None else np.asarray(feet, float)
     box = default_box(robot) if box is None else box
     margin = MARGIN_FRACTION * L if margin is None else float(margin)
-    stance = ref.stance_frame(feet, nominal_feet)
+    stance = stance_frame(feet, nominal_feet)
     nominal = np.array([0.0, 0.0, h0, 0.0, 0.0, 0.0])
     limits = robot.limits
     seed_pose = seed_q = None
@@ -203,7 +204,7 @@ def _compiled(robot, box: ReachBox):
 
 
 def stance_frames(feet: np.ndarray, nominal_feet: np.ndarray) -> np.ndarray:
-    """Row-wise :func:`spotkin.reference.reach.stance_frame`: (N, n, 3) feet -> (N, 4, 4)."""
+    """Row-wise :func:`spotkin.reference.reach_geometry.stance_frame`: (N, n, 3) feet -> (N, 4, 4)."""
     cf, c0 = feet.mean(axis=1), nominal_feet.mean(axis=0)
     u, v = nominal_feet - c0, feet - cf[:, None, :]
     cross = (u[:, 0] * v[..., 1] - u[:, 1] * v[..., 0]).sum(-1)

@@ -1,0 +1,247 @@
+// The Gauss-Newton steps (R) and the repair (F) of the reach search (cpp/src/reach_search.hpp):
+// python/spotkin/reference/reach.py's sensitivities, refine, hand_error and descend.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "reach_search.hpp"
+
+namespace spotkin::motion::search {
+
+// ref.sensitivities: dq/dp (m, 6), row-major, at the answer; false where a Jacobian is singular.
+template <typename Model>
+bool sensitivities(const Search<Model>& s, const Answer& a, double* dq) {
+  const int n3 = 3 * s.legs;
+  const double* S = s.in.stance;  // world <- S: points into S by R_S^T (x - t_S)
+  const auto to_stance = [&](const double* x, double* out) {
+    const double d[3] = {x[0] - S[3], x[1] - S[7], x[2] - S[11]};
+    for (int i = 0; i < 3; ++i) out[i] = S[i] * d[0] + S[4 + i] * d[1] + S[8 + i] * d[2];
+  };
+  double T[16];
+  body_batch::pose_transform(a.p, BodyPoseFormat::Euler, xyz_sequence(), T);
+  const double ca = std::cos(a.p[3]), sa = std::sin(a.p[3]), cb = std::cos(a.p[4]),
+               sb = std::sin(a.p[4]);
+  const double E[3][3] = {{1.0, 0.0, sb}, {0.0, ca, -sa * cb}, {0.0, sa, ca * cb}};
+  // column j of (v, w): p_j' = 1
+  const auto motion = [&](int j, double* v, double* w) {
+    for (int i = 0; i < 3; ++i) v[i] = j == i ? 1.0 : 0.0, w[i] = j >= 3 ? E[i][j - 3] : 0.0;
+  };
+  // -R^T (v + w x (x - t)) for the 6 columns: rhs (3, 6)
+  const auto held = [&](const double* x, double* rhs) {
+    const double d[3] = {x[0] - T[3], x[1] - T[7], x[2] - T[11]};
+    for (int j = 0; j < 6; ++j) {
+      double v[3], w[3];
+      motion(j, v, w);
+      const double u[3] = {v[0] + w[1] * d[2] - w[2] * d[1], v[1] + w[2] * d[0] - w[0] * d[2],
+                           v[2] + w[0] * d[1] - w[1] * d[0]};
+      for (int i = 0; i < 3; ++i)
+        rhs[6 * i + j] = -(T[i] * u[0] + T[4 + i] * u[1] + T[8 + i] * u[2]);
+    }
+  };
+  for (int l = 0; l < s.legs; ++l) {
+    const auto& col = s.robot.body.columns[std::size_t(l)];
+    const double q_leg[3] = {a.q[col[0]], a.q[col[1]], a.q[col[2]]};
+    double J[9], foot[3], rhs[18];
+    kernels::leg_jacobian(s.robot.body.legs[std::size_t(l)], q_leg, J, 1);
+    to_stance(s.in.feet + 3 * l, foot);
+    held(foot, rhs);
+    if (!lu_solve(J, 3, rhs, 6)) return false;
+    for (int i = 0; i < 3; ++i) std::copy_n(rhs + 6 * i, 6, dq + 6 * col[i]);
+  }
+  double J[36], target[3], rhs[36];
+  kernels::chain_jacobian(*s.arm.chain, a.q + n3, J, 1, 6, false);
+  {  // the target's position in S (its column 3)
+    const double p_t[3] = {s.in.target[3], s.in.target[7], s.in.target[11]};
+    to_stance(p_t, target);
+  }
+  held(target, rhs);
+  for (int j = 0; j < 6; ++j) {  // -R^T w
+    double v[3], w[3];
+    motion(j, v, w);
+    for (int i = 0; i < 3; ++i)
+      rhs[6 * (3 + i) + j] = -(T[i] * w[0] + T[4 + i] * w[1] + T[8 + i] * w[2]);
+  }
+  if (!lu_solve(J, 6, rhs, 6)) return false;
+  std::copy_n(rhs, 36, dq + 6 * n3);
+  return true;
+}
+
+// (R): Gauss-Newton steps on p.
+template <typename Model>
+void refine(const Search<Model>& s, Answer& a) {
+  const int m = s.m, rows = 6 + m;
+  Evaluation ev;
+  std::vector<double> r0(static_cast<std::size_t>(rows)), dq(static_cast<std::size_t>(6 * m));
+  for (int step = 0; step < kReachRefineSteps; ++step) {
+    residual(s, a.p, a.q, r0.data());
+    if (!sensitivities(s, a, dq.data())) return;
+    // J = [diag(1 / w_p); dq / w_q]: J^T J + mu I and -J^T r0
+    double A[36], g[6];
+    for (int i = 0; i < 6; ++i) {
+      g[i] = -r0[std::size_t(i)] / s.sh.w_p[i];
+      for (int j = 0; j < 6; ++j)
+        A[6 * i + j] = (i == j ? 1.0 / (s.sh.w_p[i] * s.sh.w_p[i]) + kReachGnDamping : 0.0);
+    }
+    for (int k = 0; k < m; ++k) {
+      const double* row = &dq[std::size_t(6 * k)];
+      const double inv = 1.0 / s.sh.w_q[k], r = r0[std::size_t(6 + k)];
+      for (int i = 0; i < 6; ++i) {
+        g[i] -= row[i] * inv * r;
+        for (int j = 0; j < 6; ++j) A[6 * i + j] += row[i] * row[j] * inv * inv;
+      }
+    }
+    if (!cholesky_solve(A, 6, g)) return;
+    bool taken = false;
+    for (const double alpha : {1.0, 0.5, 0.25}) {
+      double p_new[6], q_new[kReachMaxQ];
+      for (int k = 0; k < 6; ++k)
+        p_new[k] = std::min(std::max(a.p[k] + alpha * g[k], s.sh.lower[k]), s.sh.upper[k]);
+      bool ok_new;
+      follow(s, a, p_new, 1, ev, q_new, &ok_new);
+      if (!ok_new) continue;
+      const double cost = cost_of(s, p_new, q_new);
+      if (!(cost < a.cost)) continue;
+      const double margin = margin_of(s, ev.T.data(), q_new);
+      if (!(margin >= s.in.margin) || collides(s, q_new)) continue;
+      std::copy_n(p_new, 6, a.p), std::copy_n(q_new, m, a.q), std::copy_n(ev.T.data(), 16, a.T);
+      a.slot = ev.arm_status[0], a.cost = cost, a.margin = margin;
+      taken = true;
+      break;
+    }
+    if (!taken) return;
+  }
+}
+
+// (F)'s hand error at each z (n, 12): e (n, 6).
+template <typename Model>
+void hand_errors(const Search<Model>& s, const double* z, int n, double* e) {
+  std::vector<double> hands(std::size_t(16 * n)), arm_q(std::size_t(6 * n));
+  for (int k = 0; k < n; ++k) std::copy_n(z + 12 * k + 6, 6, &arm_q[std::size_t(6 * k)]);
+  kernels::chain_fk(*s.arm.chain, arm_q.data(), hands.data(), n);
+  const double* t = s.in.target;
+  for (int k = 0; k < n; ++k) {
+    double T_body[16], T_hand[16];
+    body_T(s, z + 12 * k, T_body);
+    mul4(T_body, &hands[std::size_t(16 * k)], T_hand);
+    double R[9];  // R_target R_hand^T
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        R[3 * i + j] = t[4 * i] * T_hand[4 * j] + t[4 * i + 1] * T_hand[4 * j + 1] +
+                       t[4 * i + 2] * T_hand[4 * j + 2];
+    double* out = e + 6 * k;
+    for (int i = 0; i < 3; ++i) out[i] = t[4 * i + 3] - T_hand[4 * i + 3];
+    rotation_log(R, out + 3);
+    for (int i = 3; i < 6; ++i) out[i] *= s.sh.scale;
+  }
+}
+
+template <typename Model>
+bool legs_ok_at(const Search<Model>& s, const double* p) {
+  double T[16], q[kReachMaxQ];
+  std::int8_t status[Body::kMaxLegs];
+  body_T(s, p, T);
+  kernels::body_ik(s.robot.body, T, BodyPoseFormat::Matrix, xyz_sequence(), s.in.feet, true,
+                   static_cast<const double*>(nullptr), q, status, 1, false);
+  for (int l = 0; l < s.legs; ++l)
+    if (status[l] != 0) return false;
+  return true;
+}
+
+// (F)'s damped least squares from z (12): z and e (6) in place.
+template <typename Model>
+void descend(const Search<Model>& s, double* z, double* e) {
+  const int n3 = 3 * s.legs;
+  double lower[12], upper[12];
+  for (int k = 0; k < 6; ++k) {
+    lower[k] = s.sh.lower[k], upper[k] = s.sh.upper[k];
+    lower[6 + k] = s.sh.q_lower[n3 + k] + kReachRepairInset,
+              upper[6 + k] = s.sh.q_upper[n3 + k] - kReachRepairInset;
+  }
+  for (int k = 0; k < 12; ++k) z[k] = std::min(std::max(z[k], lower[k]), upper[k]);
+  hand_errors(s, z, 1, e);
+  double lam = kReachRepairDamping;
+  double zs[12 * 12], es[12 * 6];
+  const auto norm2 = [](const double* v) {
+    double sum = 0.0;
+    for (int k = 0; k < 6; ++k) sum += v[k] * v[k];
+    return sum;
+  };
+  for (int it = 0; it < kReachRepairIterations; ++it) {
+    if (norm2(e) < 1e-24 || lam > kReachRepairStall) break;
+    for (int j = 0; j < 12; ++j) {
+      std::copy_n(z, 12, zs + 12 * j);
+      zs[12 * j + j] += kReachFdStep;
+    }
+    hand_errors(s, zs, 12, es);
+    double J[6][12];  // d hand / dz = -d e / dz, forward differences
+    for (int j = 0; j < 12; ++j)
+      for (int i = 0; i < 6; ++i) J[i][j] = -(es[6 * j + i] - e[i]) / kReachFdStep;
+    double toward[12] = {};
+    for (int k = 0; k < 6; ++k) toward[k] = kReachNullGain * (s.sh.nominal[k] - z[k]);
+    bool free_[12];
+    std::fill(free_, free_ + 12, true);
+    double delta[12] = {};
+    for (int pass = 0; pass < kReachActiveSetPasses; ++pass) {
+      double Jf[6][12];
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 12; ++j) Jf[i][j] = free_[j] ? J[i][j] : 0.0;
+      double A[36], X[36];  // X = (Jf Jf^T + lam^2 I)^-1
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j) {
+          double sum = 0.0;
+          for (int k = 0; k < 12; ++k) sum += Jf[i][k] * Jf[j][k];
+          A[6 * i + j] = sum + (i == j ? lam * lam : 0.0);
+          X[6 * i + j] = i == j ? 1.0 : 0.0;
+        }
+      cholesky_solve(A, 6, X, 6);
+      double P[12][6];  // pinv = Jf^T X
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 6; ++j) {
+          double sum = 0.0;
+          for (int k = 0; k < 6; ++k) sum += Jf[k][i] * X[6 * k + j];
+          P[i][j] = sum;
+        }
+      double secondary[12];
+      for (int k = 0; k < 12; ++k) secondary[k] = free_[k] ? toward[k] : 0.0;
+      double Jy[6];  // Jf secondary
+      for (int i = 0; i < 6; ++i) {
+        Jy[i] = 0.0;
+        for (int k = 0; k < 12; ++k) Jy[i] += Jf[i][k] * secondary[k];
+      }
+      bool held_any = false;
+      bool held[12];
+      for (int i = 0; i < 12; ++i) {
+        double d = secondary[i];
+        for (int k = 0; k < 6; ++k) d += P[i][k] * (e[k] - Jy[k]);
+        delta[i] = d;
+      }
+      for (int i = 0; i < 12; ++i) {
+        held[i] = free_[i] &&
+                  ((z[i] <= lower[i] && delta[i] < 0.0) || (z[i] >= upper[i] && delta[i] > 0.0));
+        held_any = held_any || held[i];
+      }
+      if (!held_any) break;
+      for (int i = 0; i < 12; ++i) free_[i] = free_[i] && !held[i];
+    }
+    double z_new[12], e_new[6];
+    for (int k = 0; k < 12; ++k) z_new[k] = std::min(std::max(z[k] + delta[k], lower[k]), upper[k]);
+    hand_errors(s, z_new, 1, e_new);
+    if (legs_ok_at(s, z_new) && norm2(e_new) < std::max(norm2(e), 1e-24)) {
+      std::copy_n(z_new, 12, z), std::copy_n(e_new, 6, e);
+      lam /= 3.0;
+    } else {
+      lam *= 3.0;
+    }
+  }
+}
+#define SPOTKIN_INSTANTIATE(L)                                     \
+  template void refine<dynamics::FloatingModel<double, L>>(        \
+      const Search<dynamics::FloatingModel<double, L>>&, Answer&); \
+  template void descend<dynamics::FloatingModel<double, L>>(       \
+      const Search<dynamics::FloatingModel<double, L>>&, double*, double*);
+SPOTKIN_INSTANTIATE(dynamics::kLanes64)
+SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
+SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)
+#undef SPOTKIN_INSTANTIATE
+
+}  // namespace spotkin::motion::search
