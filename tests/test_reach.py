@@ -499,3 +499,15 @@ def test_reachability_bad_arguments():
         robot_named("go2").reachability([[0.3, 0.0, 0.3]])
     nan = spot.reachability([[math.nan, 0.0, 0.5], [0.9, 0.0, 0.6]])
     assert not nan.reachable[0]
+
+
+def test_spot_from_its_urdf_reaches_with_its_chain_arm():
+    """Spot loaded as any robot (its arm a 6R chain of the spherical-wrist family, not the built-in
+    Spot's dedicated closed form): the same success rate, the same answers as the reference."""
+    robot = sk.Robot.from_urdf(sk.robots.path("spot_with_arm"))
+    assert robot.arm.ik_kind == "6R-spherical-wrist"
+    T, _, _ = ref.feasible_samples(reach_module.reference_problem(robot, np.eye(4)), 300, seed=18)
+    res = robot.reach(T)
+    assert np.mean(res.status == sk.ReachStatus.OK) >= 0.995
+    check_answers(robot, T, res)
+    _compare(robot, T[:4])
