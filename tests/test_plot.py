@@ -964,3 +964,135 @@ def test_the_arm_is_drawn_on_its_mount(robots):
     np.testing.assert_allclose(
         _xyz(_artist(ax, "hand"))[0], robot.fk_all(pose, q, ARM_Q).hand[:3, 3], atol=1e-12
     )
+
+
+# ---- whole-body reachability -------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def spot_reach(robots):
+    """A small grid's reachability of Spot (0.2 m spacing: 1440 points, a third of a second)."""
+    return robots["spot"].reachability(spacing=0.2)
+
+
+def _scattered(ax) -> np.ndarray:
+    """(m, 3) the points of the "reachable" scatter, in drawing order."""
+    scatter = _artist(ax, "reachable")
+    return np.column_stack([np.ma.getdata(v) for v in scatter._offsets3d]).astype(float)
+
+
+def _reach_axes(fig):
+    return next(ax for ax in fig.axes if getattr(ax, "name", "") == "3d")
+
+
+@needs_matplotlib
+def test_reachability_draws_the_reachable_points_coloured_by_height(spot_reach):
+    fig = plot.reachability(spot_reach)
+    assert isinstance(fig, matplotlib.figure.Figure)
+    ax = _reach_axes(fig)
+    want = spot_reach.points[spot_reach.reachable]
+    assert len(want) > 100
+    np.testing.assert_array_equal(_scattered(ax), want)
+    np.testing.assert_array_equal(np.asarray(_artist(ax, "reachable").get_array()), want[:, 2])
+    bar = next(a for a in fig.axes if a.get_gid() == "height")  # the colour bar spans the heights
+    assert bar.get_ylim() == pytest.approx((want[:, 2].min(), want[:, 2].max()))
+    title = ax.get_title()
+    assert f"{spot_reach.volume:.3f} m³" in title
+    assert f"{len(want)} of {spot_reach.reachable.size} points" in title
+    spans = np.array([np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim()), np.ptp(ax.get_zlim())])
+    np.testing.assert_allclose(np.array(ax.get_box_aspect()) / ax.get_box_aspect()[0], spans / spans[0])
+
+
+@needs_matplotlib
+def test_reachability_of_points_along_an_approach(robots):
+    spot = robots["spot"]
+    points = np.array([[0.8, 0.0, 0.5], [0.6, 0.2, 0.3], [3.0, 0.0, 0.0], [0.7, -0.1, np.nan]])
+    result = spot.reachability(points, approach=[1.0, 0.0, 0.0])
+    assert result.reachable.tolist() == [True, True, False, False]
+    ax = _reach_axes(plot.reachability(result, spot))
+    np.testing.assert_array_equal(_scattered(ax), points[:2])
+    assert "2 of 4 points reachable" in ax.get_title() and "m³" not in ax.get_title()
+    nothing = spot.reachability([[3.0, 0.0, 0.0]])  # nothing reachable: no colour bar, still a picture
+    fig = plot.reachability(nothing, title="far away")
+    assert len(_scattered(_reach_axes(fig))) == 0 and _reach_axes(fig).get_title() == "far away"
+    assert not [a for a in fig.axes if a.get_gid() == "height"]
+
+
+@needs_matplotlib
+def test_reachability_draws_into_a_given_axes(spot_reach, robots):
+    fig = plt.figure(figsize=(4, 3))
+    ax = fig.add_subplot(projection="3d")
+    assert plot.reachability(spot_reach, robots["spot"], ax=ax) is fig
+    assert len(_scattered(ax)) == spot_reach.reachable.sum()
+    assert _artist(ax, "feet") is not None
+
+
+@needs_matplotlib
+def test_reachability_draws_the_robot_at_the_reach_nominal_pose(spot_reach, robots):
+    """The robot stands where the reach's box is centred: the body at the nominal height over the
+    nominal stance's feet (the default of ``reachability``), or over the feet it was given."""
+    from spotkin.motion.reach import _scales
+
+    spot = robots["spot"]
+    h0, _, feet = _scales(spot)
+    ax = _reach_axes(plot.reachability(spot_reach, spot))
+    np.testing.assert_allclose(_xyz(_artist(ax, "feet")), feet, atol=1e-9)
+    np.testing.assert_allclose(_xyz(_artist(ax, "body-axis:x"))[0], [0.0, 0.0, h0], atol=1e-12)
+    assert len(_xyz(_artist(ax, "arm"))) > 2
+    assert ax.get_title().startswith("Spot: ")
+    moved = feet + [0.1, -0.05, 0.02]
+    result = spot.reachability([[0.9, -0.05, 0.5]], feet=moved)
+    ax = _reach_axes(plot.reachability(result, spot, feet=moved))
+    np.testing.assert_allclose(_xyz(_artist(ax, "feet")), moved, atol=1e-9)
+    np.testing.assert_allclose(_xyz(_artist(ax, "body-axis:x"))[0], [0.1, -0.05, h0 + 0.02], atol=1e-12)
+
+
+@needs_matplotlib
+def test_reachability_of_go2_with_an_arm():
+    from urdf_helpers import robot_named
+
+    go2 = robot_named("go2_z1")
+    result = go2.reachability([[0.5, 0.0, 0.4], [0.4, 0.2, 0.5], [2.0, 0.0, 0.0]])
+    ax = _reach_axes(plot.reachability(result, go2))
+    assert len(_scattered(ax)) == result.reachable.sum() >= 1
+    hand = _xyz(_artist(ax, "hand"))[0]
+    assert np.isfinite(hand).all() and ax.get_title().startswith("Go2: ")
+
+
+@needs_matplotlib
+def test_reachability_rejects_bad_arguments_naming_them(spot_reach, robots):
+    spot, go2 = robots["spot"], robots["go2"]
+    marked = spot_reach.points.copy()
+    marked[spot_reach.reachable] = np.nan
+    far = spot.stance_feet(0.5) * [3.0, 3.0, 1.0]
+    cases = [
+        (lambda: plot.reachability("result"), TypeError, "result"),
+        (lambda: plot.reachability(tuple(spot_reach)), TypeError, "result"),
+        (lambda: plot.reachability(None), TypeError, "result"),
+        (
+            lambda: plot.reachability(spot_reach._replace(reachable=spot_reach.reachable * 1)),
+            TypeError,
+            "result",
+        ),
+        (lambda: plot.reachability(spot_reach._replace(points=spot_reach.points[:2])), ValueError, "result"),
+        (lambda: plot.reachability(spot_reach._replace(points=marked)), ValueError, "result"),
+        (
+            lambda: plot.reachability(spot_reach._replace(points=spot_reach.points + 2e6)),
+            ValueError,
+            "result",
+        ),
+        (lambda: plot.reachability(spot_reach._replace(volume="big")), TypeError, "result.volume"),
+        (lambda: plot.reachability(spot_reach, "spot"), TypeError, "robot"),
+        (lambda: plot.reachability(spot_reach, go2), ValueError, "robot"),  # no arm: not the result's robot
+        (lambda: plot.reachability(spot_reach, feet=np.zeros((4, 3))), ValueError, "feet"),
+        (lambda: plot.reachability(spot_reach, spot, feet=np.zeros((3, 3))), ValueError, "feet"),
+        (lambda: plot.reachability(spot_reach, spot, feet=np.full((4, 3), np.nan)), ValueError, "feet"),
+        (lambda: plot.reachability(spot_reach, spot, feet=far), ValueError, "feet"),  # out of reach
+        (lambda: plot.reachability(spot_reach, spot, feet="abc"), TypeError, "feet"),
+        (lambda: plot.reachability(spot_reach, ax=plt.figure().add_subplot()), ValueError, "ax"),
+        (lambda: plot.reachability(spot_reach, ax="ax"), TypeError, "ax"),
+        (lambda: plot.reachability(spot_reach, title=3), TypeError, "title"),
+    ]
+    for call, error, name in cases:
+        with pytest.raises(error, match=name):
+            call()

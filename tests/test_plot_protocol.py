@@ -118,6 +118,7 @@ def test_one_module_per_picture_family_none_over_600_lines():
         "branches",
         "foot_paths",
         "gait_diagram",
+        "reachability",
         "robot",
         "trajectory",
         "walk_animation",

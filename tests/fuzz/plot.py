@@ -9,7 +9,7 @@ chains, trajectories and a walk of Go2 in the simulator (when spotkin[sim] is in
 poses, joints, targets, options, axes and figures. The probes read the drawings back: the drawn feet are
 ``body_fk``'s (of the walk's recorded pose and joints for its animation), each drawn branch is one that
 ``ik_all`` finds, the map's counts are ``ik_all``'s at sampled pixels, the curves are the trajectory's own
-samples.
+samples, the reachability's scatter is its reachable points and its robot stands on the feet it was given.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import spotkin as sk
 from .entry import register, seq_slot
 from .objects import ROBOT_ARMS, STANCE_HEIGHT
 from .outputs import close, describe
-from .slots import ACCEPT, REJECT, Arg, Array, Choice, Custom, Flag, Int, Real
+from .slots import ACCEPT, EITHER, REJECT, Arg, Array, Choice, Custom, Flag, Int, Real
 
 PLOT_ARM_Q = np.array([0.0, -1.2, 1.9, 0.0, 0.4, 0.0])
 
@@ -604,4 +604,116 @@ def register_entries() -> None:
         pairs=8,
         expect=ACCEPT if sim is not None else REJECT,
         why="" if sim is not None else "type",
+    )
+
+    # plot.reachability: small reachabilities of Spot (a 0.25 m grid, a third of a second once per worker)
+    # and of Go2 carrying an arm (three points); the scatter is the reachable points, the robot stands on
+    # the nominal feet or on those given
+    def reach_of(key, points=None, **options):
+        def make(c):
+            label = (key, None if points is None else np.asarray(points).tolist(), sorted(options.items()))
+            return c._get(
+                ("plot-reachability", repr(label)), lambda: c.robot(key).reachability(points, **options)
+            )
+
+        return make
+
+    spot_grid = reach_of("spot", spacing=0.25)
+    reach_points = [[0.8, 0.0, 0.5], [0.6, 0.2, 0.3], [3.0, 0.0, 0.0], [0.7, -0.1, math.nan]]
+
+    def altered(make, **fields):
+        """The result of ``make`` with fields replaced (each a function of the result)."""
+        return lambda c: make(c)._replace(**{k: f(make(c)) for k, f in fields.items()})
+
+    def marked_nan(r):
+        points = r.points.copy()
+        points[r.reachable] = math.nan
+        return points
+
+    def nominal_feet(c, key):
+        from spotkin.motion.reach import _scales
+
+        return _scales(c.robot(key))[2]
+
+    def reach_probe(fig, kw, c):
+        if not isinstance(fig, Figure):
+            return f"not a Figure: {describe(fig)}"
+        result = kw["result"]
+        want = np.asarray(result.points, np.float64)[np.asarray(result.reachable)]
+        ax = next(a for a in fig.axes if getattr(a, "name", "") == "3d")
+        scatter = next((a for a in ax.collections if a.get_gid() == "reachable"), None)
+        got = None if scatter is None else np.column_stack([np.ma.getdata(v) for v in scatter._offsets3d])
+        if got is None or not close(got.astype(np.float64).reshape(-1, 3), want, False):
+            return f"the scatter {describe(got)} is not the reachable points {describe(want)}"
+        robot = kw.get("robot")
+        if robot is not None:
+            feet = kw.get("feet")
+            key = "spot" if robot is c.robot("spot") else "go2_z1"
+            want = nominal_feet(c, key) if feet is None else np.asarray(feet, np.float64)
+            drawn = _gid_data(fig, "feet")
+            if drawn is None or not close(drawn, want, False):
+                return f"drawn feet {describe(drawn)} are not the feet stood on {describe(want)}"
+        return None
+
+    def reach_pairs(plan):
+        feet = plan["feet"] not in ("omit", "none")
+        if feet and plan["robot"] == "none":
+            return REJECT  # the feet stand the drawn robot: without one, a ValueError naming feet
+        if feet and plan["robot"] == "go2_z1":
+            return EITHER  # Spot's feet, moved: within Go2's legs or not
+        return None
+
+    register(
+        name="plot.reachability",
+        covers="spotkin.plot.reachability",
+        call=lambda c, **k: plot.reachability(**k),
+        slots=[
+            Custom(
+                "result",
+                {
+                    "valid": const(spot_grid),
+                    "points": const(reach_of("spot", reach_points, approach=[1.0, 0.0, 0.0])),
+                    "nothing": const(reach_of("spot", [[3.0, 0.0, 0.0]])),
+                    "go2_z1": const(reach_of("go2_z1", [[0.5, 0.0, 0.4], [0.4, 0.2, 0.5], [2.0, 0.0, 0.0]])),
+                    "tuple": const(lambda c: tuple(spot_grid(c)), REJECT, "type"),
+                    "int_reachable": const(
+                        altered(spot_grid, reachable=lambda r: r.reachable.astype(np.int64)), REJECT, "type"
+                    ),
+                    "short_points": const(altered(spot_grid, points=lambda r: r.points[:1]), REJECT, "value"),
+                    "nan_reachable": const(altered(spot_grid, points=marked_nan), REJECT, "value"),
+                    "far": const(altered(spot_grid, points=lambda r: r.points + 1e7), REJECT, "value"),
+                    "str_volume": const(altered(spot_grid, volume=lambda r: "big"), REJECT, "type"),
+                    "str": const("result", REJECT, "type"),
+                    "none": const(None, REJECT, "type"),
+                },
+            ),
+            Custom(
+                "robot",
+                {
+                    "valid": const(lambda c: c.robot("spot")),
+                    "none": const(None),
+                    "go2_z1": const(lambda c: c.robot("go2_z1")),  # as many joints: drawn
+                    "go2": const(lambda c: c.robot("go2"), REJECT, "value"),  # no arm: not the result's
+                    "hexapod": const(lambda c: c.robot("hexapod"), REJECT, "value"),
+                    "str": const("spot", REJECT, "type"),
+                },
+            ),
+            Array(
+                "feet",
+                lambda c: nominal_feet(c, "spot") + [0.05, -0.03, 0.01],
+                optional=True,
+                default="omit",
+            ),
+            Custom("ax", axes_table(True), default="omit"),
+            Custom(
+                "title",
+                {"text": const("a title"), "none": const(None), "int": const(3, REJECT, "type")},
+                default="omit",
+            ),
+        ],
+        probe=reach_probe,
+        pair_rule=reach_pairs,
+        after=_close_figures,
+        combos=(),
+        pairs=12,
     )

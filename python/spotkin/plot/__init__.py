@@ -17,6 +17,9 @@
   in contact marked, the camera following the body.
 - :func:`gait_diagram`: a walk's contacts, a bar per leg against time (planned and measured);
   :func:`foot_paths`: the feet's paths in side view over each leg's sagittal workspace.
+- :func:`reachability`: the hand positions a legged robot reaches with its feet fixed (a
+  :class:`spotkin.Reachability`), a 3D scatter coloured by height, the robot standing among them, the
+  volume in the title.
 
 Every function returns the matplotlib Figure it drew in, or draws into an ``ax`` (or ``fig``)
 that it is given, so that pictures compose and save as usual (``fig.savefig("stance.png")``).
@@ -31,8 +34,8 @@ leg's geometry, a chain's frames), not for its class.
 
 # One module per picture family: _robot (with _stance, one configuration in the world, and _artists, its
 # drawing), _branches, _workspace_map, _trajectory, _animation, _gait (walks), _walk (a simulated walk,
-# animated); _common (style, argument checks, axes) and _solvers (the solver interface as the pictures
-# read it) hold what they share.
+# animated), _reach (whole-body reachability); _common (style, argument checks, axes) and _solvers (the
+# solver interface as the pictures read it) hold what they share.
 
 from __future__ import annotations
 
@@ -51,6 +54,7 @@ from ._animation import animate
 from ._branches import _q_text as _q_text
 from ._branches import branches
 from ._gait import foot_paths, gait_diagram
+from ._reach import reachability
 from ._robot import _description as _description
 from ._robot import robot
 from ._stance import _frame as _frame
@@ -66,6 +70,7 @@ __all__ = [
     "branches",
     "foot_paths",
     "gait_diagram",
+    "reachability",
     "robot",
     "trajectory",
     "walk_animation",

@@ -16,6 +16,8 @@ from .. import Robot, body_transform
 # spotkin's private helpers, imported here only (the picture modules take them from this one)
 from .._support.boundary import as_index, as_real, as_scalar  # noqa: F401
 from ..model.leg import SLOT_NAMES  # noqa: F401
+from ..motion.reach import _numbers as _reach_numbers  # noqa: F401
+from ..motion.reach import stance_frames  # noqa: F401
 
 # -- style: distinct in greyscale (luminance, line style, marker) -------------------------------------
 _BODY_EDGE, _BODY_FACE = "#252525", "#bdbdbd"
