@@ -511,3 +511,14 @@ def test_spot_from_its_urdf_reaches_with_its_chain_arm():
     assert np.mean(res.status == sk.ReachStatus.OK) >= 0.995
     check_answers(robot, T, res)
     _compare(robot, T[:4])
+
+
+def test_reach_path_flags_a_start_outside_the_box():
+    robot = robot_named("spot")
+    T, _, _ = targets_of("spot", 2, seed=19)
+    start = robot.reach(T[0])
+    high = np.array(start.body_pose, float)
+    high[2] += 0.1  # above the default box (its top is 0.1 hip heights over the nominal pose)
+    legs = np.asarray(robot.body_ik(high, reach_module._scales(robot)[2]).q)
+    path = robot.reach_path((high, np.concatenate([legs, start.q[12:]])), T[1], n=10)
+    assert not path.ok[0] and path.status != sk.ReachStatus.OK

@@ -63,7 +63,7 @@ motion::ReachCapsules read_capsules(py::handle obj, int legs) {
 ReachModel make_reach_model(const RobotStatics& robot, py::handle arm_obj, const ChainPair& chain,
                             py::handle mount, py::handle capsules, py::handle nominal,
                             py::handle lower, py::handle upper, double scale, py::handle q_lower,
-                            py::handle q_upper, py::handle halton) {
+                            py::handle q_upper, py::handle halton, int refine_steps) {
   const int legs = robot.body.n_legs();
   const int m = 3 * legs + 6;
   if (robot.n_arm != 6)
@@ -90,7 +90,9 @@ ReachModel make_reach_model(const RobotStatics& robot, py::handle arm_obj, const
   copy_exact(halton, "halton", {motion::kReachCandidates, 6}, &sh.halton[0][0]);
   if (!(scale > 0.0) || !std::isfinite(scale))
     throw py::value_error("scale must be finite and positive");
-  sh.scale = scale, sh.m = m;
+  if (refine_steps < 0 || refine_steps > 100)
+    throw py::value_error("refine_steps must be in 0 .. 100");
+  sh.scale = scale, sh.m = m, sh.refine_steps = refine_steps;
   for (int k = 0; k < 6; ++k) {  // ref.Problem.widths
     const double w = 0.5 * (sh.upper[k] - sh.lower[k]);
     if (!std::isfinite(w) || !(sh.lower[k] <= sh.upper[k]))
@@ -194,8 +196,8 @@ void bind_reach(py::module_& m) {
       .def(py::init(&make_reach_model), py::arg("statics"), py::arg("arm"), py::arg("chain"),
            py::arg("mount"), py::arg("capsules"), py::arg("nominal"), py::arg("lower"),
            py::arg("upper"), py::arg("scale"), py::arg("q_lower"), py::arg("q_upper"),
-           py::arg("halton"), py::keep_alive<1, 2>(), py::keep_alive<1, 3>(),
-           py::keep_alive<1, 4>())
+           py::arg("halton"), py::arg("refine_steps"), py::keep_alive<1, 2>(),
+           py::keep_alive<1, 3>(), py::keep_alive<1, 4>())
       .def("solve", &solve, py::arg("targets"), py::arg("feet"), py::arg("stance"),
            py::arg("p_ref"), py::arg("q_ref"), py::arg("seed_pose"), py::arg("margin"),
            py::arg("refine") = true, py::arg("repair") = true,

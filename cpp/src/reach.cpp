@@ -84,9 +84,9 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
   }
   Answer a{};
   a.slot = -1;
-  Evaluation ends;
   std::vector<int> start_order(kReachRepairStarts);
   for (int k = 0; k < kReachRepairStarts; ++k) start_order[std::size_t(k)] = k;
+  std::vector<Evaluation> ends;  // the repair's ends (the chosen option may point at one)
   std::vector<Option> repaired;
   const Option* picked = chosen >= 0 ? &options[std::size_t(chosen)] : nullptr;
   double nearest_e[6] = {};
@@ -123,27 +123,30 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
       std::copy_n(shared.nominal, 6, z[count]);
       for (int k = 0; k < 6; ++k) z[count][6 + k] = lo[k] + shared.halton[u][k] * (hi[k] - lo[k]);
     }
-    ends.resize(kReachRepairStarts, legs);
-    for (int j = 0; j < kReachRepairStarts; ++j) {
-      descend(s, z[j], e[j]);
-      std::copy_n(z[j], 6, &ends.p[std::size_t(6 * j)]);
+    ends.resize(kReachRepairStarts);  // sized once: the options point at them
+    repaired.reserve(8 * kReachRepairStarts);
+    int ran = 0;
+    for (int j = 0; j < kReachRepairStarts; ++j) {  // start by start, until one ends feasible
+      descend(s, z[j], e[j], j, ends[std::size_t(j)]);
+      ++ran;
+      options_of(s, ends[std::size_t(j)], start_order.data() + j, repaired, nullptr);
+      chosen = choose(s, repaired, status);
+      if (status == kReachOk) break;
     }
-    run(s, ends, nullptr, true);
-    options_of(s, ends, start_order.data(), repaired, nullptr);
-    chosen = choose(s, repaired, status);
     picked = chosen >= 0 ? &repaired[std::size_t(chosen)] : nullptr;
     if (!picked) {  // the nearest the repair came (ties to the earlier start)
       int best = 0;
       double best_e = kInf;
-      for (int j = 0; j < kReachRepairStarts; ++j) {
+      for (int j = 0; j < ran; ++j) {
         double sum = 0.0;
         for (int k = 0; k < 6; ++k) sum += e[j][k] * e[j][k];
         if (sum < best_e) best_e = sum, best = j;
       }
+      const Evaluation& end = ends[std::size_t(best)];
       std::copy_n(z[best], 6, a.p);
-      std::copy_n(&ends.legs[std::size_t(n3 * best)], n3, a.q);
+      std::copy_n(end.legs.data(), n3, a.q);
       std::copy_n(z[best] + 6, 6, a.q + n3);
-      std::copy_n(&ends.T[std::size_t(16 * best)], 16, a.T);
+      std::copy_n(end.T.data(), 16, a.T);
       a.margin = margin_of(s, a.T, a.q);
       std::copy_n(e[best], 6, nearest_e);
       status = kReachUnreachable;

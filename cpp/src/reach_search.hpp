@@ -309,8 +309,10 @@ void follow(const Search<Model>& s, const Answer& a, const double* poses, int n,
 template <typename Model>
 void refine(const Search<Model>& s, Answer& a);
 
-// (F)'s damped least squares from z (12): z and e (6) in place (cpp/src/reach_steps.cpp).
+// (F)'s damped least squares from z (12): z and e (6) in place, and (E) at its final body pose in
+// `end` (with options of order `order`); it stops early where an option there is feasible, tried
+// every REPAIR_CHECK iterations (cpp/src/reach_steps.cpp).
 template <typename Model>
-void descend(const Search<Model>& s, double* z, double* e);
+void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation& end);
 
 }  // namespace spotkin::motion::search

@@ -72,7 +72,7 @@ void refine(const Search<Model>& s, Answer& a) {
   const int m = s.m, rows = 6 + m;
   Evaluation ev;
   std::vector<double> r0(static_cast<std::size_t>(rows)), dq(static_cast<std::size_t>(6 * m));
-  for (int step = 0; step < kReachRefineSteps; ++step) {
+  for (int step = 0; step < s.sh.refine_steps; ++step) {
     residual(s, a.p, a.q, r0.data());
     if (!sensitivities(s, a, dq.data())) return;
     // J = [diag(1 / w_p); dq / w_q]: J^T J + mu I and -J^T r0
@@ -147,9 +147,23 @@ bool legs_ok_at(const Search<Model>& s, const double* p) {
   return true;
 }
 
+// (E) at the body pose z[0..6] into `end` (n = 1, the legs' nearest fallback as the reference's);
+// whether an option there is feasible.
+template <typename Model>
+bool answers_at(const Search<Model>& s, const double* z, int order, Evaluation& end) {
+  end.resize(1, s.legs);
+  std::copy_n(z, 6, end.p.data());
+  run(s, end, nullptr, true);
+  std::vector<Option> options;
+  options_of(s, end, &order, options, nullptr);
+  std::int8_t status;
+  choose(s, options, status);
+  return status == kReachOk;
+}
+
 // (F)'s damped least squares from z (12): z and e (6) in place.
 template <typename Model>
-void descend(const Search<Model>& s, double* z, double* e) {
+void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation& end) {
   const int n3 = 3 * s.legs;
   double lower[12], upper[12];
   for (int k = 0; k < 6; ++k) {
@@ -232,13 +246,16 @@ void descend(const Search<Model>& s, double* z, double* e) {
     } else {
       lam *= 3.0;
     }
+    if ((it + 1) % kReachRepairCheck == 0 && answers_at(s, z, order, end)) return;
   }
+  answers_at(s, z, order, end);
 }
+
 #define SPOTKIN_INSTANTIATE(L)                                     \
   template void refine<dynamics::FloatingModel<double, L>>(        \
       const Search<dynamics::FloatingModel<double, L>>&, Answer&); \
   template void descend<dynamics::FloatingModel<double, L>>(       \
-      const Search<dynamics::FloatingModel<double, L>>&, double*, double*);
+      const Search<dynamics::FloatingModel<double, L>>&, double*, double*, int, Evaluation&);
 SPOTKIN_INSTANTIATE(dynamics::kLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)

@@ -251,7 +251,7 @@ class GaitControllerCore:
     def ticks(self) -> int:
         ...
 class ReachModel:
-    def __init__(self, statics: RobotStatics, arm: typing.Any, chain: Chain, mount: typing.Any, capsules: typing.Any, nominal: typing.Any, lower: typing.Any, upper: typing.Any, scale: typing.SupportsFloat | typing.SupportsIndex, q_lower: typing.Any, q_upper: typing.Any, halton: typing.Any) -> None:
+    def __init__(self, statics: RobotStatics, arm: typing.Any, chain: Chain, mount: typing.Any, capsules: typing.Any, nominal: typing.Any, lower: typing.Any, upper: typing.Any, scale: typing.SupportsFloat | typing.SupportsIndex, q_lower: typing.Any, q_upper: typing.Any, halton: typing.Any, refine_steps: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def constraints(self, T_body: typing.Any, q: typing.Any, feet: typing.Any) -> tuple:
         """

@@ -522,9 +522,11 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         (..., 3 n_legs + n_arm), ``status`` (:class:`spotkin.ReachStatus`), ``margin``, ``distance``
         and ``angle`` (how far the hand is from the target: 0 unless UNREACHABLE, where the answer is the
         nearest pose the search reached), and the arm's branches at the chosen body pose. The method is
-        in the guide's *Reach* page. A robot without an arm, a target of another shape or a
-        ``box`` that is not (2, 6) with lower <= upper is a ``ValueError``; NaN or Inf in a sample, or a
-        target that is not a rigid transform, gives INVALID_INPUT and NaN in that sample only.
+        in the guide's *Reach* page. A robot without an arm, an arm without 6 joints or without a
+        closed form, a target of another shape or a ``box`` that is not (2, 6) with lower <= upper is a
+        ``ValueError``; NaN or Inf in a sample, or a target that is not a rigid transform, gives
+        INVALID_INPUT and NaN in that sample only. No constraint keeps the hand or the arm above the
+        ground: a target below it may be answered.
         """
         return _MOTION["reach"](self, T_hand_world, feet, seed, margin, box)
 
@@ -533,7 +535,8 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         pair) to the reach answer for ``target`` (4, 4) (:meth:`reach`, seeded with the start), in ``n``
         samples, the feet fixed at ``feet`` (default the nominal stance), every constraint of
         :meth:`reach` held at every sample: the body pose and the arm's joints along straight lines
-        timed by a quintic, the legs from the leg IK; together, else the body first, else the arm first.
+        timed by a quintic, the legs from the leg IK; five orders are tried (together, the body first, the
+        arm first, the arm through two via postures), the first whose every sample holds is taken.
         Returns a :class:`spotkin.ReachPath` (``t``, ``body_pose``, ``q``, ``margin``, ``ok`` per sample,
         ``status``, ``order``, ``answer``). The method is in the guide's *Reach* page.
         """

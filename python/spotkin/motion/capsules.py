@@ -2,9 +2,9 @@
 
 The simulator (:mod:`spotkin.sim`) gives its links the same capsules and its body the same box, and
 whole-body reach (:meth:`spotkin.Robot.reach`) checks the arm against them. The model, for a robot
-with legs of reach L (the shortest leg's longest hip-pitch to foot distance):
+whose shortest leg reaches l (its longest hip-pitch to foot distance):
 
-- every link is a capsule of radius r = ``LINK_FRACTION`` L (the simulator caps it at 70 % of its
+- every link is a capsule of radius r = ``LINK_FRACTION`` l (the simulator caps it at 70 % of its
   foot sphere's radius) around the segment from its joint to the next joint;
 - the body is the box over the hips: half-lengths (x: half the hips' spread + r, y: the largest
   |hip y| + r, z: the same as y), centred between the front and hind hips at the hips' mean height;

@@ -198,6 +198,7 @@ def _compiled(robot, box: ReachBox):
             limits[:, 0],
             limits[:, 1],
             ref.candidate_units(),
+            ref.REFINE_STEPS,
         )
         numbers.models[key] = model
     return model

@@ -13,7 +13,8 @@ The path, in the stance frame S of :mod:`spotkin.reference.reach` (the box's fra
   posture at mid-path (its joints at zero, then at the middle of their ranges, clipped into the
   limits: both within them, so the straight pieces are too). Each sample is checked: every leg's
   IK OK, the support margin at least ``margin``, no collision between the arm and the body or the
-  legs (the capsules of :mod:`spotkin.motion.capsules`).
+  legs (the capsules of :mod:`spotkin.motion.capsules`), the body pose within the box and every joint
+  within its limits (a start outside them makes those samples fail).
 """
 
 from __future__ import annotations
@@ -136,9 +137,11 @@ def reach_path(robot, start, target, n=50, feet=None, margin=None, box=None) -> 
     to_stance = np.linalg.inv(stance)
     p0 = poses_of((to_stance @ body_transform(pose0))[None])[0]
     t = np.linspace(0.0, 1.0, n)
+    nominal = np.array([0.0, 0.0, numbers.h0, 0.0, 0.0, 0.0])
+    bounds = (stance, nominal + box[0], nominal + box[1])
     if answer.status != ReachStatus.OK:
         poses, qs = np.broadcast_to(pose0, (n, 6)).copy(), np.broadcast_to(q0, (n, m)).copy()
-        margins, ok = _check(robot, model, poses, qs, feet, margin)[:2]
+        margins, ok = _check(robot, model, poses, qs, feet, margin, bounds)[:2]
         return ReachPath(t, poses, qs, margins, ok, answer.status, "start", answer)
     p1 = poses_of((to_stance @ body_transform(answer.body_pose))[None])[0]
     n3 = 3 * n_legs
@@ -154,7 +157,7 @@ def reach_path(robot, start, target, n=50, feet=None, margin=None, box=None) -> 
         poses = poses_of(T_body)
         poses[0], q[0] = pose0, q0  # the start and the end as given, to their last bits
         poses[-1], q[-1] = answer.body_pose, answer.q
-        margins, ok, short = _check(robot, model, poses, q, feet, margin, legs.status)
+        margins, ok, short = _check(robot, model, poses, q, feet, margin, bounds, legs.status)
         path = ReachPath(t, poses, q, margins, ok, ReachStatus.OK, order, answer)
         if ok.all():
             return path
@@ -164,8 +167,9 @@ def reach_path(robot, start, target, n=50, feet=None, margin=None, box=None) -> 
     return first
 
 
-def _check(robot, model, poses, q, feet, margin, leg_status=None):
-    """(margin (n,), ok (n,), only the margin fails) of whole-body samples."""
+def _check(robot, model, poses, q, feet, margin, bounds, leg_status=None):
+    """(margin (n,), ok (n,), only the margin fails) of whole-body samples; ``bounds`` = (world <- S,
+    the box's lower and upper offsets in S, absolute)."""
     n = len(poses)
     T_body = body_transform(poses)
     feet_n = np.ascontiguousarray(np.broadcast_to(feet, (n, *feet.shape)))
@@ -174,8 +178,15 @@ def _check(robot, model, poses, q, feet, margin, leg_status=None):
         legs_ok = (np.asarray(robot.body_ik(T_body, feet).status) == 0).all(axis=-1)
     else:
         legs_ok = (np.asarray(leg_status) == 0).all(axis=-1)
-    ok = legs_ok & ~collides & (margins >= margin)
-    only_margin = bool((legs_ok & ~collides).all() and not ok.all())
+    stance, lower, upper = bounds
+    p = poses_of(np.linalg.inv(stance) @ T_body)
+    in_box = ((p >= lower - 1e-9) & (p <= upper + 1e-9)).all(axis=1)
+    limits = robot.limits
+    with np.errstate(invalid="ignore"):
+        in_limits = ((q >= limits[:, 0] - 1e-12) & (q <= limits[:, 1] + 1e-12)).all(axis=1)
+    held = legs_ok & ~collides & in_box & in_limits
+    ok = held & (margins >= margin)
+    only_margin = bool(held.all() and not ok.all())
     return margins, ok, only_margin
 
 

@@ -61,11 +61,12 @@ The search
     pushes out is held there (its column zeroed, up to ``ACTIVE_SET_PASSES`` passes); z + delta is
     clipped into the box and the arm's limits (``REPAIR_INSET`` inside them), and taken when every leg's
     IK there is OK and |e| decreases (lambda / 3), else refused (lambda x 3). At most
-    ``REPAIR_ITERATIONS`` steps, until |e| < 1e-12 or lambda > ``REPAIR_STALL``. At the ends, (E)
-    again and (A) over their options: a feasible one is the answer (refined by (R)), a reaching one
-    is UNSTABLE. Otherwise UNREACHABLE, the answer the end nearest the target (ties to the earlier
-    start) with the legs' IK there, ``distance`` its position error (m) and ``angle`` its rotation
-    error (rad).
+    ``REPAIR_ITERATIONS`` steps, until |e| < 1e-12 or lambda > ``REPAIR_STALL``; every
+    ``REPAIR_CHECK`` steps, (E) at the body pose reached, and the start stops there when an option
+    is feasible. The starts run in order, each ending with (E) at its body pose, until (A) over the
+    ends' options finds a feasible one: the answer (refined by (R)); else a reaching one is UNSTABLE.
+    Otherwise UNREACHABLE, the answer the end nearest the target (ties to the earlier start) with the
+    legs' IK there, ``distance`` its position error (m) and ``angle`` its rotation error (rad).
 """
 
 from __future__ import annotations
@@ -93,12 +94,14 @@ CANDIDATES = 64
 """Halton points in the box, after the seed's pose and the nominal one."""
 STAGES = (0, 8)
 """(C)'s stages: the seed's and the nominal pose; then the first 8 Halton points; then the rest."""
-REFINE_STEPS = 3
+REFINE_STEPS = 2
 FD_STEP = 1e-6
 GN_DAMPING = 1e-6
 REPAIR_ITERATIONS = 60
 REPAIR_DAMPING = 1e-2
 REPAIR_STALL = 1e4
+REPAIR_CHECK = 5
+"""(F) tries the closed form at its body pose every this many iterations, and stops when it answers."""
 """(F) stops when its damping has grown past this (no step has helped for several tries)."""
 REPAIR_STARTS = 6
 ACTIVE_SET_PASSES = 3
@@ -371,19 +374,16 @@ def repair_starts(problem: Problem, misses=()) -> list[np.ndarray]:
     return starts
 
 
-def repair(problem: Problem, misses=()) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """(F): (p, q_a, e) from each start."""
-    return [descend(problem, z) for z in repair_starts(problem, misses)]
-
-
-def descend(problem: Problem, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(F)'s damped least squares from z = (p, q_a)."""
+def descend(problem: Problem, z, order: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Option]]:
+    """(F)'s damped least squares from z = (p, q_a): (p, q_a, e, the options at p (order ``order``)),
+    stopping early where the closed form at p has a feasible option (tried every ``REPAIR_CHECK``
+    iterations)."""
     arm_lower, arm_upper = problem.q_lower[-6:] + REPAIR_INSET, problem.q_upper[-6:] - REPAIR_INSET
     lower, upper = np.concatenate([problem.lower, arm_lower]), np.concatenate([problem.upper, arm_upper])
     z = np.clip(np.array(z, float), lower, upper)
     e = hand_error(problem, z[:6], z[6:])
     lam = REPAIR_DAMPING
-    for _ in range(REPAIR_ITERATIONS):
+    for iteration in range(REPAIR_ITERATIONS):
         if float(e @ e) < 1e-24 or lam > REPAIR_STALL:
             break
         J = np.empty((6, 12))  # d hand / dz = -d e / dz, forward differences
@@ -408,7 +408,11 @@ def descend(problem: Problem, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             z, e, lam = z_new, e_new, lam / 3.0
         else:
             lam *= 3.0
-    return z[:6], z[6:], e
+        if (iteration + 1) % REPAIR_CHECK == 0:
+            options = evaluate(problem, z[:6], order)
+            if any(o.feasible(problem) for o in options):
+                return z[:6], z[6:], e, options
+    return z[:6], z[6:], e, evaluate(problem, z[:6], order)
 
 
 def nan_result(robot) -> dict:
@@ -456,12 +460,15 @@ def reach(problem: Problem) -> dict:
         option, status = _choose(problem, options)
         if status == OK:
             break
-    if option is None:
-        ends = repair(problem, misses)
-        repaired = []
-        for k, (p, _, _) in enumerate(ends):
-            repaired += evaluate(problem, p, k)
-        option, status = _choose(problem, repaired)
+    if option is None:  # (F), start by start until one ends with a feasible option
+        ends, repaired = [], []
+        for k, z in enumerate(repair_starts(problem, misses)):
+            p, q_arm, e, found = descend(problem, z, k)
+            ends.append((p, q_arm, e))
+            repaired += found
+            option, status = _choose(problem, repaired)
+            if status == OK:
+                break
         if option is None:  # the nearest the repair came (ties to the earlier start)
             p, q_arm, e = min(ends, key=lambda end: float(end[2] @ end[2]))
             T_body = body_T(problem, p)

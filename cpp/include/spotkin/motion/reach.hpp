@@ -20,16 +20,16 @@ namespace spotkin::motion {
 constexpr int kReachCandidates =
     64;  // CANDIDATES: Halton points after the seed's pose and the nominal
 constexpr int kReachStageTwo = 8;             // STAGES[1]: the Halton points of (C)'s second stage
-constexpr int kReachRefineSteps = 3;          // REFINE_STEPS
 constexpr double kReachFdStep = 1e-6;         // FD_STEP
 constexpr double kReachGnDamping = 1e-6;      // GN_DAMPING
 constexpr int kReachRepairIterations = 60;    // REPAIR_ITERATIONS
 constexpr double kReachRepairDamping = 1e-2;  // REPAIR_DAMPING
-constexpr double kReachRepairStall = 1e4;     // REPAIR_STALL
-constexpr int kReachRepairStarts = 6;         // REPAIR_STARTS
-constexpr int kReachActiveSetPasses = 3;      // ACTIVE_SET_PASSES
-constexpr double kReachRepairInset = 1e-6;    // REPAIR_INSET
-constexpr double kReachNullGain = 0.2;        // NULL_GAIN
+constexpr double kReachRepairStall = 1e4;
+constexpr int kReachRepairCheck = 5;        // REPAIR_CHECK     // REPAIR_STALL
+constexpr int kReachRepairStarts = 6;       // REPAIR_STARTS
+constexpr int kReachActiveSetPasses = 3;    // ACTIVE_SET_PASSES
+constexpr double kReachRepairInset = 1e-6;  // REPAIR_INSET
+constexpr double kReachNullGain = 0.2;      // NULL_GAIN
 constexpr int kReachMaxQ = 3 * Body::kMaxLegs + 6;
 constexpr int kReachMaxSegments = 8;
 
@@ -70,6 +70,7 @@ struct ReachShared {
   double nominal[6], lower[6], upper[6], w_p[6];
   double scale;
   int m;
+  int refine_steps;  // REFINE_STEPS of (R)
   double q_lower[kReachMaxQ], q_upper[kReachMaxQ], w_q[kReachMaxQ];
   double halton[kReachCandidates][6];  // the unit points of (C)
 };
