@@ -522,3 +522,26 @@ def test_reach_path_flags_a_start_outside_the_box():
     legs = np.asarray(robot.body_ik(high, reach_module._scales(robot)[2]).q)
     path = robot.reach_path((high, np.concatenate([legs, start.q[12:]])), T[1], n=10)
     assert not path.ok[0] and path.status != sk.ReachStatus.OK
+
+
+def test_targets_near_the_arm_singularities_get_exact_answers_or_a_status():
+    """Spot's hands from arm configurations within 1e-7 rad of its singular sets (wr0 = 0: the wrist's
+    outer axes aligned; el0 = 0: the elbow stretched, at its limit): each answer is exact where OK, and
+    every answer finite."""
+    robot = robot_named("spot")
+    problem = reach_module.reference_problem(robot, np.eye(4))
+    _, offsets, qs = targets_of("spot", 40, seed=20)
+    q = qs.copy()
+    q[:20, 12 + 4] = 1e-7 * np.random.default_rng(1).standard_normal(20)  # wr0 near 0
+    q[20:, 12 + 2] = 1e-7  # el0 near 0
+    T = robot.fk_all(problem.nominal + offsets, q).hand
+    res = robot.reach(T)
+    assert set(np.unique(res.status)) <= {
+        sk.ReachStatus.OK,
+        sk.ReachStatus.UNREACHABLE,
+        sk.ReachStatus.UNSTABLE,
+    }
+    ok = res.status == sk.ReachStatus.OK
+    assert ok[:20].mean() > 0.9 and ok[20:].mean() > 0.5
+    assert np.abs(robot.fk_all(res.body_pose[ok], res.q[ok]).hand - T[ok]).max() < 1e-9
+    assert np.isfinite(res.q).all() and np.isfinite(res.body_pose).all()
