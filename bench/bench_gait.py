@@ -11,14 +11,13 @@ summary, whose baseline here is the IK, "ref:")."""
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import spotkin as sk
-from conftest import _RESULTS
+from conftest import _RESULTS, median_time
 from spotkin.reference import gait_plan
 
 COMMANDS, DURATION, RATE = 64, 2.0, 500.0
@@ -26,15 +25,6 @@ ROBOTS = {
     "spot": sk.Spot,
     "go2": lambda: sk.Robot.from_urdf(Path(sk.__file__).parent / "robots" / "go2.urdf"),
 }
-
-
-def median_time(func, rounds: int) -> float:
-    times = []
-    for _ in range(rounds):
-        start = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 @pytest.mark.parametrize("gait", ["trot", "walk"])

@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 import spotkin as sk
-from conftest import _RESULTS
+from conftest import _RESULTS, median_time
 from spotkin.motion import reach as reach_module
 from spotkin.reference import reach as ref
 
@@ -34,15 +34,6 @@ from urdf_helpers import robot_named  # the tests' robots: Go2 carrying a Z1-lik
 
 TARGETS, SINGLES, MINK_TARGETS, MINK_ITERATIONS = 500, 100, 60, 100
 TOLERANCE = 1e-6
-
-
-def median_time(func, rounds: int) -> float:
-    times = []
-    for _ in range(rounds):
-        start = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 class MinkReach:

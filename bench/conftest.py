@@ -63,6 +63,20 @@ def measure(benchmark):
     return run
 
 
+def median_time(func, rounds: int) -> float:
+    """The median wall time (s) of ``rounds`` calls of func() (for benches that time a whole call)."""
+    import time
+
+    import numpy as np
+
+    times = []
+    for _ in range(rounds):
+        start = time.perf_counter()
+        func()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
 def cpu_model() -> str:
     """The CPU's model name (Linux /proc/cpuinfo; the platform's processor string elsewhere)."""
     try:

@@ -185,15 +185,25 @@ def _probe_for(key):
     return probe
 
 
-def reach_entries():
-    for key, covers in (("go2_z1", "spotkin.Robot.reach"), ("spot", "spotkin.Spot.reach")):
+def _register_both(method: str, slots_for, probe_for) -> None:
+    """``method`` on Go2 carrying a Z1-like arm (``Robot.<method>``) and on ``Spot`` (``Spot.<method>``):
+    the same slots and probe, each made for its robot."""
+    for key, owner in (("go2_z1", "Robot"), ("spot", "Spot")):
         register(
-            name=f"{covers.split('.', 1)[1]}[{key}]",
-            covers=covers,
-            call=lambda c, key=key, **k: c.robot(key).reach(**k),
-            slots=[_target_slot(key), _feet_slot(key), _seed_slot(key), _MARGIN, _BOX],
-            probe=_probe_for(key),
+            name=f"{owner}.{method}[{key}]",
+            covers=f"spotkin.{owner}.{method}",
+            call=lambda c, key=key, **k: getattr(c.robot(key), method)(**k),
+            slots=slots_for(key),
+            probe=probe_for(key),
         )
+
+
+def reach_entries():
+    _register_both(
+        "reach",
+        lambda key: [_target_slot(key), _feet_slot(key), _seed_slot(key), _MARGIN, _BOX],
+        _probe_for,
+    )
 
 
 def _start_slot(key):
@@ -267,21 +277,18 @@ def _path_probe_for(key):
 
 
 def reach_path_entries():
-    for key, covers in (("go2_z1", "spotkin.Robot.reach_path"), ("spot", "spotkin.Spot.reach_path")):
-        register(
-            name=f"{covers.split('.', 1)[1]}[{key}]",
-            covers=covers,
-            call=lambda c, key=key, **k: c.robot(key).reach_path(**k),
-            slots=[
-                _start_slot(key),
-                _path_target_slot(key),
-                _SAMPLES,
-                _feet_slot(key, nan=REJECT),
-                _PATH_MARGIN,
-                _BOX,
-            ],
-            probe=_path_probe_for(key),
-        )
+    _register_both(
+        "reach_path",
+        lambda key: [
+            _start_slot(key),
+            _path_target_slot(key),
+            _SAMPLES,
+            _feet_slot(key, nan=REJECT),
+            _PATH_MARGIN,
+            _BOX,
+        ],
+        _path_probe_for,
+    )
 
 
 def _points_slot(key):
@@ -367,21 +374,18 @@ def _map_probe_for(key):
 
 
 def reachability_entries():
-    for key, covers in (("go2_z1", "spotkin.Robot.reachability"), ("spot", "spotkin.Spot.reachability")):
-        register(
-            name=f"{covers.split('.', 1)[1]}[{key}]",
-            covers=covers,
-            call=lambda c, key=key, **k: c.robot(key).reachability(**k),
-            slots=[
-                _points_slot(key),
-                _APPROACH,
-                _SPACING,
-                _AXIS,
-                _feet_slot(key, nan=REJECT),
-                _PATH_MARGIN,
-                _BOX,
-                _count_slot("directions"),
-                _count_slot("rolls"),
-            ],
-            probe=_map_probe_for(key),
-        )
+    _register_both(
+        "reachability",
+        lambda key: [
+            _points_slot(key),
+            _APPROACH,
+            _SPACING,
+            _AXIS,
+            _feet_slot(key, nan=REJECT),
+            _PATH_MARGIN,
+            _BOX,
+            _count_slot("directions"),
+            _count_slot("rolls"),
+        ],
+        _map_probe_for,
+    )
