@@ -166,11 +166,9 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
   *out.status = status, *out.margin = a.margin,
   *out.slot = status == kReachUnreachable ? -1 : a.slot;
   if (status == kReachUnreachable) {
-    *out.distance = std::sqrt(nearest_e[0] * nearest_e[0] + nearest_e[1] * nearest_e[1] +
-                              nearest_e[2] * nearest_e[2]);
-    *out.angle = std::sqrt(nearest_e[3] * nearest_e[3] + nearest_e[4] * nearest_e[4] +
-                           nearest_e[5] * nearest_e[5]) /
-                 shared.scale;
+    // hypot: a target far beyond reach (1e300 m) still gets a finite distance
+    *out.distance = std::hypot(std::hypot(nearest_e[0], nearest_e[1]), nearest_e[2]);
+    *out.angle = std::hypot(std::hypot(nearest_e[3], nearest_e[4]), nearest_e[5]) / shared.scale;
   } else {
     *out.distance = *out.angle = 0.0;
   }
