@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import Robot
 from .._support.boundary import as_finite
+from ..motion.capsules import LINK_FRACTION, body_box
 from ..motion.gait import hip_height as _motion_hip_height
 from .terrain import Bumps, Flat, as_terrain
 
@@ -18,8 +19,6 @@ __all__ = ["foot_radius", "hip_height", "mjcf", "mujoco_model"]
 
 FOOT_FRACTION = 0.05
 """The default foot radius as a fraction of the leg's reach (Spot: 0.036 / 0.658; Go2: 0.022 / 0.426)."""
-LINK_FRACTION = 0.04
-"""The links' capsule radius as a fraction of the leg's reach (at most 70 % of the foot's radius)."""
 ARMATURE = 1e-3
 """Each joint's armature (kg m²) is ARMATURE · m L² (m the robot's mass, L the leg's reach): the order
 of a geared rotor's reflected inertia (Go2: 0.003, Spot: 0.024); it also keeps light links stable."""
@@ -217,10 +216,9 @@ def layout(robot, terrain=None, friction=1.0, timestep=0.001, foot_radius=None, 
     else:
         radius = as_finite(foot_radius, "foot_radius", 0.0, strict=True)
     reach = _reach(robot)
-    link_radius = min(LINK_FRACTION * reach, 0.7 * radius)
+    link_radius = min(LINK_FRACTION * reach, 0.7 * radius)  # the capsule model's, capped by the feet
     total = sum(link.inertial.mass for link in model.links.values() if link.inertial is not None)
     armature = ARMATURE * total * reach**2
-    hips = robot.hip_positions
     lower = {body: k for k, body in enumerate(tree.lower)}
 
     def body_xml(link: str, joint, depth: int) -> list[str]:
@@ -265,10 +263,7 @@ def layout(robot, terrain=None, friction=1.0, timestep=0.001, foot_radius=None, 
 
     def geoms(link: str, joint, pad: str) -> list[str]:
         if joint is None:  # the body: a box over the hips
-            low, high = hips.min(axis=0), hips.max(axis=0)
-            half = np.array([0.5 * (high[0] - low[0]), np.abs(hips[:, 1]).max(), 0.0]) + link_radius
-            half[2] = half[1]
-            centre = np.array([0.5 * (high[0] + low[0]), 0.0, hips[:, 2].mean()])
+            centre, half = body_box(robot, link_radius)  # the capsule model's (spotkin.motion.capsules)
             return [
                 f'{pad}<geom name="body" type="box" size="{_v(half)}" pos="{_v(centre)}" '
                 f'group="{FALL_GROUP}" {_ROBOT_GEOM}/>'
