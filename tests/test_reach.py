@@ -61,8 +61,8 @@ def check_answers(robot, T, res, feet=None, margin=None, stance=None):
     standing = robot.standing_torques(pose, q)
     assert np.all(np.asarray(standing.margin) >= margin - 1e-9)
     np.testing.assert_allclose(standing.margin, np.asarray(res.margin)[ok], atol=1e-9)
-    problem = reach_module.reference_problem(robot, np.eye(4))
-    assert not any(ref.collides(problem, row) for row in q)
+    problem = reach_module.reference_problem(robot, np.eye(4), feet)
+    assert not any(ref.collides(problem, row, T) for row, T in zip(q, sk.body_transform(pose)))
 
 
 @pytest.mark.parametrize("name", ROBOTS)
@@ -325,9 +325,10 @@ def test_capsule_model_flags_an_arm_through_the_body():
     problem = reach_module.reference_problem(spot, np.eye(4))
     stance = np.asarray(spot.body_ik(problem.nominal, problem.feet).q)
     forward = np.concatenate([stance, [0.0, -0.5, 0.5, 0.0, 0.0, 0.0]])  # the arm up and forward
-    assert not ref.collides(problem, forward)
+    T_nominal = sk.body_transform(problem.nominal)
+    assert not ref.collides(problem, forward, T_nominal)
     through = np.concatenate([stance, [math.pi, 0.5, 0.3, 0.0, 0.0, 0.0]])  # down behind, into the body
-    assert ref.collides(problem, through)
+    assert ref.collides(problem, through, T_nominal)
 
 
 @pytest.mark.parametrize("name", ROBOTS)
@@ -365,7 +366,9 @@ def test_reach_path_holds_every_constraint_at_every_sample(name):
         standing = robot.standing_torques(path.body_pose, path.q)
         assert (np.asarray(standing.margin) >= margin - 1e-9).all()
         np.testing.assert_allclose(standing.margin, path.margin, atol=1e-9)
-        assert not any(ref.collides(problem, row) for row in path.q)
+        assert not any(
+            ref.collides(problem, row, T) for row, T in zip(path.q, sk.body_transform(path.body_pose))
+        )
         steps = np.abs(np.diff(path.q, axis=0)).max(axis=1)
         assert steps[0] < 0.05 * steps.max() + 1e-12 and steps[-1] < 0.05 * steps.max() + 1e-12  # at rest
     assert done >= len(T) - 3
@@ -439,7 +442,8 @@ def test_reachability_answers_hold_every_constraint(name):
     assert ((result.q[ok] >= limits[:, 0] - 1e-12) & (result.q[ok] <= limits[:, 1] + 1e-12)).all()
     standing = robot.standing_torques(result.body_pose[ok], result.q[ok])
     assert (np.asarray(standing.margin) >= problem.margin - 1e-9).all()
-    assert not any(ref.collides(problem, row) for row in result.q[ok])
+    poses = sk.body_transform(result.body_pose[ok])
+    assert not any(ref.collides(problem, row, T) for row, T in zip(result.q[ok], poses))
     assert np.isnan(result.q[~ok]).all()
 
 
@@ -545,3 +549,17 @@ def test_targets_near_the_arm_singularities_get_exact_answers_or_a_status():
     assert ok[:20].mean() > 0.9 and ok[20:].mean() > 0.5
     assert np.abs(robot.fk_all(res.body_pose[ok], res.q[ok]).hand - T[ok]).max() < 1e-9
     assert np.isfinite(res.q).all() and np.isfinite(res.body_pose).all()
+
+
+def test_a_hand_target_under_the_ground_is_not_reached():
+    """The ground (the plane through the lowest foot point) is a capsule constraint: a hand target below
+    it, which the arm alone could reach, gets no OK answer."""
+    spot = robot_named("spot")
+    T = np.eye(4)
+    T[:3, :3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]  # the gripper pointing down
+    T[:3, 3] = [0.9, 0.0, -0.05]
+    assert spot.reach(T).status != sk.ReachStatus.OK
+    T[2, 3] = 0.25
+    above = spot.reach(T)
+    assert above.status == sk.ReachStatus.OK
+    assert above.body_pose[2] < reach_module._scales(spot)[0]  # the body leans down to it

@@ -190,7 +190,7 @@ void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const Re
   const ReachInput in{identity, feet, identity, zeros, zeros, nullptr, 0.0};
   const Search<Model> s{robot, arm, capsules, shared, in, robot.body.n_legs(), shared.m};
   *margin = margin_of(s, T_body, q);
-  *hits = collides(s, q);
+  *hits = collides(s, q, T_body);
 }
 
 #define SPOTKIN_INSTANTIATE(L)                                                                 \

@@ -160,9 +160,9 @@ double margin_of(const Search<Model>& s, const double* T_body, const double* q) 
   return support_margin(feet, s.legs, com);
 }
 
-// Whether an arm capsule hits the body box or a leg capsule (ref.collides).
+// Whether an arm capsule hits the body box or a leg capsule, or the ground (ref.collides).
 template <typename Model>
-bool collides(const Search<Model>& s, const double* q) {
+bool collides(const Search<Model>& s, const double* q, const double* T_body) {
   const ReachCapsules& c = s.caps;
   if (!c.enabled || c.n_points < 2) return false;
   const int dof = int(s.arm.chain->dof());
@@ -193,10 +193,16 @@ bool collides(const Search<Model>& s, const double* q) {
       seg[l][k][2] = hip[2] + s1 * v[1] + c1 * v[2];
     }
   }
+  double ground = s.in.feet[2];  // the horizontal plane through the lowest foot point
+  for (int l = 1; l < s.legs; ++l) ground = std::min(ground, s.in.feet[3 * l + 2]);
+  const auto height = [&](const double* F) {  // a frame origin's height in the world
+    return T_body[8] * F[3] + T_body[9] * F[7] + T_body[10] * F[11] + T_body[11];
+  };
   for (int k = 0; k + 1 < c.n_points; ++k) {
     const double* F0 = frames + 16 * c.points[k];
     const double* F1 = frames + 16 * c.points[k + 1];
     const double a[3] = {F0[3], F0[7], F0[11]}, b[3] = {F1[3], F1[7], F1[11]};
+    if (std::min(height(F0), height(F1)) < ground + c.radius) return true;
     if (c.vs_body[k] && segment_box_distance(a, b, c.box_centre, c.box_half) < c.radius)
       return true;
     for (int l = 0; l < s.legs; ++l) {
@@ -215,7 +221,7 @@ void check(const Search<Model>& s, Option& o) {
   double q[kReachMaxQ];
   whole_q(s, *o.ev, o.pose, o.slot, q);
   o.margin = margin_of(s, &o.ev->T[std::size_t(16 * o.pose)], q);
-  o.collides = collides(s, q);
+  o.collides = collides(s, q, &o.ev->T[std::size_t(16 * o.pose)]);
   o.checked = true;
 }
 

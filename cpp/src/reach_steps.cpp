@@ -102,7 +102,7 @@ void refine(const Search<Model>& s, Answer& a) {
       const double cost = cost_of(s, p_new, q_new);
       if (!(cost < a.cost)) continue;
       const double margin = margin_of(s, ev.T.data(), q_new);
-      if (!(margin >= s.in.margin) || collides(s, q_new)) continue;
+      if (!(margin >= s.in.margin) || collides(s, q_new, ev.T.data())) continue;
       std::copy_n(p_new, 6, a.p), std::copy_n(q_new, m, a.q), std::copy_n(ev.T.data(), 16, a.T);
       a.slot = ev.arm_status[0], a.cost = cost, a.margin = margin;
       taken = true;

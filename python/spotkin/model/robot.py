@@ -508,7 +508,8 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         """Whole-body reach: the body pose, the legs' joints and the arm's that put the hand exactly at
         ``T_hand_world`` (..., 4, 4) in the world with the feet fixed at ``feet`` (..., n, 3) (default:
         the nominal stance, :meth:`stance_feet` at the nominal height), every joint within its limits,
-        no collision between the arm and the body or the legs (:mod:`spotkin.motion.capsules`), the
+        no collision between the arm and the body, the legs or the ground (the horizontal plane through
+        the lowest foot point) (:mod:`spotkin.motion.capsules`), the
         centre of mass at least ``margin`` m (default 5 % of the hip height) inside the feet's support
         polygon, and the body pose within ``box`` (a :class:`spotkin.ReachBox` of offsets from the
         nominal pose in the stance frame; default :func:`spotkin.motion.reach.default_box`).
@@ -525,8 +526,7 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         in the guide's *Reach* page. A robot without an arm, an arm without 6 joints or without a
         closed form, a target of another shape or a ``box`` that is not (2, 6) with lower <= upper is a
         ``ValueError``; NaN or Inf in a sample, or a target that is not a rigid transform, gives
-        INVALID_INPUT and NaN in that sample only. No constraint keeps the hand or the arm above the
-        ground: a target below it may be answered.
+        INVALID_INPUT and NaN in that sample only.
         """
         return _MOTION["reach"](self, T_hand_world, feet, seed, margin, box)
 

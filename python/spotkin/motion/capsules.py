@@ -14,7 +14,9 @@ whose shortest leg reaches l (its longest hip-pitch to foot distance):
 
 An arm capsule is checked against the body box, and against each leg capsule, unless it already
 touches that part with the arm and the legs at zero: such a capsule is mounted on it (the arm's
-base link on the body's top, typically), and its contact is by design.
+base link on the body's top, typically), and its contact is by design. Every arm capsule is also kept
+above the ground, the horizontal plane through the lowest foot point (both ends of its segment at least
+r above it).
 """
 
 from __future__ import annotations

@@ -23,8 +23,10 @@ frame S:
 A body pose p with arm solution q_a (a branch of the arm's closed form) is **feasible** when every leg's
 IK is OK (reachable, within its limits), q_a is within the arm's limits, no arm capsule collides with
 the body box or a leg capsule (:mod:`spotkin.motion.capsules`: segment distance < 2 r to a leg
-capsule, < r to the box), and the support margin (M) of the centre of mass (arm included) is at
-least ``margin``: the signed distance of its horizontal projection to the convex hull of the feet.
+capsule, < r to the box) or the ground (an end of the capsule's segment lower than r above the
+horizontal plane through the lowest foot point), and the support margin (M) of the centre of mass
+(arm included) is at least ``margin``: the signed distance of its horizontal projection to the
+convex hull of the feet.
 It **reaches** when all of that but the margin holds.
 
 (G) The objective, least squares: cost = |r|^2 / 2 with r = [(p - p_ref) / w_p, wrap(q - q_ref) / w_q],
@@ -121,8 +123,9 @@ def candidate_units(count: int = CANDIDATES) -> np.ndarray:
     return np.array([[halton(k, b) for b in _PRIMES] for k in range(1, count + 1)]).reshape(count, 6)
 
 
-def collides(problem, q) -> bool:
-    """Whether an arm capsule hits the body box or a leg capsule (all in the body frame)."""
+def collides(problem, q, T_body) -> bool:
+    """Whether an arm capsule hits the body box or a leg capsule (in the body frame), or the ground: the
+    horizontal plane through the lowest foot point (world <- body ``T_body``)."""
     model = problem.capsules
     if model is None or not model.arm_points:
         return False
@@ -130,8 +133,13 @@ def collides(problem, q) -> bool:
     frames = problem.chain.frames(q[n3:])[:, :3, 3]
     legs = leg_segments(problem.robot, q[:n3])
     r = model.radius
+    T_body = np.asarray(T_body, float)
+    heights = frames @ T_body[2, :3] + T_body[2, 3]  # each frame origin's height in the world
+    ground = float(np.min(problem.feet[:, 2]))
     for k in range(len(model.arm_points) - 1):
         a, b = frames[model.arm_points[k]], frames[model.arm_points[k + 1]]
+        if min(heights[model.arm_points[k]], heights[model.arm_points[k + 1]]) < ground + r:
+            return True
         if model.arm_vs_body[k] and segment_box_distance(a, b, model.box_centre, model.box_half) < r:
             return True
         for i, (hip_pitch, knee, foot) in enumerate(legs):
@@ -225,7 +233,8 @@ def _option(problem: Problem, p, T_body, q_legs, q_arm, slot: int, order: int) -
     com = np.asarray(problem.robot.center_of_mass(T_body, q), float)
     margin = support_margin(problem.feet[:, :2], com[:2])
     r = residual(problem, p, q)
-    return Option(np.array(p, float), q, slot, margin, collides(problem, q), 0.5 * float(r @ r), order)
+    hit = collides(problem, q, T_body)
+    return Option(np.array(p, float), q, slot, margin, hit, 0.5 * float(r @ r), order)
 
 
 def evaluate(problem: Problem, p, order: int = 0, misses: list | None = None) -> list[Option]:
@@ -501,7 +510,7 @@ def feasible_samples(problem: Problem, n: int, seed: int = 0):
         T = body_T(problem, p)
         q_legs, ok = _legs(problem, T)
         q = np.concatenate([q_legs, lo + rng.random(len(lo)) * (hi - lo)])
-        if not ok or collides(problem, q):
+        if not ok or collides(problem, q, T):
             continue
         com = np.asarray(robot.center_of_mass(T, q), float)
         if support_margin(problem.feet[:, :2], com[:2]) < problem.margin:

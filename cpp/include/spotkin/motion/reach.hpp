@@ -112,7 +112,8 @@ void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachAr
                   const ReachOutput& out);
 
 // The constraints of (A) at one whole-body sample: world <- body T_body (16), q (m) and the feet
-// (legs, 3): its support margin (M), and whether an arm capsule collides.
+// (legs, 3): its support margin (M), and whether an arm capsule collides (with the body, a leg or
+// the ground).
 template <typename Model>
 void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
                        const ReachCapsules& capsules, const ReachShared& shared,
