@@ -40,6 +40,7 @@ struct Search {
 struct Evaluation {
   int n = 0;
   std::vector<double> p, T, legs, arm_q;
+  std::vector<double> targets, seeds;  // scratch: the arm's targets, the legs' seeds (reused)
   std::vector<std::int8_t> leg_status, arm_status;
   std::vector<std::uint8_t> valid, exists, exact;
   std::vector<bool> legs_ok;
@@ -51,6 +52,7 @@ struct Evaluation {
     valid.resize(std::size_t(8 * count)), exists.resize(std::size_t(8 * count)),
         exact.resize(std::size_t(8 * count));
     legs_ok.assign(std::size_t(count), false);
+    targets.resize(std::size_t(16 * count)), seeds.resize(std::size_t(3 * n_legs * count));
   }
 };
 
@@ -107,7 +109,7 @@ template <typename Model>
 void run(const Search<Model>& s, Evaluation& ev, const double* seed_legs = nullptr,
          bool nearest = false) {
   const int n = ev.n;
-  std::vector<double> targets(std::size_t(16 * n));
+  double* targets = ev.targets.data();
   for (int k = 0; k < n; ++k) body_T(s, &ev.p[std::size_t(6 * k)], &ev.T[std::size_t(16 * k)]);
   kernels::body_ik(s.robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(), s.in.feet,
                    true, seed_legs, ev.legs.data(), ev.leg_status.data(), n, nearest);
@@ -115,10 +117,10 @@ void run(const Search<Model>& s, Evaluation& ev, const double* seed_legs = nullp
     bool ok = true;
     for (int l = 0; l < s.legs; ++l) ok = ok && ev.leg_status[std::size_t(s.legs * k + l)] == 0;
     ev.legs_ok[std::size_t(k)] = ok;
-    arm_target(s, &ev.T[std::size_t(16 * k)], &targets[std::size_t(16 * k)]);
+    arm_target(s, &ev.T[std::size_t(16 * k)], targets + 16 * k);
   }
-  arm_ik_all(s.arm, targets.data(), ev.arm_q.data(), ev.valid.data(), ev.exists.data(),
-             ev.exact.data(), ev.arm_status.data(), n);
+  arm_ik_all(s.arm, targets, ev.arm_q.data(), ev.valid.data(), ev.exists.data(), ev.exact.data(),
+             ev.arm_status.data(), n);
 }
 
 template <typename Model>
@@ -291,9 +293,8 @@ void follow(const Search<Model>& s, const Answer& a, const double* poses, int n,
   ev.resize(n, s.legs);
   std::copy_n(poses, 6 * n, ev.p.data());
   const int n3 = 3 * s.legs;
-  std::vector<double> seeds(std::size_t(n3 * n));
-  for (int k = 0; k < n; ++k) std::copy_n(a.q, n3, &seeds[std::size_t(n3 * k)]);
-  run(s, ev, seeds.data());
+  for (int k = 0; k < n; ++k) std::copy_n(a.q, n3, &ev.seeds[std::size_t(n3 * k)]);
+  run(s, ev, ev.seeds.data());
   for (int k = 0; k < n; ++k) {
     double best = kInf;
     int slot = -1;
