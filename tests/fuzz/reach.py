@@ -116,29 +116,23 @@ def _seed_slot(key):
     )
 
 
-_MARGIN = Custom(
-    "margin",
-    {
-        "valid": _arg(0.02),
-        "negative": _arg(-0.05),
-        "huge": _arg(10.0),
-        "nan": _arg(math.nan),
-        "str": _arg("wide", REJECT, "type"),
-    },
-    default="omit",
-)
+def _margin_slot(nan=ACCEPT):
+    """The support margin; NaN: INVALID_INPUT for a reach (``nan`` ACCEPT), a ValueError for a path or a
+    map."""
+    return Custom(
+        "margin",
+        {
+            "valid": _arg(0.02),
+            "negative": _arg(-0.05),
+            "huge": _arg(10.0),
+            "nan": _arg(math.nan, nan, "" if nan == ACCEPT else "value"),
+            "str": _arg("wide", REJECT, "type"),
+        },
+        default="omit",
+    )
 
-_PATH_MARGIN = Custom(
-    "margin",
-    {
-        "valid": _arg(0.02),
-        "negative": _arg(-0.05),
-        "huge": _arg(10.0),
-        "nan": _arg(math.nan, REJECT, "value"),
-        "str": _arg("wide", REJECT, "type"),
-    },
-    default="omit",
-)
+
+_MARGIN, _PATH_MARGIN = _margin_slot(), _margin_slot(nan=REJECT)
 
 _BOX = Custom(
     "box",
