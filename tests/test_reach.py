@@ -390,8 +390,10 @@ def test_reach_path_bad_arguments():
     robot = robot_named("spot")
     T, _, _ = targets_of("spot", 1, seed=15)
     start = robot.reach(T[0])
-    with pytest.raises(ValueError, match="n must be at least 2"):
+    with pytest.raises(ValueError, match="n must be in"):
         robot.reach_path(start, T[0], n=1)
+    with pytest.raises(ValueError, match="n must be in"):
+        robot.reach_path(start, T[0], n=10**9)  # refused before any memory is taken
     with pytest.raises(ValueError, match="start q"):
         robot.reach_path((start.body_pose, start.q[:12]), T[0])
     with pytest.raises(TypeError, match="start"):
@@ -493,6 +495,8 @@ def test_reachability_bad_arguments():
         spot.reachability([[0.9, 0.0, 0.6]], axis="w")
     with pytest.raises(ValueError, match="spacing"):
         spot.reachability([[0.9, 0.0, 0.6]], spacing=-0.1)
+    with pytest.raises(ValueError, match="coarser spacing"):
+        spot.reachability(spacing=1e-6)  # a grid of 1e19 points: refused before any memory is taken
     with pytest.raises(ValueError, match="points"):
         spot.reachability(np.zeros((4, 2)))
     with pytest.raises(ValueError, match="do not broadcast"):

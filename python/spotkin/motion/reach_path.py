@@ -39,6 +39,8 @@ from .reach import (
 
 __all__ = ["ReachPath"]
 
+MAX_SAMPLES = 1_000_000
+"""The most samples a path may have."""
 ORDERS = ("together", "body_first", "arm_first", "via_zero", "via_middle")
 
 
@@ -116,8 +118,8 @@ def reach_path(robot, start, target, n=50, feet=None, margin=None, box=None) -> 
     if arm is None:
         raise ValueError("reach_path needs an arm: this robot has none (robot.arm is None)")
     n = as_index(n, "n")
-    if n < 2:
-        raise ValueError(f"n must be at least 2 (the start and the end), got {n}")
+    if n < 2 or n > MAX_SAMPLES:
+        raise ValueError(f"n must be in [2, {MAX_SAMPLES:,}] (the start, the end and between), got {n}")
     n_legs, m = robot.n_legs, 3 * robot.n_legs + arm.dof
     pose0, q0 = _start_parts(start, m)
     target = as_real(target, "target", np.float64)

@@ -33,6 +33,8 @@ __all__ = ["Reachability"]
 
 ROUND = 8
 """Orientations tried per point in one round (a point leaves the rounds when one reaches)."""
+MAX_GRID_POINTS = 5_000_000
+"""The most points a grid made here may have."""
 GRID_SPACING = 0.15
 """The default grid's spacing as a fraction of the hip height (Spot: 7.9 cm)."""
 
@@ -105,6 +107,12 @@ def default_grid(robot, spacing: float, feet: np.ndarray, box) -> np.ndarray:
     numbers = _numbers(robot)
     base = _arm_base(robot, feet)
     half = _arm_length(numbers.chain) + float(np.abs(np.concatenate([box[0][:3], box[1][:3]])).max())
+    count = (math.floor(2.0 * half / spacing) + 1) ** 3
+    if count > MAX_GRID_POINTS:
+        raise ValueError(
+            f"spacing {spacing:g} m makes a grid of about {count:,} points, more than {MAX_GRID_POINTS:,}: "
+            "choose a coarser spacing, or pass the points"
+        )
     axes = [np.arange(base[k] - half, base[k] + half + 0.5 * spacing, spacing) for k in range(3)]
     axes[2] = axes[2][axes[2] >= feet[:, 2].min()]
     return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
