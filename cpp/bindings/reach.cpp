@@ -139,21 +139,31 @@ py::tuple solve(const ReachModel& model, py::handle target_obj, py::handle feet_
     py::gil_scoped_release release;
     // one sample's statics model at every level: the answers do not depend on the batch
     on_robot(model.robot, 1, [&](const auto& robot) {
-      parallel_for(N, 1, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
-        for (std::ptrdiff_t i = begin; i < end; ++i) {
-          const motion::ReachInput in{target.data() + 16 * i,
-                                      feet.data() + 3 * legs * i,
-                                      stance.data() + 16 * i,
-                                      p_ref.data() + 6 * i,
-                                      q_ref.data() + m * i,
-                                      seed_data ? seed_data + 6 * i : nullptr,
-                                      margin.data()[i],
-                                      refine,
-                                      repair};
-          const motion::ReachOutput out{rows.body_pose + 6 * i, rows.q + m * i,     rows.status + i,
-                                        rows.margin + i,        rows.distance + i,  rows.angle + i,
-                                        rows.branches + 48 * i, rows.valid + 8 * i, rows.slot + i};
-          motion::reach_target(robot, model.arm, model.capsules, model.shared, in, out);
+      // blocks of kReachBlock targets, fixed by the targets' indices: the same answers for any
+      // thread count
+      const std::ptrdiff_t blocks = (N + motion::kReachBlock - 1) / motion::kReachBlock;
+      parallel_for(blocks, 1, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
+        for (std::ptrdiff_t b = begin; b < end; ++b) {
+          motion::ReachInput in[motion::kReachBlock];
+          motion::ReachOutput out[motion::kReachBlock];
+          const std::ptrdiff_t i0 = b * motion::kReachBlock;
+          const int count = int(std::min<std::ptrdiff_t>(motion::kReachBlock, N - i0));
+          for (int k = 0; k < count; ++k) {
+            const std::ptrdiff_t i = i0 + k;
+            in[k] = {target.data() + 16 * i,
+                     feet.data() + 3 * legs * i,
+                     stance.data() + 16 * i,
+                     p_ref.data() + 6 * i,
+                     q_ref.data() + m * i,
+                     seed_data ? seed_data + 6 * i : nullptr,
+                     margin.data()[i],
+                     refine,
+                     repair};
+            out[k] = {rows.body_pose + 6 * i, rows.q + m * i,     rows.status + i,
+                      rows.margin + i,        rows.distance + i,  rows.angle + i,
+                      rows.branches + 48 * i, rows.valid + 8 * i, rows.slot + i};
+          }
+          motion::reach_block(robot, model.arm, model.capsules, model.shared, in, out, count);
         }
       });
     });

@@ -1,7 +1,8 @@
 // Whole-body reach (spotkin/motion/reach.hpp): python/spotkin/reference/reach.py step for step, in
-// double. A target's candidates go through the batched body and arm kernels in one call each; the
-// options (cpp/src/reach_search.hpp), the Gauss-Newton refinement and the repair
-// (cpp/src/reach_steps.cpp) are scalar code over them.
+// double. The targets of a block go through each step together: a stage's candidates of every
+// target still searching, and a Gauss-Newton step's line search of every target, in one call of
+// the batched body and arm kernels each; the options (cpp/src/reach_search.hpp), the refinement's
+// normal equations and the repair (cpp/src/reach_steps.cpp) are scalar code, target by target.
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -12,172 +13,250 @@ namespace spotkin::motion {
 
 using namespace search;  // NOLINT: the search's steps
 
-template <typename Model>
-void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
-                  const ReachCapsules& capsules, const ReachShared& shared, const ReachInput& in,
-                  const ReachOutput& out) {
-  const int legs = robot.body.n_legs(), m = shared.m, n3 = 3 * legs;
-  const auto invalid = [&] {
-    std::fill(out.body_pose, out.body_pose + 6, kNan), std::fill(out.q, out.q + m, kNan);
-    *out.status = kReachInvalid, *out.margin = *out.distance = *out.angle = kNan;
-    std::fill(out.branches, out.branches + 48, kNan),
-        std::fill(out.valid, out.valid + 8, std::uint8_t(0));
-    *out.slot = -1;
-  };
-  {  // a finite rigid target (ref.rigid), finite feet, margin and references
-    const double* T = in.target;
-    bool ok = std::isfinite(in.margin);
-    for (int k = 0; k < 16; ++k) ok = ok && std::isfinite(T[k]);
-    for (int k = 0; k < 3 * legs; ++k) ok = ok && std::isfinite(in.feet[k]);
-    for (int k = 0; k < 6; ++k)
-      ok = ok && std::isfinite(in.p_ref[k]) && (!in.seed_pose || std::isfinite(in.seed_pose[k]));
-    for (int k = 0; k < m; ++k) ok = ok && std::isfinite(in.q_ref[k]);
-    if (ok) {
-      double last = 0.0, ortho = 0.0;
-      for (int k = 0; k < 4; ++k) last = std::max(last, std::abs(T[12 + k] - (k == 3 ? 1.0 : 0.0)));
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          const double d =
-              T[i] * T[j] + T[4 + i] * T[4 + j] + T[8 + i] * T[8 + j] - (i == j ? 1.0 : 0.0);
-          ortho = std::max(ortho, std::abs(d));
-        }
-      const double det = T[0] * (T[5] * T[10] - T[6] * T[9]) - T[1] * (T[4] * T[10] - T[6] * T[8]) +
-                         T[2] * (T[4] * T[9] - T[5] * T[8]);
-      ok = last <= 1e-6 && ortho <= 1e-6 && det > 0.0;
+namespace {
+
+// ref.rigid: a finite rigid target, and finite feet, margin and references.
+bool valid_input(const ReachInput& in, int legs, int m) {
+  const double* T = in.target;
+  bool ok = std::isfinite(in.margin);
+  for (int k = 0; k < 16; ++k) ok = ok && std::isfinite(T[k]);
+  for (int k = 0; k < 3 * legs; ++k) ok = ok && std::isfinite(in.feet[k]);
+  for (int k = 0; k < 6; ++k)
+    ok = ok && std::isfinite(in.p_ref[k]) && (!in.seed_pose || std::isfinite(in.seed_pose[k]));
+  for (int k = 0; k < m; ++k) ok = ok && std::isfinite(in.q_ref[k]);
+  if (!ok) return false;
+  double last = 0.0, ortho = 0.0;
+  for (int k = 0; k < 4; ++k) last = std::max(last, std::abs(T[12 + k] - (k == 3 ? 1.0 : 0.0)));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double d =
+          T[i] * T[j] + T[4 + i] * T[4 + j] + T[8 + i] * T[8 + j] - (i == j ? 1.0 : 0.0);
+      ortho = std::max(ortho, std::abs(d));
     }
-    if (!ok) return invalid();
-  }
-  const Search<Model> s{robot, arm, capsules, shared, in, legs, m};
-  // (C), (E), (A): stage by stage, until an option is feasible
-  const int first = (in.seed_pose ? 1 : 0) + 1;
-  const int sizes[3] = {first, kReachStageTwo, kReachCandidates - kReachStageTwo};
-  Evaluation stages[3];
-  std::vector<int> order(std::size_t(first + kReachCandidates));
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = int(k);
-  std::vector<Option> options;
-  options.reserve(
-      std::size_t(8 * (first + kReachCandidates)));  // no reallocation: options point at stages
+  const double det = T[0] * (T[5] * T[10] - T[6] * T[9]) - T[1] * (T[4] * T[10] - T[6] * T[8]) +
+                     T[2] * (T[4] * T[9] - T[5] * T[8]);
+  return last <= 1e-6 && ortho <= 1e-6 && det > 0.0;
+}
+
+// NaN answers with a status (INVALID_INPUT, or UNREACHABLE without the repair).
+void no_answer(const ReachOutput& out, int m, std::int8_t status) {
+  std::fill(out.body_pose, out.body_pose + 6, kNan), std::fill(out.q, out.q + m, kNan);
+  *out.status = status, *out.margin = *out.distance = *out.angle = kNan;
+  std::fill(out.branches, out.branches + 48, kNan),
+      std::fill(out.valid, out.valid + 8, std::uint8_t(0));
+  *out.slot = -1;
+}
+
+// A target's search in its block.
+struct Target {
+  bool searching = false, answered = false;  // in (C) .. (A); has an answer to write
+  std::vector<Option> options;               // point at the block's stage evaluations
   std::vector<Miss> misses;
   std::int8_t status = kReachUnreachable;
-  int chosen = -1, halton = 0, next_order = 0;
-  for (int stage = 0; stage < 3; ++stage) {
-    Evaluation& ev = stages[stage];
-    ev.resize(sizes[stage], legs);
-    for (int j = 0; j < sizes[stage]; ++j) {
-      double* p = &ev.p[std::size_t(6 * j)];
-      if (stage == 0 && in.seed_pose && j == 0) {
-        for (int k = 0; k < 6; ++k)
-          p[k] = std::min(std::max(in.seed_pose[k], shared.lower[k]), shared.upper[k]);
-      } else if (stage == 0) {
-        std::copy_n(shared.nominal, 6, p);
-      } else {
-        for (int k = 0; k < 6; ++k)
-          p[k] = shared.lower[k] + shared.halton[halton][k] * (shared.upper[k] - shared.lower[k]);
-        ++halton;
-      }
-    }
-    run(s, ev);
-    options_of(s, ev, order.data() + next_order, options, &misses);
-    next_order += sizes[stage];
-    chosen = choose(s, options, status);
-    if (status == kReachOk) break;
-  }
-  Answer a{};
-  a.slot = -1;
-  std::vector<int> start_order(kReachRepairStarts);
-  for (int k = 0; k < kReachRepairStarts; ++k) start_order[std::size_t(k)] = k;
+  int chosen = -1, next_order = 0, begin = 0, size = 0;
   std::vector<Evaluation> ends;  // the repair's ends (the chosen option may point at one)
   std::vector<Option> repaired;
-  const Option* picked = chosen >= 0 ? &options[std::size_t(chosen)] : nullptr;
   double nearest_e[6] = {};
-  if (!picked && !in.repair) {
-    std::fill(out.body_pose, out.body_pose + 6, kNan), std::fill(out.q, out.q + m, kNan);
-    *out.status = kReachUnreachable, *out.margin = *out.distance = *out.angle = kNan;
-    std::fill(out.branches, out.branches + 48, kNan),
-        std::fill(out.valid, out.valid + 8, std::uint8_t(0));
-    *out.slot = -1;
-    return;
+};
+
+// (F) for a target no candidate reaches: the repaired answer, or the nearest the repair came.
+template <typename Model>
+void repair(const Search<Model>& s, Target& t, Answer& a) {
+  const ReachShared& shared = s.sh;
+  const int n3 = 3 * s.legs;
+  double lo[6], hi[6];
+  for (int k = 0; k < 6; ++k) {
+    lo[k] = std::isfinite(shared.q_lower[n3 + k]) ? shared.q_lower[n3 + k] : -kPi;
+    hi[k] = std::isfinite(shared.q_upper[n3 + k]) ? shared.q_upper[n3 + k] : kPi;
   }
-  if (!picked) {  // (F)
-    double lo[6], hi[6];
-    for (int k = 0; k < 6; ++k) {
-      lo[k] = std::isfinite(shared.q_lower[n3 + k]) ? shared.q_lower[n3 + k] : -kPi;
-      hi[k] = std::isfinite(shared.q_upper[n3 + k]) ? shared.q_upper[n3 + k] : kPi;
-    }
-    std::stable_sort(misses.begin(), misses.end(), [](const Miss& x, const Miss& y) {
-      if (x.violation != y.violation) return x.violation < y.violation;
-      if (x.order != y.order) return x.order < y.order;
-      return x.slot < y.slot;
-    });
-    double z[kReachRepairStarts][12], e[kReachRepairStarts][6];
-    int count = 0;
+  std::vector<Miss>& misses = t.misses;
+  std::stable_sort(misses.begin(), misses.end(), [](const Miss& x, const Miss& y) {
+    if (x.violation != y.violation) return x.violation < y.violation;
+    if (x.order != y.order) return x.order < y.order;
+    return x.slot < y.slot;
+  });
+  double z[kReachRepairStarts][12], e[kReachRepairStarts][6];
+  int count = 0;
+  std::copy_n(shared.nominal, 6, z[count]);
+  for (int k = 0; k < 6; ++k) z[count][6 + k] = std::min(std::max(0.0, lo[k]), hi[k]);
+  ++count;
+  for (std::size_t j = 0; j < misses.size() && count < kReachRepairStarts; ++j, ++count) {
+    std::copy_n(misses[j].p, 6, z[count]);
+    for (int k = 0; k < 6; ++k)
+      z[count][6 + k] = std::min(std::max(misses[j].q_arm[k], lo[k]), hi[k]);
+  }
+  for (int u = 0; count < kReachRepairStarts; ++u, ++count) {
     std::copy_n(shared.nominal, 6, z[count]);
-    for (int k = 0; k < 6; ++k) z[count][6 + k] = std::min(std::max(0.0, lo[k]), hi[k]);
-    ++count;
-    for (std::size_t j = 0; j < misses.size() && count < kReachRepairStarts; ++j, ++count) {
-      std::copy_n(misses[j].p, 6, z[count]);
-      for (int k = 0; k < 6; ++k)
-        z[count][6 + k] = std::min(std::max(misses[j].q_arm[k], lo[k]), hi[k]);
+    for (int k = 0; k < 6; ++k) z[count][6 + k] = lo[k] + shared.halton[u][k] * (hi[k] - lo[k]);
+  }
+  t.ends.resize(kReachRepairStarts);  // sized once: the options point at them
+  t.repaired.reserve(8 * kReachRepairStarts);
+  int ran = 0;
+  for (int j = 0; j < kReachRepairStarts; ++j) {  // start by start, until one ends feasible
+    descend(s, z[j], e[j], j, t.ends[std::size_t(j)]);
+    ++ran;
+    options_of(s, t.ends[std::size_t(j)], 0, 1, j, t.repaired, nullptr);
+    t.chosen = choose(s, t.repaired, t.status);
+    if (t.status == kReachOk) break;
+  }
+  if (t.chosen >= 0) return;
+  int best = 0;  // the nearest the repair came (ties to the earlier start)
+  double best_e = kInf;
+  for (int j = 0; j < ran; ++j) {
+    double sum = 0.0;
+    for (int k = 0; k < 6; ++k) sum += e[j][k] * e[j][k];
+    if (sum < best_e) best_e = sum, best = j;
+  }
+  const Evaluation& end = t.ends[std::size_t(best)];
+  std::copy_n(z[best], 6, a.p);
+  std::copy_n(end.legs.data(), n3, a.q);
+  std::copy_n(z[best] + 6, 6, a.q + n3);
+  std::copy_n(end.T.data(), 16, a.T);
+  a.slot = -1;
+  a.margin = margin_of(s, a.T, a.q);
+  std::copy_n(e[best], 6, t.nearest_e);
+  t.status = kReachUnreachable;
+}
+
+}  // namespace
+
+template <typename Model>
+void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+                 const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
+                 const ReachOutput* out, int count) {
+  const int legs = robot.body.n_legs(), m = shared.m;
+  std::vector<Search<Model>> S;
+  S.reserve(std::size_t(count));
+  Target targets[kReachBlock];
+  Answer answers[kReachBlock] = {};
+  for (int t = 0; t < count; ++t) {
+    S.push_back({robot, arm, capsules, shared, in[t], legs, m});
+    if (!valid_input(in[t], legs, m)) {
+      no_answer(out[t], m, kReachInvalid);
+      continue;
     }
-    for (int u = 0; count < kReachRepairStarts; ++u, ++count) {
-      std::copy_n(shared.nominal, 6, z[count]);
-      for (int k = 0; k < 6; ++k) z[count][6 + k] = lo[k] + shared.halton[u][k] * (hi[k] - lo[k]);
+    targets[t].searching = true;
+    // no reallocation: the options point at the stages
+    targets[t].options.reserve(std::size_t(8 * (2 + kReachCandidates)));
+  }
+  // (C), (E), (A): stage by stage, until an option is feasible; a stage's candidates of every
+  // target still searching in one evaluation
+  Evaluation stages[3];
+  Checks checks;
+  for (int stage = 0, halton = 0; stage < 3; ++stage) {
+    Evaluation& ev = stages[stage];
+    int total = 0;
+    for (int t = 0; t < count; ++t) {
+      Target& tg = targets[t];
+      if (!tg.searching) continue;
+      const int first = (in[t].seed_pose ? 1 : 0) + 1;
+      tg.begin = total;
+      tg.size = stage == 0   ? first
+                : stage == 1 ? kReachStageTwo
+                             : kReachCandidates - kReachStageTwo;
+      total += tg.size;
     }
-    ends.resize(kReachRepairStarts);  // sized once: the options point at them
-    repaired.reserve(8 * kReachRepairStarts);
-    int ran = 0;
-    for (int j = 0; j < kReachRepairStarts; ++j) {  // start by start, until one ends feasible
-      descend(s, z[j], e[j], j, ends[std::size_t(j)]);
-      ++ran;
-      options_of(s, ends[std::size_t(j)], start_order.data() + j, repaired, nullptr);
-      chosen = choose(s, repaired, status);
-      if (status == kReachOk) break;
-    }
-    picked = chosen >= 0 ? &repaired[std::size_t(chosen)] : nullptr;
-    if (!picked) {  // the nearest the repair came (ties to the earlier start)
-      int best = 0;
-      double best_e = kInf;
-      for (int j = 0; j < ran; ++j) {
-        double sum = 0.0;
-        for (int k = 0; k < 6; ++k) sum += e[j][k] * e[j][k];
-        if (sum < best_e) best_e = sum, best = j;
+    if (total == 0) break;
+    ev.resize(total, legs);
+    for (int t = 0; t < count; ++t) {
+      const Target& tg = targets[t];
+      if (!tg.searching) continue;
+      for (int j = 0; j < tg.size; ++j) {
+        const int k = tg.begin + j;
+        double* p = &ev.p[std::size_t(6 * k)];
+        ev.owner[std::size_t(k)] = t;
+        if (stage == 0 && in[t].seed_pose && j == 0) {
+          for (int i = 0; i < 6; ++i)
+            p[i] = std::min(std::max(in[t].seed_pose[i], shared.lower[i]), shared.upper[i]);
+        } else if (stage == 0) {
+          std::copy_n(shared.nominal, 6, p);
+        } else {
+          for (int i = 0; i < 6; ++i)
+            p[i] = shared.lower[i] +
+                   shared.halton[halton + j][i] * (shared.upper[i] - shared.lower[i]);
+        }
       }
-      const Evaluation& end = ends[std::size_t(best)];
-      std::copy_n(z[best], 6, a.p);
-      std::copy_n(end.legs.data(), n3, a.q);
-      std::copy_n(z[best] + 6, 6, a.q + n3);
-      std::copy_n(end.T.data(), 16, a.T);
-      a.margin = margin_of(s, a.T, a.q);
-      std::copy_n(e[best], 6, nearest_e);
-      status = kReachUnreachable;
+    }
+    if (stage > 0) halton += stage == 1 ? kReachStageTwo : kReachCandidates - kReachStageTwo;
+    run(S.data(), ev);
+    Option* first[kReachBlock];
+    int owner[kReachBlock], n_first = 0;
+    for (int t = 0; t < count; ++t) {
+      Target& tg = targets[t];
+      if (!tg.searching) continue;
+      options_of(S[std::size_t(t)], ev, tg.begin, tg.begin + tg.size, tg.next_order, tg.options,
+                 &tg.misses);
+      tg.next_order += tg.size;
+      if (Option* o = first_unchecked(tg.options)) first[n_first] = o, owner[n_first++] = t;
+    }
+    check_all(S.data(), first, owner, n_first, checks);  // the options choose() checks first
+    for (int t = 0; t < count; ++t) {
+      Target& tg = targets[t];
+      if (!tg.searching) continue;
+      tg.chosen = choose(S[std::size_t(t)], tg.options, tg.status);
+      if (tg.status == kReachOk) tg.searching = false;
     }
   }
-  if (picked) {
+  // the chosen options, or (F) where none reaches; then (R) on every feasible answer at once
+  int refining[kReachBlock], n_refining = 0;
+  for (int t = 0; t < count; ++t) {
+    Target& tg = targets[t];
+    if (!tg.searching && tg.status != kReachOk) continue;  // INVALID_INPUT
+    tg.searching = false;
+    const Search<Model>& s = S[std::size_t(t)];
+    Answer& a = answers[t];
+    a.slot = -1;
+    const Option* picked = tg.chosen >= 0 ? &tg.options[std::size_t(tg.chosen)] : nullptr;
+    if (!picked && !in[t].repair) {
+      no_answer(out[t], m, kReachUnreachable);
+      continue;
+    }
+    if (!picked) {
+      repair(s, tg, a);
+      picked = tg.chosen >= 0 ? &tg.repaired[std::size_t(tg.chosen)] : nullptr;
+    }
+    tg.answered = true;
+    if (!picked) continue;  // UNREACHABLE: the nearest the repair came, in a
     const Evaluation& ev = *picked->ev;
     std::copy_n(&ev.p[std::size_t(6 * picked->pose)], 6, a.p);
     whole_q(s, ev, picked->pose, picked->slot, a.q);
     std::copy_n(&ev.T[std::size_t(16 * picked->pose)], 16, a.T);
     a.slot = picked->slot, a.cost = picked->cost, a.margin = picked->margin;
-    if (status == kReachOk && in.refine) refine(s, a);
+    if (tg.status == kReachOk && in[t].refine) refining[n_refining++] = t;
   }
-  // the answer
-  pose_of(a.T, out.body_pose);
-  std::copy_n(a.q, m, out.q);
-  *out.status = status, *out.margin = a.margin,
-  *out.slot = status == kReachUnreachable ? -1 : a.slot;
-  if (status == kReachUnreachable) {
-    // hypot: a target far beyond reach (1e300 m) still gets a finite distance
-    *out.distance = std::hypot(std::hypot(nearest_e[0], nearest_e[1]), nearest_e[2]);
-    *out.angle = std::hypot(std::hypot(nearest_e[3], nearest_e[4]), nearest_e[5]) / shared.scale;
-  } else {
-    *out.distance = *out.angle = 0.0;
+  if (n_refining) refine(S.data(), answers, refining, n_refining);
+  // the answers, and the arm's branches at each answer's body pose (one call)
+  Evaluation final_ev;
+  int n_final = 0;
+  final_ev.resize(count, legs);
+  for (int t = 0; t < count; ++t) {
+    const Target& tg = targets[t];
+    if (!tg.answered) continue;
+    const Answer& a = answers[t];
+    const ReachOutput& o = out[t];
+    pose_of(a.T, o.body_pose);
+    std::copy_n(a.q, m, o.q);
+    *o.status = tg.status, *o.margin = a.margin;
+    *o.slot = tg.status == kReachUnreachable ? -1 : a.slot;
+    if (tg.status == kReachUnreachable) {
+      // hypot: a target far beyond reach (1e300 m) still gets a finite distance
+      const double* e = tg.nearest_e;
+      *o.distance = std::hypot(std::hypot(e[0], e[1]), e[2]);
+      *o.angle = std::hypot(std::hypot(e[3], e[4]), e[5]) / shared.scale;
+    } else {
+      *o.distance = *o.angle = 0.0;
+    }
+    arm_target(S[std::size_t(t)], a.T, &final_ev.targets[std::size_t(16 * n_final)]);
+    final_ev.owner[std::size_t(n_final++)] = t;
   }
-  double target[16], exact[8];
-  std::uint8_t exists[8], exact_flags[8];
-  std::int8_t arm_status;
-  (void)exact;
-  arm_target(s, a.T, target);
-  arm_ik_all(arm, target, out.branches, out.valid, exists, exact_flags, &arm_status, 1);
+  if (n_final == 0) return;
+  arm_ik_all(arm, final_ev.targets.data(), final_ev.arm_q.data(), final_ev.valid.data(),
+             final_ev.exists.data(), final_ev.exact.data(), final_ev.arm_status.data(), n_final);
+  for (int k = 0; k < n_final; ++k) {
+    const ReachOutput& o = out[final_ev.owner[std::size_t(k)]];
+    std::copy_n(&final_ev.arm_q[std::size_t(48 * k)], 48, o.branches);
+    std::copy_n(&final_ev.valid[std::size_t(8 * k)], 8, o.valid);
+  }
 }
 
 template <typename Model>
@@ -194,9 +273,9 @@ void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const Re
 }
 
 #define SPOTKIN_INSTANTIATE(L)                                                                 \
-  template void reach_target<dynamics::FloatingModel<double, L>>(                              \
+  template void reach_block<dynamics::FloatingModel<double, L>>(                               \
       const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const ReachArm&, \
-      const ReachCapsules&, const ReachShared&, const ReachInput&, const ReachOutput&);        \
+      const ReachCapsules&, const ReachShared&, const ReachInput*, const ReachOutput*, int);   \
   template void reach_constraints<dynamics::FloatingModel<double, L>>(                         \
       const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const ReachArm&, \
       const ReachCapsules&, const ReachShared&, const double*, const double*, const double*,   \

@@ -36,11 +36,13 @@ struct Search {
   int legs, m;
 };
 
-// The poses of one evaluation: body transforms, legs, arm branches.
+// The poses of one evaluation: body transforms, legs, arm branches. Pose k belongs to the target
+// owner[k] of the block (cpp/src/reach.cpp: the kernels run the poses of every target at once).
 struct Evaluation {
   int n = 0;
+  std::vector<int> owner;
   std::vector<double> p, T, legs, arm_q;
-  std::vector<double> targets, seeds;  // scratch: the arm's targets, the legs' seeds (reused)
+  std::vector<double> targets, seeds, feet;  // scratch: arm targets, legs' seeds, feet (reused)
   std::vector<std::int8_t> leg_status, arm_status;
   std::vector<std::uint8_t> valid, exists, exact;
   std::vector<bool> legs_ok;
@@ -53,6 +55,7 @@ struct Evaluation {
         exact.resize(std::size_t(8 * count));
     legs_ok.assign(std::size_t(count), false);
     targets.resize(std::size_t(16 * count)), seeds.resize(std::size_t(3 * n_legs * count));
+    feet.resize(std::size_t(3 * n_legs * count)), owner.assign(std::size_t(count), 0);
   }
 };
 
@@ -101,25 +104,32 @@ inline void arm_ik_all(const ReachArm& arm, const double* poses, double* q, std:
                           exact, status, n);
 }
 
-// (E) at ev.n poses ev.p (legs unseeded, or seeded by seed_legs (n, 3 legs) when given).
-// The legs' fallback for an unreachable foot ("nearest", as the reference's body_ik) only matters
-// for the answer of an UNREACHABLE target (nearest = true there); elsewhere a failed leg is a
-// failed pose.
+// (E) at ev.n poses ev.p, pose k for target S[ev.owner[k]] (legs unseeded, or seeded by
+// seed_legs (n, 3 legs) when given), each kernel called once for every pose. The kernels answer
+// each pose as if alone (up to the arm's scalar and lane paths: an ulp), so a target's answer does
+// not depend on the thread count. The legs' fallback for an unreachable foot ("nearest", as the
+// reference's body_ik) only matters for the answer of an UNREACHABLE target (nearest = true
+// there); elsewhere a failed leg is a failed pose.
 template <typename Model>
-void run(const Search<Model>& s, Evaluation& ev, const double* seed_legs = nullptr,
+void run(const Search<Model>* S, Evaluation& ev, const double* seed_legs = nullptr,
          bool nearest = false) {
-  const int n = ev.n;
+  const int n = ev.n, legs = S[0].legs, n3 = 3 * legs;
   double* targets = ev.targets.data();
-  for (int k = 0; k < n; ++k) body_T(s, &ev.p[std::size_t(6 * k)], &ev.T[std::size_t(16 * k)]);
-  kernels::body_ik(s.robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(), s.in.feet,
-                   true, seed_legs, ev.legs.data(), ev.leg_status.data(), n, nearest);
+  for (int k = 0; k < n; ++k) {
+    const Search<Model>& s = S[ev.owner[std::size_t(k)]];
+    body_T(s, &ev.p[std::size_t(6 * k)], &ev.T[std::size_t(16 * k)]);
+    std::copy_n(s.in.feet, n3, &ev.feet[std::size_t(n3 * k)]);
+  }
+  kernels::body_ik(S[0].robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(),
+                   ev.feet.data(), false, seed_legs, ev.legs.data(), ev.leg_status.data(), n,
+                   nearest);
   for (int k = 0; k < n; ++k) {
     bool ok = true;
-    for (int l = 0; l < s.legs; ++l) ok = ok && ev.leg_status[std::size_t(s.legs * k + l)] == 0;
+    for (int l = 0; l < legs; ++l) ok = ok && ev.leg_status[std::size_t(legs * k + l)] == 0;
     ev.legs_ok[std::size_t(k)] = ok;
-    arm_target(s, &ev.T[std::size_t(16 * k)], targets + 16 * k);
+    arm_target(S[ev.owner[std::size_t(k)]], &ev.T[std::size_t(16 * k)], targets + 16 * k);
   }
-  arm_ik_all(s.arm, targets, ev.arm_q.data(), ev.valid.data(), ev.exists.data(), ev.exact.data(),
+  arm_ik_all(S[0].arm, targets, ev.arm_q.data(), ev.valid.data(), ev.exists.data(), ev.exact.data(),
              ev.arm_status.data(), n);
 }
 
@@ -151,27 +161,54 @@ void residual(const Search<Model>& s, const double* p, const double* q, double* 
   for (int k = 0; k < s.m; ++k) r[6 + k] = wrap_angle(q[k] - s.in.q_ref[k]) / s.sh.w_q[k];
 }
 
-// (M) of the whole robot at T_body with q.
-template <typename Model>
-double margin_of(const Search<Model>& s, const double* T_body, const double* q) {
-  dynamics::StaticsRows<double> rows{T_body, 16, BodyPoseFormat::Matrix, q, s.m, true};
-  double com[3];
-  dynamics::robot_com(s.robot, xyz_sequence(), rows, com, 1);
-  double feet[Body::kMaxLegs][2];
-  for (int l = 0; l < s.legs; ++l) feet[l][0] = s.in.feet[3 * l], feet[l][1] = s.in.feet[3 * l + 1];
-  return support_margin(feet, s.legs, com);
+// The sphere around the segment a-b: its centre and radius.
+inline void sphere(const double* a, const double* b, double* centre, double& radius) {
+  double sum = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    centre[i] = 0.5 * (a[i] + b[i]);
+    sum += (b[i] - a[i]) * (b[i] - a[i]);
+  }
+  radius = 0.5 * std::sqrt(sum);
 }
 
-// Whether an arm capsule hits the body box or a leg capsule, or the ground (ref.collides).
+// Scratch of the batched constraint checks (reused).
+struct Checks {
+  std::vector<double> T, q, com, arm_q, frames, margin;
+  std::vector<std::uint8_t> hits;
+  std::vector<int> owner;
+  void resize(int n, int m, int dof) {
+    T.resize(std::size_t(16 * n)), q.resize(std::size_t(m * n)), com.resize(std::size_t(3 * n));
+    arm_q.resize(std::size_t(dof * n)), frames.resize(std::size_t((dof + 2) * 16 * n));
+    margin.resize(std::size_t(n)), hits.resize(std::size_t(n)), owner.resize(std::size_t(n));
+  }
+};
+
+// (M) of the whole robot at n samples, sample i for target S[owner[i]] at body c.T (n, 16) and
+// c.q (n, m), in one call of the centre-of-mass kernel: c.margin (n).
 template <typename Model>
-bool collides(const Search<Model>& s, const double* q, const double* T_body) {
+void margins_of(const Search<Model>* S, Checks& c, int n) {
+  const Search<Model>& s0 = S[0];
+  dynamics::StaticsRows<double> rows{c.T.data(), 16,   BodyPoseFormat::Matrix,
+                                     c.q.data(), s0.m, true};
+  dynamics::robot_com(s0.robot, xyz_sequence(), rows, c.com.data(), n);
+  for (int i = 0; i < n; ++i) {
+    const Search<Model>& s = S[c.owner[std::size_t(i)]];
+    double feet[Body::kMaxLegs][2];
+    for (int l = 0; l < s.legs; ++l)
+      feet[l][0] = s.in.feet[3 * l], feet[l][1] = s.in.feet[3 * l + 1];
+    c.margin[std::size_t(i)] = support_margin(feet, s.legs, &c.com[std::size_t(3 * i)]);
+  }
+}
+
+// Whether an arm capsule hits the body box or a leg capsule, or the ground (ref.collides), with the
+// arm's frames (dof + 2, 4, 4) in the body. A pair whose bounding spheres are apart by the
+// capsules' radii is skipped: the segments' distance is at least the spheres'.
+template <typename Model>
+bool collides_framed(const Search<Model>& s, const double* q, const double* T_body,
+                     const double* frames) {
   const ReachCapsules& c = s.caps;
-  if (!c.enabled || c.n_points < 2) return false;
-  const int dof = int(s.arm.chain->dof());
-  double frames[(6 + 2) * 16];
-  kernels::chain_frames(*s.arm.chain, q + 3 * s.legs, frames, 1);
-  (void)dof;
   double seg[Body::kMaxLegs][3][3];  // hip pitch, knee, foot (body frame)
+  double centre[Body::kMaxLegs][2][3], half[Body::kMaxLegs][2];
   for (int l = 0; l < s.legs; ++l) {
     const Leg& leg = s.robot.body.legs[std::size_t(l)];
     const auto& g = leg.geometry();
@@ -194,12 +231,15 @@ bool collides(const Search<Model>& s, const double* q, const double* T_body) {
       seg[l][k][1] = hip[1] + c1 * v[1] - s1 * v[2];
       seg[l][k][2] = hip[2] + s1 * v[1] + c1 * v[2];
     }
+    for (int part = 0; part < 2; ++part)
+      sphere(seg[l][part], seg[l][part + 1], centre[l][part], half[l][part]);
   }
   double ground = s.in.feet[2];  // the horizontal plane through the lowest foot point
   for (int l = 1; l < s.legs; ++l) ground = std::min(ground, s.in.feet[3 * l + 2]);
   const auto height = [&](const double* F) {  // a frame origin's height in the world
     return T_body[8] * F[3] + T_body[9] * F[7] + T_body[10] * F[11] + T_body[11];
   };
+  const double reach = 2.0 * c.radius * (1.0 + 1e-9) + 1e-12;  // the pairs' test, with slack
   for (int k = 0; k + 1 < c.n_points; ++k) {
     const double* F0 = frames + 16 * c.points[k];
     const double* F1 = frames + 16 * c.points[k + 1];
@@ -207,42 +247,129 @@ bool collides(const Search<Model>& s, const double* q, const double* T_body) {
     if (std::min(height(F0), height(F1)) < ground + c.radius) return true;
     if (c.vs_body[k] && segment_box_distance(a, b, c.box_centre, c.box_half) < c.radius)
       return true;
-    for (int l = 0; l < s.legs; ++l) {
-      if (c.vs_legs[k][l][0] && segment_distance(a, b, seg[l][0], seg[l][1]) < 2.0 * c.radius)
-        return true;
-      if (c.vs_legs[k][l][1] && segment_distance(a, b, seg[l][1], seg[l][2]) < 2.0 * c.radius)
-        return true;
-    }
+    double mid[3], r;
+    sphere(a, b, mid, r);
+    for (int l = 0; l < s.legs; ++l)
+      for (int part = 0; part < 2; ++part) {
+        if (!c.vs_legs[k][l][part]) continue;
+        const double* o = centre[l][part];
+        const double gap =
+            std::sqrt((mid[0] - o[0]) * (mid[0] - o[0]) + (mid[1] - o[1]) * (mid[1] - o[1]) +
+                      (mid[2] - o[2]) * (mid[2] - o[2])) -
+            r - half[l][part];
+        if (gap >= reach) continue;  // apart: no need of the exact distance
+        if (segment_distance(a, b, seg[l][part], seg[l][part + 1]) < 2.0 * c.radius) return true;
+      }
   }
   return false;
+}
+
+// collides_framed at n samples (c.T, c.q, c.owner as margins_of), the arm's frames in one call:
+// c.hits (n).
+template <typename Model>
+void collisions_of(const Search<Model>* S, Checks& c, int n) {
+  const Search<Model>& s0 = S[0];
+  if (!s0.caps.enabled || s0.caps.n_points < 2) {
+    std::fill_n(c.hits.begin(), n, std::uint8_t(0));
+    return;
+  }
+  const int dof = int(s0.arm.chain->dof()), n3 = 3 * s0.legs, stride = (dof + 2) * 16;
+  for (int i = 0; i < n; ++i)
+    std::copy_n(&c.q[std::size_t(s0.m * i + n3)], dof, &c.arm_q[std::size_t(dof * i)]);
+  kernels::chain_frames(*s0.arm.chain, c.arm_q.data(), c.frames.data(), n);
+  for (int i = 0; i < n; ++i)
+    c.hits[std::size_t(i)] =
+        collides_framed(S[c.owner[std::size_t(i)]], &c.q[std::size_t(s0.m * i)],
+                        &c.T[std::size_t(16 * i)], &c.frames[std::size_t(stride * i)]);
+}
+
+template <typename Model>
+int arm_dof(const Search<Model>& s) {
+  return s.arm.chain ? int(s.arm.chain->dof()) : 6;
+}
+
+// (M) of one sample.
+template <typename Model>
+double margin_of(const Search<Model>& s, const double* T_body, const double* q) {
+  Checks c;
+  c.resize(1, s.m, arm_dof(s));
+  std::copy_n(T_body, 16, c.T.data()), std::copy_n(q, s.m, c.q.data()), c.owner[0] = 0;
+  margins_of(&s, c, 1);
+  return c.margin[0];
+}
+
+// Whether one sample collides.
+template <typename Model>
+bool collides(const Search<Model>& s, const double* q, const double* T_body) {
+  Checks c;
+  c.resize(1, s.m, arm_dof(s));
+  std::copy_n(T_body, 16, c.T.data()), std::copy_n(q, s.m, c.q.data()), c.owner[0] = 0;
+  collisions_of(&s, c, 1);
+  return c.hits[0] != 0;
+}
+
+// check of n options, option i of target S[owner[i]], in one call of each kernel.
+template <typename Model>
+void check_all(const Search<Model>* S, Option* const* options, const int* owner, int n, Checks& c) {
+  if (n == 0) return;
+  const Search<Model>& s0 = S[0];
+  c.resize(n, s0.m, arm_dof(s0));
+  for (int i = 0; i < n; ++i) {
+    const Option& o = *options[i];
+    c.owner[std::size_t(i)] = owner[i];
+    std::copy_n(&o.ev->T[std::size_t(16 * o.pose)], 16, &c.T[std::size_t(16 * i)]);
+    whole_q(s0, *o.ev, o.pose, o.slot, &c.q[std::size_t(s0.m * i)]);
+  }
+  margins_of(S, c, n);
+  collisions_of(S, c, n);
+  for (int i = 0; i < n; ++i) {
+    Option& o = *options[i];
+    o.margin = c.margin[std::size_t(i)], o.collides = c.hits[std::size_t(i)] != 0, o.checked = true;
+  }
+}
+
+// Whether option x comes before y in (A)'s order: cost, then candidate, then branch.
+inline bool before(const Option& x, const Option& y) {
+  if (x.cost != y.cost) return x.cost < y.cost;
+  if (x.order != y.order) return x.order < y.order;
+  return x.slot < y.slot;
+}
+
+// The first unchecked option in (A)'s order (null: none), the one choose() checks first.
+inline Option* first_unchecked(std::vector<Option>& options) {
+  Option* best = nullptr;
+  for (Option& o : options)
+    if (!o.checked && (!best || before(o, *best))) best = &o;
+  return best;
 }
 
 template <typename Model>
 void check(const Search<Model>& s, Option& o) {
   if (o.checked) return;
-  double q[kReachMaxQ];
-  whole_q(s, *o.ev, o.pose, o.slot, q);
-  o.margin = margin_of(s, &o.ev->T[std::size_t(16 * o.pose)], q);
-  o.collides = collides(s, q, &o.ev->T[std::size_t(16 * o.pose)]);
-  o.checked = true;
+  Option* one = &o;
+  const int owner = 0;
+  Checks c;
+  check_all(&s, &one, &owner, 1, c);
 }
 
-// The options of an evaluation (every valid branch where the legs are OK), and its misses.
+// The options of an evaluation's poses begin .. end - 1 (every valid branch where the legs are OK),
+// numbered from first_order, and their misses.
 template <typename Model>
-void options_of(const Search<Model>& s, const Evaluation& ev, const int* order,
+void options_of(const Search<Model>& s, const Evaluation& ev, int begin, int end, int first_order,
                 std::vector<Option>& out, std::vector<Miss>* misses) {
   double q[kReachMaxQ];
   const double* lo = s.sh.q_lower + 3 * s.legs;
   const double* hi = s.sh.q_upper + 3 * s.legs;
-  for (int k = 0; k < ev.n; ++k) {
+  for (int k = begin; k < end; ++k) {
+    const int order = first_order + (k - begin);
     if (!ev.legs_ok[std::size_t(k)]) continue;
     for (int slot = 0; slot < 8; ++slot) {
       const std::size_t at = std::size_t(8 * k + slot);
       if (ev.valid[at]) {
         whole_q(s, ev, k, slot, q);
-        out.push_back({&ev, k, slot, order[k], cost_of(s, &ev.p[std::size_t(6 * k)], q)});
+        out.push_back({&ev, k, slot, order, cost_of(s, &ev.p[std::size_t(6 * k)], q)});
       } else if (misses && ev.exists[at]) {
-        Miss miss{0.0, order[k], slot, {}, {}};
+        Miss miss{0.0, order, slot, {}, {}};
         for (int j = 0; j < 6; ++j) {
           const double v = ev.arm_q[48 * std::size_t(k) + std::size_t(6 * slot + j)];
           miss.violation += std::max(lo[j] - v, 0.0) + std::max(v - hi[j], 0.0);
@@ -259,12 +386,8 @@ template <typename Model>
 int choose(const Search<Model>& s, std::vector<Option>& options, std::int8_t& status) {
   std::vector<int> order(options.size());
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = int(k);
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const Option &x = options[std::size_t(a)], &y = options[std::size_t(b)];
-    if (x.cost != y.cost) return x.cost < y.cost;
-    if (x.order != y.order) return x.order < y.order;
-    return x.slot < y.slot;
-  });
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return before(options[std::size_t(a)], options[std::size_t(b)]); });
   for (const int k : order) {
     Option& o = options[std::size_t(k)];
     check(s, o);
@@ -286,16 +409,16 @@ struct Answer {
   double cost, margin;
 };
 
-// follow at n poses (n, 6) from the answer's branch: q (n, m) and ok (n).
+// follow at ev's poses (ev.p and ev.owner set), pose k from the branch of its target's answer
+// A[ev.owner[k]]: q (n, m) and ok (n).
 template <typename Model>
-void follow(const Search<Model>& s, const Answer& a, const double* poses, int n, Evaluation& ev,
-            double* q, bool* ok) {
-  ev.resize(n, s.legs);
-  std::copy_n(poses, 6 * n, ev.p.data());
-  const int n3 = 3 * s.legs;
-  for (int k = 0; k < n; ++k) std::copy_n(a.q, n3, &ev.seeds[std::size_t(n3 * k)]);
-  run(s, ev, ev.seeds.data());
+void follow(const Search<Model>* S, const Answer* A, Evaluation& ev, double* q, bool* ok) {
+  const int n = ev.n, n3 = 3 * S[0].legs, m = S[0].m;
+  for (int k = 0; k < n; ++k)
+    std::copy_n(A[ev.owner[std::size_t(k)]].q, n3, &ev.seeds[std::size_t(n3 * k)]);
+  run(S, ev, ev.seeds.data());
   for (int k = 0; k < n; ++k) {
+    const Answer& a = A[ev.owner[std::size_t(k)]];
     double best = kInf;
     int slot = -1;
     for (int j = 0; j < 8; ++j) {
@@ -308,13 +431,14 @@ void follow(const Search<Model>& s, const Answer& a, const double* poses, int n,
       if (move < best) best = move, slot = j;
     }
     ok[k] = ev.legs_ok[std::size_t(k)] && slot >= 0;
-    if (slot >= 0) whole_q(s, ev, k, slot, q + std::size_t(s.m) * std::size_t(k));
+    if (slot >= 0) whole_q(S[0], ev, k, slot, q + std::size_t(m) * std::size_t(k));
     ev.arm_status[std::size_t(k)] = std::int8_t(slot);  // the branch taken (reused field)
   }
 }
-// (R): Gauss-Newton steps on the answer's body pose (cpp/src/reach_steps.cpp).
+// (R): Gauss-Newton steps on the body poses of answers A[t] for the targets t in active (count),
+// the steps of every target in one call of each kernel (cpp/src/reach_steps.cpp).
 template <typename Model>
-void refine(const Search<Model>& s, Answer& a);
+void refine(const Search<Model>* S, Answer* A, const int* active, int count);
 
 // (F)'s damped least squares from z (12): z and e (6) in place, and (E) at its final body pose in
 // `end` (with options of order `order`); it stops early where an option there is feasible, tried

@@ -8,9 +8,11 @@
 
 namespace spotkin::motion::search {
 
-// ref.sensitivities: dq/dp (m, 6), row-major, at the answer; false where a Jacobian is singular.
+// ref.sensitivities: dq/dp (m, 6), row-major, at the answer, from the legs' Jacobians J_legs[l]
+// (3 x 3) and the arm's J_arm (6 x 6) there; false where a Jacobian is singular.
 template <typename Model>
-bool sensitivities(const Search<Model>& s, const Answer& a, double* dq) {
+bool sensitivities(const Search<Model>& s, const Answer& a, const double* const* J_legs,
+                   const double* J_arm, double* dq) {
   const int n3 = 3 * s.legs;
   const double* S = s.in.stance;  // world <- S: points into S by R_S^T (x - t_S)
   const auto to_stance = [&](const double* x, double* out) {
@@ -40,16 +42,15 @@ bool sensitivities(const Search<Model>& s, const Answer& a, double* dq) {
   };
   for (int l = 0; l < s.legs; ++l) {
     const auto& col = s.robot.body.columns[std::size_t(l)];
-    const double q_leg[3] = {a.q[col[0]], a.q[col[1]], a.q[col[2]]};
     double J[9], foot[3], rhs[18];
-    kernels::leg_jacobian(s.robot.body.legs[std::size_t(l)], q_leg, J, 1);
+    std::copy_n(J_legs[l], 9, J);
     to_stance(s.in.feet + 3 * l, foot);
     held(foot, rhs);
     if (!lu_solve(J, 3, rhs, 6)) return false;
     for (int i = 0; i < 3; ++i) std::copy_n(rhs + 6 * i, 6, dq + 6 * col[i]);
   }
   double J[36], target[3], rhs[36];
-  kernels::chain_jacobian(*s.arm.chain, a.q + n3, J, 1, 6, false);
+  std::copy_n(J_arm, 36, J);
   {  // the target's position in S (its column 3)
     const double p_t[3] = {s.in.target[3], s.in.target[7], s.in.target[11]};
     to_stance(p_t, target);
@@ -66,49 +67,120 @@ bool sensitivities(const Search<Model>& s, const Answer& a, double* dq) {
   return true;
 }
 
-// (R): Gauss-Newton steps on p.
+// (R): Gauss-Newton steps on p, for every active target at once: each step's line search tries
+// alpha = 1, 1/2, 1/4 in turn, the targets still without a step evaluated together.
 template <typename Model>
-void refine(const Search<Model>& s, Answer& a) {
-  const int m = s.m, rows = 6 + m;
+void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) {
+  const int m = S[0].m;
+  std::vector<int> active(active_in, active_in + count), pending, taken;
   Evaluation ev;
-  std::vector<double> r0(static_cast<std::size_t>(rows)), dq(static_cast<std::size_t>(6 * m));
-  for (int step = 0; step < s.sh.refine_steps; ++step) {
-    residual(s, a.p, a.q, r0.data());
-    if (!sensitivities(s, a, dq.data())) return;
-    // J = [diag(1 / w_p); dq / w_q]: J^T J + mu I and -J^T r0
-    double A[36], g[6];
-    for (int i = 0; i < 6; ++i) {
-      g[i] = -r0[std::size_t(i)] / s.sh.w_p[i];
-      for (int j = 0; j < 6; ++j)
-        A[6 * i + j] = (i == j ? 1.0 / (s.sh.w_p[i] * s.sh.w_p[i]) + kReachGnDamping : 0.0);
+  std::vector<double> r0(static_cast<std::size_t>(6 + m)), dq(static_cast<std::size_t>(6 * m));
+  std::vector<double> q_new(std::size_t(kReachBlock * m));
+  double g[kReachBlock][6];
+  bool ok_new[kReachBlock];
+  const int legs = S[0].legs, n3 = 3 * legs;
+  std::vector<double> leg_q(std::size_t(3 * kReachBlock)),
+      J_legs(std::size_t(9 * legs * kReachBlock));
+  std::vector<double> arm_q(std::size_t(6 * kReachBlock)), J_arm(std::size_t(36 * kReachBlock));
+  Checks checks;
+  for (int step = 0; step < S[0].sh.refine_steps && !active.empty(); ++step) {
+    pending.clear(), taken.clear();
+    const int n_active = int(active.size());
+    for (int l = 0; l < legs; ++l) {  // the Jacobians of every active target, one call each
+      const auto& col = S[0].robot.body.columns[std::size_t(l)];
+      for (int i = 0; i < n_active; ++i)
+        for (int j = 0; j < 3; ++j)
+          leg_q[std::size_t(3 * i + j)] = A[active[std::size_t(i)]].q[col[j]];
+      kernels::leg_jacobian(S[0].robot.body.legs[std::size_t(l)], leg_q.data(),
+                            &J_legs[std::size_t(9 * n_active * l)], n_active);
     }
-    for (int k = 0; k < m; ++k) {
-      const double* row = &dq[std::size_t(6 * k)];
-      const double inv = 1.0 / s.sh.w_q[k], r = r0[std::size_t(6 + k)];
+    for (int i = 0; i < n_active; ++i)
+      std::copy_n(A[active[std::size_t(i)]].q + n3, 6, &arm_q[std::size_t(6 * i)]);
+    kernels::chain_jacobian(*S[0].arm.chain, arm_q.data(), J_arm.data(), n_active, 6, false);
+    for (int i = 0; i < n_active; ++i) {
+      const int t = active[std::size_t(i)];
+      const Search<Model>& s = S[t];
+      const Answer& a = A[t];
+      residual(s, a.p, a.q, r0.data());
+      const double* J_leg[Body::kMaxLegs];
+      for (int l = 0; l < legs; ++l) J_leg[l] = &J_legs[std::size_t(9 * (n_active * l + i))];
+      if (!sensitivities(s, a, J_leg, &J_arm[std::size_t(36 * i)], dq.data())) continue;
+      // J = [diag(1 / w_p); dq / w_q]: J^T J + mu I and -J^T r0
+      double M[36], *gt = g[t];
       for (int i = 0; i < 6; ++i) {
-        g[i] -= row[i] * inv * r;
-        for (int j = 0; j < 6; ++j) A[6 * i + j] += row[i] * row[j] * inv * inv;
+        gt[i] = -r0[std::size_t(i)] / s.sh.w_p[i];
+        for (int j = 0; j < 6; ++j)
+          M[6 * i + j] = (i == j ? 1.0 / (s.sh.w_p[i] * s.sh.w_p[i]) + kReachGnDamping : 0.0);
       }
+      for (int k = 0; k < m; ++k) {
+        const double* row = &dq[std::size_t(6 * k)];
+        const double inv = 1.0 / s.sh.w_q[k], r = r0[std::size_t(6 + k)];
+        for (int i = 0; i < 6; ++i) {
+          gt[i] -= row[i] * inv * r;
+          for (int j = 0; j < 6; ++j) M[6 * i + j] += row[i] * row[j] * inv * inv;
+        }
+      }
+      if (cholesky_solve(M, 6, gt)) pending.push_back(t);
     }
-    if (!cholesky_solve(A, 6, g)) return;
-    bool taken = false;
     for (const double alpha : {1.0, 0.5, 0.25}) {
-      double p_new[6], q_new[kReachMaxQ];
-      for (int k = 0; k < 6; ++k)
-        p_new[k] = std::min(std::max(a.p[k] + alpha * g[k], s.sh.lower[k]), s.sh.upper[k]);
-      bool ok_new;
-      follow(s, a, p_new, 1, ev, q_new, &ok_new);
-      if (!ok_new) continue;
-      const double cost = cost_of(s, p_new, q_new);
-      if (!(cost < a.cost)) continue;
-      const double margin = margin_of(s, ev.T.data(), q_new);
-      if (!(margin >= s.in.margin) || collides(s, q_new, ev.T.data())) continue;
-      std::copy_n(p_new, 6, a.p), std::copy_n(q_new, m, a.q), std::copy_n(ev.T.data(), 16, a.T);
-      a.slot = ev.arm_status[0], a.cost = cost, a.margin = margin;
-      taken = true;
-      break;
+      if (pending.empty()) break;
+      const int n = int(pending.size());
+      ev.resize(n, S[0].legs);
+      for (int i = 0; i < n; ++i) {
+        const int t = pending[std::size_t(i)];
+        ev.owner[std::size_t(i)] = t;
+        for (int k = 0; k < 6; ++k)
+          ev.p[std::size_t(6 * i + k)] =
+              std::min(std::max(A[t].p[k] + alpha * g[t][k], S[t].sh.lower[k]), S[t].sh.upper[k]);
+      }
+      follow(S, A, ev, q_new.data(), ok_new);
+      // cheaper, then within the margin (one call for all), then free of collisions (one call)
+      double cost[kReachBlock], margin[kReachBlock];
+      int index[kReachBlock], n_cheaper = 0, n_stable = 0;
+      checks.resize(n, m, arm_dof(S[0]));
+      for (int i = 0; i < n; ++i) {
+        const int t = pending[std::size_t(i)];
+        cost[i] =
+            ok_new[i] ? cost_of(S[t], &ev.p[std::size_t(6 * i)], &q_new[std::size_t(m * i)]) : kNan;
+        if (!(cost[i] < A[t].cost)) continue;
+        index[n_cheaper] = i, checks.owner[std::size_t(n_cheaper)] = t;
+        std::copy_n(&ev.T[std::size_t(16 * i)], 16, &checks.T[std::size_t(16 * n_cheaper)]);
+        std::copy_n(&q_new[std::size_t(m * i)], m, &checks.q[std::size_t(m * n_cheaper)]);
+        ++n_cheaper;
+      }
+      if (n_cheaper) margins_of(S, checks, n_cheaper);
+      for (int j = 0; j < n_cheaper; ++j) {
+        const int t = checks.owner[std::size_t(j)];
+        margin[index[j]] = checks.margin[std::size_t(j)];
+        if (!(checks.margin[std::size_t(j)] >= S[t].in.margin)) continue;
+        if (n_stable != j) {
+          index[n_stable] = index[j], checks.owner[std::size_t(n_stable)] = t;
+          std::copy_n(&checks.T[std::size_t(16 * j)], 16, &checks.T[std::size_t(16 * n_stable)]);
+          std::copy_n(&checks.q[std::size_t(m * j)], m, &checks.q[std::size_t(m * n_stable)]);
+        }
+        ++n_stable;
+      }
+      if (n_stable) collisions_of(S, checks, n_stable);
+      bool accept[kReachBlock] = {};
+      for (int j = 0; j < n_stable; ++j) accept[index[j]] = checks.hits[std::size_t(j)] == 0;
+      std::size_t kept = 0;
+      for (int i = 0; i < n; ++i) {
+        const int t = pending[std::size_t(i)];
+        if (!accept[i]) {
+          pending[kept++] = t;
+          continue;
+        }
+        Answer& a = A[t];
+        std::copy_n(&ev.p[std::size_t(6 * i)], 6, a.p);
+        std::copy_n(&q_new[std::size_t(m * i)], m, a.q);
+        std::copy_n(&ev.T[std::size_t(16 * i)], 16, a.T);
+        a.slot = ev.arm_status[std::size_t(i)], a.cost = cost[i], a.margin = margin[i];
+        taken.push_back(t);
+      }
+      pending.resize(kept);
     }
-    if (!taken) return;
+    std::sort(taken.begin(), taken.end());
+    active.swap(taken);  // a target without a step stops
   }
 }
 
@@ -153,9 +225,9 @@ template <typename Model>
 bool answers_at(const Search<Model>& s, const double* z, int order, Evaluation& end) {
   end.resize(1, s.legs);
   std::copy_n(z, 6, end.p.data());
-  run(s, end, nullptr, true);
+  run(&s, end, nullptr, true);
   std::vector<Option> options;
-  options_of(s, end, &order, options, nullptr);
+  options_of(s, end, 0, 1, order, options, nullptr);
   std::int8_t status;
   choose(s, options, status);
   return status == kReachOk;
@@ -251,10 +323,10 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
   answers_at(s, z, order, end);
 }
 
-#define SPOTKIN_INSTANTIATE(L)                                     \
-  template void refine<dynamics::FloatingModel<double, L>>(        \
-      const Search<dynamics::FloatingModel<double, L>>&, Answer&); \
-  template void descend<dynamics::FloatingModel<double, L>>(       \
+#define SPOTKIN_INSTANTIATE(L)                                                      \
+  template void refine<dynamics::FloatingModel<double, L>>(                         \
+      const Search<dynamics::FloatingModel<double, L>>*, Answer*, const int*, int); \
+  template void descend<dynamics::FloatingModel<double, L>>(                        \
       const Search<dynamics::FloatingModel<double, L>>&, double*, double*, int, Evaluation&);
 SPOTKIN_INSTANTIATE(dynamics::kLanes64)
 SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)

@@ -3,7 +3,8 @@
 // (F) are cited in reach.cpp): candidates in the body-pose box, the legs' and the arm's closed
 // forms at each (the batched kernels over a target's candidates), the feasible option of least
 // cost, a few Gauss-Newton steps on the body pose, and a damped least-squares repair when no
-// candidate reaches. One target per call; the binding runs targets on the threads.
+// candidate reaches. Targets go in blocks of kReachBlock, searched together; the binding runs the
+// blocks on the threads.
 #pragma once
 
 #include <cstddef>
@@ -32,6 +33,7 @@ constexpr double kReachRepairInset = 1e-6;  // REPAIR_INSET
 constexpr double kReachNullGain = 0.2;      // NULL_GAIN
 constexpr int kReachMaxQ = 3 * Body::kMaxLegs + 6;
 constexpr int kReachMaxSegments = 8;
+constexpr int kReachBlock = 8;  // the targets searched together (one call of each kernel per step)
 
 // The statuses (ReachStatus).
 enum ReachCode : std::int8_t {
@@ -104,12 +106,14 @@ struct ReachOutput {
   std::int64_t* slot;
 };
 
-// The answer for one target (NaN and INVALID_INPUT for a target that is not a finite rigid
-// transform, or non-finite feet, margin or references).
+// The answers for count (at most kReachBlock) targets in[k] -> out[k], searched together: each
+// step of the search runs the kernels once over the candidates of every target still searching
+// (NaN and INVALID_INPUT for a target that is not a finite rigid transform, or non-finite feet,
+// margin or references). A target's answer is the one it gets alone, whatever its block.
 template <typename Model>
-void reach_target(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
-                  const ReachCapsules& capsules, const ReachShared& shared, const ReachInput& in,
-                  const ReachOutput& out);
+void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+                 const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
+                 const ReachOutput* out, int count);
 
 // The constraints of (A) at one whole-body sample: world <- body T_body (16), q (m) and the feet
 // (legs, 3): its support margin (M), and whether an arm capsule collides (with the body, a leg or
