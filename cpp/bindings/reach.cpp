@@ -104,6 +104,7 @@ ReachModel make_reach_model(const RobotStatics& robot, py::handle arm_obj, const
     const double w = finite ? 0.5 * (sh.q_upper[k] - sh.q_lower[k]) : kPiValue;
     sh.w_q[k] = w > 0.0 ? w : 1.0;
   }
+  motion::prepare_shared(sh);
   return model;
 }
 

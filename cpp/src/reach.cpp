@@ -13,6 +13,22 @@ namespace spotkin::motion {
 
 using namespace search;  // NOLINT: the search's steps
 
+// The candidates' points of the box: p = lower + u (upper - lower) for (C)'s unit point u.
+void candidate_pose(const ReachShared& shared, int k, double* p) {
+  for (int i = 0; i < 6; ++i)
+    p[i] = shared.lower[i] + shared.halton[k][i] * (shared.upper[i] - shared.lower[i]);
+}
+
+void prepare_shared(ReachShared& shared) {
+  body_batch::pose_transform(shared.nominal, BodyPoseFormat::Euler, xyz_sequence(),
+                             shared.local[0]);
+  for (int k = 0; k < kReachCandidates; ++k) {
+    double p[6];
+    candidate_pose(shared, k, p);
+    body_batch::pose_transform(p, BodyPoseFormat::Euler, xyz_sequence(), shared.local[1 + k]);
+  }
+}
+
 namespace {
 
 // ref.rigid: a finite rigid target, and finite feet, margin and references.
@@ -170,10 +186,10 @@ void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm
             p[i] = std::min(std::max(in[t].seed_pose[i], shared.lower[i]), shared.upper[i]);
         } else if (stage == 0) {
           std::copy_n(shared.nominal, 6, p);
+          ev.local[std::size_t(k)] = shared.local[0];
         } else {
-          for (int i = 0; i < 6; ++i)
-            p[i] = shared.lower[i] +
-                   shared.halton[halton + j][i] * (shared.upper[i] - shared.lower[i]);
+          candidate_pose(shared, halton + j, p);
+          ev.local[std::size_t(k)] = shared.local[1 + halton + j];
         }
       }
     }

@@ -22,35 +22,6 @@ void pose_of(const double* T, double* pose) noexcept {
   pose[5] = std::atan2(-T[1], T[0]);
 }
 
-// Solves the n x n symmetric positive definite A x = b in place of b (Cholesky); false if not SPD.
-bool cholesky_solve(double* A, int n, double* b, int columns) noexcept {
-  for (int j = 0; j < n; ++j) {
-    double d = A[n * j + j];
-    for (int k = 0; k < j; ++k) d -= A[n * j + k] * A[n * j + k];
-    if (!(d > 0.0)) return false;
-    d = std::sqrt(d);
-    A[n * j + j] = d;
-    for (int i = j + 1; i < n; ++i) {
-      double s = A[n * i + j];
-      for (int k = 0; k < j; ++k) s -= A[n * i + k] * A[n * j + k];
-      A[n * i + j] = s / d;
-    }
-  }
-  for (int c = 0; c < columns; ++c) {
-    for (int i = 0; i < n; ++i) {  // L y = b
-      double s = b[columns * i + c];
-      for (int k = 0; k < i; ++k) s -= A[n * i + k] * b[columns * k + c];
-      b[columns * i + c] = s / A[n * i + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {  // L^T x = y
-      double s = b[columns * i + c];
-      for (int k = i + 1; k < n; ++k) s -= A[n * k + i] * b[columns * k + c];
-      b[columns * i + c] = s / A[n * i + i];
-    }
-  }
-  return true;
-}
-
 // ref.segment_distance: the segments a-b and c-d (Ericson 5.1.9).
 double segment_distance(const double* a, const double* b, const double* c,
                         const double* d) noexcept {
@@ -146,33 +117,6 @@ void rotation_log(const double* R, double* out) noexcept {
     return;
   }
   for (int k = 0; k < 3; ++k) out[k] = angle * w[k] / (2.0 * s);
-}
-
-// Solves the n x n A x = b in place of b (Gaussian elimination, partial pivoting, `columns`
-// right-hand sides); false when A is singular.
-bool lu_solve(double* A, int n, double* b, int columns) noexcept {
-  for (int k = 0; k < n; ++k) {
-    int pivot = k;
-    for (int i = k + 1; i < n; ++i)
-      if (std::abs(A[n * i + k]) > std::abs(A[n * pivot + k])) pivot = i;
-    if (!(std::abs(A[n * pivot + k]) > 0.0)) return false;
-    if (pivot != k) {
-      for (int j = 0; j < n; ++j) std::swap(A[n * k + j], A[n * pivot + j]);
-      for (int j = 0; j < columns; ++j) std::swap(b[columns * k + j], b[columns * pivot + j]);
-    }
-    for (int i = k + 1; i < n; ++i) {
-      const double f = A[n * i + k] / A[n * k + k];
-      for (int j = k; j < n; ++j) A[n * i + j] -= f * A[n * k + j];
-      for (int j = 0; j < columns; ++j) b[columns * i + j] -= f * b[columns * k + j];
-    }
-  }
-  for (int i = n - 1; i >= 0; --i)
-    for (int j = 0; j < columns; ++j) {
-      double sum = b[columns * i + j];
-      for (int k = i + 1; k < n; ++k) sum -= A[n * i + k] * b[columns * k + j];
-      b[columns * i + j] = sum / A[n * i + i];
-    }
-  return true;
 }
 
 }  // namespace spotkin::motion::geometry

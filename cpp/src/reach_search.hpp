@@ -41,6 +41,7 @@ struct Search {
 struct Evaluation {
   int n = 0;
   std::vector<int> owner;
+  std::vector<const double*> local;  // S <- body of pose k when known (null: from p)
   std::vector<double> p, T, legs, arm_q;
   std::vector<double> targets, seeds, feet;  // scratch: arm targets, legs' seeds, feet (reused)
   std::vector<std::int8_t> leg_status, arm_status;
@@ -56,6 +57,7 @@ struct Evaluation {
     legs_ok.assign(std::size_t(count), false);
     targets.resize(std::size_t(16 * count)), seeds.resize(std::size_t(3 * n_legs * count));
     feet.resize(std::size_t(3 * n_legs * count)), owner.assign(std::size_t(count), 0);
+    local.assign(std::size_t(count), nullptr);
   }
 };
 
@@ -117,7 +119,10 @@ void run(const Search<Model>* S, Evaluation& ev, const double* seed_legs = nullp
   double* targets = ev.targets.data();
   for (int k = 0; k < n; ++k) {
     const Search<Model>& s = S[ev.owner[std::size_t(k)]];
-    body_T(s, &ev.p[std::size_t(6 * k)], &ev.T[std::size_t(16 * k)]);
+    if (const double* local = ev.local[std::size_t(k)])
+      mul4(s.in.stance, local, &ev.T[std::size_t(16 * k)]);
+    else
+      body_T(s, &ev.p[std::size_t(6 * k)], &ev.T[std::size_t(16 * k)]);
     std::copy_n(s.in.feet, n3, &ev.feet[std::size_t(n3 * k)]);
   }
   kernels::body_ik(S[0].robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(),
@@ -176,6 +181,7 @@ struct Checks {
   std::vector<double> T, q, com, arm_q, frames, margin;
   std::vector<std::uint8_t> hits;
   std::vector<int> owner;
+  std::vector<const double*> local;  // S <- body of pose k when known (null: from p)
   void resize(int n, int m, int dof) {
     T.resize(std::size_t(16 * n)), q.resize(std::size_t(m * n)), com.resize(std::size_t(3 * n));
     arm_q.resize(std::size_t(dof * n)), frames.resize(std::size_t((dof + 2) * 16 * n));
@@ -245,10 +251,18 @@ bool collides_framed(const Search<Model>& s, const double* q, const double* T_bo
     const double* F1 = frames + 16 * c.points[k + 1];
     const double a[3] = {F0[3], F0[7], F0[11]}, b[3] = {F1[3], F1[7], F1[11]};
     if (std::min(height(F0), height(F1)) < ground + c.radius) return true;
-    if (c.vs_body[k] && segment_box_distance(a, b, c.box_centre, c.box_half) < c.radius)
-      return true;
     double mid[3], r;
     sphere(a, b, mid, r);
+    if (c.vs_body[k]) {
+      double g2 = 0.0;  // the sphere's centre from the box (axis-aligned in the body)
+      for (int i = 0; i < 3; ++i) {
+        const double g = std::max(std::abs(mid[i] - c.box_centre[i]) - c.box_half[i], 0.0);
+        g2 += g * g;
+      }
+      if (std::sqrt(g2) - r < 0.5 * reach &&
+          segment_box_distance(a, b, c.box_centre, c.box_half) < c.radius)
+        return true;
+    }
     for (int l = 0; l < s.legs; ++l)
       for (int part = 0; part < 2; ++part) {
         if (!c.vs_legs[k][l][part]) continue;

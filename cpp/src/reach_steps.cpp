@@ -46,7 +46,7 @@ bool sensitivities(const Search<Model>& s, const Answer& a, const double* const*
     std::copy_n(J_legs[l], 9, J);
     to_stance(s.in.feet + 3 * l, foot);
     held(foot, rhs);
-    if (!lu_solve(J, 3, rhs, 6)) return false;
+    if (!lu_solve<3, 6>(J, rhs)) return false;
     for (int i = 0; i < 3; ++i) std::copy_n(rhs + 6 * i, 6, dq + 6 * col[i]);
   }
   double J[36], target[3], rhs[36];
@@ -62,7 +62,7 @@ bool sensitivities(const Search<Model>& s, const Answer& a, const double* const*
     for (int i = 0; i < 3; ++i)
       rhs[6 * (3 + i) + j] = -(T[i] * w[0] + T[4 + i] * w[1] + T[8 + i] * w[2]);
   }
-  if (!lu_solve(J, 6, rhs, 6)) return false;
+  if (!lu_solve<6, 6>(J, rhs)) return false;
   std::copy_n(rhs, 36, dq + 6 * n3);
   return true;
 }
@@ -120,7 +120,7 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
           for (int j = 0; j < 6; ++j) M[6 * i + j] += row[i] * row[j] * inv * inv;
         }
       }
-      if (cholesky_solve(M, 6, gt)) pending.push_back(t);
+      if (cholesky_solve<6>(M, gt)) pending.push_back(t);
     }
     for (const double alpha : {1.0, 0.5, 0.25}) {
       if (pending.empty()) break;
@@ -279,7 +279,7 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
           A[6 * i + j] = sum + (i == j ? lam * lam : 0.0);
           X[6 * i + j] = i == j ? 1.0 : 0.0;
         }
-      cholesky_solve(A, 6, X, 6);
+      cholesky_solve<6, 6>(A, X);
       double P[12][6];  // pinv = Jf^T X
       for (int i = 0; i < 12; ++i)
         for (int j = 0; j < 6; ++j) {

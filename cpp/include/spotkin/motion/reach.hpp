@@ -75,7 +75,12 @@ struct ReachShared {
   int refine_steps;  // REFINE_STEPS of (R)
   double q_lower[kReachMaxQ], q_upper[kReachMaxQ], w_q[kReachMaxQ];
   double halton[kReachCandidates][6];  // the unit points of (C)
+  // S <- body at the nominal pose (0) and at (C)'s points (1 + k), set by prepare_shared
+  double local[kReachCandidates + 1][16];
 };
+
+// Sets shared.local from the nominal pose, the box and the Halton points.
+void prepare_shared(ReachShared& shared);
 
 // One target's inputs (row-major): world <- hand target (16), feet (legs, 3), world <- S (16), the
 // residual's references p_ref (6) and q_ref (m), the seed's pose in S (6, or null) and the margin.
