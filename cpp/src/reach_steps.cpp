@@ -112,14 +112,16 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
         for (int j = 0; j < 6; ++j)
           M[6 * i + j] = (i == j ? 1.0 / (s.sh.w_p[i] * s.sh.w_p[i]) + kReachGnDamping : 0.0);
       }
-      for (int k = 0; k < m; ++k) {
+      for (int k = 0; k < m; ++k) {  // the rows u = dq_k / w_q: M += u u^T (its upper half)
         const double* row = &dq[std::size_t(6 * k)];
         const double inv = 1.0 / s.sh.w_q[k], r = r0[std::size_t(6 + k)];
-        for (int i = 0; i < 6; ++i) {
-          gt[i] -= row[i] * inv * r;
-          for (int j = 0; j < 6; ++j) M[6 * i + j] += row[i] * row[j] * inv * inv;
-        }
+        double u[6];
+        for (int i = 0; i < 6; ++i) u[i] = row[i] * inv, gt[i] -= u[i] * r;
+        for (int i = 0; i < 6; ++i)
+          for (int j = i; j < 6; ++j) M[6 * i + j] += u[i] * u[j];
       }
+      for (int i = 1; i < 6; ++i)
+        for (int j = 0; j < i; ++j) M[6 * i + j] = M[6 * j + i];
       if (cholesky_solve<6>(M, gt)) pending.push_back(t);
     }
     for (const double alpha : {1.0, 0.5, 0.25}) {
@@ -184,26 +186,46 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
   }
 }
 
-// (F)'s hand error at each z (n, 12): e (n, 6).
+// The hand's error e (6) from world <- body T_body and body <- hand T_arm: the target's
+// position minus the hand's, and the rotation vector of R_target R_hand^T, times the scale.
 template <typename Model>
-void hand_errors(const Search<Model>& s, const double* z, int n, double* e) {
-  std::vector<double> hands(std::size_t(16 * n)), arm_q(std::size_t(6 * n));
-  for (int k = 0; k < n; ++k) std::copy_n(z + 12 * k + 6, 6, &arm_q[std::size_t(6 * k)]);
-  kernels::chain_fk(*s.arm.chain, arm_q.data(), hands.data(), n);
+void hand_error(const Search<Model>& s, const double* T_body, const double* T_arm, double* e) {
   const double* t = s.in.target;
-  for (int k = 0; k < n; ++k) {
-    double T_body[16], T_hand[16];
-    body_T(s, z + 12 * k, T_body);
-    mul4(T_body, &hands[std::size_t(16 * k)], T_hand);
-    double R[9];  // R_target R_hand^T
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        R[3 * i + j] = t[4 * i] * T_hand[4 * j] + t[4 * i + 1] * T_hand[4 * j + 1] +
-                       t[4 * i + 2] * T_hand[4 * j + 2];
-    double* out = e + 6 * k;
-    for (int i = 0; i < 3; ++i) out[i] = t[4 * i + 3] - T_hand[4 * i + 3];
-    rotation_log(R, out + 3);
-    for (int i = 3; i < 6; ++i) out[i] *= s.sh.scale;
+  double T_hand[16], R[9];  // R_target R_hand^T
+  mul4(T_body, T_arm, T_hand);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      R[3 * i + j] = t[4 * i] * T_hand[4 * j] + t[4 * i + 1] * T_hand[4 * j + 1] +
+                     t[4 * i + 2] * T_hand[4 * j + 2];
+  for (int i = 0; i < 3; ++i) e[i] = t[4 * i + 3] - T_hand[4 * i + 3];
+  rotation_log(R, e + 3);
+  for (int i = 3; i < 6; ++i) e[i] *= s.sh.scale;
+}
+
+// (F)'s hand error at z (12): e (6).
+template <typename Model>
+void hand_errors(const Search<Model>& s, const double* z, double* e) {
+  double T_arm[16], T_body[16];
+  kernels::chain_fk(*s.arm.chain, z + 6, T_arm, 1);
+  body_T(s, z, T_body);
+  hand_error(s, T_body, T_arm, e);
+}
+
+// The hand errors at z + FD_STEP along each of the 12 axes: es (12, 6). A body column moves the
+// body only, an arm column the arm only: 7 body transforms and 7 arm poses.
+template <typename Model>
+void hand_error_columns(const Search<Model>& s, const double* z, double* es) {
+  double arm_q[7 * 6], T_arm[7 * 16], T_body[7 * 16];
+  for (int j = 0; j < 7; ++j) {
+    double p[6];
+    std::copy_n(z + 6, 6, arm_q + 6 * j), std::copy_n(z, 6, p);
+    if (j > 0) arm_q[6 * j + j - 1] += kReachFdStep, p[j - 1] += kReachFdStep;
+    body_T(s, p, T_body + 16 * j);
+  }
+  kernels::chain_fk(*s.arm.chain, arm_q, T_arm, 7);
+  for (int j = 0; j < 6; ++j) {
+    hand_error(s, T_body + 16 * (1 + j), T_arm, es + 6 * j);        // body axis j
+    hand_error(s, T_body, T_arm + 16 * (1 + j), es + 6 * (6 + j));  // arm axis j
   }
 }
 
@@ -244,9 +266,9 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
               upper[6 + k] = s.sh.q_upper[n3 + k] - kReachRepairInset;
   }
   for (int k = 0; k < 12; ++k) z[k] = std::min(std::max(z[k], lower[k]), upper[k]);
-  hand_errors(s, z, 1, e);
+  hand_errors(s, z, e);
   double lam = kReachRepairDamping;
-  double zs[12 * 12], es[12 * 6];
+  double es[12 * 6];
   const auto norm2 = [](const double* v) {
     double sum = 0.0;
     for (int k = 0; k < 6; ++k) sum += v[k] * v[k];
@@ -254,11 +276,7 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
   };
   for (int it = 0; it < kReachRepairIterations; ++it) {
     if (norm2(e) < 1e-24 || lam > kReachRepairStall) break;
-    for (int j = 0; j < 12; ++j) {
-      std::copy_n(z, 12, zs + 12 * j);
-      zs[12 * j + j] += kReachFdStep;
-    }
-    hand_errors(s, zs, 12, es);
+    hand_error_columns(s, z, es);
     double J[6][12];  // d hand / dz = -d e / dz, forward differences
     for (int j = 0; j < 12; ++j)
       for (int i = 0; i < 6; ++i) J[i][j] = -(es[6 * j + i] - e[i]) / kReachFdStep;
@@ -311,7 +329,7 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
     }
     double z_new[12], e_new[6];
     for (int k = 0; k < 12; ++k) z_new[k] = std::min(std::max(z[k] + delta[k], lower[k]), upper[k]);
-    hand_errors(s, z_new, 1, e_new);
+    hand_errors(s, z_new, e_new);
     if (legs_ok_at(s, z_new) && norm2(e_new) < std::max(norm2(e), 1e-24)) {
       std::copy_n(z_new, 12, z), std::copy_n(e_new, 6, e);
       lam /= 3.0;
