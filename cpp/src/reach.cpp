@@ -73,6 +73,19 @@ struct Target {
   std::vector<Evaluation> ends;  // the repair's ends (the chosen option may point at one)
   std::vector<Option> repaired;
   double nearest_e[6] = {};
+  void reset() {  // a new target (the vectors keep their memory)
+    searching = answered = false, status = kReachUnreachable;
+    chosen = -1, next_order = begin = size = 0;
+    options.clear(), misses.clear(), ends.clear(), repaired.clear();
+    std::fill(nearest_e, nearest_e + 6, 0.0);
+  }
+};
+
+// A thread's memory for its blocks, kept from block to block.
+struct BlockScratch {
+  Target targets[kReachBlock];
+  Evaluation stages[3], final_ev;
+  Checks checks;
 };
 
 // (F) for a target no candidate reaches: the repaired answer, or the nearest the repair came.
@@ -143,22 +156,22 @@ void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm
   const int legs = robot.body.n_legs(), m = shared.m;
   std::vector<Search<Model>> S;
   S.reserve(std::size_t(count));
-  Target targets[kReachBlock];
+  static thread_local BlockScratch scratch;
+  Target* targets = scratch.targets;
+  Evaluation* stages = scratch.stages;
+  Checks& checks = scratch.checks;
   Answer answers[kReachBlock] = {};
   for (int t = 0; t < count; ++t) {
     S.push_back({robot, arm, capsules, shared, in[t], legs, m});
+    targets[t].reset();
     if (!valid_input(in[t], legs, m)) {
       no_answer(out[t], m, kReachInvalid);
       continue;
     }
     targets[t].searching = true;
-    // no reallocation: the options point at the stages
-    targets[t].options.reserve(std::size_t(8 * (2 + kReachCandidates)));
   }
   // (C), (E), (A): stage by stage, until an option is feasible; a stage's candidates of every
   // target still searching in one evaluation
-  Evaluation stages[3];
-  Checks checks;
   for (int stage = 0, halton = 0; stage < 3; ++stage) {
     Evaluation& ev = stages[stage];
     int total = 0;
@@ -242,7 +255,7 @@ void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm
   }
   if (n_refining) refine(S.data(), answers, refining, n_refining);
   // the answers, and the arm's branches at each answer's body pose (one call)
-  Evaluation final_ev;
+  Evaluation& final_ev = scratch.final_ev;
   int n_final = 0;
   final_ev.resize(count, legs);
   for (int t = 0; t < count; ++t) {

@@ -145,19 +145,35 @@ void whole_q(const Search<Model>& s, const Evaluation& ev, int pose, int slot, d
   std::copy_n(&ev.arm_q[std::size_t(48 * pose + 6 * slot)], 6, q + n3);
 }
 
-// (G): 0.5 |r|^2.
+// |r|^2 over the body pose and q's first `count` joints (the legs' when count = 3 legs).
 template <typename Model>
-double cost_of(const Search<Model>& s, const double* p, const double* q) {
+double squares_of(const Search<Model>& s, const double* p, const double* q, int count) {
   double sum = 0.0;
   for (int k = 0; k < 6; ++k) {
     const double r = (p[k] - s.in.p_ref[k]) / s.sh.w_p[k];
     sum += r * r;
   }
-  for (int k = 0; k < s.m; ++k) {
+  for (int k = 0; k < count; ++k) {
     const double r = wrap_angle(q[k] - s.in.q_ref[k]) / s.sh.w_q[k];
     sum += r * r;
   }
-  return 0.5 * sum;
+  return sum;
+}
+
+// sum plus |r|^2 over q's joints from..m - 1 (in order: the same sums as one loop).
+template <typename Model>
+double add_squares(const Search<Model>& s, double sum, const double* q, int from) {
+  for (int k = from; k < s.m; ++k) {
+    const double r = wrap_angle(q[k - from] - s.in.q_ref[k]) / s.sh.w_q[k];
+    sum += r * r;
+  }
+  return sum;
+}
+
+// (G): 0.5 |r|^2.
+template <typename Model>
+double cost_of(const Search<Model>& s, const double* p, const double* q) {
+  return 0.5 * squares_of(s, p, q, s.m);
 }
 
 template <typename Model>
@@ -371,17 +387,20 @@ void check(const Search<Model>& s, Option& o) {
 template <typename Model>
 void options_of(const Search<Model>& s, const Evaluation& ev, int begin, int end, int first_order,
                 std::vector<Option>& out, std::vector<Miss>* misses) {
-  double q[kReachMaxQ];
-  const double* lo = s.sh.q_lower + 3 * s.legs;
-  const double* hi = s.sh.q_upper + 3 * s.legs;
+  const int n3 = 3 * s.legs;
+  const double* lo = s.sh.q_lower + n3;
+  const double* hi = s.sh.q_upper + n3;
   for (int k = begin; k < end; ++k) {
     const int order = first_order + (k - begin);
     if (!ev.legs_ok[std::size_t(k)]) continue;
+    double legs_sum = kNan;  // the pose's and the legs' squares, shared by its branches
     for (int slot = 0; slot < 8; ++slot) {
       const std::size_t at = std::size_t(8 * k + slot);
       if (ev.valid[at]) {
-        whole_q(s, ev, k, slot, q);
-        out.push_back({&ev, k, slot, order, cost_of(s, &ev.p[std::size_t(6 * k)], q)});
+        if (std::isnan(legs_sum))
+          legs_sum = squares_of(s, &ev.p[std::size_t(6 * k)], &ev.legs[std::size_t(n3 * k)], n3);
+        const double sum = add_squares(s, legs_sum, &ev.arm_q[std::size_t(48 * k + 6 * slot)], n3);
+        out.push_back({&ev, k, slot, order, 0.5 * sum});
       } else if (misses && ev.exists[at]) {
         Miss miss{0.0, order, slot, {}, {}};
         for (int j = 0; j < 6; ++j) {

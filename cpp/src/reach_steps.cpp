@@ -73,16 +73,14 @@ template <typename Model>
 void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) {
   const int m = S[0].m;
   std::vector<int> active(active_in, active_in + count), pending, taken;
-  Evaluation ev;
-  std::vector<double> r0(static_cast<std::size_t>(6 + m)), dq(static_cast<std::size_t>(6 * m));
-  std::vector<double> q_new(std::size_t(kReachBlock * m));
+  static thread_local Evaluation ev;  // kept from call to call
+  double r0[6 + kReachMaxQ], dq[6 * kReachMaxQ], q_new[kReachBlock * kReachMaxQ];
   double g[kReachBlock][6];
   bool ok_new[kReachBlock];
   const int legs = S[0].legs, n3 = 3 * legs;
-  std::vector<double> leg_q(std::size_t(3 * kReachBlock)),
-      J_legs(std::size_t(9 * legs * kReachBlock));
-  std::vector<double> arm_q(std::size_t(6 * kReachBlock)), J_arm(std::size_t(36 * kReachBlock));
-  Checks checks;
+  double leg_q[3 * kReachBlock], J_legs[9 * Body::kMaxLegs * kReachBlock];
+  double arm_q[6 * kReachBlock], J_arm[36 * kReachBlock];
+  static thread_local Checks checks;
   for (int step = 0; step < S[0].sh.refine_steps && !active.empty(); ++step) {
     pending.clear(), taken.clear();
     const int n_active = int(active.size());
@@ -91,20 +89,20 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
       for (int i = 0; i < n_active; ++i)
         for (int j = 0; j < 3; ++j)
           leg_q[std::size_t(3 * i + j)] = A[active[std::size_t(i)]].q[col[j]];
-      kernels::leg_jacobian(S[0].robot.body.legs[std::size_t(l)], leg_q.data(),
+      kernels::leg_jacobian(S[0].robot.body.legs[std::size_t(l)], leg_q,
                             &J_legs[std::size_t(9 * n_active * l)], n_active);
     }
     for (int i = 0; i < n_active; ++i)
       std::copy_n(A[active[std::size_t(i)]].q + n3, 6, &arm_q[std::size_t(6 * i)]);
-    kernels::chain_jacobian(*S[0].arm.chain, arm_q.data(), J_arm.data(), n_active, 6, false);
+    kernels::chain_jacobian(*S[0].arm.chain, arm_q, J_arm, n_active, 6, false);
     for (int i = 0; i < n_active; ++i) {
       const int t = active[std::size_t(i)];
       const Search<Model>& s = S[t];
       const Answer& a = A[t];
-      residual(s, a.p, a.q, r0.data());
+      residual(s, a.p, a.q, r0);
       const double* J_leg[Body::kMaxLegs];
       for (int l = 0; l < legs; ++l) J_leg[l] = &J_legs[std::size_t(9 * (n_active * l + i))];
-      if (!sensitivities(s, a, J_leg, &J_arm[std::size_t(36 * i)], dq.data())) continue;
+      if (!sensitivities(s, a, J_leg, &J_arm[std::size_t(36 * i)], dq)) continue;
       // J = [diag(1 / w_p); dq / w_q]: J^T J + mu I and -J^T r0
       double M[36], *gt = g[t];
       for (int i = 0; i < 6; ++i) {
@@ -135,7 +133,7 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
           ev.p[std::size_t(6 * i + k)] =
               std::min(std::max(A[t].p[k] + alpha * g[t][k], S[t].sh.lower[k]), S[t].sh.upper[k]);
       }
-      follow(S, A, ev, q_new.data(), ok_new);
+      follow(S, A, ev, q_new, ok_new);
       // cheaper, then within the margin (one call for all), then free of collisions (one call)
       double cost[kReachBlock], margin[kReachBlock];
       int index[kReachBlock], n_cheaper = 0, n_stable = 0;
