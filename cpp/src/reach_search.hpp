@@ -17,6 +17,7 @@
 #include "spotkin/motion/gait_plan.hpp"
 #include "spotkin/motion/reach.hpp"
 #include "spotkin/motion/reach_geometry.hpp"
+#include "spotkin/vector_math.hpp"
 
 namespace spotkin::motion::search {
 
@@ -231,13 +232,17 @@ bool collides_framed(const Search<Model>& s, const double* q, const double* T_bo
   const ReachCapsules& c = s.caps;
   double seg[Body::kMaxLegs][3][3];  // hip pitch, knee, foot (body frame)
   double centre[Body::kMaxLegs][2][3], half[Body::kMaxLegs][2];
+  double angle[3 * Body::kMaxLegs], sines[3 * Body::kMaxLegs], cosines[3 * Body::kMaxLegs];
   for (int l = 0; l < s.legs; ++l) {
-    const Leg& leg = s.robot.body.legs[std::size_t(l)];
-    const auto& g = leg.geometry();
+    const auto& g = s.robot.body.legs[std::size_t(l)].geometry();
     const auto& col = s.robot.body.columns[std::size_t(l)];
-    const double t1 = g.sign[0] * q[col[0]], t2 = g.sign[1] * q[col[1]], t3 = g.sign[2] * q[col[2]];
-    const double c1 = std::cos(t1), s1 = std::sin(t1), c2 = std::cos(t2), s2 = std::sin(t2);
-    const double c3 = std::cos(t3), s3 = std::sin(t3);
+    for (int j = 0; j < 3; ++j) angle[3 * l + j] = g.sign[j] * q[col[j]];
+  }
+  vector_math::sincos(angle, sines, cosines, 3 * s.legs);  // every leg joint's at once
+  for (int l = 0; l < s.legs; ++l) {
+    const auto& g = s.robot.body.legs[std::size_t(l)].geometry();
+    const double c1 = cosines[3 * l], s1 = sines[3 * l], c2 = cosines[3 * l + 1],
+                 s2 = sines[3 * l + 1], c3 = cosines[3 * l + 2], s3 = sines[3 * l + 2];
     // Ry(t3) c, then b + that, Ry(t2) of it, a + that, Rx(t1) of each point
     const double kc[3] = {c3 * g.c[0] + s3 * g.c[2], g.c[1], -s3 * g.c[0] + c3 * g.c[2]};
     const double bf[3] = {g.b[0] + kc[0], g.b[1] + kc[1], g.b[2] + kc[2]};

@@ -328,7 +328,7 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
     double z_new[12], e_new[6];
     for (int k = 0; k < 12; ++k) z_new[k] = std::min(std::max(z[k] + delta[k], lower[k]), upper[k]);
     hand_errors(s, z_new, e_new);
-    if (legs_ok_at(s, z_new) && norm2(e_new) < std::max(norm2(e), 1e-24)) {
+    if (norm2(e_new) < std::max(norm2(e), 1e-24) && legs_ok_at(s, z_new)) {  // cheap test first
       std::copy_n(z_new, 12, z), std::copy_n(e_new, 6, e);
       lam /= 3.0;
     } else {

@@ -76,6 +76,7 @@ class _Numbers:
         self.capsules = None if self.chain is None else capsule_model(robot, self.chain)
         self.models: dict = {}
         self.single = None  # reach's arrays for one target with the defaults (set on first use)
+        self.stance = stance_frames(self.feet[None], self.feet)[0]  # the nominal feet's stance frame
 
 
 def _numbers(robot) -> _Numbers:
@@ -307,8 +308,11 @@ def reach(robot, T_hand_world, feet=None, seed=None, margin=None, box=None) -> R
     flat_margin = np.ascontiguousarray(
         np.broadcast_to(MARGIN_FRACTION * L if margin is None else margin, lead).reshape(N), np.float64
     )
-    with np.errstate(invalid="ignore"):  # NaN feet: NaN stance frames (the core answers INVALID_INPUT)
-        stance = stance_frames(flat_feet, nominal_feet)
+    if feet is None:  # every target's stance frame is the nominal stance's
+        stance = np.ascontiguousarray(np.broadcast_to(_numbers(robot).stance, (N, 4, 4)))
+    else:
+        with np.errstate(invalid="ignore"):  # NaN feet: NaN stance frames (the core answers INVALID_INPUT)
+            stance = stance_frames(flat_feet, nominal_feet)
     h0 = _numbers(robot).h0
     if seed_pose is None:
         limits = robot.limits
