@@ -32,29 +32,28 @@ void pose_of(const double* T, double* pose) noexcept;
 // (Cholesky, A overwritten); false if A is not positive definite. Sizes fixed: loops unrolled.
 template <int n, int columns = 1>
 inline bool cholesky_solve(double* A, double* b) noexcept {
+  double inv[n];  // 1 / L_jj: one division per row
   for (int j = 0; j < n; ++j) {
     double d = A[n * j + j];
     for (int k = 0; k < j; ++k) d -= A[n * j + k] * A[n * j + k];
     if (!(d > 0.0)) return false;
     d = std::sqrt(d);
-    A[n * j + j] = d;
+    A[n * j + j] = d, inv[j] = 1.0 / d;
     for (int i = j + 1; i < n; ++i) {
       double s = A[n * i + j];
       for (int k = 0; k < j; ++k) s -= A[n * i + k] * A[n * j + k];
-      A[n * i + j] = s / d;
+      A[n * i + j] = s * inv[j];
     }
   }
-  for (int c = 0; c < columns; ++c) {
-    for (int i = 0; i < n; ++i) {  // L y = b
-      double s = b[columns * i + c];
-      for (int k = 0; k < i; ++k) s -= A[n * i + k] * b[columns * k + c];
-      b[columns * i + c] = s / A[n * i + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {  // L^T x = y
-      double s = b[columns * i + c];
-      for (int k = i + 1; k < n; ++k) s -= A[n * k + i] * b[columns * k + c];
-      b[columns * i + c] = s / A[n * i + i];
-    }
+  for (int i = 0; i < n; ++i) {  // L y = b, row by row over the columns
+    for (int k = 0; k < i; ++k)
+      for (int c = 0; c < columns; ++c) b[columns * i + c] -= A[n * i + k] * b[columns * k + c];
+    for (int c = 0; c < columns; ++c) b[columns * i + c] *= inv[i];
+  }
+  for (int i = n - 1; i >= 0; --i) {  // L^T x = y
+    for (int k = i + 1; k < n; ++k)
+      for (int c = 0; c < columns; ++c) b[columns * i + c] -= A[n * k + i] * b[columns * k + c];
+    for (int c = 0; c < columns; ++c) b[columns * i + c] *= inv[i];
   }
   return true;
 }
@@ -63,6 +62,7 @@ inline bool cholesky_solve(double* A, double* b) noexcept {
 // right-hand sides, A overwritten); false when A is singular. Sizes fixed: loops unrolled.
 template <int n, int columns = 1>
 inline bool lu_solve(double* A, double* b) noexcept {
+  double inv[n];  // 1 / U_kk: one division per row
   for (int k = 0; k < n; ++k) {
     int pivot = k;
     for (int i = k + 1; i < n; ++i)
@@ -72,18 +72,18 @@ inline bool lu_solve(double* A, double* b) noexcept {
       for (int j = 0; j < n; ++j) std::swap(A[n * k + j], A[n * pivot + j]);
       for (int j = 0; j < columns; ++j) std::swap(b[columns * k + j], b[columns * pivot + j]);
     }
+    inv[k] = 1.0 / A[n * k + k];
     for (int i = k + 1; i < n; ++i) {
-      const double f = A[n * i + k] / A[n * k + k];
+      const double f = A[n * i + k] * inv[k];
       for (int j = k; j < n; ++j) A[n * i + j] -= f * A[n * k + j];
       for (int j = 0; j < columns; ++j) b[columns * i + j] -= f * b[columns * k + j];
     }
   }
-  for (int i = n - 1; i >= 0; --i)
-    for (int j = 0; j < columns; ++j) {
-      double sum = b[columns * i + j];
-      for (int k = i + 1; k < n; ++k) sum -= A[n * i + k] * b[columns * k + j];
-      b[columns * i + j] = sum / A[n * i + i];
-    }
+  for (int i = n - 1; i >= 0; --i) {  // U x = y, row by row over the columns
+    for (int k = i + 1; k < n; ++k)
+      for (int j = 0; j < columns; ++j) b[columns * i + j] -= A[n * i + k] * b[columns * k + j];
+    for (int j = 0; j < columns; ++j) b[columns * i + j] *= inv[i];
+  }
   return true;
 }
 
