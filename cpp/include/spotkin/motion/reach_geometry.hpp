@@ -31,7 +31,7 @@ void pose_of(const double* T, double* pose) noexcept;
 // Solves the n x n symmetric positive definite A x = b in place of b, `columns` right-hand sides
 // (Cholesky, A overwritten); false if A is not positive definite. Sizes fixed: loops unrolled.
 template <int n, int columns = 1>
-inline bool cholesky_solve(double* A, double* b) noexcept {
+inline bool cholesky_solve(double* __restrict A, double* __restrict b) noexcept {
   double inv[n];  // 1 / L_jj: one division per row
   for (int j = 0; j < n; ++j) {
     double d = A[n * j + j];
@@ -61,7 +61,7 @@ inline bool cholesky_solve(double* A, double* b) noexcept {
 // Solves the n x n A x = b in place of b (Gaussian elimination with partial pivoting, `columns`
 // right-hand sides, A overwritten); false when A is singular. Sizes fixed: loops unrolled.
 template <int n, int columns = 1>
-inline bool lu_solve(double* A, double* b) noexcept {
+inline bool lu_solve(double* __restrict A, double* __restrict b) noexcept {
   double inv[n];  // 1 / U_kk: one division per row
   for (int k = 0; k < n; ++k) {
     int pivot = k;
