@@ -140,7 +140,7 @@ void repair(const Search<Model>& s, Target& t, Answer& a) {
   std::copy_n(z[best], 6, a.p);
   std::copy_n(end.legs.data(), n3, a.q);
   std::copy_n(z[best] + 6, 6, a.q + n3);
-  std::copy_n(end.T.data(), 16, a.T);
+  std::copy_n(end.T.data(), 16, a.T), std::copy_n(end.L.data(), 16, a.L);
   a.slot = -1;
   a.margin = margin_of(s, a.T, a.q);
   std::copy_n(e[best], 6, t.nearest_e);
@@ -250,6 +250,7 @@ void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm
     std::copy_n(&ev.p[std::size_t(6 * picked->pose)], 6, a.p);
     whole_q(s, ev, picked->pose, picked->slot, a.q);
     std::copy_n(&ev.T[std::size_t(16 * picked->pose)], 16, a.T);
+    std::copy_n(&ev.L[std::size_t(16 * picked->pose)], 16, a.L);
     a.slot = picked->slot, a.cost = picked->cost, a.margin = picked->margin;
     if (tg.status == kReachOk && in[t].refine) refining[n_refining++] = t;
   }

@@ -42,15 +42,16 @@ struct Search {
 struct Evaluation {
   int n = 0;
   std::vector<int> owner;
-  std::vector<const double*> local;  // S <- body of pose k when known (null: from p)
-  std::vector<double> p, T, legs, arm_q;
+  std::vector<const double*> local;          // S <- body of pose k when known (null: from p)
+  std::vector<double> p, T, L, legs, arm_q;  // L: S <- body (T = stance L)
   std::vector<double> targets, seeds, feet;  // scratch: arm targets, legs' seeds, feet (reused)
   std::vector<std::int8_t> leg_status, arm_status;
   std::vector<std::uint8_t> valid, exists, exact;
   std::vector<bool> legs_ok;
   void resize(int count, int n_legs) {
     n = count;
-    p.resize(std::size_t(6 * count)), T.resize(std::size_t(16 * count));
+    p.resize(std::size_t(6 * count)), T.resize(std::size_t(16 * count)),
+        L.resize(std::size_t(16 * count));
     legs.resize(std::size_t(3 * n_legs * count)), leg_status.resize(std::size_t(n_legs * count));
     arm_q.resize(std::size_t(48 * count)), arm_status.resize(std::size_t(count));
     valid.resize(std::size_t(8 * count)), exists.resize(std::size_t(8 * count)),
@@ -120,10 +121,13 @@ void run(const Search<Model>* S, Evaluation& ev, const double* seed_legs = nullp
   double* targets = ev.targets.data();
   for (int k = 0; k < n; ++k) {
     const Search<Model>& s = S[ev.owner[std::size_t(k)]];
+    double* L = &ev.L[std::size_t(16 * k)];
     if (const double* local = ev.local[std::size_t(k)])
-      mul4(s.in.stance, local, &ev.T[std::size_t(16 * k)]);
+      std::copy_n(local, 16, L);
     else
-      body_T(s, &ev.p[std::size_t(6 * k)], &ev.T[std::size_t(16 * k)]);
+      body_batch::pose_transform(&ev.p[std::size_t(6 * k)], BodyPoseFormat::Euler, xyz_sequence(),
+                                 L);
+    mul4(s.in.stance, L, &ev.T[std::size_t(16 * k)]);
     std::copy_n(s.in.feet, n3, &ev.feet[std::size_t(n3 * k)]);
   }
   kernels::body_ik(S[0].robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(),
@@ -288,11 +292,10 @@ bool collides_framed(const Search<Model>& s, const double* q, const double* T_bo
       for (int part = 0; part < 2; ++part) {
         if (!c.vs_legs[k][l][part]) continue;
         const double* o = centre[l][part];
-        const double gap =
-            std::sqrt((mid[0] - o[0]) * (mid[0] - o[0]) + (mid[1] - o[1]) * (mid[1] - o[1]) +
-                      (mid[2] - o[2]) * (mid[2] - o[2])) -
-            r - half[l][part];
-        if (gap >= reach) continue;  // apart: no need of the exact distance
+        const double apart = reach + r + half[l][part];  // |mid - o| >= apart: no need of the
+        const double d2 = (mid[0] - o[0]) * (mid[0] - o[0]) + (mid[1] - o[1]) * (mid[1] - o[1]) +
+                          (mid[2] - o[2]) * (mid[2] - o[2]);  // exact distance
+        if (d2 >= apart * apart) continue;
         if (segment_distance(a, b, seg[l][part], seg[l][part + 1]) < 2.0 * c.radius) return true;
       }
   }
@@ -442,7 +445,7 @@ int choose(const Search<Model>& s, std::vector<Option>& options, std::int8_t& st
 
 // The state of the chosen answer.
 struct Answer {
-  double p[6], q[kReachMaxQ], T[16];
+  double p[6], q[kReachMaxQ], T[16], L[16];  // L: S <- body
   int slot;
   double cost, margin;
 };

@@ -19,8 +19,7 @@ bool sensitivities(const Search<Model>& s, const Answer& a, const double* const*
     const double d[3] = {x[0] - S[3], x[1] - S[7], x[2] - S[11]};
     for (int i = 0; i < 3; ++i) out[i] = S[i] * d[0] + S[4 + i] * d[1] + S[8 + i] * d[2];
   };
-  double T[16];
-  body_batch::pose_transform(a.p, BodyPoseFormat::Euler, xyz_sequence(), T);
+  const double* T = a.L;
   const double ca = std::cos(a.p[3]), sa = std::sin(a.p[3]), cb = std::cos(a.p[4]),
                sb = std::sin(a.p[4]);
   const double E[3][3] = {{1.0, 0.0, sb}, {0.0, ca, -sa * cb}, {0.0, sa, ca * cb}};
@@ -174,6 +173,7 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
         std::copy_n(&ev.p[std::size_t(6 * i)], 6, a.p);
         std::copy_n(&q_new[std::size_t(m * i)], m, a.q);
         std::copy_n(&ev.T[std::size_t(16 * i)], 16, a.T);
+        std::copy_n(&ev.L[std::size_t(16 * i)], 16, a.L);
         a.slot = ev.arm_status[std::size_t(i)], a.cost = cost[i], a.margin = margin[i];
         taken.push_back(t);
       }
