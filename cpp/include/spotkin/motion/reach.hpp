@@ -33,7 +33,7 @@ constexpr double kReachRepairInset = 1e-6;  // REPAIR_INSET
 constexpr double kReachNullGain = 0.2;      // NULL_GAIN
 constexpr int kReachMaxQ = 3 * Body::kMaxLegs + 6;
 constexpr int kReachMaxSegments = 8;
-constexpr int kReachBlock = 32;  // targets searched together: one call of each kernel per step
+constexpr int kReachBlock = 64;  // targets searched together: one call of each kernel per step
 
 // The statuses (ReachStatus).
 enum ReachCode : std::int8_t {
