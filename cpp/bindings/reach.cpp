@@ -23,6 +23,19 @@ namespace spotkin::bindings {
 
 namespace {
 
+// f(the robot with the floating model of one sample at the active level: motion::reach_block's
+// vector model at AVX2 and AVX-512, its baseline model at the baseline; dynamics' with_model picks
+// the same for one sample).
+template <typename F>
+void on_reach_robot(const RobotStatics& r, F&& f) {
+  if (active_isa() == Isa::Baseline)
+    f(dynamics::RobotStaticsModel<motion::ReachBaselineModel>{r.body, r.floating.small(0.0), r.mass,
+                                                              r.n_arm});
+  else
+    f(dynamics::RobotStaticsModel<motion::ReachVectorModel>{r.body, r.floating.mid(0.0), r.mass,
+                                                            r.n_arm});
+}
+
 constexpr double kPiValue = 3.14159265358979323846;
 
 struct ReachModel {
@@ -138,8 +151,8 @@ py::tuple solve(const ReachModel& model, py::handle target_obj, py::handle feet_
       slot.mutable_data()};
   {
     py::gil_scoped_release release;
-    // one sample's statics model at every level: the answers do not depend on the batch
-    on_robot(model.robot, 1, [&](const auto& robot) {
+    // one sample's statics model: the answers do not depend on the batch
+    on_reach_robot(model.robot, [&](const auto& robot) {
       // blocks of kReachBlock targets, fixed by the targets' indices: the same answers for any
       // thread count
       const std::ptrdiff_t blocks = (N + motion::kReachBlock - 1) / motion::kReachBlock;
@@ -188,7 +201,7 @@ py::tuple constraints(const ReachModel& model, py::handle T_obj, py::handle q_ob
   bool* out_collides = collides.mutable_data();
   {
     py::gil_scoped_release release;
-    on_robot(model.robot, 1, [&](const auto& robot) {
+    on_reach_robot(model.robot, [&](const auto& robot) {
       parallel_for(N, 16, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
         for (std::ptrdiff_t i = begin; i < end; ++i)
           motion::reach_constraints(robot, model.arm, model.capsules, model.shared,

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "reach_search.hpp"
+#include "reach_steps.hpp"
+#include "spotkin/isa.hpp"
 
 namespace spotkin::motion {
 
@@ -150,9 +152,9 @@ void repair(const Search<Model>& s, Target& t, Answer& a) {
 }  // namespace
 
 template <typename Model>
-void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
-                 const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
-                 const ReachOutput* out, int count) {
+inline void search_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+                         const ReachCapsules& capsules, const ReachShared& shared,
+                         const ReachInput* in, const ReachOutput* out, int count) {
   const int legs = robot.body.n_legs(), m = shared.m;
   std::vector<Search<Model>> S;
   S.reserve(std::size_t(count));
@@ -289,6 +291,30 @@ void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm
   }
 }
 
+// The entry points, one per model: the search inlined whole into each (flatten), the vector
+// model's compiled for AVX2 with FMA where the build makes clones (the levels that run it; the
+// search's scalar code is a tenth faster so), the baseline model's for the baseline.
+#if SPOTKIN_HAS_ISA_CLONES
+#define SPOTKIN_REACH_VECTOR_TARGET \
+  __attribute__((target("avx2,fma,bmi,bmi2,lzcnt,popcnt,f16c,movbe"), flatten))
+#else
+#define SPOTKIN_REACH_VECTOR_TARGET __attribute__((flatten))
+#endif
+
+SPOTKIN_REACH_VECTOR_TARGET void reach_block(
+    const dynamics::RobotStaticsModel<ReachVectorModel>& robot, const ReachArm& arm,
+    const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
+    const ReachOutput* out, int count) {
+  search_block(robot, arm, capsules, shared, in, out, count);
+}
+
+__attribute__((flatten)) void reach_block(
+    const dynamics::RobotStaticsModel<ReachBaselineModel>& robot, const ReachArm& arm,
+    const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
+    const ReachOutput* out, int count) {
+  search_block(robot, arm, capsules, shared, in, out, count);
+}
+
 template <typename Model>
 void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
                        const ReachCapsules& capsules, const ReachShared& shared,
@@ -302,17 +328,11 @@ void reach_constraints(const dynamics::RobotStaticsModel<Model>& robot, const Re
   *hits = collides(s, q, T_body);
 }
 
-#define SPOTKIN_INSTANTIATE(L)                                                                 \
-  template void reach_block<dynamics::FloatingModel<double, L>>(                               \
-      const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const ReachArm&, \
-      const ReachCapsules&, const ReachShared&, const ReachInput*, const ReachOutput*, int);   \
-  template void reach_constraints<dynamics::FloatingModel<double, L>>(                         \
-      const dynamics::RobotStaticsModel<dynamics::FloatingModel<double, L>>&, const ReachArm&, \
-      const ReachCapsules&, const ReachShared&, const double*, const double*, const double*,   \
-      double*, bool*);
-SPOTKIN_INSTANTIATE(dynamics::kLanes64)
-SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
-SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)
-#undef SPOTKIN_INSTANTIATE
+template void reach_constraints<ReachVectorModel>(
+    const dynamics::RobotStaticsModel<ReachVectorModel>&, const ReachArm&, const ReachCapsules&,
+    const ReachShared&, const double*, const double*, const double*, double*, bool*);
+template void reach_constraints<ReachBaselineModel>(
+    const dynamics::RobotStaticsModel<ReachBaselineModel>&, const ReachArm&, const ReachCapsules&,
+    const ReachShared&, const double*, const double*, const double*, double*, bool*);
 
 }  // namespace spotkin::motion

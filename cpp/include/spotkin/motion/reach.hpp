@@ -14,6 +14,7 @@
 #include "spotkin/body.hpp"
 #include "spotkin/chain.hpp"
 #include "spotkin/chain_ik/arm6.hpp"
+#include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/robot_statics.hpp"
 
 namespace spotkin::motion {
@@ -111,12 +112,21 @@ struct ReachOutput {
   std::int64_t* slot;
 };
 
+// The floating models reach runs on (one sample's, as dynamics' with_model picks for one sample):
+// the 4-lane model at the AVX2 and AVX-512 levels, the 2-lane model at the baseline.
+using ReachVectorModel = dynamics::FloatingModel<double, dynamics::kMidLanes64>;
+using ReachBaselineModel = dynamics::FloatingModel<double, dynamics::kSmallLanes64>;
+
 // The answers for count (at most kReachBlock) targets in[k] -> out[k], searched together: each
 // step of the search runs the kernels once over the candidates of every target still searching
 // (NaN and INVALID_INPUT for a target that is not a finite rigid transform, or non-finite feet,
-// margin or references). A target's answer is the one it gets alone, whatever its block.
-template <typename Model>
-void reach_block(const dynamics::RobotStaticsModel<Model>& robot, const ReachArm& arm,
+// margin or references). A target's answer is the one it gets alone, whatever its block (up to the
+// arm's scalar and lane paths, an ulp). The vector model's runs at the AVX2 and AVX-512 levels
+// only (it is compiled for AVX2), the baseline model's at any.
+void reach_block(const dynamics::RobotStaticsModel<ReachVectorModel>& robot, const ReachArm& arm,
+                 const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
+                 const ReachOutput* out, int count);
+void reach_block(const dynamics::RobotStaticsModel<ReachBaselineModel>& robot, const ReachArm& arm,
                  const ReachCapsules& capsules, const ReachShared& shared, const ReachInput* in,
                  const ReachOutput* out, int count);
 

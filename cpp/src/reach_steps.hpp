@@ -1,5 +1,8 @@
 // The Gauss-Newton steps (R) and the repair (F) of the reach search (cpp/src/reach_search.hpp):
-// python/spotkin/reference/reach.py's sensitivities, refine, hand_error and descend.
+// python/spotkin/reference/reach.py's sensitivities, refine, hand_error and descend. Included by
+// cpp/src/reach.cpp alone, whose level-specific entry points inline them.
+#pragma once
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -338,15 +341,5 @@ void descend(const Search<Model>& s, double* z, double* e, int order, Evaluation
   }
   answers_at(s, z, order, end);
 }
-
-#define SPOTKIN_INSTANTIATE(L)                                                      \
-  template void refine<dynamics::FloatingModel<double, L>>(                         \
-      const Search<dynamics::FloatingModel<double, L>>*, Answer*, const int*, int); \
-  template void descend<dynamics::FloatingModel<double, L>>(                        \
-      const Search<dynamics::FloatingModel<double, L>>&, double*, double*, int, Evaluation&);
-SPOTKIN_INSTANTIATE(dynamics::kLanes64)
-SPOTKIN_INSTANTIATE(dynamics::kMidLanes64)
-SPOTKIN_INSTANTIATE(dynamics::kSmallLanes64)
-#undef SPOTKIN_INSTANTIATE
 
 }  // namespace spotkin::motion::search
