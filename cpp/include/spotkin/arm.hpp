@@ -199,7 +199,7 @@ class Arm {
       const double det = pose.R[0][0] * (pose.R[1][1] * pose.R[2][2] - pose.R[1][2] * pose.R[2][1]) -
                          pose.R[0][1] * (pose.R[1][0] * pose.R[2][2] - pose.R[1][2] * pose.R[2][0]) +
                          pose.R[0][2] * (pose.R[1][0] * pose.R[2][1] - pose.R[1][1] * pose.R[2][0]);
-      ok = (orth <= kRotationTolerance) & (det > 0.0) ? ok : 0.0;
+      ok = ((orth <= kRotationTolerance) & (det > 0.0)) ? ok : 0.0;
     } else {
       const double x = double(in[3]), y = double(in[4]), z = double(in[5]), w = double(in[6]);
       const double n2 = x * x + y * y + z * z + w * w;

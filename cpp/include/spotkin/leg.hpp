@@ -539,7 +539,7 @@ SPOTKIN_INLINE bool all_settled(const C* ok, const C* also, std::ptrdiff_t m) no
 // 1 where x, y, z are all finite; vectorisable (x - x is NaN for NaN and Inf).
 template <typename C>
 SPOTKIN_INLINE C finite_mask(C x, C y, C z) noexcept {
-  return ((x - x) == C(0)) & ((y - y) == C(0)) & ((z - z) == C(0)) ? C(1) : C(0);
+  return (((x - x) == C(0)) & ((y - y) == C(0)) & ((z - z) == C(0))) ? C(1) : C(0);
 }
 
 // The targets of a block that the preferred-slot pass did not settle (a seed,

@@ -260,7 +260,7 @@ SPOTKIN_INLINE void read_pose_lanes(const double (*pose_in)[SphericalWrist6::kLa
       const double det = R[0][0][i] * (R[1][1][i] * R[2][2][i] - R[1][2][i] * R[2][1][i]) -
                          R[0][1][i] * (R[1][0][i] * R[2][2][i] - R[1][2][i] * R[2][0][i]) +
                          R[0][2][i] * (R[1][0][i] * R[2][1][i] - R[1][1][i] * R[2][0][i]);
-      okl = (orth <= Arm::kRotationTolerance) & (det > 0.0) ? okl : 0.0;
+      okl = ((orth <= Arm::kRotationTolerance) & (det > 0.0)) ? okl : 0.0;
     } else {
       const double x = in[3][i], y = in[4][i], z = in[5][i], w = in[6][i];
       const double n2 = x * x + y * y + z * z + w * w;

@@ -330,7 +330,7 @@ struct Limits {
     const double below = v - two_pi, above = v + two_pi;
     const bool in = (v >= lo) & (v <= hi), in_below = revolute & (below >= lo) & (below <= hi),
                in_above = revolute & (above >= lo) & (above <= hi);
-    fit = in | in_below | in_above ? fit : 0.0;
+    fit = (in | in_below | in_above) ? fit : 0.0;
     return in ? v : in_below ? below : in_above ? above : v;
   }
 };
