@@ -86,7 +86,7 @@ struct Target {
 // A thread's memory for its blocks, kept from block to block.
 struct BlockScratch {
   Target targets[kReachBlock];
-  Evaluation stages[3], final_ev;
+  Evaluation stages[3];
   Checks checks;
 };
 
@@ -143,6 +143,7 @@ void repair(const Search<Model>& s, Target& t, Answer& a) {
   std::copy_n(end.legs.data(), n3, a.q);
   std::copy_n(z[best] + 6, 6, a.q + n3);
   std::copy_n(end.T.data(), 16, a.T), std::copy_n(end.L.data(), 16, a.L);
+  branches_from(end, 0, a.branches, a.valid);
   a.slot = -1;
   a.margin = margin_of(s, a.T, a.q);
   std::copy_n(e[best], 6, t.nearest_e);
@@ -253,14 +254,12 @@ inline void search_block(const dynamics::RobotStaticsModel<Model>& robot, const 
     whole_q(s, ev, picked->pose, picked->slot, a.q);
     std::copy_n(&ev.T[std::size_t(16 * picked->pose)], 16, a.T);
     std::copy_n(&ev.L[std::size_t(16 * picked->pose)], 16, a.L);
+    branches_from(ev, picked->pose, a.branches, a.valid);
     a.slot = picked->slot, a.cost = picked->cost, a.margin = picked->margin;
     if (tg.status == kReachOk && in[t].refine) refining[n_refining++] = t;
   }
   if (n_refining) refine(S.data(), answers, refining, n_refining);
-  // the answers, and the arm's branches at each answer's body pose (one call)
-  Evaluation& final_ev = scratch.final_ev;
-  int n_final = 0;
-  final_ev.resize(count, legs);
+  // the answers, with the arm's branches at each answer's body pose (from its evaluation)
   for (int t = 0; t < count; ++t) {
     const Target& tg = targets[t];
     if (!tg.answered) continue;
@@ -278,16 +277,7 @@ inline void search_block(const dynamics::RobotStaticsModel<Model>& robot, const 
     } else {
       *o.distance = *o.angle = 0.0;
     }
-    arm_target(S[std::size_t(t)], a.T, &final_ev.targets[std::size_t(16 * n_final)]);
-    final_ev.owner[std::size_t(n_final++)] = t;
-  }
-  if (n_final == 0) return;
-  arm_ik_all(arm, final_ev.targets.data(), final_ev.arm_q.data(), final_ev.valid.data(),
-             final_ev.exists.data(), final_ev.exact.data(), final_ev.arm_status.data(), n_final);
-  for (int k = 0; k < n_final; ++k) {
-    const ReachOutput& o = out[final_ev.owner[std::size_t(k)]];
-    std::copy_n(&final_ev.arm_q[std::size_t(48 * k)], 48, o.branches);
-    std::copy_n(&final_ev.valid[std::size_t(8 * k)], 8, o.valid);
+    std::copy_n(a.branches, 48, o.branches), std::copy_n(a.valid, 8, o.valid);
   }
 }
 

@@ -63,6 +63,12 @@ struct Evaluation {
   }
 };
 
+// An answer's arm branches from pose k of ev.
+inline void branches_from(const Evaluation& ev, int k, double* branches, std::uint8_t* valid) {
+  std::copy_n(&ev.arm_q[std::size_t(48 * k)], 48, branches);
+  std::copy_n(&ev.valid[std::size_t(8 * k)], 8, valid);
+}
+
 struct Option {
   const Evaluation* ev;
   int pose, slot, order;
@@ -446,6 +452,8 @@ int choose(const Search<Model>& s, std::vector<Option>& options, std::int8_t& st
 // The state of the chosen answer.
 struct Answer {
   double p[6], q[kReachMaxQ], T[16], L[16];  // L: S <- body
+  double branches[48];  // the arm's branches at T, and their validity, as its evaluation found
+  std::uint8_t valid[8];
   int slot;
   double cost, margin;
 };

@@ -177,6 +177,7 @@ void refine(const Search<Model>* S, Answer* A, const int* active_in, int count) 
         std::copy_n(&q_new[std::size_t(m * i)], m, a.q);
         std::copy_n(&ev.T[std::size_t(16 * i)], 16, a.T);
         std::copy_n(&ev.L[std::size_t(16 * i)], 16, a.L);
+        branches_from(ev, i, a.branches, a.valid);
         a.slot = ev.arm_status[std::size_t(i)], a.cost = cost[i], a.margin = margin[i];
         taken.push_back(t);
       }
