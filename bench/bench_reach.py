@@ -88,7 +88,7 @@ class MinkReach:
         return False, MINK_ITERATIONS
 
 
-@pytest.mark.parametrize("name", ["spot", "go2_z1"])
+@pytest.mark.parametrize("name", ["spot", "go2_z1", "heavy_ur5"])
 def test_reach_against_mink(name, capsys):
     robot = robot_named(name)
     problem = reach_module.reference_problem(robot, np.eye(4))

@@ -21,7 +21,7 @@ from spotkin.motion.capsules import capsule_model
 from spotkin.reference import reach as ref
 from spotkin.reference import reach_geometry
 
-ROBOTS = ("spot", "go2_z1")
+ROBOTS = ("spot", "go2_z1", "heavy_ur5")  # three arm families: Spot's, a Z1-like one, a UR5
 
 
 _TARGETS: dict = {}

@@ -145,13 +145,53 @@ def go2_with_z1(limits=None) -> str:
     return text[:end] + "\n".join(parts) + "\n" + text[end:]
 
 
+UR5_JOINTS = [  # name, parent, child, xyz, rpy, axis, mass: the UR5's own URDF (ur_description)
+    ("ur_shoulder_pan", "trunk", "ur_shoulder", "0.3 0 0.17", "0 0 0", "0 0 1", 3.7),
+    (
+        "ur_shoulder_lift",
+        "ur_shoulder",
+        "ur_upper_arm",
+        "0 0.13585 0",
+        "0 1.5707963267948966 0",
+        "0 1 0",
+        8.393,
+    ),
+    ("ur_elbow", "ur_upper_arm", "ur_forearm", "0 -0.1197 0.425", "0 0 0", "0 1 0", 2.275),
+    ("ur_wrist_1", "ur_forearm", "ur_wrist_1_link", "0 0 0.39225", "0 1.5707963267948966 0", "0 1 0", 1.219),
+    ("ur_wrist_2", "ur_wrist_1_link", "ur_wrist_2_link", "0 0.093 0", "0 0 0", "0 0 1", 1.219),
+    ("ur_wrist_3", "ur_wrist_2_link", "ur_wrist_3_link", "0 0 0.09465", "0 0 0", "0 1 0", 0.1879),
+]
+
+
+def heavy_with_ur5() -> str:
+    """The tests' 90 kg quadruped ("heavy") carrying a UR5 on its trunk: the UR5's joint frames
+    (rotated origins included), link masses and tool frame, joints limited to +-pi, the base 0.3 m
+    ahead of the trunk's centre and 0.17 m above it."""
+    text = quadruped_urdf(0.4, 90.0, 200.0)
+    parts = []
+    for name, parent, child, xyz, rpy, axis, mass in UR5_JOINTS:
+        parts.append(
+            f'<link name="{child}"><inertial><mass value="{mass}"/><origin xyz="0 0 0"/>'
+            f'<inertia ixx="1e-2" ixy="0" ixz="0" iyy="1e-2" iyz="0" izz="1e-2"/></inertial></link>'
+            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
+            f'<limit lower="-3.14159" upper="3.14159" effort="150" velocity="3"/></joint>'
+        )
+    parts.append(
+        '<link name="ur_tool0"/><joint name="ur_tool0_fixed" type="fixed"><parent link="ur_wrist_3_link"/>'
+        '<child link="ur_tool0"/><origin xyz="0 0.0823 0" rpy="0 0 1.5707963267948966"/></joint>'
+    )
+    end = text.rindex("</robot>")
+    return text[:end] + "\n".join(parts) + "\n" + text[end:]
+
+
 _named: dict = {}
 
 
 def robot_named(name: str):
     """A robot by name, made once: "spot" (built in), "go2" (packaged), "heavy" (the tests' own 90 kg
-    quadruped: 0.4 m segments, 200 N m motors, no meshes), "small" (2 kg, 0.1 m segments) and "go2_z1"
-    (Go2 carrying a Z1-like arm with the Z1's joint ranges)."""
+    quadruped: 0.4 m segments, 200 N m motors, no meshes), "small" (2 kg, 0.1 m segments), "go2_z1"
+    (Go2 carrying a Z1-like arm with the Z1's joint ranges) and "heavy_ur5" (heavy carrying a UR5)."""
     import spotkin as sk
 
     if name not in _named:
@@ -161,5 +201,6 @@ def robot_named(name: str):
             "heavy": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.4, 90.0, 200.0)),
             "small": lambda: sk.Robot.from_urdf_string(quadruped_urdf(0.1, 2.0, 5.0)),
             "go2_z1": lambda: sk.Robot.from_urdf_string(go2_with_z1(Z1_LIMITS)),
+            "heavy_ur5": lambda: sk.Robot.from_urdf_string(heavy_with_ur5()),
         }[name]()
     return _named[name]
