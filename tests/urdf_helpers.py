@@ -120,6 +120,29 @@ Z1_LIMITS = ((-2.618, 2.618), (0.0, 2.967), (-2.880, 0.0), (-1.518, 1.518), (-1.
 """The Unitree Z1's own joint ranges (rad), from its URDF (rounded)."""
 
 
+def _with_arm(text: str, joints, inertia: float, effort: float, tool) -> str:
+    """``text`` (a URDF) with an arm added before ``</robot>``: ``joints`` rows (name, parent, child,
+    xyz, rpy, axis, mass, lower, upper) of revolute joints, each child link of that mass and a diagonal
+    ``inertia``, then the fixed ``tool`` (name, parent, xyz, rpy)."""
+    parts = []
+    for name, parent, child, xyz, rpy, axis, mass, lower, upper in joints:
+        parts.append(
+            f'<link name="{child}"><inertial><mass value="{mass}"/><origin xyz="0 0 0"/>'
+            f'<inertia ixx="{inertia}" ixy="0" ixz="0" iyy="{inertia}" iyz="0" izz="{inertia}"/>'
+            "</inertial></link>"
+            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
+            f'<limit lower="{lower}" upper="{upper}" effort="{effort}" velocity="3"/></joint>'
+        )
+    name, parent, xyz, rpy = tool
+    parts.append(
+        f'<link name="{name}"/><joint name="{name}_fixed" type="fixed"><parent link="{parent}"/>'
+        f'<child link="{name}"/><origin xyz="{xyz}" rpy="{rpy}"/></joint>'
+    )
+    end = text.rindex("</robot>")
+    return text[:end] + "\n".join(parts) + "\n" + text[end:]
+
+
 def go2_with_z1(limits=None) -> str:
     """Go2's packaged URDF with a Z1-like arm on its body: 0.5 kg links, ``limits`` (6 (lower, upper)
     pairs; default -2.9..2.9 on every joint)."""
@@ -127,22 +150,11 @@ def go2_with_z1(limits=None) -> str:
 
     with open(sk.robots.path("go2"), encoding="utf-8") as file:
         text = file.read()
-    parts = []
-    for k, (name, parent, child, xyz, axis) in enumerate(Z1_JOINTS):
-        lower, upper = (-2.9, 2.9) if limits is None else limits[k]
-        parts.append(
-            f'<link name="{child}"><inertial><mass value="0.5"/><origin xyz="0 0 0"/>'
-            f'<inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-3" iyz="0" izz="1e-3"/></inertial></link>'
-            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
-            f'<origin xyz="{xyz}" rpy="0 0 0"/><axis xyz="{axis}"/>'
-            f'<limit lower="{lower}" upper="{upper}" effort="30" velocity="3"/></joint>'
-        )
-    parts.append(
-        '<link name="z1_gripper"/><joint name="z1_gripper_fixed" type="fixed"><parent link="z1_link06"/>'
-        '<child link="z1_gripper"/><origin xyz="0.051 0 0" rpy="0 0 0"/></joint>'
-    )
-    end = text.rindex("</robot>")
-    return text[:end] + "\n".join(parts) + "\n" + text[end:]
+    rows = [
+        (name, parent, child, xyz, "0 0 0", axis, 0.5, *((-2.9, 2.9) if limits is None else limits[k]))
+        for k, (name, parent, child, xyz, axis) in enumerate(Z1_JOINTS)
+    ]
+    return _with_arm(text, rows, 1e-3, 30, ("z1_gripper", "z1_link06", "0.051 0 0", "0 0 0"))
 
 
 UR5_JOINTS = [  # name, parent, child, xyz, rpy, axis, mass: the UR5's own URDF (ur_description)
@@ -167,22 +179,9 @@ def heavy_with_ur5() -> str:
     """The tests' 90 kg quadruped ("heavy") carrying a UR5 on its trunk: the UR5's joint frames
     (rotated origins included), link masses and tool frame, joints limited to +-pi, the base 0.3 m
     ahead of the trunk's centre and 0.17 m above it."""
-    text = quadruped_urdf(0.4, 90.0, 200.0)
-    parts = []
-    for name, parent, child, xyz, rpy, axis, mass in UR5_JOINTS:
-        parts.append(
-            f'<link name="{child}"><inertial><mass value="{mass}"/><origin xyz="0 0 0"/>'
-            f'<inertia ixx="1e-2" ixy="0" ixz="0" iyy="1e-2" iyz="0" izz="1e-2"/></inertial></link>'
-            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
-            f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
-            f'<limit lower="-3.14159" upper="3.14159" effort="150" velocity="3"/></joint>'
-        )
-    parts.append(
-        '<link name="ur_tool0"/><joint name="ur_tool0_fixed" type="fixed"><parent link="ur_wrist_3_link"/>'
-        '<child link="ur_tool0"/><origin xyz="0 0.0823 0" rpy="0 0 1.5707963267948966"/></joint>'
-    )
-    end = text.rindex("</robot>")
-    return text[:end] + "\n".join(parts) + "\n" + text[end:]
+    rows = [(*row, -3.14159, 3.14159) for row in UR5_JOINTS]
+    tool = ("ur_tool0", "ur_wrist_3_link", "0 0.0823 0", "0 0 1.5707963267948966")
+    return _with_arm(quadruped_urdf(0.4, 90.0, 200.0), rows, 1e-2, 150, tool)
 
 
 _named: dict = {}
