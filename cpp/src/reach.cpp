@@ -5,6 +5,7 @@
 // normal equations and the repair (cpp/src/reach_steps.cpp) are scalar code, target by target.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "reach_search.hpp"
@@ -166,6 +167,13 @@ inline void search_block(const dynamics::RobotStaticsModel<Model>& robot, const 
   Answer answers[kReachBlock] = {};
   for (int t = 0; t < count; ++t) {
     S.push_back({robot, arm, capsules, shared, in[t], legs, m});
+    // the stance and feet of the target before (the common case: every target's), or its own
+    const int before = t > 0 ? S[std::size_t(t - 1)].same_feet : -1;
+    const bool same =  // bit for bit
+        before >= 0 &&
+        std::memcmp(in[t].feet, in[before].feet, sizeof(double) * std::size_t(3 * legs)) == 0 &&
+        std::memcmp(in[t].stance, in[before].stance, sizeof(double) * 16) == 0;
+    S[std::size_t(t)].same_feet = same ? before : t;
     targets[t].reset();
     if (!valid_input(in[t], legs, m)) {
       no_answer(out[t], m, kReachInvalid);

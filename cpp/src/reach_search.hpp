@@ -35,6 +35,7 @@ struct Search {
   const ReachShared& sh;
   const ReachInput& in;
   int legs, m;
+  int same_feet = -1;  // the block's first target with the same stance and feet (its own index)
 };
 
 // The poses of one evaluation: body transforms, legs, arm branches. Pose k belongs to the target
@@ -45,6 +46,10 @@ struct Evaluation {
   std::vector<const double*> local;          // S <- body of pose k when known (null: from p)
   std::vector<double> p, T, L, legs, arm_q;  // L: S <- body (T = stance L)
   std::vector<double> targets, seeds, feet;  // scratch: arm targets, legs' seeds, feet (reused)
+  // scratch of the legs' distinct poses: pose k's legs are those of distinct pose at[k]
+  std::vector<int> at, first;
+  std::vector<double> distinct_T, distinct_feet, distinct_legs;
+  std::vector<std::int8_t> distinct_status;
   std::vector<std::int8_t> leg_status, arm_status;
   std::vector<std::uint8_t> valid, exists, exact;
   std::vector<bool> legs_ok;
@@ -136,9 +141,54 @@ void run(const Search<Model>* S, Evaluation& ev, const double* seed_legs = nullp
     mul4(s.in.stance, L, &ev.T[std::size_t(16 * k)]);
     std::copy_n(s.in.feet, n3, &ev.feet[std::size_t(n3 * k)]);
   }
-  kernels::body_ik(S[0].robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(),
-                   ev.feet.data(), false, seed_legs, ev.legs.data(), ev.leg_status.data(), n,
-                   nearest);
+  // The legs: a candidate of (C) (ev.local) at targets of the same stance and feet is one pose for
+  // them (the same T and feet, bit for bit), solved once; the others one by one. Unseeded only.
+  constexpr int kLocals = kReachCandidates + 1;
+  int owners = 0;
+  for (int k = 0; k < n; ++k) owners = std::max(owners, ev.owner[std::size_t(k)] + 1);
+  ev.at.resize(std::size_t(n));
+  ev.first.assign(std::size_t(owners * kLocals), -1);
+  int distinct = 0;
+  for (int k = 0; k < n; ++k) {
+    const double* local = ev.local[std::size_t(k)];
+    int* first = nullptr;
+    if (local && !seed_legs) {
+      const Search<Model>& s = S[ev.owner[std::size_t(k)]];
+      const int candidate = int((local - &s.sh.local[0][0]) / 16);
+      first = &ev.first[std::size_t(s.same_feet * kLocals + candidate)];
+      if (*first >= 0) {
+        ev.at[std::size_t(k)] = *first;
+        continue;
+      }
+    }
+    if (first) *first = distinct;
+    ev.at[std::size_t(k)] = distinct++;
+  }
+  if (distinct == n) {
+    kernels::body_ik(S[0].robot.body, ev.T.data(), BodyPoseFormat::Matrix, xyz_sequence(),
+                     ev.feet.data(), false, seed_legs, ev.legs.data(), ev.leg_status.data(), n,
+                     nearest);
+  } else {
+    ev.distinct_T.resize(std::size_t(16 * distinct)),
+        ev.distinct_feet.resize(std::size_t(n3 * distinct));
+    ev.distinct_legs.resize(std::size_t(n3 * distinct));
+    ev.distinct_status.resize(std::size_t(legs * distinct));
+    for (int k = 0, next = 0; k < n; ++k) {
+      if (ev.at[std::size_t(k)] != next) continue;  // a pose met before
+      std::copy_n(&ev.T[std::size_t(16 * k)], 16, &ev.distinct_T[std::size_t(16 * next)]);
+      std::copy_n(&ev.feet[std::size_t(n3 * k)], n3, &ev.distinct_feet[std::size_t(n3 * next)]);
+      ++next;
+    }
+    kernels::body_ik(S[0].robot.body, ev.distinct_T.data(), BodyPoseFormat::Matrix, xyz_sequence(),
+                     ev.distinct_feet.data(), false, seed_legs, ev.distinct_legs.data(),
+                     ev.distinct_status.data(), distinct, nearest);
+    for (int k = 0; k < n; ++k) {
+      const std::size_t j = std::size_t(ev.at[std::size_t(k)]);
+      std::copy_n(&ev.distinct_legs[n3 * j], n3, &ev.legs[std::size_t(n3 * k)]);
+      std::copy_n(&ev.distinct_status[std::size_t(legs) * j], legs,
+                  &ev.leg_status[std::size_t(legs * k)]);
+    }
+  }
   for (int k = 0; k < n; ++k) {
     bool ok = true;
     for (int l = 0; l < legs; ++l) ok = ok && ev.leg_status[std::size_t(legs * k + l)] == 0;
@@ -332,12 +382,19 @@ int arm_dof(const Search<Model>& s) {
   return s.arm.chain ? int(s.arm.chain->dof()) : 6;
 }
 
-// (M) of one sample.
+// The checks' memory holding one sample (T_body, q) of target s.
 template <typename Model>
-double margin_of(const Search<Model>& s, const double* T_body, const double* q) {
+Checks one_sample(const Search<Model>& s, const double* T_body, const double* q) {
   Checks c;
   c.resize(1, s.m, arm_dof(s));
   std::copy_n(T_body, 16, c.T.data()), std::copy_n(q, s.m, c.q.data()), c.owner[0] = 0;
+  return c;
+}
+
+// (M) of one sample.
+template <typename Model>
+double margin_of(const Search<Model>& s, const double* T_body, const double* q) {
+  Checks c = one_sample(s, T_body, q);
   margins_of(&s, c, 1);
   return c.margin[0];
 }
@@ -345,9 +402,7 @@ double margin_of(const Search<Model>& s, const double* T_body, const double* q) 
 // Whether one sample collides.
 template <typename Model>
 bool collides(const Search<Model>& s, const double* q, const double* T_body) {
-  Checks c;
-  c.resize(1, s.m, arm_dof(s));
-  std::copy_n(T_body, 16, c.T.data()), std::copy_n(q, s.m, c.q.data()), c.owner[0] = 0;
+  Checks c = one_sample(s, T_body, q);
   collisions_of(&s, c, 1);
   return c.hits[0] != 0;
 }
