@@ -105,7 +105,7 @@ def test_reach_against_mink(name, capsys):
     sk.set_num_threads(1)
     try:
         result = robot.reach(T)
-        batched = median_time(lambda: robot.reach(T), 5) / TARGETS
+        batched = median_time(lambda: robot.reach(T), 15) / TARGETS
         singles = []
         for k in range(SINGLES):
             target = T[k]
