@@ -3,6 +3,7 @@ and a DH chain)."""
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -149,9 +150,11 @@ def _demo_reach(targets: int = 500) -> None:
     problem = reach_module.reference_problem(spot, np.eye(4))
     T, _, _ = feasible_samples(problem, targets, seed=0)
     spot.reach(T[:2])  # the compiled model, made once
-    start = time.perf_counter()
-    result = spot.reach(T)
-    seconds = time.perf_counter() - start
+    seconds = math.inf
+    for _ in range(3):  # the best of three calls: the threads' first call also sets up their memory
+        start = time.perf_counter()
+        result = spot.reach(T)
+        seconds = min(seconds, time.perf_counter() - start)
     ok = result.status == 0
     frames = spot.fk_all(result.body_pose[ok], result.q[ok])
     hand = float(np.abs(frames.hand - T[ok]).max(initial=0.0))
