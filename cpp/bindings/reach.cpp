@@ -154,14 +154,14 @@ py::tuple solve(const ReachModel& model, py::handle target_obj, py::handle feet_
     // one sample's statics model: the answers do not depend on the batch
     on_reach_robot(model.robot, [&](const auto& robot) {
       // blocks of kReachBlock targets, fixed by the targets' indices: the same answers for any
-      // thread count
-      const std::ptrdiff_t blocks = (N + motion::kReachBlock - 1) / motion::kReachBlock;
-      parallel_for(blocks, 1, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
-        for (std::ptrdiff_t b = begin; b < end; ++b) {
+      // thread count (the threads' chunks start at multiples of kChunkAlignment, so they hold
+      // whole blocks; a thread for every two blocks at least)
+      static_assert(kChunkAlignment % motion::kReachBlock == 0, "chunks hold whole blocks");
+      parallel_for(N, 2 * motion::kReachBlock, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
+        for (std::ptrdiff_t i0 = begin; i0 < end; i0 += motion::kReachBlock) {
           motion::ReachInput in[motion::kReachBlock];
           motion::ReachOutput out[motion::kReachBlock];
-          const std::ptrdiff_t i0 = b * motion::kReachBlock;
-          const int count = int(std::min<std::ptrdiff_t>(motion::kReachBlock, N - i0));
+          const int count = int(std::min<std::ptrdiff_t>(motion::kReachBlock, end - i0));
           for (int k = 0; k < count; ++k) {
             const std::ptrdiff_t i = i0 + k;
             in[k] = {target.data() + 16 * i,
