@@ -86,17 +86,22 @@ py::tuple plan_gait(const RobotStatics& r, py::handle gait_obj, py::handle veloc
   {
     py::gil_scoped_release release;
     on_robot(r, ticks, [&](const auto& robot) {
-      parallel_for(B, 1, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
-        for (std::ptrdiff_t b = begin; b < end; ++b) {
-          const std::ptrdiff_t n = b * ticks;
-          const motion::PlanRows at{
-              rows.pose + 6 * n,  rows.feet + W * n,    rows.contact + kLegs * n, rows.q + W * n,
-              rows.qd + W * n,    rows.tau + W * n,     rows.status + n,          rows.margin + n,
-              rows.shortened + n, rows.residual + 6 * n};
-          motion::plan_command(robot, gait, v + 3 * b, att, ticks, rate, at, changes.data(),
-                               int(changes.size()));
-        }
-      });
+      // one command's whole plan an item: chunks may start at any command (alignment 1)
+      parallel_for(
+          B, 1,
+          [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
+            for (std::ptrdiff_t b = begin; b < end; ++b) {
+              const std::ptrdiff_t n = b * ticks;
+              const motion::PlanRows at{rows.pose + 6 * n,        rows.feet + W * n,
+                                        rows.contact + kLegs * n, rows.q + W * n,
+                                        rows.qd + W * n,          rows.tau + W * n,
+                                        rows.status + n,          rows.margin + n,
+                                        rows.shortened + n,       rows.residual + 6 * n};
+              motion::plan_command(robot, gait, v + 3 * b, att, ticks, rate, at, changes.data(),
+                                   int(changes.size()));
+            }
+          },
+          1);
     });
   }
   return py::make_tuple(pose, feet, contact, q, qd, tau, status, margin, shortened, residual);

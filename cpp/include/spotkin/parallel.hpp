@@ -100,19 +100,23 @@ constexpr std::ptrdiff_t min_chunk(double ns_per_sample) {
 constexpr std::ptrdiff_t kMaxChunksPerGrain = 100;
 
 namespace detail {
-inline std::ptrdiff_t align_up(std::ptrdiff_t n) {
-  return std::max<std::ptrdiff_t>(1, (n + kChunkAlignment - 1) / kChunkAlignment) * kChunkAlignment;
+inline std::ptrdiff_t align_up(std::ptrdiff_t n, std::ptrdiff_t alignment = kChunkAlignment) {
+  return std::max<std::ptrdiff_t>(1, (n + alignment - 1) / alignment) * alignment;
 }
 }  // namespace detail
 
+// `alignment`: where chunks may start. Samples of a lane kernel keep kChunkAlignment; coarse items
+// that each run alone (a whole plan per command) pass 1, else up to 64 of them make one chunk and
+// run on one thread.
 template <typename Body>
-void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) {
+void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body,
+                  std::ptrdiff_t alignment = kChunkAlignment) {
   if (n <= 0) return;
   const std::ptrdiff_t min_chunk = std::max<std::ptrdiff_t>(1, min_per_thread);
   const std::ptrdiff_t threads =
       std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(get_num_threads(), n / min_chunk));
   const InterruptPoll poll = interrupt_poll().load();
-  const std::ptrdiff_t longest = detail::align_up(kMaxChunksPerGrain * min_chunk);
+  const std::ptrdiff_t longest = detail::align_up(kMaxChunksPerGrain * min_chunk, alignment);
   if (threads <= 1 && (poll == nullptr || n <= longest)) {
     body(std::ptrdiff_t{0}, n);
     return;
@@ -121,8 +125,11 @@ void parallel_for(std::ptrdiff_t n, std::ptrdiff_t min_per_thread, Body&& body) 
   // that runs faster (cores of a VM often differ) takes more of the batch
   // instead of waiting for the slowest; each chunk starts on a block boundary.
   const std::ptrdiff_t grain =
-      threads <= 1 ? longest
-                   : std::min(longest, detail::align_up(std::max<std::ptrdiff_t>(min_chunk / 4, n / (8 * threads))));
+      threads <= 1
+          ? longest
+          : std::min(longest,
+                     detail::align_up(std::max<std::ptrdiff_t>(min_chunk / 4, n / (8 * threads)),
+                                      alignment));
   std::atomic<std::ptrdiff_t> next{0};
   std::atomic<bool> stop{false};
   std::exception_ptr failure;  // the first exception a worker threw
