@@ -147,7 +147,7 @@ void run(const Search<Model>* S, Evaluation& ev, const double* seed_legs = nullp
   int owners = 0;
   for (int k = 0; k < n; ++k) owners = std::max(owners, ev.owner[std::size_t(k)] + 1);
   ev.at.resize(std::size_t(n));
-  ev.first.assign(std::size_t(owners * kLocals), -1);
+  if (!seed_legs) ev.first.assign(std::size_t(owners * kLocals), -1);  // seeded: no sharing
   int distinct = 0;
   for (int k = 0; k < n; ++k) {
     const double* local = ev.local[std::size_t(k)];
@@ -382,10 +382,11 @@ int arm_dof(const Search<Model>& s) {
   return s.arm.chain ? int(s.arm.chain->dof()) : 6;
 }
 
-// The checks' memory holding one sample (T_body, q) of target s.
+// The checks' memory holding one sample (T_body, q) of target s (a thread's, reused: a path's
+// samples check one by one).
 template <typename Model>
-Checks one_sample(const Search<Model>& s, const double* T_body, const double* q) {
-  Checks c;
+Checks& one_sample(const Search<Model>& s, const double* T_body, const double* q) {
+  static thread_local Checks c;
   c.resize(1, s.m, arm_dof(s));
   std::copy_n(T_body, 16, c.T.data()), std::copy_n(q, s.m, c.q.data()), c.owner[0] = 0;
   return c;
@@ -394,7 +395,7 @@ Checks one_sample(const Search<Model>& s, const double* T_body, const double* q)
 // (M) of one sample.
 template <typename Model>
 double margin_of(const Search<Model>& s, const double* T_body, const double* q) {
-  Checks c = one_sample(s, T_body, q);
+  Checks& c = one_sample(s, T_body, q);
   margins_of(&s, c, 1);
   return c.margin[0];
 }
@@ -402,7 +403,7 @@ double margin_of(const Search<Model>& s, const double* T_body, const double* q) 
 // Whether one sample collides.
 template <typename Model>
 bool collides(const Search<Model>& s, const double* q, const double* T_body) {
-  Checks c = one_sample(s, T_body, q);
+  Checks& c = one_sample(s, T_body, q);
   collisions_of(&s, c, 1);
   return c.hits[0] != 0;
 }
@@ -447,7 +448,7 @@ void check(const Search<Model>& s, Option& o) {
   if (o.checked) return;
   Option* one = &o;
   const int owner = 0;
-  Checks c;
+  static thread_local Checks c;  // a thread's, reused
   check_all(&s, &one, &owner, 1, c);
 }
 
