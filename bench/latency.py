@@ -10,6 +10,7 @@ joints, one Go2 leg for 3, Spot's arm for 6.
 
 from __future__ import annotations
 
+import itertools
 import timeit
 from pathlib import Path
 
@@ -87,7 +88,7 @@ def main() -> list[tuple[str, float, float, str, float | None]]:
     state = sk.motion.RobotState(
         pose[:3], np.array([0.0, 0.0, 0.0, 1.0]), np.zeros(3), np.zeros(3), q_legs, np.zeros(12)
     )
-    clock = iter(np.arange(1_000_000_000) * 0.002)
+    clock = (0.002 * k for k in itertools.count())  # the 500 Hz clock, made as it is read
 
     def gait_step():
         controller.step(next(clock), state, (0.2, 0.0, 0.0))

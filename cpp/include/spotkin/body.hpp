@@ -51,6 +51,11 @@ struct Body {
   std::vector<std::array<int, 3>> columns;   // each leg joint's column in q
 
   static constexpr int kMaxLegs = 21;  // q's angle mask holds 64 columns
+  // body_batch::ik_pairs's lanes: lane k holds leg k % n, its constants and hip.
+  static constexpr std::ptrdiff_t kPairLanes = 16;
+  leg_batch::LegLanes<kPairLanes> pair_legs;
+  double pair_hips[3][kPairLanes];
+  bool shared_knees = true;  // every leg has a_z = 0 (Leg::shared_knee)
 
   Body() = default;
   // columns: a permutation of 0 .. 3 n - 1 (throws std::invalid_argument otherwise).
@@ -67,6 +72,12 @@ struct Body {
           throw std::invalid_argument("leg joint columns must be a permutation of 0 .. 3 n - 1");
         seen[std::size_t(k)] = true;
       }
+    for (std::ptrdiff_t k = 0; k < kPairLanes; ++k) {
+      const std::size_t l = std::size_t(k) % n;
+      pair_legs.set(k, legs[l]);
+      for (int r = 0; r < 3; ++r) pair_hips[r][k] = hips[l][std::size_t(r)];
+    }
+    for (const Leg& leg : legs) shared_knees = shared_knees && leg.shared_knee();
   }
 
   int n_legs() const noexcept { return static_cast<int>(legs.size()); }
@@ -294,6 +305,65 @@ SPOTKIN_INLINE std::ptrdiff_t read_padded_poses(const T* poses, BodyPoseFormat f
   return padded;
 }
 
+// ik() for a few poses (count * n <= Body::kPairLanes): each (pose, leg) pair in its own lane, every
+// slot at once (leg_batch::solve_slots_lanes), then each pair chosen as ik() chooses it. ik() pads
+// each leg's targets to whole vectors, so one pose costs n vector passes (2 n with a seed); here
+// the n legs of a pose share them. The lanes run ik()'s operations on the same values: the same bits.
+template <typename T>
+SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                             const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
+                             std::ptrdiff_t count, bool nearest_fallback) noexcept {
+  const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+  using C = leg_batch::Compute<T>;
+  constexpr std::ptrdiff_t N = Body::kPairLanes;
+  const int n = body.n_legs(), w = body.width();
+  const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
+  BlockPoses<C> P;
+  read_padded_poses(poses, format, seq, stride, count, P);
+  leg_batch::OpenTargets<C> open;
+  const std::ptrdiff_t m = count * n, padded = leg_batch::padded_count<C>(m);
+  C R[9][N], t[3][N], f[3][N];
+  // pair k: pose k / n (the last one for the padding), leg k % n (counters: no division)
+  for (std::ptrdiff_t k = 0, i = 0, l = 0; k < padded; ++k) {
+    const std::ptrdiff_t pose = std::min(i, count - 1);
+    const T* foot = feet + (feet_shared ? 3 * l : 3 * n * pose + 3 * l);
+    for (int r = 0; r < 9; ++r) R[r][k] = P.R[r][pose];
+    for (int r = 0; r < 3; ++r) t[r][k] = P.t[r][pose], f[r][k] = C(foot[r]);
+    if (++l == n) l = 0, ++i;
+  }
+  for (std::ptrdiff_t k = 0; k < padded; ++k) {  // (B2), as leg_block_slot
+    const C dx = f[0][k] - t[0][k], dy = f[1][k] - t[1][k], dz = f[2][k] - t[2][k];
+    open.x[k] = R[0][k] * dx + R[3][k] * dy + R[6][k] * dz - C(body.pair_hips[0][k]);
+    open.y[k] = R[1][k] * dx + R[4][k] * dy + R[7][k] * dz - C(body.pair_hips[1][k]);
+    open.z[k] = R[2][k] * dx + R[5][k] * dy + R[8][k] * dz - C(body.pair_hips[2][k]);
+  }
+  if (body.shared_knees)
+    leg_batch::solve_slots_lanes<true>(body.pair_legs, open.x, open.y, open.z, padded, tol, limit_tol, open.q,
+                                       open.ok, open.exists_hip);
+  else
+    leg_batch::solve_slots_lanes<false>(body.pair_legs, open.x, open.y, open.z, padded, tol, limit_tol, open.q,
+                                        open.ok, open.exists_hip);
+  // pair k = n i + l: pose i, leg l (counters, in the increment: the loop body may `continue`)
+  for (std::ptrdiff_t k = 0, i = 0, l = 0; k < m; ++k, l = l + 1 == n ? 0 : l + 1, i += l == 0) {
+    const Leg& leg = body.legs[std::size_t(l)];
+    const std::array<int, 3>& col = body.columns[std::size_t(l)];
+    T* qt = q + w * i;
+    std::int8_t& st = status[n * i + l];
+    const T* s = seed ? seed + w * i : nullptr;
+    if (P.ok[i] == C(0) || leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0) ||
+        (s && !(std::isfinite(double(s[col[0]])) && std::isfinite(double(s[col[1]])) &&
+                std::isfinite(double(s[col[2]]))))) {
+      qt[col[0]] = qt[col[1]] = qt[col[2]] = T(quiet_nan<double>());
+      st = std::int8_t(Status::InvalidInput);
+      continue;
+    }
+    T sd[3], leg_q[3];
+    if (s) sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
+    st = std::int8_t(open.choose(leg, k, s ? sd : nullptr, leg_q, nearest_fallback));
+    qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
+  }
+}
+
 // Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
 // (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:
 // null or (count, w). q (count, w) in the body's column order, status
@@ -306,6 +376,8 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   using C = leg_batch::Compute<T>;
   const int n = body.n_legs(), w = body.width();
+  if (count * n <= Body::kPairLanes)
+    return ik_pairs(body, poses, format, seq, feet, feet_shared, seed, q, status, count, nearest_fallback);
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
   C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock], ok[kBlock];

@@ -67,6 +67,11 @@ struct JointLimits {
   // loops; C is the kernel's compute type (float for the float32 kernels).
   template <typename C = double>
   SPOTKIN_INLINE C wrap_mask(C* q, C tol = C(kTolerance)) const noexcept {
+    return wrap_mask_within(lower, upper, q, tol);
+  }
+  // wrap_mask within the bounds lower, upper (a lane kernel's: each lane its own limits).
+  template <typename C>
+  static SPOTKIN_INLINE C wrap_mask_within(const double* lower, const double* upper, C* q, C tol) noexcept {
     constexpr C two_pi = C(2) * kPi<C>;
     C all = 1;
 #pragma GCC unroll 8
@@ -103,6 +108,17 @@ inline RppGeometry spot_style_geometry(double h1, double upper, double lower, do
   g.sign[0] = g.sign[1] = g.sign[2] = 1.0;
   return g;
 }
+
+// The constants of (I1)-(I4) for one leg, derived from its RppGeometry (Leg::update): the
+// branch solves read only these, so that a kernel can give each lane a different leg's.
+struct RppConstants {
+  double a0 = 0, a2 = 0, h = 0;                   // a_x, a_z; h = a_y + b_y + c_y (I1)
+  double h2 = 0;  // h^2, rounded once: a kernel with h in lanes must not fuse r^2 - h^2 into one FMA
+  double Bz = 0, Bx = 0, Cz = 0, Cx = 0;          // B = zeta(b), C = zeta(c) (I2)
+  double phi = 0, cos_phi = 1, sin_phi = 0;       // phi = arg C - arg B (I3)
+  double knee_sum_sq = 0, inv_2BC = 0;            // |B|^2 + |C|^2, 1 / (2 |B| |C|) (I3)
+  double sign1 = 1, sign2 = 1, sign3 = 1;         // q_k = s_k theta_k
+};
 
 class Leg {
  public:
@@ -145,19 +161,20 @@ class Leg {
   const int* slot_order() const noexcept { return order_; }
   // a_z = 0: the knee's solution does not depend on the hip branch.
   bool shared_knee() const noexcept { return g_.a[2] == 0.0; }
+  const RppConstants& constants() const noexcept { return k_; }
 
   // (R1), with zeta = A + e^{i theta2} (B + e^{i theta3} C) the pitch-plane part.
   template <typename T>
   SPOTKIN_INLINE void forward(const T* q, T* p) const noexcept {
     double s[3], c[3];
-    const double angles[3] = {sign1_ * double(q[0]), sign2_ * double(q[1]),
-                              sign2_ * double(q[1]) + sign3_ * double(q[2])};
+    const double angles[3] = {k_.sign1 * double(q[0]), k_.sign2 * double(q[1]),
+                              k_.sign2 * double(q[1]) + k_.sign3 * double(q[2])};
     vector_math::sincos(angles, s, c, 3);
     double vx, vz;
     plane(c[1], s[1], c[2], s[2], vx, vz);
     p[0] = T(vx);
-    p[1] = T(h_ * c[0] - vz * s[0]);
-    p[2] = T(h_ * s[0] + vz * c[0]);
+    p[1] = T(k_.h * c[0] - vz * s[0]);
+    p[2] = T(k_.h * s[0] + vz * c[0]);
   }
 
   // d p / d q (row-major 3x3): columns s1 (0, -p_z, p_y), s2 Rx(theta1)(y x u2),
@@ -165,8 +182,8 @@ class Leg {
   template <typename T>
   SPOTKIN_INLINE void jacobian(const T* q, T* J) const noexcept {
     double s[3], c[3];
-    const double angles[3] = {sign1_ * double(q[0]), sign2_ * double(q[1]),
-                              sign2_ * double(q[1]) + sign3_ * double(q[2])};
+    const double angles[3] = {k_.sign1 * double(q[0]), k_.sign2 * double(q[1]),
+                              k_.sign2 * double(q[1]) + k_.sign3 * double(q[2])};
     vector_math::sincos(angles, s, c, 3);
     double out[9];
     jacobian_from(c, s, out);
@@ -199,13 +216,13 @@ class Leg {
   };
   template <typename C, std::ptrdiff_t N>
   SPOTKIN_INLINE void slot_hip(std::ptrdiff_t i, C y, C z, C tol, SlotStages<C, N>& st) const noexcept {
-    const Hip<C> hip = solve_hip(y, z, tol);
+    const Hip<C> hip = solve_hip(k_, y, z, tol);
     st.S[i] = hip.S, st.hip_exists[i] = hip.exists;
   }
   template <int Slot, typename C, std::ptrdiff_t N>
   SPOTKIN_INLINE void slot_knee(std::ptrdiff_t i, C x, C tol, SlotStages<C, N>& st) const noexcept {
     constexpr C eps = Slot < 2 ? C(1) : C(-1);
-    const Knee<C> knee = solve_knee(x - C(g_.a[0]), -eps * st.S[i] - C(g_.a[2]), tol);
+    const Knee<C> knee = solve_knee(k_, x - C(k_.a0), -eps * st.S[i] - C(k_.a2), tol);
     st.cos_psi[i] = knee.cos_psi, st.sin_psi[i] = knee.sin_psi, st.acos_psi[i] = knee.acos_psi;
     st.knee_exists[i] = knee.exists;
   }
@@ -215,10 +232,10 @@ class Leg {
     constexpr int kb = Slot % 2;
     const Hip<C> hip{y * y + z * z, st.S[i], st.hip_exists[i]};
     const Knee<C> knee{st.cos_psi[i], st.sin_psi[i], st.acos_psi[i], st.knee_exists[i]};
-    const C wx = x - C(g_.a[0]), wz = -eps * hip.S - C(g_.a[2]);
-    q[0] = hip_roll(y, z, hip, eps);
-    q[1] = hip_pitch(wx, wz, knee, kb);
-    q[2] = knee_angle(knee, kb);
+    const C wx = x - C(k_.a0), wz = -eps * hip.S - C(k_.a2);
+    q[0] = hip_roll(k_, y, z, hip, eps);
+    q[1] = hip_pitch(k_, wx, wz, knee, kb);
+    q[2] = knee_angle(k_, knee, kb);
     return hip.exists * knee.exists;
   }
 
@@ -232,23 +249,29 @@ class Leg {
   template <bool SharedKnee = false, typename C = double>
   SPOTKIN_INLINE void solve_all_mask(C x, C y, C z, C q[kSlots][3], C exists_hip[2],
                                      C tol = C(kRatioTolerance)) const noexcept {
-    const Hip<C> hip = solve_hip(y, z, tol);
-    const C wx = x - C(g_.a[0]);
+    solve_all_with<SharedKnee>(k_, x, y, z, q, exists_hip, tol);
+  }
+  // solve_all_mask with a leg's constants k (a lane kernel's: each lane its own leg's).
+  template <bool SharedKnee, typename C>
+  static SPOTKIN_INLINE void solve_all_with(const RppConstants& k, C x, C y, C z, C q[kSlots][3], C exists_hip[2],
+                                            C tol) noexcept {
+    const Hip<C> hip = solve_hip(k, y, z, tol);
+    const C wx = x - C(k.a0);
     Knee<C> shared;
-    if (SharedKnee) shared = solve_knee(wx, hip.S, tol);
+    if (SharedKnee) shared = solve_knee(k, wx, hip.S, tol);
 #pragma GCC unroll 2
     for (int hb = 0; hb < 2; ++hb) {
       const C eps = hb == 0 ? C(1) : C(-1);
-      const C hx = hip_roll(y, z, hip, eps);
-      const C wz = SharedKnee ? -eps * hip.S : -eps * hip.S - C(g_.a[2]);
-      const Knee<C> knee = SharedKnee ? shared : solve_knee(wx, wz, tol);
+      const C hx = hip_roll(k, y, z, hip, eps);
+      const C wz = SharedKnee ? -eps * hip.S : -eps * hip.S - C(k.a2);
+      const Knee<C> knee = SharedKnee ? shared : solve_knee(k, wx, wz, tol);
       exists_hip[hb] = hip.exists * knee.exists;
 #pragma GCC unroll 2
       for (int kb = 0; kb < 2; ++kb) {
         C* slot = q[2 * hb + kb];
         slot[0] = hx;
-        slot[1] = hip_pitch(wx, wz, knee, kb);
-        slot[2] = knee_angle(knee, kb);
+        slot[1] = hip_pitch(k, wx, wz, knee, kb);
+        slot[2] = knee_angle(k, knee, kb);
       }
     }
   }
@@ -259,12 +282,12 @@ class Leg {
   SPOTKIN_INLINE C solve_slot(C x, C y, C z, C q[3], C tol = C(kRatioTolerance)) const noexcept {
     constexpr C eps = Slot < 2 ? C(1) : C(-1);
     constexpr int kb = Slot % 2;
-    const Hip<C> hip = solve_hip(y, z, tol);
-    const C wx = x - C(g_.a[0]), wz = -eps * hip.S - C(g_.a[2]);
-    const Knee<C> knee = solve_knee(wx, wz, tol);
-    q[0] = hip_roll(y, z, hip, eps);
-    q[1] = hip_pitch(wx, wz, knee, kb);
-    q[2] = knee_angle(knee, kb);
+    const Hip<C> hip = solve_hip(k_, y, z, tol);
+    const C wx = x - C(k_.a0), wz = -eps * hip.S - C(k_.a2);
+    const Knee<C> knee = solve_knee(k_, wx, wz, tol);
+    q[0] = hip_roll(k_, y, z, hip, eps);
+    q[1] = hip_pitch(k_, wx, wz, knee, kb);
+    q[2] = knee_angle(k_, knee, kb);
     return hip.exists * knee.exists;
   }
 
@@ -292,7 +315,7 @@ class Leg {
 
   // Knee joint origin for q (the leg frame): Rx(theta1)(a + Ry(theta2) b).
   void knee_position(const double* q, double* out) const noexcept {
-    const double t1 = sign1_ * q[0], t2 = sign2_ * q[1];
+    const double t1 = k_.sign1 * q[0], t2 = k_.sign2 * q[1];
     const double c2 = std::cos(t2), s2 = std::sin(t2), c1 = std::cos(t1), s1 = std::sin(t1);
     const double vx = g_.a[0] + c2 * g_.b[0] + s2 * g_.b[2], vy = g_.a[1] + g_.b[1];
     const double vz = g_.a[2] - s2 * g_.b[0] + c2 * g_.b[2];
@@ -303,24 +326,24 @@ class Leg {
   // cosines and sines of theta2 and theta2 + theta3.
   SPOTKIN_INLINE void plane(double c2, double s2, double c23, double s23, double& vx, double& vz) const noexcept {
     // zeta = A + e^{i t2} B + e^{i t23} C;  v_z = Re, v_x = Im
-    vz = g_.a[2] + c2 * Bz_ - s2 * Bx_ + c23 * Cz_ - s23 * Cx_;
-    vx = g_.a[0] + c2 * Bx_ + s2 * Bz_ + c23 * Cx_ + s23 * Cz_;
+    vz = g_.a[2] + c2 * k_.Bz - s2 * k_.Bx + c23 * k_.Cz - s23 * k_.Cx;
+    vx = g_.a[0] + c2 * k_.Bx + s2 * k_.Bz + c23 * k_.Cx + s23 * k_.Cz;
   }
-  SPOTKIN_INLINE double lateral() const noexcept { return h_; }
-  SPOTKIN_INLINE double sign(int k) const noexcept { return k == 0 ? sign1_ : (k == 1 ? sign2_ : sign3_); }
+  SPOTKIN_INLINE double lateral() const noexcept { return k_.h; }
+  SPOTKIN_INLINE double sign(int k) const noexcept { return k == 0 ? k_.sign1 : (k == 1 ? k_.sign2 : k_.sign3); }
 
   // Jacobian from c[k], s[k] = cos, sin of theta1, theta2, theta2 + theta3.
   SPOTKIN_INLINE void jacobian_from(const double* c, const double* s, double* J) const noexcept {
     // u3 = e^{i t23} C, u2 = e^{i t2} B + u3 (zeta components z + i x)
-    const double u3z = c[2] * Cz_ - s[2] * Cx_, u3x = c[2] * Cx_ + s[2] * Cz_;
-    const double u2z = c[1] * Bz_ - s[1] * Bx_ + u3z, u2x = c[1] * Bx_ + s[1] * Bz_ + u3x;
+    const double u3z = c[2] * k_.Cz - s[2] * k_.Cx, u3x = c[2] * k_.Cx + s[2] * k_.Cz;
+    const double u2z = c[1] * k_.Bz - s[1] * k_.Bx + u3z, u2x = c[1] * k_.Bx + s[1] * k_.Bz + u3x;
     const double vz = g_.a[2] + u2z, vx = g_.a[0] + u2x;
-    const double py = h_ * c[0] - vz * s[0], pz = h_ * s[0] + vz * c[0];
+    const double py = k_.h * c[0] - vz * s[0], pz = k_.h * s[0] + vz * c[0];
     (void)vx;
     // y x u = (u_z, 0, -u_x), then Rx(theta1): (u_z, s1 u_x, -c1 u_x)
-    J[0] = 0.0, J[1] = sign2_ * u2z, J[2] = sign3_ * u3z;
-    J[3] = -sign1_ * pz, J[4] = sign2_ * s[0] * u2x, J[5] = sign3_ * s[0] * u3x;
-    J[6] = sign1_ * py, J[7] = -sign2_ * c[0] * u2x, J[8] = -sign3_ * c[0] * u3x;
+    J[0] = 0.0, J[1] = k_.sign2 * u2z, J[2] = k_.sign3 * u3z;
+    J[3] = -k_.sign1 * pz, J[4] = k_.sign2 * s[0] * u2x, J[5] = k_.sign3 * s[0] * u3x;
+    J[6] = k_.sign1 * py, J[7] = -k_.sign2 * c[0] * u2x, J[8] = -k_.sign3 * c[0] * u3x;
   }
 
  private:
@@ -335,36 +358,36 @@ class Leg {
   };
 
   template <typename C>
-  SPOTKIN_INLINE Hip<C> solve_hip(C y, C z, C tol) const noexcept {
-    const C h = C(h_);
+  static SPOTKIN_INLINE Hip<C> solve_hip(const RppConstants& k, C y, C z, C tol) noexcept {
+    const C h = C(k.h);
     Hip<C> hp;
     hp.r2 = y * y + z * z;
     // r^2 - h^2 cancels where the foot nears the hip-roll circle (S -> 0, where
     // the hip pitch then depends on S): float kernels form it in double.
     C disc;
     if constexpr (std::is_same_v<C, float>)
-      disc = C(double(y) * double(y) + double(z) * double(z) - h_ * h_);
+      disc = C(double(y) * double(y) + double(z) * double(z) - k.h2);
     else
-      disc = hp.r2 - h * h;
+      disc = hp.r2 - C(k.h2);
     hp.exists = disc >= -tol * C(2) * h * h ? C(1) : C(0);  // (h/r)^2 <= 1 + 2 tol
     hp.S = std::sqrt(std::max(disc, C(0)));
     return hp;
   }
 
   template <typename C>
-  SPOTKIN_INLINE Knee<C> solve_knee(C wx, C wz, C tol) const noexcept {
+  static SPOTKIN_INLINE Knee<C> solve_knee(const RppConstants& kc, C wx, C wz, C tol) noexcept {
     Knee<C> k;
     if constexpr (std::is_same_v<C, float>) {
       // Near the stretched and folded knee (ratio -> +-1) psi is sqrt-sensitive to the
       // ratio's rounding, and |B|^2 + |C|^2 rounded to float alone would cost ~1e-4 rad:
       // the ratio and 1 - ratio^2 are formed in double.
-      const double ratio = (double(wx) * double(wx) + double(wz) * double(wz) - knee_sum_sq_) * inv_2BC_;
+      const double ratio = (double(wx) * double(wx) + double(wz) * double(wz) - kc.knee_sum_sq) * kc.inv_2BC;
       k.exists = std::fabs(ratio) <= 1.0 + double(tol) ? C(1) : C(0);
       const double cos_psi = std::clamp(ratio, -1.0, 1.0);
       k.cos_psi = C(cos_psi);
       k.sin_psi = std::sqrt(C((1.0 - cos_psi) * (1.0 + cos_psi)));
     } else {
-      const C ratio = (wx * wx + wz * wz - C(knee_sum_sq_)) * C(inv_2BC_);
+      const C ratio = (wx * wx + wz * wz - C(kc.knee_sum_sq)) * C(kc.inv_2BC);
       k.exists = std::fabs(ratio) <= C(1) + tol ? C(1) : C(0);
       k.cos_psi = std::clamp(ratio, C(-1), C(1));
       k.sin_psi = std::sqrt((C(1) - k.cos_psi) * (C(1) + k.cos_psi));
@@ -376,10 +399,10 @@ class Leg {
   // (I1): theta1 for hip branch eps; atan2 is scale-invariant, so the cos/sin
   // are used without their common 1 / r^2. 0 when r = 0 (every angle works).
   template <typename C>
-  SPOTKIN_INLINE C hip_roll(C y, C z, const Hip<C>& hip, C eps) const noexcept {
-    const C h = C(h_);
+  static SPOTKIN_INLINE C hip_roll(const RppConstants& k, C y, C z, const Hip<C>& hip, C eps) noexcept {
+    const C h = C(k.h);
     const C t1 = vector_math::atan2(z * h + eps * y * hip.S, y * h - eps * z * hip.S);
-    return hip.r2 > C(0) ? half_open(C(sign1_) * t1) : C(0);
+    return hip.r2 > C(0) ? half_open(C(k.sign1) * t1) : C(0);
   }
 
   // An angle in [-pi, pi] (an atan2, maybe negated) into (-pi, pi]: -pi (atan2 of a -0 sine, or pi
@@ -391,41 +414,43 @@ class Leg {
 
   // theta3 = psi - phi, then q3 = s3 theta3 in (-pi, pi].
   template <typename C>
-  SPOTKIN_INLINE C knee_angle(const Knee<C>& k, int kb) const noexcept {
-    const C t3 = (kb == 0 ? -k.acos_psi : k.acos_psi) - C(phi_);
-    const C q3 = C(sign3_) * t3;  // in (-2pi, 2pi)
+  static SPOTKIN_INLINE C knee_angle(const RppConstants& kc, const Knee<C>& k, int kb) noexcept {
+    const C t3 = (kb == 0 ? -k.acos_psi : k.acos_psi) - C(kc.phi);
+    const C q3 = C(kc.sign3) * t3;  // in (-2pi, 2pi)
     const C wrapped = q3 <= -kPi<C> ? q3 + C(2) * kPi<C> : q3;
     return wrapped > kPi<C> ? wrapped - C(2) * kPi<C> : wrapped;
   }
 
   // (I4) with e^{i theta3} from psi: theta3 = psi - phi.
   template <typename C>
-  SPOTKIN_INLINE C hip_pitch(C wx, C wz, const Knee<C>& k, int kb) const noexcept {
-    const C Bz = C(Bz_), Bx = C(Bx_), Cz = C(Cz_), Cx = C(Cx_), cos_phi = C(cos_phi_), sin_phi = C(sin_phi_);
+  static SPOTKIN_INLINE C hip_pitch(const RppConstants& kc, C wx, C wz, const Knee<C>& k, int kb) noexcept {
+    const C Bz = C(kc.Bz), Bx = C(kc.Bx), Cz = C(kc.Cz), Cx = C(kc.Cx), cos_phi = C(kc.cos_phi), sin_phi = C(kc.sin_phi);
     const C sin_psi = kb == 0 ? -k.sin_psi : k.sin_psi;
     const C c3 = k.cos_psi * cos_phi + sin_psi * sin_phi;
     const C s3 = sin_psi * cos_phi - k.cos_psi * sin_phi;
     const C dz = Bz + c3 * Cz - s3 * Cx, dx = Bx + c3 * Cx + s3 * Cz;
     const C t2 = vector_math::atan2(wx * dz - wz * dx, wz * dz + wx * dx);
-    return half_open(C(sign2_) * t2);
+    return half_open(C(kc.sign2) * t2);
   }
 
   void update(int preferred_slot) noexcept {
-    sign1_ = g_.sign[0], sign2_ = g_.sign[1], sign3_ = g_.sign[2];
-    h_ = g_.a[1] + g_.b[1] + g_.c[1];
-    Bz_ = g_.b[2], Bx_ = g_.b[0], Cz_ = g_.c[2], Cx_ = g_.c[0];
-    const double nB = std::hypot(Bz_, Bx_), nC = std::hypot(Cz_, Cx_);
-    phi_ = std::atan2(Cx_, Cz_) - std::atan2(Bx_, Bz_);
-    cos_phi_ = std::cos(phi_), sin_phi_ = std::sin(phi_);
-    knee_sum_sq_ = nB * nB + nC * nC;
-    inv_2BC_ = 1.0 / (2.0 * nB * nC);
+    k_.sign1 = g_.sign[0], k_.sign2 = g_.sign[1], k_.sign3 = g_.sign[2];
+    k_.a0 = g_.a[0], k_.a2 = g_.a[2];
+    k_.h = g_.a[1] + g_.b[1] + g_.c[1];
+    k_.h2 = k_.h * k_.h;
+    k_.Bz = g_.b[2], k_.Bx = g_.b[0], k_.Cz = g_.c[2], k_.Cx = g_.c[0];
+    const double nB = std::hypot(k_.Bz, k_.Bx), nC = std::hypot(k_.Cz, k_.Cx);
+    k_.phi = std::atan2(k_.Cx, k_.Cz) - std::atan2(k_.Bx, k_.Bz);
+    k_.cos_phi = std::cos(k_.phi), k_.sin_phi = std::sin(k_.phi);
+    k_.knee_sum_sq = nB * nB + nC * nC;
+    k_.inv_2BC = 1.0 / (2.0 * nB * nC);
     d_max_ = nB + nC;
     d_min_ = std::fabs(nB - nC);
     if (preferred_slot < 0) {
       // knee branch of the middle of the knee's range: sin(psi) <= 0 is branch 0
       const double lo = limits_.lower[2], hi = limits_.upper[2];
       int knee = 0;
-      if (std::isfinite(lo) && std::isfinite(hi)) knee = std::sin(sign3_ * 0.5 * (lo + hi) + phi_) > 0.0 ? 1 : 0;
+      if (std::isfinite(lo) && std::isfinite(hi)) knee = std::sin(k_.sign3 * 0.5 * (lo + hi) + k_.phi) > 0.0 ? 1 : 0;
       preferred_slot = knee;
     }
     order_[0] = preferred_slot;
@@ -435,8 +460,8 @@ class Leg {
 
   RppGeometry g_;
   JointLimits<3> limits_;
-  double sign1_ = 1, sign2_ = 1, sign3_ = 1, h_ = 0, Bz_ = 0, Bx_ = 0, Cz_ = 0, Cx_ = 0;
-  double phi_ = 0, cos_phi_ = 1, sin_phi_ = 0, knee_sum_sq_ = 0, inv_2BC_ = 0, d_max_ = 0, d_min_ = 0;
+  RppConstants k_;
+  double d_max_ = 0, d_min_ = 0;
   int order_[kSlots] = {0, 1, 2, 3};
 };
 
@@ -540,6 +565,61 @@ SPOTKIN_INLINE bool all_settled(const C* ok, const C* also, std::ptrdiff_t m) no
 template <typename C>
 SPOTKIN_INLINE C finite_mask(C x, C y, C z) noexcept {
   return (((x - x) == C(0)) & ((y - y) == C(0)) & ((z - z) == C(0))) ? C(1) : C(0);
+}
+
+// The constants of up to N legs, one per lane (SoA), for kernels whose lanes hold different legs
+// (body_batch::ik_pairs: a few poses, each leg of each pose in its own lane).
+template <std::ptrdiff_t N>
+struct LegLanes {
+  double a0[N], a2[N], h[N], h2[N], Bz[N], Bx[N], Cz[N], Cx[N];
+  double phi[N], cos_phi[N], sin_phi[N], knee_sum_sq[N], inv_2BC[N];
+  double sign1[N], sign2[N], sign3[N], lower[3][N], upper[3][N];
+
+  void set(std::ptrdiff_t i, const Leg& leg) noexcept {
+    const RppConstants& k = leg.constants();
+    a0[i] = k.a0, a2[i] = k.a2, h[i] = k.h, h2[i] = k.h2, Bz[i] = k.Bz, Bx[i] = k.Bx, Cz[i] = k.Cz, Cx[i] = k.Cx;
+    phi[i] = k.phi, cos_phi[i] = k.cos_phi, sin_phi[i] = k.sin_phi;
+    knee_sum_sq[i] = k.knee_sum_sq, inv_2BC[i] = k.inv_2BC;
+    sign1[i] = k.sign1, sign2[i] = k.sign2, sign3[i] = k.sign3;
+    for (int j = 0; j < 3; ++j) lower[j][i] = leg.limits().lower[j], upper[j][i] = leg.limits().upper[j];
+  }
+  SPOTKIN_INLINE RppConstants at(std::ptrdiff_t i) const noexcept {
+    RppConstants k;
+    k.a0 = a0[i], k.a2 = a2[i], k.h = h[i], k.h2 = h2[i], k.Bz = Bz[i], k.Bx = Bx[i], k.Cz = Cz[i], k.Cx = Cx[i];
+    k.phi = phi[i], k.cos_phi = cos_phi[i], k.sin_phi = sin_phi[i];
+    k.knee_sum_sq = knee_sum_sq[i], k.inv_2BC = inv_2BC[i];
+    k.sign1 = sign1[i], k.sign2 = sign2[i], k.sign3 = sign3[i];
+    return k;
+  }
+};
+
+// solve_slots with lane i solved for the leg L holds in lane i (m <= N): the same operations on each
+// lane as solve_slots for that leg alone, so the same answers to the bit. SharedKnee: every lane's
+// leg has a_z = 0.
+template <bool SharedKnee, std::ptrdiff_t N, typename C>
+SPOTKIN_INLINE void solve_slots_lanes(const LegLanes<N>& __restrict L, const C* __restrict x, const C* __restrict y,
+                                      const C* __restrict z, std::ptrdiff_t m, C tol, C limit_tol,
+                                      C (*__restrict q)[3][kBlock], C (*__restrict ok)[kBlock],
+                                      C (*__restrict exists_hip)[kBlock]) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    C q_all[Leg::kSlots][3], e[2];
+    Leg::solve_all_with<SharedKnee>(L.at(i), x[i], y[i], z[i], q_all, e, tol);
+    exists_hip[0][i] = e[0], exists_hip[1][i] = e[1];
+#pragma GCC unroll 4
+    for (int s = 0; s < Leg::kSlots; ++s)
+#pragma GCC unroll 3
+      for (int j = 0; j < 3; ++j) q[s][j][i] = q_all[s][j];
+  }
+#pragma GCC unroll 4
+  for (int s = 0; s < Leg::kSlots; ++s) {
+    for (std::ptrdiff_t i = 0; i < m; ++i) {
+      C qi[3] = {q[s][0][i], q[s][1][i], q[s][2][i]};
+      const double lower[3] = {L.lower[0][i], L.lower[1][i], L.lower[2][i]};
+      const double upper[3] = {L.upper[0][i], L.upper[1][i], L.upper[2][i]};
+      ok[s][i] = exists_hip[s / 2][i] * JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol);
+      q[s][0][i] = qi[0], q[s][1][i] = qi[1], q[s][2][i] = qi[2];
+    }
+  }
 }
 
 // The targets of a block that the preferred-slot pass did not settle (a seed,
