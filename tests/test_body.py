@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
+from urdf_helpers import robot_named
 
 import spotkin as sk
 from conftest import BATCH_SHAPES
@@ -335,6 +336,55 @@ def test_threads_bit_identical_and_concurrent_callers(rng):
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda c: SPOT.body_ik(c, FEET).q, chunks))
     np.testing.assert_array_equal(np.concatenate(results), one.q)
+
+
+def _hard_stances(rng, robot, height, n, dtype):
+    """n poses and per-pose feet around a stance: in reach, far out (UNREACHABLE, JOINT_LIMIT), NaN, Inf,
+    a scaled rotation matrix row, and random seeds (one with a NaN joint)."""
+    feet0 = robot.stance_feet(height)
+    poses = np.zeros((n, 6))
+    poses[:, 2] = height
+    poses += rng.normal(size=(n, 6)) * [0.08, 0.08, 0.08, 0.3, 0.3, 0.5]
+    poses[::9] *= 5  # out of reach, or past a limit
+    poses[3, 4] = np.nan
+    feet = feet0 + rng.normal(size=(n, *feet0.shape)) * 0.03
+    feet[5, 1, 2] = np.inf
+    seeds = rng.uniform(-3, 3, size=(n, 3 * len(feet0)))
+    seeds[6, 4] = np.nan
+    return poses.astype(dtype), feet.astype(dtype), seeds.astype(dtype), feet0.astype(dtype)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_few_poses_equal_their_rows_of_a_batch_to_the_bit(rng, dtype):
+    """One to four poses are solved with each (pose, leg) pair in its own lane (every slot at once), a
+    batch leg by leg: the answers, statuses and fallbacks are the same bits either way, with and without
+    a seed, a shared stance or one per pose, and in Euler, matrix and quaternion form."""
+    for robot, height in [(SPOT, 0.5), (robot_named("go2"), 0.3), (robot_named("heavy"), 0.6)]:
+        poses, feet, seeds, feet0 = _hard_stances(rng, robot, height, 160, dtype)
+        matrices = matrix_poses(poses.astype(np.float64)).astype(dtype)
+        quats = np.hstack([poses[:, :3], Rotation.from_euler("XYZ", np.nan_to_num(poses[:, 3:])).as_quat()])
+        quats = quats.astype(dtype)
+        statuses = set()
+        for form in (poses, matrices, quats):
+            for seed in (None, seeds):
+                for fallback in ("nearest", "nan"):
+                    for stance in (feet, feet0):
+                        batch = robot.body_ik(form, stance, seed, fallback=fallback)
+                        statuses |= set(np.unique(batch.status).tolist())
+                        for count in (1, 2, 3, 4):
+                            for k in range(0, 160 - count, 23 + count):
+                                rows = slice(k, k + count) if count > 1 else k
+                                few = robot.body_ik(
+                                    form[rows],
+                                    stance[rows] if stance is feet else stance,
+                                    None if seed is None else seed[rows],
+                                    fallback=fallback,
+                                )
+                                assert few.q.dtype == dtype
+                                np.testing.assert_array_equal(few.q, batch.q[rows])
+                                np.testing.assert_array_equal(few.status, batch.status[rows])
+        # the cases that matter were met: OK, UNREACHABLE, JOINT_LIMIT and INVALID_INPUT
+        assert {int(sk.Status.OK), int(sk.Status.UNREACHABLE), int(sk.Status.INVALID_INPUT)} <= statuses
 
 
 # ------------------------------------------------------------------ body_transform against the reference
