@@ -305,15 +305,18 @@ SPOTKIN_INLINE std::ptrdiff_t read_padded_poses(const T* poses, BodyPoseFormat f
   return padded;
 }
 
-// ik() for a few poses (count * n <= Body::kPairLanes): each (pose, leg) pair in its own lane, every
-// slot at once (leg_batch::solve_slots_lanes), then each pair chosen as ik() chooses it. ik() pads
-// each leg's targets to whole vectors, so one pose costs n vector passes (2 n with a seed); here
-// the n legs of a pose share them. The lanes run ik()'s operations on the same values: the same bits.
+// ik() for a few poses (count * n <= Body::kPairLanes): each (pose, leg) pair in its own lane,
+// every slot at once (leg_batch::solve_slots_lanes), then each pair chosen as ik() chooses it. ik()
+// pads each leg's targets to whole vectors, so one pose costs n vector passes (2 n with a seed);
+// here the n legs of a pose share them. The lanes run ik()'s operations on the same values: the
+// same bits.
 template <typename T>
-SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
-                             const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
-                             std::ptrdiff_t count, bool nearest_fallback) noexcept {
-  const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
+SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat format,
+                             const EulerSequence& seq, const T* feet, bool feet_shared,
+                             const T* seed, T* q, std::int8_t* status, std::ptrdiff_t count,
+                             bool nearest_fallback) noexcept {
+  const std::ptrdiff_t stride =
+      format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   using C = leg_batch::Compute<T>;
   constexpr std::ptrdiff_t N = Body::kPairLanes;
   const int n = body.n_legs(), w = body.width();
@@ -338,11 +341,11 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
     open.z[k] = R[2][k] * dx + R[5][k] * dy + R[8][k] * dz - C(body.pair_hips[2][k]);
   }
   if (body.shared_knees)
-    leg_batch::solve_slots_lanes<true>(body.pair_legs, open.x, open.y, open.z, padded, tol, limit_tol, open.q,
-                                       open.ok, open.exists_hip);
+    leg_batch::solve_slots_lanes<true>(body.pair_legs, open.x, open.y, open.z, padded, tol,
+                                       limit_tol, open.q, open.ok, open.exists_hip);
   else
-    leg_batch::solve_slots_lanes<false>(body.pair_legs, open.x, open.y, open.z, padded, tol, limit_tol, open.q,
-                                        open.ok, open.exists_hip);
+    leg_batch::solve_slots_lanes<false>(body.pair_legs, open.x, open.y, open.z, padded, tol,
+                                        limit_tol, open.q, open.ok, open.exists_hip);
   // pair k = n i + l: pose i, leg l (counters, in the increment: the loop body may `continue`)
   for (std::ptrdiff_t k = 0, i = 0, l = 0; k < m; ++k, l = l + 1 == n ? 0 : l + 1, i += l == 0) {
     const Leg& leg = body.legs[std::size_t(l)];
@@ -377,7 +380,8 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   using C = leg_batch::Compute<T>;
   const int n = body.n_legs(), w = body.width();
   if (count * n <= Body::kPairLanes)
-    return ik_pairs(body, poses, format, seq, feet, feet_shared, seed, q, status, count, nearest_fallback);
+    return ik_pairs(body, poses, format, seq, feet, feet_shared, seed, q, status, count,
+                    nearest_fallback);
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
   C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock], ok[kBlock];

@@ -71,7 +71,8 @@ struct JointLimits {
   }
   // wrap_mask within the bounds lower, upper (a lane kernel's: each lane its own limits).
   template <typename C>
-  static SPOTKIN_INLINE C wrap_mask_within(const double* lower, const double* upper, C* q, C tol) noexcept {
+  static SPOTKIN_INLINE C wrap_mask_within(const double* lower, const double* upper, C* q,
+                                           C tol) noexcept {
     constexpr C two_pi = C(2) * kPi<C>;
     C all = 1;
 #pragma GCC unroll 8
@@ -112,12 +113,13 @@ inline RppGeometry spot_style_geometry(double h1, double upper, double lower, do
 // The constants of (I1)-(I4) for one leg, derived from its RppGeometry (Leg::update): the
 // branch solves read only these, so that a kernel can give each lane a different leg's.
 struct RppConstants {
-  double a0 = 0, a2 = 0, h = 0;                   // a_x, a_z; h = a_y + b_y + c_y (I1)
-  double h2 = 0;  // h^2, rounded once: a kernel with h in lanes must not fuse r^2 - h^2 into one FMA
-  double Bz = 0, Bx = 0, Cz = 0, Cx = 0;          // B = zeta(b), C = zeta(c) (I2)
-  double phi = 0, cos_phi = 1, sin_phi = 0;       // phi = arg C - arg B (I3)
-  double knee_sum_sq = 0, inv_2BC = 0;            // |B|^2 + |C|^2, 1 / (2 |B| |C|) (I3)
-  double sign1 = 1, sign2 = 1, sign3 = 1;         // q_k = s_k theta_k
+  double a0 = 0, a2 = 0, h = 0;  // a_x, a_z; h = a_y + b_y + c_y (I1)
+  double h2 =
+      0;  // h^2, rounded once: a kernel with h in lanes must not fuse r^2 - h^2 into one FMA
+  double Bz = 0, Bx = 0, Cz = 0, Cx = 0;     // B = zeta(b), C = zeta(c) (I2)
+  double phi = 0, cos_phi = 1, sin_phi = 0;  // phi = arg C - arg B (I3)
+  double knee_sum_sq = 0, inv_2BC = 0;       // |B|^2 + |C|^2, 1 / (2 |B| |C|) (I3)
+  double sign1 = 1, sign2 = 1, sign3 = 1;    // q_k = s_k theta_k
 };
 
 class Leg {
@@ -253,8 +255,8 @@ class Leg {
   }
   // solve_all_mask with a leg's constants k (a lane kernel's: each lane its own leg's).
   template <bool SharedKnee, typename C>
-  static SPOTKIN_INLINE void solve_all_with(const RppConstants& k, C x, C y, C z, C q[kSlots][3], C exists_hip[2],
-                                            C tol) noexcept {
+  static SPOTKIN_INLINE void solve_all_with(const RppConstants& k, C x, C y, C z, C q[kSlots][3],
+                                            C exists_hip[2], C tol) noexcept {
     const Hip<C> hip = solve_hip(k, y, z, tol);
     const C wx = x - C(k.a0);
     Knee<C> shared;
@@ -330,7 +332,9 @@ class Leg {
     vx = g_.a[0] + c2 * k_.Bx + s2 * k_.Bz + c23 * k_.Cx + s23 * k_.Cz;
   }
   SPOTKIN_INLINE double lateral() const noexcept { return k_.h; }
-  SPOTKIN_INLINE double sign(int k) const noexcept { return k == 0 ? k_.sign1 : (k == 1 ? k_.sign2 : k_.sign3); }
+  SPOTKIN_INLINE double sign(int k) const noexcept {
+    return k == 0 ? k_.sign1 : (k == 1 ? k_.sign2 : k_.sign3);
+  }
 
   // Jacobian from c[k], s[k] = cos, sin of theta1, theta2, theta2 + theta3.
   SPOTKIN_INLINE void jacobian_from(const double* c, const double* s, double* J) const noexcept {
@@ -381,7 +385,8 @@ class Leg {
       // Near the stretched and folded knee (ratio -> +-1) psi is sqrt-sensitive to the
       // ratio's rounding, and |B|^2 + |C|^2 rounded to float alone would cost ~1e-4 rad:
       // the ratio and 1 - ratio^2 are formed in double.
-      const double ratio = (double(wx) * double(wx) + double(wz) * double(wz) - kc.knee_sum_sq) * kc.inv_2BC;
+      const double ratio =
+          (double(wx) * double(wx) + double(wz) * double(wz) - kc.knee_sum_sq) * kc.inv_2BC;
       k.exists = std::fabs(ratio) <= 1.0 + double(tol) ? C(1) : C(0);
       const double cos_psi = std::clamp(ratio, -1.0, 1.0);
       k.cos_psi = C(cos_psi);
@@ -399,7 +404,8 @@ class Leg {
   // (I1): theta1 for hip branch eps; atan2 is scale-invariant, so the cos/sin
   // are used without their common 1 / r^2. 0 when r = 0 (every angle works).
   template <typename C>
-  static SPOTKIN_INLINE C hip_roll(const RppConstants& k, C y, C z, const Hip<C>& hip, C eps) noexcept {
+  static SPOTKIN_INLINE C hip_roll(const RppConstants& k, C y, C z, const Hip<C>& hip,
+                                   C eps) noexcept {
     const C h = C(k.h);
     const C t1 = vector_math::atan2(z * h + eps * y * hip.S, y * h - eps * z * hip.S);
     return hip.r2 > C(0) ? half_open(C(k.sign1) * t1) : C(0);
@@ -423,8 +429,10 @@ class Leg {
 
   // (I4) with e^{i theta3} from psi: theta3 = psi - phi.
   template <typename C>
-  static SPOTKIN_INLINE C hip_pitch(const RppConstants& kc, C wx, C wz, const Knee<C>& k, int kb) noexcept {
-    const C Bz = C(kc.Bz), Bx = C(kc.Bx), Cz = C(kc.Cz), Cx = C(kc.Cx), cos_phi = C(kc.cos_phi), sin_phi = C(kc.sin_phi);
+  static SPOTKIN_INLINE C hip_pitch(const RppConstants& kc, C wx, C wz, const Knee<C>& k,
+                                    int kb) noexcept {
+    const C Bz = C(kc.Bz), Bx = C(kc.Bx), Cz = C(kc.Cz), Cx = C(kc.Cx), cos_phi = C(kc.cos_phi),
+            sin_phi = C(kc.sin_phi);
     const C sin_psi = kb == 0 ? -k.sin_psi : k.sin_psi;
     const C c3 = k.cos_psi * cos_phi + sin_psi * sin_phi;
     const C s3 = sin_psi * cos_phi - k.cos_psi * sin_phi;
@@ -450,7 +458,8 @@ class Leg {
       // knee branch of the middle of the knee's range: sin(psi) <= 0 is branch 0
       const double lo = limits_.lower[2], hi = limits_.upper[2];
       int knee = 0;
-      if (std::isfinite(lo) && std::isfinite(hi)) knee = std::sin(k_.sign3 * 0.5 * (lo + hi) + k_.phi) > 0.0 ? 1 : 0;
+      if (std::isfinite(lo) && std::isfinite(hi))
+        knee = std::sin(k_.sign3 * 0.5 * (lo + hi) + k_.phi) > 0.0 ? 1 : 0;
       preferred_slot = knee;
     }
     order_[0] = preferred_slot;
@@ -577,15 +586,18 @@ struct LegLanes {
 
   void set(std::ptrdiff_t i, const Leg& leg) noexcept {
     const RppConstants& k = leg.constants();
-    a0[i] = k.a0, a2[i] = k.a2, h[i] = k.h, h2[i] = k.h2, Bz[i] = k.Bz, Bx[i] = k.Bx, Cz[i] = k.Cz, Cx[i] = k.Cx;
+    a0[i] = k.a0, a2[i] = k.a2, h[i] = k.h, h2[i] = k.h2, Bz[i] = k.Bz, Bx[i] = k.Bx, Cz[i] = k.Cz,
+    Cx[i] = k.Cx;
     phi[i] = k.phi, cos_phi[i] = k.cos_phi, sin_phi[i] = k.sin_phi;
     knee_sum_sq[i] = k.knee_sum_sq, inv_2BC[i] = k.inv_2BC;
     sign1[i] = k.sign1, sign2[i] = k.sign2, sign3[i] = k.sign3;
-    for (int j = 0; j < 3; ++j) lower[j][i] = leg.limits().lower[j], upper[j][i] = leg.limits().upper[j];
+    for (int j = 0; j < 3; ++j)
+      lower[j][i] = leg.limits().lower[j], upper[j][i] = leg.limits().upper[j];
   }
   SPOTKIN_INLINE RppConstants at(std::ptrdiff_t i) const noexcept {
     RppConstants k;
-    k.a0 = a0[i], k.a2 = a2[i], k.h = h[i], k.h2 = h2[i], k.Bz = Bz[i], k.Bx = Bx[i], k.Cz = Cz[i], k.Cx = Cx[i];
+    k.a0 = a0[i], k.a2 = a2[i], k.h = h[i], k.h2 = h2[i], k.Bz = Bz[i], k.Bx = Bx[i], k.Cz = Cz[i],
+    k.Cx = Cx[i];
     k.phi = phi[i], k.cos_phi = cos_phi[i], k.sin_phi = sin_phi[i];
     k.knee_sum_sq = knee_sum_sq[i], k.inv_2BC = inv_2BC[i];
     k.sign1 = sign1[i], k.sign2 = sign2[i], k.sign3 = sign3[i];
@@ -593,12 +605,13 @@ struct LegLanes {
   }
 };
 
-// solve_slots with lane i solved for the leg L holds in lane i (m <= N): the same operations on each
-// lane as solve_slots for that leg alone, so the same answers to the bit. SharedKnee: every lane's
-// leg has a_z = 0.
+// solve_slots with lane i solved for the leg L holds in lane i (m <= N): the same operations on
+// each lane as solve_slots for that leg alone, so the same answers to the bit. SharedKnee: every
+// lane's leg has a_z = 0.
 template <bool SharedKnee, std::ptrdiff_t N, typename C>
-SPOTKIN_INLINE void solve_slots_lanes(const LegLanes<N>& __restrict L, const C* __restrict x, const C* __restrict y,
-                                      const C* __restrict z, std::ptrdiff_t m, C tol, C limit_tol,
+SPOTKIN_INLINE void solve_slots_lanes(const LegLanes<N>& __restrict L, const C* __restrict x,
+                                      const C* __restrict y, const C* __restrict z,
+                                      std::ptrdiff_t m, C tol, C limit_tol,
                                       C (*__restrict q)[3][kBlock], C (*__restrict ok)[kBlock],
                                       C (*__restrict exists_hip)[kBlock]) noexcept {
   for (std::ptrdiff_t i = 0; i < m; ++i) {
@@ -616,7 +629,8 @@ SPOTKIN_INLINE void solve_slots_lanes(const LegLanes<N>& __restrict L, const C* 
       C qi[3] = {q[s][0][i], q[s][1][i], q[s][2][i]};
       const double lower[3] = {L.lower[0][i], L.lower[1][i], L.lower[2][i]};
       const double upper[3] = {L.upper[0][i], L.upper[1][i], L.upper[2][i]};
-      ok[s][i] = exists_hip[s / 2][i] * JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol);
+      ok[s][i] =
+          exists_hip[s / 2][i] * JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol);
       q[s][0][i] = qi[0], q[s][1][i] = qi[1], q[s][2][i] = qi[2];
     }
   }
