@@ -179,3 +179,73 @@ def test_the_threads_do_not_change_a_batch_s_bits():
         sk.set_num_threads(before)
     for field in ("q", "qd", "tau", "kp", "kd", "contact"):
         assert np.array_equal(getattr(commands[0], field), getattr(commands[1], field)), field
+
+
+def test_one_robot_s_fast_step_is_the_general_step_to_the_bit():
+    """``step`` reads a single robot's float64 rows in place and builds the JointCommand in the core;
+    ``_step`` converts, broadcasts and checks in general. Over a walk with changing commands, measured
+    contacts and without, both give the same bits, and the command is a full JointCommand."""
+    robot = robot_named("go2")
+    rng = np.random.default_rng(7)
+    fast, general = sk.GaitController(robot), sk.GaitController(robot)
+    base = _standing(robot)
+    for tick in range(300):
+        state = base.replace(
+            position=base.position + rng.normal(0, 0.005, 3),
+            linear_velocity=rng.normal(0, 0.05, 3),
+            q=base.q + rng.normal(0, 0.01, 12),
+            qd=rng.normal(0, 0.1, 12),
+            contact=None if tick % 3 else rng.random(4) < 0.7,
+        )
+        velocity = (0.2, 0.05 * np.sin(tick / 50), 0.1) if tick % 2 else [0, 0, 0]  # a list of ints too
+        a = fast.step(tick / 500, state, velocity)
+        b = general._step(tick / 500, state, velocity, None)
+        for field in ("q", "qd", "tau", "kp", "kd", "contact"):
+            got, want = getattr(a, field), getattr(b, field)
+            assert got.shape == want.shape and got.dtype == want.dtype, field
+            assert np.array_equal(got, want), f"tick {tick}: {field}"
+        for field in DETAILS:
+            if field != "time":
+                assert np.array_equal(fast.last[field], general.last[field]), f"tick {tick}: {field}"
+    assert type(a) is sk.motion.JointCommand and fast.ticks == general.ticks == 300
+    with pytest.raises(AttributeError):  # frozen, as one made by its __init__
+        a.q = a.qd
+    np.testing.assert_array_equal(a.torques(a.q, a.qd), a.tau)
+    # the states above did take the in-place path: it answers them (and declines what it does not take)
+    probe = sk.GaitController(robot)
+    assert type(probe._core.step_one(0.0, probe._start_index, -1, base, [0, 0, 0])) is sk.motion.JointCommand
+    assert probe._core.step_one(0.002, probe._start_index, -1, base, (0.1, 0.0)) is None
+
+
+def test_one_robot_s_step_declines_to_the_general_path_with_its_errors():
+    """What the in-place step does not take goes the general way: the same command for a strided row,
+    an integer time or a NumPy scalar one, and the general path's errors for NaN, a zero quaternion,
+    a wrong width or time going back."""
+    robot = robot_named("go2")
+    state = _standing(robot)
+    want = sk.GaitController(robot).step(0.25, state, (0.1, 0.0, 0.0))
+    wide = np.zeros((12, 2))
+    wide[:, 0] = state.q
+    strided = state.replace(q=wide[:, 0])  # a non-contiguous (12,) row
+    assert not strided.q.flags.c_contiguous
+    probe = sk.GaitController(robot)
+    assert probe._core.step_one(0.25, probe._start_index, -1, strided, (0.1, 0.0, 0.0)) is None
+    assert probe._core.step_one(1, probe._start_index, -1, state, (0.1, 0.0, 0.0)) is None  # an int t
+    for t, s, v in [(0.25, strided, (0.1, 0.0, 0.0)), (np.float64(0.25), state, np.array([0.1, 0.0, 0.0]))]:
+        got = sk.GaitController(robot).step(t, s, v)
+        assert np.array_equal(got.tau, want.tau) and np.array_equal(got.q, want.q)
+    assert sk.GaitController(robot).step(1, state, (0, 0, 0)).q.shape == (12,)
+    controller = sk.GaitController(robot)
+    with pytest.raises(ValueError, match=r"state\.position must be finite"):
+        controller.step(0.0, state.replace(position=np.array([0.0, np.nan, 0.3])), (0.1, 0.0, 0.0))
+    with pytest.raises(ValueError, match="velocity must be finite"):
+        controller.step(0.0, state, (0.1, np.inf, 0.0))
+    with pytest.raises(ValueError, match="non-zero length"):
+        controller.step(0.0, state.replace(quaternion=np.zeros(4)), (0.1, 0.0, 0.0))
+    with pytest.raises(ValueError, match="velocity"):
+        controller.step(0.0, state, (0.1, 0.0))
+    controller.step(1.0, state, (0.1, 0.0, 0.0))
+    with pytest.raises(ValueError, match="t went backwards"):
+        controller.step(0.5, state, (0.1, 0.0, 0.0))
+    with pytest.raises(TypeError, match="RobotState"):
+        controller.step(1.5, (state.position, state.quaternion), (0.1, 0.0, 0.0))

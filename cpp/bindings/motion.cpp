@@ -176,6 +176,53 @@ auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trai
   return arr;
 }
 
+// The batch's checks against the controller's memory: the same robots, and time not going back.
+void check_batch(const ControllerCore& core, double t, py::ssize_t B) {
+  if (!core.memories.empty() && py::ssize_t(core.memories.size()) != B)
+    throw py::value_error("the batch changed from " + std::to_string(core.memories.size()) +
+                          " to " + std::to_string(B) + " robots: call reset() first");
+  for (const auto& memory : core.memories)
+    if (memory.started && t - memory.t < -1e-9)
+      throw py::value_error("t went backwards: " + std::to_string(t) + " after " +
+                            std::to_string(memory.t) + ": call reset() first");
+}
+
+// One tick of B robots (rows of the state's fields, checked), into core.last.
+void run_ticks(ControllerCore& core, double t, int start_gait, int new_gait, const double* pos,
+               const double* quat, const double* lin, const double* ang, const double* q,
+               const double* qd, const bool* contact, const double* cmd, py::ssize_t B) {
+  using motion::kLegs;
+  constexpr py::ssize_t W = 3 * kLegs;
+  if (core.memories.empty()) core.memories.resize(std::size_t(B));
+  std::vector<motion::ControllerOutput>& outs = core.last;
+  outs.resize(static_cast<std::size_t>(B));
+  core.seconds.resize(static_cast<std::size_t>(B));
+  double* wall = core.seconds.data();
+  {
+    ReleaseGilFor release(B);
+    on_robot(core.robot, 1, [&](const auto& robot) {
+      parallel_for(B, 64, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
+        for (std::ptrdiff_t b = begin; b < end; ++b) {
+          const auto start = std::chrono::steady_clock::now();
+          const motion::ControllerInput in{
+              t,           pos + 3 * b, quat + 4 * b, lin + 3 * b,
+              ang + 3 * b, q + W * b,   qd + W * b,   contact ? contact + kLegs * b : nullptr,
+              cmd + 3 * b};
+          motion::controller_tick(robot, core.config, core.gaits.data(), start_gait, new_gait,
+                                  core.memories[std::size_t(b)], in, outs[std::size_t(b)]);
+          wall[b] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
+      });
+    });
+  }
+  for (const auto& out : outs) {
+    bool any = false;
+    for (bool c : out.clipped) any = any || c;
+    core.clipped += any;
+  }
+  core.ticks += B;
+}
+
 // One tick of every robot: the state's arrays (B, width) each, contact (B, 4) bool or None, the
 // command (B, 3). Returns the command (q, qd, tau, kp, kd, contact), (B, ...) arrays each, or
 // (...) ones when the state came as single rows; details() gives the rest of the tick.
@@ -235,53 +282,145 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
     if (!fits)
       throw py::value_error("state.contact must have shape (" + std::to_string(B) + ", 4)");
   }
-  if (core.memories.empty()) core.memories.resize(std::size_t(B));
-  if (py::ssize_t(core.memories.size()) != B)
-    throw py::value_error("the batch changed from " + std::to_string(core.memories.size()) +
-                          " to " + std::to_string(B) + " robots: call reset() first");
-  for (const auto& memory : core.memories)
-    if (memory.started && t - memory.t < -1e-9)
-      throw py::value_error("t went backwards: " + std::to_string(t) + " after " +
-                            std::to_string(memory.t) + ": call reset() first");
-  std::vector<motion::ControllerOutput>& outs = core.last;
-  outs.resize(static_cast<std::size_t>(B));
-  core.seconds.resize(static_cast<std::size_t>(B));
-  double* wall = core.seconds.data();
-  {
-    ReleaseGilFor release(B);
-    on_robot(core.robot, 1, [&](const auto& robot) {
-      parallel_for(B, 64, [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
-        for (std::ptrdiff_t b = begin; b < end; ++b) {
-          const auto start = std::chrono::steady_clock::now();
-          const motion::ControllerInput in{
-              t,
-              pos.data() + 3 * b,
-              quat.data() + 4 * b,
-              lin.data() + 3 * b,
-              ang.data() + 3 * b,
-              q.data() + W * b,
-              qd.data() + W * b,
-              contact_obj.is_none() ? nullptr : contact.data() + kLegs * b,
-              cmd.data() + 3 * b};
-          motion::controller_tick(robot, core.config, core.gaits.data(), start_gait, new_gait,
-                                  core.memories[std::size_t(b)], in, outs[std::size_t(b)]);
-          wall[b] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        }
-      });
-    });
-  }
-  const auto B_ = py::ssize_t(outs.size());
-  for (const auto& out : outs) {
-    bool any = false;
-    for (bool c : out.clipped) any = any || c;
-    core.clipped += any;
-  }
-  core.ticks += B_;
+  check_batch(core, t, B);
+  run_ticks(core, t, start_gait, new_gait, pos.data(), quat.data(), lin.data(), ang.data(),
+            q.data(), qd.data(), contact_obj.is_none() ? nullptr : contact.data(), cmd.data(), B);
   using Out = motion::ControllerOutput;
+  const std::vector<motion::ControllerOutput>& outs = core.last;
   return py::make_tuple(gather(outs, {W}, &Out::q, one_row), gather(outs, {W}, &Out::qd, one_row),
                         gather(outs, {W}, &Out::tau, one_row), gather(outs, {W}, &Out::kp, one_row),
                         gather(outs, {W}, &Out::kd, one_row),
                         gather(outs, {kLegs}, &Out::contact, one_row));
+}
+
+// ---------------------------------------------------------------- one robot, as a control loop
+// calls
+
+// The JointCommand class (spotkin.motion.JointCommand), registered by the façade at import: the
+// one-robot step builds its instances without calling its __init__ (a frozen dataclass's setattrs).
+PyObject*& joint_command_type() {
+  static PyObject* type = nullptr;  // never released: it lives as long as the module
+  return type;
+}
+
+// obj's data when it is a C-contiguous, aligned, native float64 (width,) array; else null.
+const double* float64_row(PyObject* obj, Py_intptr_t width) {
+  using api = py::detail::npy_api;
+  if (Py_TYPE(obj) != reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) return nullptr;
+  const auto* a = py::detail::array_proxy(obj);
+  const auto* d = py::detail::array_descriptor_proxy(a->descr);
+  constexpr int kNeeded = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_ALIGNED_;
+  if ((a->flags & kNeeded) != kNeeded || d->type_num != api::NPY_DOUBLE_ || d->byteorder == '>' ||
+      a->nd != 1 || a->dimensions[0] != width)
+    return nullptr;
+  return reinterpret_cast<const double*>(a->data);
+}
+
+// A new (n,) array of NumPy type `type`, uninitialised.
+PyObject* new_row(int type, Py_intptr_t n) {
+  auto& numpy = py::detail::npy_api::get();
+  return numpy.PyArray_NewFromDescr_(numpy.PyArray_Type_, numpy.PyArray_DescrFromType_(type), 1, &n,
+                                     nullptr, nullptr, 0, nullptr);
+}
+
+// GaitController.step for one robot whose state holds single rows: the state's fields read in
+// place (float64 rows of their widths, C-contiguous), velocity three Python numbers or a float64
+// row, contact None or four bools; every value finite, the quaternion non-zero, the gait indices
+// valid, the controller holding one robot or none, and t not going back. Then one tick and a
+// JointCommand of (12,) and (4,) arrays. Anything else returns None, and the general step converts,
+// checks and says what is wrong: the same tick either way.
+py::object controller_step_one(ControllerCore& core, py::handle t_obj, int start_gait, int new_gait,
+                               py::handle state, py::handle velocity) {
+  using motion::kLegs;
+  constexpr Py_intptr_t W = 3 * kLegs;
+  PyObject* type = joint_command_type();
+  if (!type || !PyFloat_Check(t_obj.ptr())) return py::none();
+  const double t = PyFloat_AS_DOUBLE(t_obj.ptr());
+  const int n_gaits = int(core.gaits.size());
+  if (!std::isfinite(t) || start_gait < 0 || start_gait >= n_gaits || new_gait < -1 ||
+      new_gait >= n_gaits || core.memories.size() > 1)
+    return py::none();
+  for (const auto& memory : core.memories)
+    if (memory.started && t - memory.t < -1e-9) return py::none();
+  static PyObject* names[7] = {PyUnicode_InternFromString("position"),
+                               PyUnicode_InternFromString("quaternion"),
+                               PyUnicode_InternFromString("linear_velocity"),
+                               PyUnicode_InternFromString("angular_velocity"),
+                               PyUnicode_InternFromString("q"),
+                               PyUnicode_InternFromString("qd"),
+                               PyUnicode_InternFromString("contact")};
+  static constexpr Py_intptr_t widths[6] = {3, 4, 3, 3, W, W};
+  py::object fields[7];  // the state's attributes, held while the tick reads them
+  const double* rows[6];
+  for (int k = 0; k < 7; ++k) {
+    fields[k] = py::reinterpret_steal<py::object>(PyObject_GetAttr(state.ptr(), names[k]));
+    if (!fields[k]) return PyErr_Clear(), py::none();
+  }
+  for (int k = 0; k < 6; ++k)
+    if (!(rows[k] = float64_row(fields[k].ptr(), widths[k]))) return py::none();
+  const bool* contact = nullptr;
+  if (!fields[6].is_none()) {
+    using api = py::detail::npy_api;
+    PyObject* c = fields[6].ptr();
+    if (Py_TYPE(c) != reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) return py::none();
+    const auto* a = py::detail::array_proxy(c);
+    const auto* d = py::detail::array_descriptor_proxy(a->descr);
+    if (!(a->flags & api::NPY_ARRAY_C_CONTIGUOUS_) || d->type_num != api::NPY_BOOL_ || a->nd != 1 ||
+        a->dimensions[0] != kLegs)
+      return py::none();
+    contact = reinterpret_cast<const bool*>(a->data);
+  }
+  double command[3];
+  if (PyTuple_CheckExact(velocity.ptr()) || PyList_CheckExact(velocity.ptr())) {
+    if (PySequence_Fast_GET_SIZE(velocity.ptr()) != 3) return py::none();
+    PyObject** items = PySequence_Fast_ITEMS(velocity.ptr());
+    for (int k = 0; k < 3; ++k) {
+      if (PyFloat_CheckExact(items[k])) {
+        command[k] = PyFloat_AS_DOUBLE(items[k]);
+      } else if (PyLong_CheckExact(items[k])) {
+        command[k] = PyLong_AsDouble(items[k]);
+        if (command[k] == -1.0 && PyErr_Occurred()) return PyErr_Clear(), py::none();
+      } else {
+        return py::none();
+      }
+    }
+  } else if (const double* row = float64_row(velocity.ptr(), 3)) {
+    std::copy(row, row + 3, command);
+  } else {
+    return py::none();
+  }
+  double sum = command[0] + command[1] + command[2];  // NaN or Inf anywhere makes it NaN
+  for (int k = 0; k < 6; ++k)
+    for (Py_intptr_t j = 0; j < widths[k]; ++j) sum += rows[k][j];
+  const double* x = rows[1];
+  if (!std::isfinite(sum) || !(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3] > 1e-12))
+    return py::none();
+  run_ticks(core, t, start_gait, new_gait, rows[0], rows[1], rows[2], rows[3], rows[4], rows[5],
+            contact, command, 1);
+  const motion::ControllerOutput& out = core.last[0];
+  using api = py::detail::npy_api;
+  const double* values[5] = {out.q, out.qd, out.tau, out.kp, out.kd};
+  static PyObject* command_names[6] = {
+      PyUnicode_InternFromString("q"),   PyUnicode_InternFromString("qd"),
+      PyUnicode_InternFromString("tau"), PyUnicode_InternFromString("kp"),
+      PyUnicode_InternFromString("kd"),  PyUnicode_InternFromString("contact")};
+  auto* cls = reinterpret_cast<PyTypeObject*>(type);
+  auto made = py::reinterpret_steal<py::object>(cls->tp_alloc(cls, 0));
+  if (!made) throw py::error_already_set();
+  for (int k = 0; k < 6; ++k) {
+    auto row = py::reinterpret_steal<py::object>(
+        new_row(k < 5 ? api::NPY_DOUBLE_ : api::NPY_BOOL_, k < 5 ? W : kLegs));
+    if (!row) throw py::error_already_set();
+    void* data = py::detail::array_proxy(row.ptr())->data;
+    if (k < 5)
+      std::copy(values[k], values[k] + W, static_cast<double*>(data));
+    else
+      std::copy(out.contact, out.contact + kLegs, static_cast<bool*>(data));
+    // object.__setattr__, as the frozen dataclass's own __init__ sets its fields
+    if (PyObject_GenericSetAttr(made.ptr(), command_names[k], row.ptr()) != 0)
+      throw py::error_already_set();
+  }
+  return made;
 }
 
 // The last step's details, (B, ...) arrays by name (the façade's `last`).
@@ -330,6 +469,16 @@ void bind_motion(py::module_& m) {
         "shortened, residual), each (B, ticks, ...). gait: the resolved gait's numbers (44,); "
         "changes: "
         "times (k,), gaits (k, 44) and velocities (k, 3), a NaN row where unchanged.");
+  m.def(
+      "_register_joint_command",
+      [](py::handle type) {
+        if (!PyType_Check(type.ptr()))
+          throw py::type_error("_register_joint_command takes a class");
+        PyObject*& slot = joint_command_type();
+        Py_XDECREF(slot);
+        slot = py::reinterpret_borrow<py::object>(type).release().ptr();
+      },
+      py::arg("type"), "Registers spotkin.motion.JointCommand, which the one-robot step returns.");
   py::class_<ControllerCore>(m, "GaitControllerCore")
       .def(py::init(&make_controller), py::arg("robot"), py::arg("h"), py::arg("body_omega"),
            py::arg("body_inertia"), py::arg("kp"), py::arg("kd"), py::arg("stance_kp"),
@@ -345,6 +494,10 @@ void bind_motion(py::module_& m) {
       .def_property_readonly("clipped", [](const ControllerCore& c) { return c.clipped; })
       .def("details", &controller_details)
       .def_property_readonly("robots", [](const ControllerCore& c) { return c.memories.size(); })
+      .def("step_one", &controller_step_one, py::arg("t"), py::arg("start_gait"),
+           py::arg("new_gait"), py::arg("state"), py::arg("velocity"),
+           "One robot's tick (its state in single rows), as a JointCommand; None when the state or "
+           "the command needs the general step's conversions or checks.")
       .def("step", &controller_step, py::arg("t"), py::arg("start_gait"), py::arg("new_gait"),
            py::arg("position"), py::arg("quaternion"), py::arg("linear_velocity"),
            py::arg("angular_velocity"), py::arg("q"), py::arg("qd"), py::arg("contact"),

@@ -241,6 +241,10 @@ class GaitControllerCore:
         ...
     def step(self, t: typing.SupportsFloat | typing.SupportsIndex, start_gait: typing.SupportsInt | typing.SupportsIndex, new_gait: typing.SupportsInt | typing.SupportsIndex, position: typing.Any, quaternion: typing.Any, linear_velocity: typing.Any, angular_velocity: typing.Any, q: typing.Any, qd: typing.Any, contact: typing.Any, velocity: typing.Any) -> tuple:
         ...
+    def step_one(self, t: typing.Any, start_gait: typing.SupportsInt | typing.SupportsIndex, new_gait: typing.SupportsInt | typing.SupportsIndex, state: typing.Any, velocity: typing.Any) -> typing.Any:
+        """
+        One robot's tick (its state in single rows), as a JointCommand; None when the state or the command needs the general step's conversions or checks.
+        """
     @property
     def clipped(self) -> int:
         ...
@@ -275,6 +279,10 @@ def _kernel_work() -> dict[str, dict[str, float]]:
     """
 def _parse_thread_count(text: str) -> int:
     ...
+def _register_joint_command(type: typing.Any) -> None:
+    """
+    Registers spotkin.motion.JointCommand, which the one-robot step returns.
+    """
 def _register_result_type(name: str, type: typing.Any) -> None:
     """
     Registers the NamedTuple the core returns for the ops that name it (LegSolutions, ...), or an enum's members by value (StanceStatus).

@@ -34,6 +34,8 @@ from .state import JointCommand, RobotState
 
 __all__ = ["GaitController"]
 
+_core._register_joint_command(JointCommand)  # the one-robot step makes its instances
+
 DETAILS = (
     "body_pose",
     "feet",
@@ -179,26 +181,13 @@ class GaitController:
         ``ValueError`` for a NaN or misshapen state or command, or a time that goes backwards."""
         if type(state) is not RobotState and not isinstance(state, RobotState):
             raise TypeError(f"state must be a spotkin.motion.RobotState, got {type(state).__name__}")
-        q_in = state.q
-        if (
-            gait is None
-            and self._batch in (None, ())
-            and q_in.ndim == 1
-            and q_in.dtype == np.float64
-            and isinstance(t, float)
-        ):
-            # one robot, one sample per field: the compiled step checks shapes and values itself
-            position, quaternion = state.position, state.quaternion
-            v, w, qd, contact = state.linear_velocity, state.angular_velocity, state.qd, state.contact
-            if position.ndim == quaternion.ndim == v.ndim == w.ndim == qd.ndim == 1 and (
-                contact is None or contact.ndim == 1
-            ):
-                index = -1 if gait is None else self._new_index(gait)
-                out = self._core.step(
-                    t, self._start_index, index, position, quaternion, v, w, state.q, qd, contact, velocity
-                )
+        if gait is None and self._batch in (None, ()):
+            # one robot in single float64 rows: read in place and checked by the compiled step, which
+            # returns None for anything that needs the general path's conversions or its errors
+            command = self._core.step_one(t, self._start_index, -1, state, velocity)
+            if command is not None:
                 self._batch = ()
-                return JointCommand(*out)  # one robot given as single rows: (12,) and (4,) arrays
+                return command
         return self._step(t, state, velocity, gait)
 
     def _step(self, t, state: RobotState, velocity, gait) -> JointCommand:
