@@ -56,6 +56,7 @@ struct Body {
   leg_batch::LegLanes<kPairLanes> pair_legs;
   double pair_hips[3][kPairLanes];
   bool shared_knees = true;  // every leg has a_z = 0 (Leg::shared_knee)
+  int preferred_slot = -1;   // every leg's preferred slot when they share one, else -1
 
   Body() = default;
   // columns: a permutation of 0 .. 3 n - 1 (throws std::invalid_argument otherwise).
@@ -78,6 +79,9 @@ struct Body {
       for (int r = 0; r < 3; ++r) pair_hips[r][k] = hips[l][std::size_t(r)];
     }
     for (const Leg& leg : legs) shared_knees = shared_knees && leg.shared_knee();
+    preferred_slot = legs[0].preferred_slot();
+    for (const Leg& leg : legs)
+      if (leg.preferred_slot() != preferred_slot) preferred_slot = -1;
   }
 
   int n_legs() const noexcept { return static_cast<int>(legs.size()); }
@@ -305,6 +309,50 @@ SPOTKIN_INLINE std::ptrdiff_t read_padded_poses(const T* poses, BodyPoseFormat f
   return padded;
 }
 
+// ik_pairs' unseeded first pass: the pairs of open.x, y, z (padded) in the legs' shared preferred
+// slot. Writes q and status and returns true when it settles every pair; false, and nothing
+// written, else.
+template <typename T, typename C>
+SPOTKIN_INLINE bool ik_pairs_preferred(const Body& body, const BlockPoses<C>& P,
+                                       const leg_batch::OpenTargets<C>& open, std::ptrdiff_t count,
+                                       std::ptrdiff_t padded, C tol, C limit_tol, T* q,
+                                       std::int8_t* status) noexcept {
+  C q0[3][kBlock], exists[kBlock], ok[kBlock];
+  const auto& L = body.pair_legs;  // (no lambda here: a clone's callees must inline into it)
+  switch (body.preferred_slot) {
+    case 0:
+      leg_batch::slot_pass_lanes<0>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
+                                    ok);
+      break;
+    case 1:
+      leg_batch::slot_pass_lanes<1>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
+                                    ok);
+      break;
+    case 2:
+      leg_batch::slot_pass_lanes<2>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
+                                    ok);
+      break;
+    default:
+      leg_batch::slot_pass_lanes<3>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
+                                    ok);
+      break;
+  }
+  const int n = body.n_legs(), w = body.width();
+  int unsettled = 0;
+  for (std::ptrdiff_t k = 0, i = 0, l = 0; k < count * n;
+       ++k, l = l + 1 == n ? 0 : l + 1, i += l == 0)
+    unsettled |= !(ok[k] != C(0) && P.ok[i] != C(0));
+  if (unsettled) return false;
+  for (std::ptrdiff_t k = 0, i = 0, l = 0; k < count * n;
+       ++k, l = l + 1 == n ? 0 : l + 1, i += l == 0) {
+    const std::array<int, 3>& col = body.columns[std::size_t(l)];
+    T* qt = q + w * i;
+    qt[col[0]] = T(q0[0][k]), qt[col[1]] = T(q0[1][k]), qt[col[2]] = T(q0[2][k]);
+    status[n * i + l] = std::int8_t(Status::Ok);
+  }
+  return true;
+}
+
 // ik() for a few poses (count * n <= Body::kPairLanes): each (pose, leg) pair in its own lane,
 // every slot at once (leg_batch::solve_slots_lanes), then each pair chosen as ik() chooses it. ik()
 // pads each leg's targets to whole vectors, so one pose costs n vector passes (2 n with a seed);
@@ -340,6 +388,11 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
     open.y[k] = R[1][k] * dx + R[4][k] * dy + R[7][k] * dz - C(body.pair_hips[1][k]);
     open.z[k] = R[2][k] * dx + R[5][k] * dy + R[8][k] * dz - C(body.pair_hips[2][k]);
   }
+  // Without a seed, first the legs' shared preferred slot, as ik()'s leg_block: when it settles
+  // every pair (and every pose is valid), those are ik()'s answers
+  if (!seed && body.preferred_slot >= 0 &&
+      ik_pairs_preferred(body, P, open, count, padded, tol, limit_tol, q, status))
+    return;
   if (body.shared_knees)
     leg_batch::solve_slots_lanes<true>(body.pair_legs, open.x, open.y, open.z, padded, tol,
                                        limit_tol, open.q, open.ok, open.exists_hip);

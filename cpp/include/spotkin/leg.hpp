@@ -218,26 +218,43 @@ class Leg {
   };
   template <typename C, std::ptrdiff_t N>
   SPOTKIN_INLINE void slot_hip(std::ptrdiff_t i, C y, C z, C tol, SlotStages<C, N>& st) const noexcept {
-    const Hip<C> hip = solve_hip(k_, y, z, tol);
-    st.S[i] = hip.S, st.hip_exists[i] = hip.exists;
+    slot_hip_with(k_, i, y, z, tol, st);
   }
   template <int Slot, typename C, std::ptrdiff_t N>
   SPOTKIN_INLINE void slot_knee(std::ptrdiff_t i, C x, C tol, SlotStages<C, N>& st) const noexcept {
+    slot_knee_with<Slot>(k_, i, x, tol, st);
+  }
+  template <int Slot, typename C, std::ptrdiff_t N>
+  SPOTKIN_INLINE C slot_angles(std::ptrdiff_t i, C x, C y, C z, const SlotStages<C, N>& st,
+                               C q[3]) const noexcept {
+    return slot_angles_with<Slot>(k_, i, x, y, z, st, q);
+  }
+  // The stages with a leg's constants k (a lane kernel's: each lane its own leg's).
+  template <typename C, std::ptrdiff_t N>
+  static SPOTKIN_INLINE void slot_hip_with(const RppConstants& k, std::ptrdiff_t i, C y, C z, C tol,
+                                           SlotStages<C, N>& st) noexcept {
+    const Hip<C> hip = solve_hip(k, y, z, tol);
+    st.S[i] = hip.S, st.hip_exists[i] = hip.exists;
+  }
+  template <int Slot, typename C, std::ptrdiff_t N>
+  static SPOTKIN_INLINE void slot_knee_with(const RppConstants& k, std::ptrdiff_t i, C x, C tol,
+                                            SlotStages<C, N>& st) noexcept {
     constexpr C eps = Slot < 2 ? C(1) : C(-1);
-    const Knee<C> knee = solve_knee(k_, x - C(k_.a0), -eps * st.S[i] - C(k_.a2), tol);
+    const Knee<C> knee = solve_knee(k, x - C(k.a0), -eps * st.S[i] - C(k.a2), tol);
     st.cos_psi[i] = knee.cos_psi, st.sin_psi[i] = knee.sin_psi, st.acos_psi[i] = knee.acos_psi;
     st.knee_exists[i] = knee.exists;
   }
   template <int Slot, typename C, std::ptrdiff_t N>
-  SPOTKIN_INLINE C slot_angles(std::ptrdiff_t i, C x, C y, C z, const SlotStages<C, N>& st, C q[3]) const noexcept {
+  static SPOTKIN_INLINE C slot_angles_with(const RppConstants& k, std::ptrdiff_t i, C x, C y, C z,
+                                           const SlotStages<C, N>& st, C q[3]) noexcept {
     constexpr C eps = Slot < 2 ? C(1) : C(-1);
     constexpr int kb = Slot % 2;
     const Hip<C> hip{y * y + z * z, st.S[i], st.hip_exists[i]};
     const Knee<C> knee{st.cos_psi[i], st.sin_psi[i], st.acos_psi[i], st.knee_exists[i]};
-    const C wx = x - C(k_.a0), wz = -eps * hip.S - C(k_.a2);
-    q[0] = hip_roll(k_, y, z, hip, eps);
-    q[1] = hip_pitch(k_, wx, wz, knee, kb);
-    q[2] = knee_angle(k_, knee, kb);
+    const C wx = x - C(k.a0), wz = -eps * hip.S - C(k.a2);
+    q[0] = hip_roll(k, y, z, hip, eps);
+    q[1] = hip_pitch(k, wx, wz, knee, kb);
+    q[2] = knee_angle(k, knee, kb);
     return hip.exists * knee.exists;
   }
 
@@ -604,6 +621,30 @@ struct LegLanes {
     return k;
   }
 };
+
+// slot_pass with lane i solved for the leg L holds in lane i (m <= N), all in slot Slot: the same
+// operations on each lane as leg_block_slot for that leg alone. ok[i] = 1 where the slot exists
+// and fits the limits; exists[i] -1 for a non-finite target.
+template <int Slot, std::ptrdiff_t N, typename C>
+SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __restrict x,
+                                    const C* __restrict y, const C* __restrict z, std::ptrdiff_t m,
+                                    C tol, C limit_tol, C (*__restrict q)[kBlock],
+                                    C* __restrict exists, C* __restrict ok) noexcept {
+  Leg::SlotStages<C, kBlock> st;
+  for (std::ptrdiff_t i = 0; i < m; ++i) Leg::slot_hip_with(L.at(i), i, y[i], z[i], tol, st);
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    const RppConstants k = L.at(i);
+    Leg::slot_knee_with<Slot>(k, i, x[i], tol, st);
+    C qi[3];
+    const C finite = finite_mask(x[i], y[i], z[i]);
+    const C e = finite * Leg::slot_angles_with<Slot>(k, i, x[i], y[i], z[i], st, qi);
+    const double lower[3] = {L.lower[0][i], L.lower[1][i], L.lower[2][i]};
+    const double upper[3] = {L.upper[0][i], L.upper[1][i], L.upper[2][i]};
+    ok[i] = e * JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol);
+    exists[i] = finite == C(0) ? C(-1) : e;
+    q[0][i] = qi[0], q[1][i] = qi[1], q[2][i] = qi[2];
+  }
+}
 
 // solve_slots with lane i solved for the leg L holds in lane i (m <= N): the same operations on
 // each lane as solve_slots for that leg alone, so the same answers to the bit. SharedKnee: every
