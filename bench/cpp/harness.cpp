@@ -463,6 +463,21 @@ int self_check(std::ptrdiff_t n) {
     }
     check.count("body_ik: every leg OK", ok, n, n - n / 10);
     check.error("body_ik: FK(IK(feet)) = feet [m]", e, 1e-9);
+    // One to four poses per call go through the pair lanes (body_batch::ik_pairs): their rows are
+    // the batch's, bit for bit (a NaN pose included).
+    poses[6 * 11 + 4] = std::numeric_limits<double>::quiet_NaN();  // in the third call
+    body_ik(body, poses.data(), feet, q12.data(), status.data(), n);
+    std::ptrdiff_t same = 0, calls = 0;
+    std::vector<double> q_few(12 * 4);
+    std::vector<std::int8_t> status_few(4 * 4);
+    for (std::ptrdiff_t i = 0; i + 4 <= n && calls < 400; i += 5, ++calls) {
+      const std::ptrdiff_t count = 1 + calls % 4;
+      body_ik(body, poses.data() + 6 * i, feet, q_few.data(), status_few.data(), count);
+      same += std::memcmp(q_few.data(), q12.data() + 12 * i,
+                          sizeof(double) * std::size_t(12 * count)) == 0 &&
+              std::memcmp(status_few.data(), status.data() + 4 * i, std::size_t(4 * count)) == 0;
+    }
+    check.count("body_ik, 1-4 poses a call = the batch's rows (bits)", same, calls, calls);
   }
 
   // Arm: every solution of FK(q) reproduces the pose, and q is among them.

@@ -309,6 +309,16 @@ SPOTKIN_INLINE std::ptrdiff_t read_padded_poses(const T* poses, BodyPoseFormat f
   return padded;
 }
 
+// Whether ik_pairs gives the batch's bits with this compiler and target: checked on x86-64 (GCC and
+// Clang, every instruction-set level: tests/test_body.py and the C++ harness). GCC for aarch64
+// contracts their multiply-adds differently from the batch loops' (the harness found 18 of 400
+// calls equal), so there a few poses take the batch path, as every thread count must give one bits.
+#if defined(__x86_64__)
+constexpr bool kPairLanesExact = true;
+#else
+constexpr bool kPairLanesExact = false;
+#endif
+
 // ik_pairs' unseeded first pass: the pairs of open.x, y, z (padded) in the legs' shared preferred
 // slot. Writes q and status and returns true when it settles every pair; false, and nothing
 // written, else.
@@ -432,7 +442,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   using C = leg_batch::Compute<T>;
   const int n = body.n_legs(), w = body.width();
-  if (count * n <= Body::kPairLanes)
+  if (kPairLanesExact && count * n <= Body::kPairLanes)
     return ik_pairs(body, poses, format, seq, feet, feet_shared, seed, q, status, count,
                     nearest_fallback);
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
