@@ -23,6 +23,7 @@
 #include "spotkin/arm.hpp"
 #include "spotkin/common.hpp"
 #include "spotkin/leg.hpp"
+#include "spotkin/leg_lanes.hpp"
 #include "spotkin/vector_math.hpp"
 
 namespace spotkin {
