@@ -523,20 +523,9 @@ Given classify(py::handle obj) {
   using api = py::detail::npy_api;
   PyObject* o = obj.ptr();
   if (o == Py_None) return Given::None;
-  if (Py_TYPE(o) == reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) {
-    const auto* a = py::detail::array_proxy(o);
-    const auto* d = py::detail::array_descriptor_proxy(a->descr);
-    constexpr int kNeeded = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_ALIGNED_;
-#if PY_LITTLE_ENDIAN
-    constexpr char kSwapped = '>';
-#else
-    constexpr char kSwapped = '<';
-#endif
-    if ((a->flags & kNeeded) != kNeeded || d->byteorder == kSwapped) return Given::Other;
-    return d->type_num == api::NPY_DOUBLE_  ? Given::F64
-           : d->type_num == api::NPY_FLOAT_ ? Given::F32
-                                            : Given::Other;
-  }
+  const int type = in_place_type(o);
+  if (type == api::NPY_DOUBLE_) return Given::F64;
+  if (type == api::NPY_FLOAT_) return Given::F32;
   if (PyTuple_CheckExact(o) || PyList_CheckExact(o)) return Given::Seq;
   return Given::Other;
 }
@@ -562,14 +551,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
       PyObject** items = PySequence_Fast_ITEMS(o);
       for (Py_ssize_t j = 0; j < len; ++j) {
         double v;
-        if (PyFloat_CheckExact(items[j])) {
-          v = PyFloat_AS_DOUBLE(items[j]);
-        } else if (PyLong_CheckExact(items[j])) {
-          v = PyLong_AsDouble(items[j]);
-          if (v == -1.0 && PyErr_Occurred()) return PyErr_Clear(), py::object();
-        } else {
-          return {};
-        }
+        if (!python_number(items[j], v)) return {};
         if (std::is_same_v<T, float> &&
             !(std::fabs(v) <= double(std::numeric_limits<float>::max())))
           return {};

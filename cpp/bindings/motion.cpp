@@ -176,8 +176,17 @@ auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trai
   return arr;
 }
 
-// The batch's checks against the controller's memory: the same robots, and time not going back.
+// Whether B robots at time t fit the controller's memory: the same robots, and time not going back.
+bool batch_fits(const ControllerCore& core, double t, py::ssize_t B) {
+  if (!core.memories.empty() && py::ssize_t(core.memories.size()) != B) return false;
+  for (const auto& memory : core.memories)
+    if (memory.started && t - memory.t < -1e-9) return false;
+  return true;
+}
+
+// batch_fits, or a ValueError that says which check failed.
 void check_batch(const ControllerCore& core, double t, py::ssize_t B) {
+  if (batch_fits(core, t, B)) return;
   if (!core.memories.empty() && py::ssize_t(core.memories.size()) != B)
     throw py::value_error("the batch changed from " + std::to_string(core.memories.size()) +
                           " to " + std::to_string(B) + " robots: call reset() first");
@@ -303,17 +312,12 @@ PyObject*& joint_command_type() {
   return type;
 }
 
-// obj's data when it is a C-contiguous, aligned, native float64 (width,) array; else null.
-const double* float64_row(PyObject* obj, Py_intptr_t width) {
-  using api = py::detail::npy_api;
-  if (Py_TYPE(obj) != reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) return nullptr;
+// obj's data when it is a (width,) array of NumPy type `type` to read in place (in_place_type);
+// else null.
+const void* row_of(PyObject* obj, int type, Py_intptr_t width) {
+  if (in_place_type(obj) != type) return nullptr;
   const auto* a = py::detail::array_proxy(obj);
-  const auto* d = py::detail::array_descriptor_proxy(a->descr);
-  constexpr int kNeeded = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_ALIGNED_;
-  if ((a->flags & kNeeded) != kNeeded || d->type_num != api::NPY_DOUBLE_ || d->byteorder == '>' ||
-      a->nd != 1 || a->dimensions[0] != width)
-    return nullptr;
-  return reinterpret_cast<const double*>(a->data);
+  return a->nd == 1 && a->dimensions[0] == width ? a->data : nullptr;
 }
 
 // A new (n,) array of NumPy type `type`, uninitialised.
@@ -332,16 +336,15 @@ PyObject* new_row(int type, Py_intptr_t n) {
 py::object controller_step_one(ControllerCore& core, py::handle t_obj, int start_gait, int new_gait,
                                py::handle state, py::handle velocity) {
   using motion::kLegs;
+  using api = py::detail::npy_api;
   constexpr Py_intptr_t W = 3 * kLegs;
   PyObject* type = joint_command_type();
   if (!type || !PyFloat_Check(t_obj.ptr())) return py::none();
   const double t = PyFloat_AS_DOUBLE(t_obj.ptr());
   const int n_gaits = int(core.gaits.size());
   if (!std::isfinite(t) || start_gait < 0 || start_gait >= n_gaits || new_gait < -1 ||
-      new_gait >= n_gaits || core.memories.size() > 1)
+      new_gait >= n_gaits || !batch_fits(core, t, 1))
     return py::none();
-  for (const auto& memory : core.memories)
-    if (memory.started && t - memory.t < -1e-9) return py::none();
   static PyObject* names[7] = {PyUnicode_InternFromString("position"),
                                PyUnicode_InternFromString("quaternion"),
                                PyUnicode_InternFromString("linear_velocity"),
@@ -357,35 +360,21 @@ py::object controller_step_one(ControllerCore& core, py::handle t_obj, int start
     if (!fields[k]) return PyErr_Clear(), py::none();
   }
   for (int k = 0; k < 6; ++k)
-    if (!(rows[k] = float64_row(fields[k].ptr(), widths[k]))) return py::none();
-  const bool* contact = nullptr;
-  if (!fields[6].is_none()) {
-    using api = py::detail::npy_api;
-    PyObject* c = fields[6].ptr();
-    if (Py_TYPE(c) != reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) return py::none();
-    const auto* a = py::detail::array_proxy(c);
-    const auto* d = py::detail::array_descriptor_proxy(a->descr);
-    if (!(a->flags & api::NPY_ARRAY_C_CONTIGUOUS_) || d->type_num != api::NPY_BOOL_ || a->nd != 1 ||
-        a->dimensions[0] != kLegs)
+    if (!(rows[k] =
+              static_cast<const double*>(row_of(fields[k].ptr(), api::NPY_DOUBLE_, widths[k]))))
       return py::none();
-    contact = reinterpret_cast<const bool*>(a->data);
-  }
+  const bool* contact = nullptr;
+  if (!fields[6].is_none() &&
+      !(contact = static_cast<const bool*>(row_of(fields[6].ptr(), api::NPY_BOOL_, kLegs))))
+    return py::none();
   double command[3];
-  if (PyTuple_CheckExact(velocity.ptr()) || PyList_CheckExact(velocity.ptr())) {
-    if (PySequence_Fast_GET_SIZE(velocity.ptr()) != 3) return py::none();
-    PyObject** items = PySequence_Fast_ITEMS(velocity.ptr());
-    for (int k = 0; k < 3; ++k) {
-      if (PyFloat_CheckExact(items[k])) {
-        command[k] = PyFloat_AS_DOUBLE(items[k]);
-      } else if (PyLong_CheckExact(items[k])) {
-        command[k] = PyLong_AsDouble(items[k]);
-        if (command[k] == -1.0 && PyErr_Occurred()) return PyErr_Clear(), py::none();
-      } else {
-        return py::none();
-      }
-    }
-  } else if (const double* row = float64_row(velocity.ptr(), 3)) {
-    std::copy(row, row + 3, command);
+  PyObject* v = velocity.ptr();
+  if (PyTuple_CheckExact(v) || PyList_CheckExact(v)) {
+    if (PySequence_Fast_GET_SIZE(v) != 3) return py::none();
+    for (int k = 0; k < 3; ++k)
+      if (!python_number(PySequence_Fast_ITEMS(v)[k], command[k])) return py::none();
+  } else if (const void* row = row_of(v, api::NPY_DOUBLE_, 3)) {
+    std::copy_n(static_cast<const double*>(row), 3, command);
   } else {
     return py::none();
   }
@@ -398,7 +387,6 @@ py::object controller_step_one(ControllerCore& core, py::handle t_obj, int start
   run_ticks(core, t, start_gait, new_gait, rows[0], rows[1], rows[2], rows[3], rows[4], rows[5],
             contact, command, 1);
   const motion::ControllerOutput& out = core.last[0];
-  using api = py::detail::npy_api;
   const double* values[5] = {out.q, out.qd, out.tau, out.kp, out.kd};
   static PyObject* command_names[6] = {
       PyUnicode_InternFromString("q"),   PyUnicode_InternFromString("qd"),

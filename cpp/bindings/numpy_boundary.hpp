@@ -29,6 +29,32 @@ namespace spotkin::bindings {
 namespace py = pybind11;
 using Shape = std::vector<py::ssize_t>;
 
+// obj's NumPy type number when it is an ndarray (exactly) that a one-sample fast path may read in
+// place: C-contiguous, aligned, in native byte order; -1 for any other object.
+inline int in_place_type(PyObject* obj) {
+  using api = py::detail::npy_api;
+  if (Py_TYPE(obj) != reinterpret_cast<PyTypeObject*>(api::get().PyArray_Type_)) return -1;
+  const auto* a = py::detail::array_proxy(obj);
+  const auto* d = py::detail::array_descriptor_proxy(a->descr);
+  constexpr int kNeeded = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_ALIGNED_;
+#if PY_LITTLE_ENDIAN
+  constexpr char kSwapped = '>';
+#else
+  constexpr char kSwapped = '<';
+#endif
+  if ((a->flags & kNeeded) != kNeeded || d->byteorder == kSwapped) return -1;
+  return d->type_num;
+}
+
+// A Python float or int (exactly those types) as a double; false, with no error set, for anything
+// else or an int too large for a double.
+inline bool python_number(PyObject* item, double& v) {
+  if (PyFloat_CheckExact(item)) return v = PyFloat_AS_DOUBLE(item), true;
+  if (!PyLong_CheckExact(item)) return false;
+  v = PyLong_AsDouble(item);
+  return !(v == -1.0 && PyErr_Occurred()) || (PyErr_Clear(), false);
+}
+
 inline std::string format_shape(const Shape& shape, bool ellipsis = false) {
   std::string s = "(";
   if (ellipsis) s += shape.empty() ? "..." : "..., ";
