@@ -198,3 +198,35 @@ def test_the_stance_forces_carry_a_wrench_and_the_torque_weighted_ones_spare_the
     two = np.array([True, False, False, True])
     weighted, _ = ref.torque_weighted_forces(feet, two, com, spot.mass, jac, gravity, limits, gait.hip_height)
     assert (weighted[~two] == 0).all() and (weighted[two, 2] > 0).all()
+
+
+def test_the_torque_weighted_forces_hold_a_joint_at_its_cap_and_give_the_wrench_way(monkeypatch):
+    """(T) with two diagonal feet displaced as in a fast stride, hip-pitch motors too weak for the
+    wrench asked (12 N m) and a forward push: unheld, both hip-pitch joints pass their limits; held,
+    they stop at TORQUE_CAP of it, the weight and the moments are still carried, and the horizontal
+    force gives way (the residual says by how much)."""
+    spot = sk.Spot()
+    gait = sk.Gait("trot").resolve(spot)
+    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
+    feet = gait.stance + np.array([[0.15, 0, 0], [-0.10, 0, 0], [0.15, 0, 0], [-0.10, 0, 0]])
+    q, _, jac, gravity = _legs_at(spot, pose, feet)
+    com = spot.center_of_mass(pose, q)
+    two = np.array([True, False, False, True])
+    limits = np.array([[45.0, 12.0, 115.0]] * 4)
+    wrench = np.array([100.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+    def load(f):  # |tau / tau_max| of the loaded legs
+        return np.array([np.abs((gravity[i] - jac[i].T @ f[i]) / limits[i]) for i in np.flatnonzero(two)])
+
+    args = (feet, two, com, spot.mass, jac, gravity, limits, gait.hip_height, wrench)
+    held, rest = ref.torque_weighted_forces(*args)
+    monkeypatch.setattr(ref, "TORQUE_CAP_ROUNDS", 0)
+    free, free_rest = ref.torque_weighted_forces(*args)
+    assert (load(free)[:, 1] > 1.0).all()  # past the limits
+    np.testing.assert_allclose(load(held)[:, 1], ref.TORQUE_CAP, atol=5e-3)
+    assert load(held).max() <= ref.TORQUE_CAP + 5e-3
+    weight = spot.mass * ref.G
+    # the vertical force and the moments as well carried as without the cap (two feet leave a little)
+    np.testing.assert_allclose(rest[2:], free_rest[2:], atol=1e-3 * weight)
+    assert abs(rest[0]) > abs(free_rest[0]) + 0.01 * weight  # the push gives way
+    assert (held[two, 2] > 0).all() and (held[~two] == 0).all()

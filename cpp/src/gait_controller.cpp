@@ -113,6 +113,10 @@ void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const d
   }
   int slots[kLegs], k = 0;
   double f[W];
+  // joints held at kTorqueCap of their limit (sign in cap, 0 free): the penalty
+  // kTorqueCapWeight (d_j . f - (g_j - s c))^2 for each, added one round at a time
+  double cap[kLegs][3] = {};
+  int cap_rounds = 0;
   while (true) {
     k = 0;
     for (int j = 0; j < kLegs; ++j)
@@ -134,6 +138,9 @@ void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const d
             if (sj == sk) {
               const double* Dj = D[slots[sj]];
               v += Dj[p] * Dj[q] + Dj[3 + p] * Dj[3 + q] + Dj[6 + p] * Dj[6 + q];
+              for (int row = 0; row < 3; ++row)
+                if (cap[slots[sj]][row] != 0.0)
+                  v += kTorqueCapWeight * Dj[3 * row + p] * Dj[3 * row + q];
               if (p == q) v += kTorqueEps / (weight * weight);
             }
             H[(3 * sj + p) * W + 3 * sk + q] = v;
@@ -145,6 +152,12 @@ void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const d
       const double ym_x_r[3] = {y[4] * rj[2] - y[5] * rj[1], y[5] * rj[0] - y[3] * rj[2],
                                 y[3] * rj[1] - y[4] * rj[0]};
       for (int p = 0; p < 3; ++p) f[3 * sj + p] = y[p] + ym_x_r[p] + Dg[slots[sj]][p];
+      const int j = slots[sj];
+      for (int row = 0; row < 3; ++row)
+        if (cap[j][row] != 0.0) {
+          const double goal = leg_gravity[j][row] / limits[j][row] - cap[j][row] * kTorqueCap;
+          for (int p = 0; p < 3; ++p) f[3 * sj + p] += kTorqueCapWeight * D[j][3 * row + p] * goal;
+        }
     }
     if (!cholesky_solve(H, 3 * k, f)) {  // not reached: eps I keeps H positive definite
       for (int a = 0; a < 3 * k; ++a) f[a] = 0.0;
@@ -152,7 +165,22 @@ void torque_weighted_forces(const double (*feet)[3], const bool* loaded, const d
     bool pulling = false;
     for (int slot = 0; slot < k; ++slot)
       if (f[3 * slot + 2] < 0.0) down[slots[slot]] = false, pulling = true;
-    if (!pulling) break;
+    if (pulling) continue;
+    bool capped = false;  // a joint past kTorqueCap of its limit: held there, solved again
+    if (cap_rounds < kTorqueCapRounds) {
+      for (int slot = 0; slot < k; ++slot) {
+        const int j = slots[slot];
+        for (int row = 0; row < 3; ++row) {
+          const double* d = D[j] + 3 * row;
+          const double u = leg_gravity[j][row] / limits[j][row] -
+                           (d[0] * f[3 * slot] + d[1] * f[3 * slot + 1] + d[2] * f[3 * slot + 2]);
+          if (cap[j][row] == 0.0 && std::fabs(u) > kTorqueCap)
+            cap[j][row] = u > 0.0 ? 1.0 : -1.0, capped = true;
+        }
+      }
+      cap_rounds += capped;
+    }
+    if (!capped) break;
   }
   double total[3] = {0.0, 0.0, 0.0}, moment[3] = {0.0, 0.0, 0.0};
   for (int slot = 0; slot < k; ++slot) {

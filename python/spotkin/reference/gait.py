@@ -65,7 +65,12 @@ Support margin, stance forces
      torques smallest against their limits: a foot displaced from under its hip pushes partly along
      its leg rather than straight up (the hip's torque falls; the body's speed then swings a little
      within a step, as an inverted pendulum's does). One linear solve (normal equations); a foot
-     whose force would pull (f_z < 0) is unloaded and the rest solved again.
+     whose force would pull (f_z < 0) is unloaded and the rest solved again. The limits are then
+     held: a joint whose torque passes c = 0.8 of its limit (the rest is its PD's headroom) gets the
+     term P (tau_j / tau_max,j - s_j c)^2 (s_j its sign, P = 1e3) and the rest is solved again, for
+     up to three such rounds; the wrench gives way where the motors cannot carry it (the residual
+     says how much). Without it, a fast trot of a robot whose centre of mass is well ahead of its
+     hips' centre (Spot with its arm) asks its hind hip-pitch motors past their limits.
 
 The crawl's body sway
 ---------------------
@@ -97,6 +102,14 @@ TORQUE_HORIZONTAL = 1e-2
 """beta of (T): the horizontal force's rows weigh beta alpha (the vertical force and the moments alpha)."""
 TORQUE_EPS = 1e-6
 """eps of (T): the forces' own (regularising) weight."""
+TORQUE_CAP = 0.8
+"""(T) holds a joint whose torque would pass this fraction of its effort limit at the fraction (the
+rest is the joint PD's headroom)."""
+TORQUE_CAP_WEIGHT = 1e3
+"""The weight of a held joint's (tau / tau_max - s TORQUE_CAP)^2, against 1 for a free joint's
+(tau / tau_max)^2."""
+TORQUE_CAP_ROUNDS = 3
+"""(T) holds more joints in at most this many rounds."""
 BISECTIONS = 30
 """Bisection steps of (B) (the foothold's lambda, 1e-9 of the step)."""
 
@@ -327,6 +340,8 @@ def torque_weighted_forces(feet, loaded, com, mass, jacobians, gravity_torques, 
         b = b + np.asarray(wrench, dtype=np.float64)
     down = [j for j in range(n) if loaded[j]]
     forces = np.zeros((n, 3))
+    cap = np.zeros((n, 3))  # the held joints: the sign of their torque, 0 when free
+    rounds = 0
     while True:
         k = len(down)
         if k == 0:
@@ -334,20 +349,39 @@ def torque_weighted_forces(feet, loaded, com, mass, jacobians, gravity_torques, 
         A = np.zeros((6, 3 * k))
         D = np.zeros((3 * k, 3 * k))
         g = np.zeros(3 * k)
+        held = np.zeros(3 * k)
         for slot, j in enumerate(down):
             A[:3, 3 * slot : 3 * slot + 3] = np.eye(3)
             A[3:, 3 * slot : 3 * slot + 3] = _skew(feet[j] - com)
             scale = 1.0 / np.asarray(limits[j], dtype=np.float64)
             D[3 * slot : 3 * slot + 3, 3 * slot : 3 * slot + 3] = scale[:, None] * np.asarray(jacobians[j]).T
             g[3 * slot : 3 * slot + 3] = scale * np.asarray(gravity_torques[j], dtype=np.float64)
+            held[3 * slot : 3 * slot + 3] = cap[j]
         S2 = np.r_[np.full(3, 1.0 / weight**2), np.full(3, 1.0 / (weight * h) ** 2)]
         S2[:2] *= TORQUE_HORIZONTAL
-        H = TORQUE_ALPHA * A.T @ (S2[:, None] * A) + D.T @ D + np.eye(3 * k) * (TORQUE_EPS / weight**2)
-        f = np.linalg.solve(H, TORQUE_ALPHA * A.T @ (S2 * b) + D.T @ g)
+        # a held joint's row of D f = g - tau / tau_max is pulled to g - s TORQUE_CAP
+        P = TORQUE_CAP_WEIGHT * (held != 0.0)
+        H = (
+            TORQUE_ALPHA * A.T @ (S2[:, None] * A)
+            + D.T @ D
+            + D.T @ (P[:, None] * D)
+            + np.eye(3 * k) * (TORQUE_EPS / weight**2)
+        )
+        f = np.linalg.solve(H, TORQUE_ALPHA * A.T @ (S2 * b) + D.T @ g + D.T @ (P * (g - held * TORQUE_CAP)))
         pulling = [j for slot, j in enumerate(down) if f[3 * slot + 2] < 0.0]
-        if not pulling:
+        if pulling:
+            down = [j for j in down if j not in pulling]
+            continue
+        if rounds == TORQUE_CAP_ROUNDS:
             break
-        down = [j for j in down if j not in pulling]
+        u = g - D @ f  # tau / tau_max
+        new = (held == 0.0) & (np.abs(u) > TORQUE_CAP)
+        if not new.any():
+            break
+        rounds += 1
+        for slot, j in enumerate(down):
+            part = slice(3 * slot, 3 * slot + 3)
+            cap[j] = np.where(new[part], np.sign(u[part]), cap[j])
     for slot, j in enumerate(down):
         forces[j] = f[3 * slot : 3 * slot + 3]
     return forces, b - A @ f

@@ -24,7 +24,10 @@ constexpr double kAccelTime = 0.02;
 constexpr double kMaxGap = 0.1;
 constexpr double kGroundTime = 0.25;
 constexpr double kTorqueAlpha = 1e4;        // (T)'s alpha, beta and eps
-constexpr double kTorqueHorizontal = 1e-2;  // beta of (T)  // beta of (T)
+constexpr double kTorqueHorizontal = 1e-2;  // beta of (T)
+constexpr double kTorqueCap = 0.8;          // (T) holds a joint's torque here, of its limit
+constexpr double kTorqueCapWeight = 1e3;
+constexpr int kTorqueCapRounds = 3;
 constexpr double kTorqueEps = 1e-6;
 
 // What a controller knows of its robot, computed once (the reference's constructor): the speed
