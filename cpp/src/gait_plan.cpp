@@ -79,7 +79,8 @@ double blend_duration(const GaitNumbers& old, const GaitNumbers& nw) noexcept {
     worst_delta = std::max(
         worst_delta, std::fabs(py_mod(nw[kOffsets + i] - old[kOffsets + i] + 0.5, 1.0) - 0.5));
   const double worst = std::max(old[kPeriod], nw[kPeriod]);
-  return std::max(nw[kPeriod], 2.0 * worst_delta * worst);
+  return std::max(std::max(nw[kPeriod], 2.0 * worst_delta * worst),
+                  std::fabs(old[kPeriod] - nw[kPeriod]));
 }
 
 struct Planar {
@@ -523,10 +524,14 @@ void change(PlannerState& s, const GaitNumbers* gait, const double* command) noe
   GaitNumbers old;
   blended(s, s.t, old, nullptr);
   GaitNumbers nw = *gait;
-  // the offsets move the shorter way round, and end there (floor(theta + o_i) never jumps)
+  // the offsets move the shorter way round, and end there (floor(theta + o_i) never jumps), all
+  // by the same c more, the c that makes the largest move smallest (reference: change)
+  double delta[kLegs];
   for (int i = 0; i < kLegs; ++i)
-    nw[kOffsets + i] =
-        old[kOffsets + i] + (py_mod(nw[kOffsets + i] - old[kOffsets + i] + 0.5, 1.0) - 0.5);
+    delta[i] = py_mod(nw[kOffsets + i] - old[kOffsets + i] + 0.5, 1.0) - 0.5;
+  const double centre =
+      (*std::max_element(delta, delta + kLegs) + *std::min_element(delta, delta + kLegs)) / 2.0;
+  for (int i = 0; i < kLegs; ++i) nw[kOffsets + i] = old[kOffsets + i] + (delta[i] - centre);
   bool all_down = true;
   for (int i = 0; i < kLegs; ++i) all_down = all_down && s.contact[i];
   if (old[kDuty] >= 1.0 && all_down)  // no swing: the new offsets at once

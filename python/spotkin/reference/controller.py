@@ -30,9 +30,12 @@ the latched contacts, the footholds) one tick at a time and closes the loop on t
    pulls back by no more than that: their torques stay within the motors' limits). Stance feet are
    held where they are measured.
 4. **Body reference.** Position: the anchored planar pose plus the centre-of-mass shift s0 (in every
-   gait) and the crawl's sway (C); height: the gait's above the ground plane; attitude: the commanded
-   roll and pitch, the pitch plus ``TERRAIN_FOLLOW`` of the ground's slope along the heading; yaw:
-   the planner's.
+   gait) and the sway (C): the crawl's static one, and in the other gaits the linear inverted
+   pendulum's periodic orbit (:func:`spotkin.reference.gait.pendulum_sway`; it is not zero only when
+   the sides' feet alternate, as in the pace, whose body must then swing over the side that is
+   down, else it rolls off the line of its two feet); height: the gait's above the ground plane;
+   attitude: the commanded roll and pitch, the pitch plus ``TERRAIN_FOLLOW`` of the ground's slope
+   along the heading; yaw: the planner's.
 5. **Joints.** ``robot.body_ik`` at the reference pose for the loaded legs (so that their PD pushes
    the body towards it) and at the measured pose for the others (so that a swing foot reaches its
    world foothold whatever the body's error), seeded with the previous tick. Joint velocities from
@@ -71,7 +74,7 @@ import time
 import numpy as np
 
 from . import gait_plan
-from .gait import G, frac, support_margin, swing, torque_weighted_forces
+from .gait import G, frac, pendulum_sway, support_margin, sway_coefficients, swing, torque_weighted_forces
 
 __all__ = ["Memory", "ReferenceController", "effort_limit", "gains"]
 
@@ -187,10 +190,15 @@ class ReferenceController:
 
     @staticmethod
     def resolved(gait):
-        """A resolved gait with its centre-of-mass shift s0 applied in every gait (a weight of 1 with no
-        sway where the gait has none)."""
+        """A resolved gait with its centre-of-mass shift s0 applied in every gait (a weight of 1), and
+        where the gait has no sway of its own (all but the crawl) the pendulum's: the lateral sway
+        (C) of amplitude :func:`spotkin.reference.gait.pendulum_sway` (zero but in the pace)."""
         if gait.com_shift == 0.0:
-            return dataclasses.replace(gait, com_shift=1.0, sway=np.zeros_like(gait.sway))
+            kappa = pendulum_sway(gait.duty, gait.period, gait.hip_height)
+            sway, _ = sway_coefficients(
+                gait.stance[:, :2], gait.roles, gait.offsets, np.zeros(2), (0.0, kappa)
+            )
+            return dataclasses.replace(gait, com_shift=1.0, sway=sway)
         return gait
 
     def start(self, memory: Memory, t, position, yaw, feet, gait) -> None:

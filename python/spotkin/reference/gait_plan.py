@@ -12,10 +12,16 @@ One tick, from t to t + dt (:func:`advance`)
 --------------------------------------------
 1. The gait's numbers at t + dt: during a change they blend from the old gait's (their values when
    the change came) to the new one's, p(t) = p_old + (p_new - p_old) b(x), x = (t - t0) / D, b the
-   quintic (Q); offsets along the shorter way round (their difference wrapped into [-1/2, 1/2));
-   from a gait without swing (duty 1, every foot down), the offsets are the new ones at once. The
-   blend lasts D = max(T_new, 2 max_i |delta o_i| max(T_old, T_new)), so that every phase keeps
-   increasing (d phase / dt >= 1 / T - (15/8) |delta o| / D > 0): no foot goes back along its swing.
+   quintic (Q); offsets along the shorter way round (their difference wrapped into [-1/2, 1/2)),
+   all shifted by the one c that makes the largest move smallest (c = -(max + min) / 2 of the
+   wrapped differences: the same pattern, its clock relabelled; from the pace to the trot each pair
+   moves a quarter cycle rather than the hind pair a half); from a gait without swing (duty 1, every
+   foot down), the offsets are the new ones at once. The blend lasts
+   D = max(T_new, 2 max_i |delta o_i| max(T_old, T_new), |T_old - T_new|), so that every phase keeps
+   increasing (d phase / dt >= 1 / T - (15/8) |delta o| / D > 0): no foot goes back along its swing;
+   and the clock speeds up or slows down over at least the periods' difference (from the crawl to
+   the trot, 1.3 s on Spot rather than the trot's 0.6 s period: a swing under way does not finish
+   three times faster than it started).
    At the start the gait blends, over its period, from itself with ``moving`` = 0 (:func:`start`).
 2. The clock: theta += dt (1 / T(t) + 1 / T(t + dt)) / 2; phase_i = frac(theta + o_i) (P).
 3. The body's planar velocity (body frame: vx, vy, yaw rate) moves towards the target by at most
@@ -166,7 +172,10 @@ def blend_duration(old: dict, new: dict) -> float:
     """D of step 1."""
     delta = np.abs((new["offsets"] - old["offsets"] + 0.5) % 1.0 - 0.5)
     worst = max(float(old["period"]), float(new["period"]))
-    return max(float(new["period"]), 2.0 * float(delta.max()) * worst)
+    return max(
+        max(float(new["period"]), 2.0 * float(delta.max()) * worst),
+        abs(float(old["period"]) - float(new["period"])),
+    )
 
 
 def blended(state: PlannerState, t: float) -> tuple[dict, dict]:
@@ -193,8 +202,12 @@ def change(state: PlannerState, gait=None, command=None) -> None:
     new = params_of(gait)
     old = {key: np.array(value) for key, value in now.items()}
     # the offsets move the shorter way round, and end there (not at the new gait's values mod 1, so
-    # that floor(theta + o_i), whose growth is a touch-down, never jumps)
-    new["offsets"] = old["offsets"] + ((new["offsets"] - old["offsets"] + 0.5) % 1.0 - 0.5)
+    # that floor(theta + o_i), whose growth is a touch-down, never jumps); all of them by the same
+    # c more (the same gait, its clock relabelled), the c that makes the largest move smallest: from
+    # the pace to the trot the front pair moves a quarter cycle and the hind a quarter back, rather
+    # than the hind pair half a cycle (its legs' clocks all but stopped half-way through the blend)
+    delta = (new["offsets"] - old["offsets"] + 0.5) % 1.0 - 0.5
+    new["offsets"] = old["offsets"] + (delta - (delta.max() + delta.min()) / 2.0)
     if float(old["duty"]) >= 1.0 and state.contact.all():  # no swing: the new offsets at once
         old["offsets"] = new["offsets"].copy()
     state.old, state.new, state.t0 = old, new, state.t
