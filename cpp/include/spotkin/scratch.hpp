@@ -63,8 +63,13 @@ class ScratchStack {
   std::size_t chunk_ = 0, offset_ = 0;
 };
 
-// n objects of type T (value-initialised, or copies of `value`) from the thread's ScratchStack,
-// with the part of std::vector's interface the kernels use.
+// The tag of a ScratchArray whose elements are default-initialised: left as they are for packs and
+// structs of packs (for an array the kernel writes in full before reading it: no memset).
+struct Uninitialized {};
+inline constexpr Uninitialized uninitialized{};
+
+// n objects of type T (value-initialised, copies of `value`, or default-initialised) from the
+// thread's ScratchStack, with the part of std::vector's interface the kernels use.
 template <typename T>
 class ScratchArray {
   static_assert(alignof(T) <= ScratchStack::kAlign, "ScratchArray aligns to at most 64 bytes");
@@ -72,6 +77,7 @@ class ScratchArray {
  public:
   explicit ScratchArray(std::size_t n) : ScratchArray(n, nullptr) {}
   ScratchArray(std::size_t n, const T& value) : ScratchArray(n, &value) {}
+  ScratchArray(std::size_t n, Uninitialized) : ScratchArray(n, nullptr, false) {}
   ScratchArray(const ScratchArray&) = delete;
   ScratchArray& operator=(const ScratchArray&) = delete;
   ~ScratchArray() {
@@ -87,10 +93,19 @@ class ScratchArray {
   T* end() noexcept { return data_ + n_; }
 
  private:
-  ScratchArray(std::size_t n, const T* value)
-      : stack_(ScratchStack::local()), mark_(stack_.mark()), n_(n),
+  ScratchArray(std::size_t n, const T* value, bool initialise = true)
+      : stack_(ScratchStack::local()),
+        mark_(stack_.mark()),
+        n_(n),
         data_(static_cast<T*>(stack_.take(n * sizeof(T) + (n == 0), alignof(T)))) {
-    for (std::size_t i = 0; i < n; ++i) value ? new (data_ + i) T(*value) : new (data_ + i) T();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (value)
+        new (data_ + i) T(*value);
+      else if (initialise)
+        new (data_ + i) T();
+      else
+        new (data_ + i) T;
+    }
   }
   ScratchStack& stack_;
   ScratchStack::Mark mark_;

@@ -72,10 +72,15 @@ struct FloatingBlock {
   P g[3];
   bool ok[L];
 
-  FloatingBlock(const FloatingModel<M, L>& model, int out_width)
-      : q(static_cast<std::size_t>(model.nq())), v(static_cast<std::size_t>(model.nv()), P(M(0))),
-        a(static_cast<std::size_t>(model.nv()), P(M(0))), out(static_cast<std::size_t>(out_width)),
-        X(static_cast<std::size_t>(model.joints())) {}
+  // q is loaded whole (every lane) and X written whole by begin() before either is read; v and a
+  // are zero where no rows are given, and not kept at all without `rates` (the centre of mass and
+  // the CRBA read neither).
+  FloatingBlock(const FloatingModel<M, L>& model, int out_width, bool rates = true)
+      : q(static_cast<std::size_t>(model.nq()), uninitialized),
+        v(rates ? static_cast<std::size_t>(model.nv()) : 0, P(M(0))),
+        a(rates ? static_cast<std::size_t>(model.nv()) : 0, P(M(0))),
+        out(static_cast<std::size_t>(out_width)),
+        X(static_cast<std::size_t>(model.joints()), uninitialized) {}
 
   SPOTKIN_INLINE void begin(const FloatingModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* v_rows,
                             const Rows<M>* a_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m,
@@ -145,7 +150,7 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
                                         std::ptrdiff_t end, bool stream, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = symmetric_width(nv, layout);
-  FloatingBlock<M, L> blk(model, SymmetricWriter<P>::size(nv));
+  FloatingBlock<M, L> blk(model, SymmetricWriter<P>::size(nv), false);
   ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
   ScratchArray<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
   ScratchArray<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
@@ -255,10 +260,11 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
                                        std::ptrdiff_t begin, std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   const int nv = model.nv(), width = jacobian ? 3 * nv : 3;
-  FloatingBlock<M, L> blk(model, width);
-  ScratchArray<Motion<P>> S(static_cast<std::size_t>(model.joints()));
-  ScratchArray<P> ms(static_cast<std::size_t>(model.joints()));
-  ScratchArray<V3<P>> hs(static_cast<std::size_t>(model.joints()));
+  FloatingBlock<M, L> blk(model, width, false);
+  // each written before it is read (S only with the Jacobian)
+  ScratchArray<Motion<P>> S(jacobian ? static_cast<std::size_t>(model.joints()) : 0, uninitialized);
+  ScratchArray<P> ms(static_cast<std::size_t>(model.joints()), uninitialized);
+  ScratchArray<V3<P>> hs(static_cast<std::size_t>(model.joints()), uninitialized);
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
