@@ -249,3 +249,29 @@ def test_one_robot_s_step_declines_to_the_general_path_with_its_errors():
         controller.step(0.5, state, (0.1, 0.0, 0.0))
     with pytest.raises(TypeError, match="RobotState"):
         controller.step(1.5, (state.position, state.quaternion), (0.1, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("name", ["go2", "spot"])
+def test_a_hard_kick_asks_no_more_horizontal_force_than_the_feet_can_give(name):
+    """A body moving sideways at 2 m/s while the reference stands still: the virtual force's velocity
+    term alone would be 2 wb m (2 m/s), several times the weight; its horizontal part is limited to
+    HORIZONTAL_WRENCH m g (beyond it the feet under the body would tip it or slip), in the compiled
+    tick and in the reference alike."""
+    robot = robot_named(name)
+    controller = sk.GaitController(robot, "trot")
+    still = _standing(robot)
+    controller.step(0.0, still)
+    kicked = still.replace(linear_velocity=np.array([0.0, 2.0, 0.0]))
+    controller.step(0.002, kicked)
+    wrench = controller.last["wrench"]
+    weight = robot.mass * 9.81
+    unclamped = 2.0 * controller.body_omega * robot.mass * 2.0
+    assert unclamped > 2.0 * weight  # the case does reach the limit
+    assert np.hypot(*wrench[:2]) == pytest.approx(reference.HORIZONTAL_WRENCH * weight, rel=1e-12)
+    assert wrench[1] < 0.0  # it still opposes the kick
+    table = [controller._resolve(sk.Gait("trot"))]
+    ref = reference.ReferenceController(robot, table[0])
+    memory = reference.Memory(robot.n_legs)
+    for t, state in ((0.0, still), (0.002, kicked)):
+        ref.tick(memory, table, 0, -1, t, *(getattr(state, f) for f in FIELDS), state.contact, np.zeros(3))
+    assert_close(wrench, memory.last["wrench"], "wrench", weight)

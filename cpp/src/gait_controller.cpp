@@ -472,6 +472,11 @@ void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
   for (int k = 0; k < 3; ++k)
     wrench[k] = mass * (wb * wb * (t_ref[k] - position[k]) + 2.0 * wb * (v_ref[k] - v[k]) +
                         memory.a_ref[k]);
+  const double horizontal = std::hypot(wrench[0], wrench[1]);
+  if (horizontal > kHorizontalWrench * mass * kGravity) {
+    const double scale = kHorizontalWrench * mass * kGravity / horizontal;
+    wrench[0] *= scale, wrench[1] *= scale;
+  }
   double inertia[3][3], RI[3][3];  // R I R^T
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)

@@ -50,7 +50,10 @@ the latched contacts, the footholds) one tick at a time and closes the loop on t
    pose about the reference: F = m (wb^2 e_p + 2 wb e_v + a_ref), M = I (wb^2 e_R + 2 wb e_w), e_R
    the rotation vector of R_ref R^T, a_ref the reference's acceleration (low-passed), I the body's
    composite rotational inertia plus ``TIP_INERTIA`` m h^2 about the horizontal axes, wb =
-   ``BODY_BANDWIDTH`` sqrt(g / h). The feedforward is clipped to the joints' effort limits
+   ``BODY_BANDWIDTH`` sqrt(g / h); F's horizontal part is at most ``HORIZONTAL_WRENCH`` m g (after a
+   hard kick the velocity term alone asks several times the weight sideways, which feet under the
+   body cannot give without tipping it: the footholds' capture-point term recovers it by stepping).
+   The feedforward is clipped to the joints' effort limits
    (:attr:`GaitController.last` says which were).
 
 Gains, from the robot's own inertias (no per-robot table): I_j, the diagonal of the floating base's
@@ -106,6 +109,8 @@ ACCEL_TIME = 0.02
 """The body reference's acceleration (fed forward, m a) low-passes over this fraction of the period."""
 MAX_GAP = 0.1
 """A longer time between two ticks (s) moves the gait by this much only."""
+HORIZONTAL_WRENCH = 0.3
+"""The virtual body force's horizontal part is at most this fraction of the weight."""
 GROUND_TIME = 0.25
 """The ground plane low-passes over this fraction of the gait's period."""
 
@@ -391,6 +396,9 @@ class ReferenceController:
             memory.a_ref += ((v_ref - memory.v_ref) / dt - memory.a_ref) * blend
         memory.v_ref = v_ref
         force = mass * (wb * wb * e_p + 2.0 * wb * (v_ref - v) + memory.a_ref)
+        horizontal = math.hypot(force[0], force[1])
+        if horizontal > HORIZONTAL_WRENCH * mass * G:
+            force[:2] *= HORIZONTAL_WRENCH * mass * G / horizontal
         inertia = R @ self.body_inertia @ R.T
         e_R = _rotation_vector(T_ref[:3, :3] @ R.T)
         moment = inertia @ (wb * wb * e_R + 2.0 * wb * (w_ref - w))

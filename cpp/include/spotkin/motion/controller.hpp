@@ -23,6 +23,7 @@ constexpr double kFriction = 0.6;
 constexpr double kAccelTime = 0.02;
 constexpr double kMaxGap = 0.1;
 constexpr double kGroundTime = 0.25;
+constexpr double kHorizontalWrench = 0.3;   // HORIZONTAL_WRENCH
 constexpr double kTorqueAlpha = 1e4;        // (T)'s alpha, beta and eps
 constexpr double kTorqueHorizontal = 1e-2;  // beta of (T)
 constexpr double kTorqueCap = 0.8;          // (T) holds a joint's torque here, of its limit
