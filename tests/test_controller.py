@@ -168,16 +168,23 @@ def _legs_at(robot, pose, feet):
     return q, cols, jac, [gravity[c] for c in cols]
 
 
+def _spot_in_a_stride(first: float, second: float):
+    """Spot standing at its trot's height, the left-front and left-hind feet ``first`` m forward of
+    their nominal place, the others ``second``: (robot, gait, feet, each leg's Jacobian, gravity
+    torques, the centre of mass)."""
+    spot = sk.Spot()
+    gait = sk.Gait("trot").resolve(spot)
+    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
+    feet = gait.stance + np.array([[first, 0, 0], [second, 0, 0], [first, 0, 0], [second, 0, 0]])
+    q, _, jac, gravity = _legs_at(spot, pose, feet)
+    return spot, gait, feet, jac, gravity, spot.center_of_mass(pose, q)
+
+
 def test_the_stance_forces_carry_a_wrench_and_the_torque_weighted_ones_spare_the_motors():
     """(W) with a wrench: the feet carry the weight plus the wrench's force exactly, its moment in the
     least-squares sense. (T): with three feet or more the same wrench (vertical force and moments
     exactly), the joints further from their limits than (W)'s, with the feet displaced as in a stride."""
-    spot = sk.Spot()
-    gait = sk.Gait("trot").resolve(spot)
-    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
-    feet = gait.stance + np.array([[0.12, 0, 0], [-0.12, 0, 0], [0.12, 0, 0], [-0.12, 0, 0]])
-    q, _, jac, gravity = _legs_at(spot, pose, feet)
-    com = spot.center_of_mass(pose, q)
+    spot, gait, feet, jac, gravity, com = _spot_in_a_stride(0.12, -0.12)
     wrench = np.array([10.0, -5.0, 20.0, 1.0, 2.0, -0.5])
     down = np.ones(4, dtype=bool)
     forces, residual = ref.stance_forces(feet, down, com, spot.mass, (0, 0, -ref.G), wrench)
@@ -205,12 +212,7 @@ def test_the_torque_weighted_forces_hold_a_joint_at_its_cap_and_give_the_wrench_
     wrench asked (12 N m) and a forward push: unheld, both hip-pitch joints pass their limits; held,
     they stop at TORQUE_CAP of it, the weight and the moments are still carried, and the horizontal
     force gives way (the residual says by how much)."""
-    spot = sk.Spot()
-    gait = sk.Gait("trot").resolve(spot)
-    pose = np.array([0.0, 0.0, gait.height, 0.0, 0.0, 0.0])
-    feet = gait.stance + np.array([[0.15, 0, 0], [-0.10, 0, 0], [0.15, 0, 0], [-0.10, 0, 0]])
-    q, _, jac, gravity = _legs_at(spot, pose, feet)
-    com = spot.center_of_mass(pose, q)
+    spot, gait, feet, jac, gravity, com = _spot_in_a_stride(0.15, -0.10)
     two = np.array([True, False, False, True])
     limits = np.array([[45.0, 12.0, 115.0]] * 4)
     wrench = np.array([100.0, 0.0, 0.0, 0.0, 0.0, 0.0])
