@@ -387,6 +387,29 @@ def test_few_poses_equal_their_rows_of_a_batch_to_the_bit(rng, dtype):
         assert {int(sk.Status.OK), int(sk.Status.UNREACHABLE), int(sk.Status.INVALID_INPUT)} <= statuses
 
 
+@pytest.mark.usefixtures("every_isa")
+@pytest.mark.parametrize(("dtype", "n"), [(np.float64, 30_000), (np.float32, 50_000)])
+def test_a_large_batch_streamed_out_equals_its_rows_solved_in_small_calls(rng, dtype, n):
+    """A batch whose q passes 2 MB stages each block's answers and streams them out (non-temporal
+    stores); small calls write in place. The bits are the same, with NaN, Inf, unreachable and
+    past-limit targets, seeds and per-pose feet, in float64 and float32."""
+    poses, feet, seeds, _ = _hard_stances(rng, SPOT, 0.5, n, dtype)
+    threads = sk.get_num_threads()
+    for seed in (None, seeds):
+        sk.set_num_threads(1)  # one call of the kernel for the whole batch: its q passes 2 MB, streamed
+        try:
+            large = SPOT.body_ik(poses, feet, seed)
+        finally:
+            sk.set_num_threads(threads)
+        assert large.q.nbytes >= 2 << 20
+        for k in range(0, n, 997):
+            rows = slice(k, k + 100)
+            small = SPOT.body_ik(poses[rows], feet[rows], None if seed is None else seed[rows])
+            np.testing.assert_array_equal(small.q, large.q[rows])
+            np.testing.assert_array_equal(small.status, large.status[rows])
+    assert {int(sk.Status.OK), int(sk.Status.INVALID_INPUT)} <= set(np.unique(large.status).tolist())
+
+
 # ------------------------------------------------------------------ body_transform against the reference
 
 

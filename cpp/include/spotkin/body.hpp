@@ -24,6 +24,7 @@
 #include "spotkin/common.hpp"
 #include "spotkin/leg.hpp"
 #include "spotkin/leg_lanes.hpp"
+#include "spotkin/stream.hpp"
 #include "spotkin/vector_math.hpp"
 
 namespace spotkin {
@@ -118,6 +119,8 @@ struct Body {
 namespace body_batch {
 
 constexpr std::ptrdiff_t kBlock = 64;
+// The widest body (3 x legs) whose large outputs ik() stages and streams: six legs.
+constexpr int kStagedWidth = 18;
 
 // Rotation, translation and validity (1 / 0) of body poses for a block, SoA,
 // in the compute type C.
@@ -450,8 +453,13 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
   BlockPoses<C> P;
   C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock], ok[kBlock];
   leg_batch::OpenTargets<C> open;
+  // a large output: each block's q staged here, then streamed out (no read for ownership)
+  const bool stream =
+      w <= kStagedWidth && std::size_t(count) * std::size_t(w) * sizeof(T) >= kStreamBytes;
+  T staged[kStagedWidth * kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
+    T* const q_block = stream ? staged : q + w * b0;
     const std::ptrdiff_t padded = read_padded_poses(poses + stride * b0, format, seq, stride, m, P);
     for (int l = 0; l < n; ++l) {
       const Leg& leg = body.legs[std::size_t(l)];
@@ -467,7 +475,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
       open.count = 0;
       if (!seed && leg_batch::all_settled(ok, P.ok, m)) {  // the common case, without a branch per target
         const std::ptrdiff_t c0 = col[0], c1 = col[1], c2 = col[2];
-        T* qt = q + w * b0;
+        T* qt = q_block;
         std::int8_t* st = status + n * b0 + l;
         for (std::ptrdiff_t i = 0; i < m; ++i, qt += w, st += n) {
           qt[c0] = T(q0[0][i]), qt[c1] = T(q0[1][i]), qt[c2] = T(q0[2][i]);
@@ -477,7 +485,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
       }
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
-        T* qt = q + w * t;
+        T* qt = q_block + w * (t - b0);
         std::int8_t& st = status[n * t + l];
         if (ok[i] != C(0) && P.ok[i] != C(0) && !seed) {  // the common case
           qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
@@ -497,7 +505,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
       open.solve(leg, tol, limit_tol);
       for (std::ptrdiff_t k = 0; k < open.count; ++k) {
         const std::ptrdiff_t t = b0 + open.index[k];
-        T* qt = q + w * t;
+        T* qt = q_block + w * (t - b0);
         T sd[3], leg_q[3];
         if (seed) {
           const T* s = seed + w * t;
@@ -507,7 +515,9 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
         qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
       }
     }
+    if (stream) stream_copy<T, int(32 / sizeof(T))>(staged, q + w * b0, std::size_t(m * w));
   }
+  if (stream) stream_fence();
 }
 
 // Whole-body IK along a path (double): pose k seeded with the answer at pose k - 1, pose 0 with
