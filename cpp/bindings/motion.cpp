@@ -176,24 +176,17 @@ auto gather(const std::vector<motion::ControllerOutput>& outs, const Shape& trai
   return arr;
 }
 
-// Whether B robots at time t fit the controller's memory: the same robots, and time not going back.
-bool batch_fits(const ControllerCore& core, double t, py::ssize_t B) {
-  if (!core.memories.empty() && py::ssize_t(core.memories.size()) != B) return false;
-  for (const auto& memory : core.memories)
-    if (memory.started && t - memory.t < -1e-9) return false;
-  return true;
-}
-
-// batch_fits, or a ValueError that says which check failed.
-void check_batch(const ControllerCore& core, double t, py::ssize_t B) {
-  if (batch_fits(core, t, B)) return;
+// Why B robots at time t do not fit the controller's memory (other robots, or time going back);
+// empty when they fit.
+std::string batch_misfit(const ControllerCore& core, double t, py::ssize_t B) {
   if (!core.memories.empty() && py::ssize_t(core.memories.size()) != B)
-    throw py::value_error("the batch changed from " + std::to_string(core.memories.size()) +
-                          " to " + std::to_string(B) + " robots: call reset() first");
+    return "the batch changed from " + std::to_string(core.memories.size()) + " to " +
+           std::to_string(B) + " robots: call reset() first";
   for (const auto& memory : core.memories)
     if (memory.started && t - memory.t < -1e-9)
-      throw py::value_error("t went backwards: " + std::to_string(t) + " after " +
-                            std::to_string(memory.t) + ": call reset() first");
+      return "t went backwards: " + std::to_string(t) + " after " + std::to_string(memory.t) +
+             ": call reset() first";
+  return {};
 }
 
 // One tick of B robots (rows of the state's fields, checked), into core.last.
@@ -291,7 +284,7 @@ py::tuple controller_step(ControllerCore& core, double t, int start_gait, int ne
     if (!fits)
       throw py::value_error("state.contact must have shape (" + std::to_string(B) + ", 4)");
   }
-  check_batch(core, t, B);
+  if (std::string misfit = batch_misfit(core, t, B); !misfit.empty()) throw py::value_error(misfit);
   run_ticks(core, t, start_gait, new_gait, pos.data(), quat.data(), lin.data(), ang.data(),
             q.data(), qd.data(), contact_obj.is_none() ? nullptr : contact.data(), cmd.data(), B);
   using Out = motion::ControllerOutput;
@@ -343,7 +336,7 @@ py::object controller_step_one(ControllerCore& core, py::handle t_obj, int start
   const double t = PyFloat_AS_DOUBLE(t_obj.ptr());
   const int n_gaits = int(core.gaits.size());
   if (!std::isfinite(t) || start_gait < 0 || start_gait >= n_gaits || new_gait < -1 ||
-      new_gait >= n_gaits || !batch_fits(core, t, 1))
+      new_gait >= n_gaits || !batch_misfit(core, t, 1).empty())
     return py::none();
   static PyObject* names[7] = {PyUnicode_InternFromString("position"),
                                PyUnicode_InternFromString("quaternion"),

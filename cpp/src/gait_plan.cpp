@@ -79,8 +79,7 @@ double blend_duration(const GaitNumbers& old, const GaitNumbers& nw) noexcept {
     worst_delta = std::max(
         worst_delta, std::fabs(py_mod(nw[kOffsets + i] - old[kOffsets + i] + 0.5, 1.0) - 0.5));
   const double worst = std::max(old[kPeriod], nw[kPeriod]);
-  return std::max(std::max(nw[kPeriod], 2.0 * worst_delta * worst),
-                  std::fabs(old[kPeriod] - nw[kPeriod]));
+  return std::max({nw[kPeriod], 2.0 * worst_delta * worst, std::fabs(old[kPeriod] - nw[kPeriod])});
 }
 
 struct Planar {

@@ -173,7 +173,8 @@ def blend_duration(old: dict, new: dict) -> float:
     delta = np.abs((new["offsets"] - old["offsets"] + 0.5) % 1.0 - 0.5)
     worst = max(float(old["period"]), float(new["period"]))
     return max(
-        max(float(new["period"]), 2.0 * float(delta.max()) * worst),
+        float(new["period"]),
+        2.0 * float(delta.max()) * worst,
         abs(float(old["period"]) - float(new["period"])),
     )
 
