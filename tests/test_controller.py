@@ -119,6 +119,10 @@ def test_bad_input_gets_a_clear_answer():
         controller.step(0.0, state, velocity=(0.1, 0.0))
     with pytest.raises(ValueError, match="12 joints"):
         controller.step(0.0, standing(GO2, q=np.zeros(9), qd=np.zeros(9)))
+    with pytest.raises(
+        ValueError, match=r"q and qd must have the same width .* got q \(11,\) and qd \(12,\)"
+    ):
+        standing(GO2, q=np.zeros(11))  # the state names the field that differs, not qd alone
     with pytest.raises(TypeError, match="RobotState"):
         controller.step(0.0, np.zeros(12))
     with pytest.raises(ValueError, match="quaternion"):

@@ -55,7 +55,12 @@ class RobotState:
         q = _field(self.q, "q", None)
         if q.ndim == 0:
             raise ValueError("q must have shape (..., 3 n_legs), got a scalar")
-        qd = _field(self.qd, "qd", q.shape[-1])
+        qd = _field(self.qd, "qd", None)
+        if qd.ndim == 0 or qd.shape[-1] != q.shape[-1]:
+            raise ValueError(
+                f"q and qd must have the same width (3 n_legs, robot.leg_joint_names), got q {q.shape} "
+                f"and qd {qd.shape}"
+            )
         object.__setattr__(self, "q", q)
         object.__setattr__(self, "qd", qd)
         if self.contact is not None:
