@@ -232,3 +232,70 @@ def test_which_path_answers():
         assert Face.f(Face(), 5) == ("python", 5, 1, "default", None)
     finally:
         core_methods.pop()  # not a façade method: out of the registry
+
+
+def test_the_hot_core_methods_are_called_past_pybind11s_dispatcher():
+    """Every façade method whose core is a compiled class calls it directly (fast_call.hpp); the
+    checks above compare those answers with the core called through pybind11."""
+    from spotkin import _core
+
+    direct = set(map(tuple, _core._direct_calls()))
+    for core_type, names in {
+        "Leg": ("fk", "jacobian", "ik", "ik_all"),
+        "Arm": ("fk", "jacobian", "ik", "ik_all"),
+        "Body": ("ik", "fk", "jacobian"),
+        "Chain": ("fk", "jacobian"),
+        "ChainDynamics": ("rnea", "gravity", "crba", "aba", "nonlinear_effects", "coriolis_matrix"),
+        "FloatingDynamics": ("rnea", "gravity", "crba", "aba", "com", "com_jacobian"),
+        "RobotStatics": ("com", "standing"),
+    }.items():
+        for name in names:
+            assert (core_type, name) in direct, (core_type, name)
+
+
+def test_a_direct_call_declines_what_it_does_not_convert(go2):
+    """A direct call converts only True and False, exact ints within C int, and anything as an
+    array; another value goes through pybind11's call, which converts it or refuses it (then the
+    Python function answers), as before. A made-up façade over the real core shows the path."""
+    from spotkin._support.forward import core_method
+    from spotkin.model.body import sequence_code
+
+    class Face:
+        __slots__ = ("_core",)
+
+        @core_method("_core", "ik")
+        def ik(self, p, seed=None, nearest_fallback=True, out=None):
+            return "python"
+
+    try:
+        leg = go2.legs[0]
+        face = Face()
+        face._core = leg._core
+        p = leg.fk(np.array([0.1, 0.7, -1.4]))
+        expected = leg.ik(p)
+        for flag in (True, np.True_, 1):  # direct; declined, then converted by pybind11
+            q, status = face.ik(p, None, flag)
+            np.testing.assert_array_equal(q, expected[0])
+            assert status is expected[1]
+        assert face.ik(p, None, "yes") == "python"  # declined, refused by pybind11: the function
+    finally:
+        core_methods.pop()
+
+    class BodyFace:
+        __slots__ = ("_core",)
+
+        @core_method("_core", "ik")
+        def ik(self, pose, sequence, feet, seed=None, nearest_fallback=True, out=None):
+            return "python"
+
+    try:
+        face = BodyFace()
+        face._core = go2._body_core
+        pose = np.array([0.0, 0.0, 0.28, 0.0, 0.05, 0.0])
+        feet = go2.stance_feet(0.28)
+        q, status = face.ik(pose, sequence_code("XYZ"), feet)
+        np.testing.assert_array_equal(q, go2.body_ik(pose, feet).q)
+        assert face.ik(pose, 2**40, feet) == "python"  # beyond C int
+        assert face.ik(pose, 0.0, feet) == "python"  # not an int
+    finally:
+        core_methods.pop()

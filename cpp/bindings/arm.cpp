@@ -7,8 +7,9 @@
 #include <tuple>
 #include <type_traits>
 
-#include "bindings.hpp"
 #include "binder.hpp"
+#include "bindings.hpp"
+#include "fast_call.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -100,15 +101,17 @@ Arm make_arm(std::array<double, 3> mount, double upper_arm, double forearm, doub
 
 void bind_arm(py::module_& m) {
   using namespace arm_glue;
-  py::class_<Arm>(m, "Arm")
-      .def(py::init(&make_arm), py::arg("mount"), py::arg("upper_arm"), py::arg("forearm"),
-           py::arg("forearm_offset"), py::arg("hand"), py::arg("tool"), py::arg("lower_limits"),
-           py::arg("upper_limits"))
-      .def("fk", &fk, py::arg("q"), py::arg("out") = py::none())
-      .def("jacobian", &jacobian, py::arg("q"), py::arg("out") = py::none())
-      .def("singularity", &singularity, py::arg("q"))
-      .def("ik", &ik, py::arg("T"), py::arg("seed") = py::none(), py::arg("out") = py::none())
-      .def("ik_all", &ik_all, py::arg("T"), py::arg("seed") = py::none(), py::arg("out") = py::none());
+  py::class_<Arm> cls(m, "Arm");
+  cls.def(py::init(&make_arm), py::arg("mount"), py::arg("upper_arm"), py::arg("forearm"),
+          py::arg("forearm_offset"), py::arg("hand"), py::arg("tool"), py::arg("lower_limits"),
+          py::arg("upper_limits"))
+      .def("singularity", &singularity, py::arg("q"));
+  fast::def_fast<&fk>(cls, "fk", py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&jacobian>(cls, "jacobian", py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&ik>(cls, "ik", py::arg("T"), py::arg("seed") = py::none(),
+                      py::arg("out") = py::none());
+  fast::def_fast<&ik_all>(cls, "ik_all", py::arg("T"), py::arg("seed") = py::none(),
+                          py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

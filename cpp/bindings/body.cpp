@@ -9,8 +9,9 @@
 #include <type_traits>
 #include <utility>
 
-#include "bindings.hpp"
 #include "binder.hpp"
+#include "bindings.hpp"
+#include "fast_call.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -154,15 +155,17 @@ Body make_body(const std::vector<const Leg*>& legs, py::handle hips_obj, py::han
 void bind_body(py::module_& m) {
   using namespace body_glue;
   m.def("body_transform", &transform, py::arg("body_pose"), py::arg("sequence"), py::arg("out") = py::none());
-  py::class_<Body>(m, "Body")
-      .def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"), py::arg("columns") = py::none())
-      .def_property_readonly("n_legs", &Body::n_legs)
-      .def("ik", &ik, py::arg("body_pose"), py::arg("sequence"), py::arg("feet"), py::arg("seed"),
-           py::arg("nearest_fallback") = true, py::arg("out") = py::none())
-      .def("fk", &fk_or_jacobian<false>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
-           py::arg("out") = py::none())
-      .def("jacobian", &fk_or_jacobian<true>, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
-           py::arg("out") = py::none());
+  py::class_<Body> cls(m, "Body");
+  cls.def(py::init(&make_body), py::arg("legs"), py::arg("hip_positions"),
+          py::arg("columns") = py::none())
+      .def_property_readonly("n_legs", &Body::n_legs);
+  fast::def_fast<&ik>(cls, "ik", py::arg("body_pose"), py::arg("sequence"), py::arg("feet"),
+                      py::arg("seed"), py::arg("nearest_fallback") = true,
+                      py::arg("out") = py::none());
+  fast::def_fast<&fk_or_jacobian<false>>(cls, "fk", py::arg("body_pose"), py::arg("sequence"),
+                                         py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&fk_or_jacobian<true>>(cls, "jacobian", py::arg("body_pose"), py::arg("sequence"),
+                                        py::arg("q"), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

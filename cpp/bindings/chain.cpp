@@ -1,17 +1,17 @@
 // Bindings for spotkin::Chain: construction from DH tables or URDF joints, batched FK,
 // frames and Jacobians.
 #include "spotkin/chain.hpp"
-#include "spotkin/kernels/chain.hpp"
 
 #include <type_traits>
 
-#include "spotkin/compatibility.hpp"
-#include "spotkin/differential.hpp"
-
+#include "binder.hpp"
 #include "bindings.hpp"
 #include "chain_model.hpp"
-#include "binder.hpp"
+#include "fast_call.hpp"
 #include "numpy_boundary.hpp"
+#include "spotkin/compatibility.hpp"
+#include "spotkin/differential.hpp"
+#include "spotkin/kernels/chain.hpp"
 #include "spotkin/parallel.hpp"
 
 namespace spotkin::bindings {
@@ -204,20 +204,22 @@ void bind_chain(py::module_& m) {
       .value("MODIFIED_DH", Convention::ModifiedDH)
       .value("CLASSIC_DH", Convention::ClassicDH);
 
-  py::class_<ChainPair>(m, "Chain")
-      .def(py::init(&chain_from_table), py::arg("convention"), py::arg("rows"), py::arg("base") = py::none(),
-           py::arg("tool") = py::none())
-      .def_static("from_joints", &chain_from_joints, py::arg("placements"), py::arg("axes"), py::arg("types"),
-                  py::arg("base") = py::none(), py::arg("tool") = py::none())
+  py::class_<ChainPair> cls(m, "Chain");
+  cls.def(py::init(&chain_from_table), py::arg("convention"), py::arg("rows"),
+          py::arg("base") = py::none(), py::arg("tool") = py::none())
+      .def_static("from_joints", &chain_from_joints, py::arg("placements"), py::arg("axes"),
+                  py::arg("types"), py::arg("base") = py::none(), py::arg("tool") = py::none())
       .def_property_readonly("dof", [](const ChainPair& c) { return c.f64.dof(); })
-      .def("fk", &fk, py::arg("q"), py::arg("out") = py::none())
       .def("frames", &frames, py::arg("q"), py::arg("out") = py::none())
-      .def("jacobian", &jacobian, py::arg("q"), py::arg("rows"), py::arg("in_tool_frame"), py::arg("out") = py::none())
-      .def("point_jacobian", &point_jacobian, py::arg("q"), py::arg("rows"), py::arg("point"), py::arg("frame"),
-           py::arg("out") = py::none())
-      .def("ik_differential", &ik_differential, py::arg("T_targets"), py::arg("q0"), py::arg("lower"),
-           py::arg("upper"), py::arg("damping"), py::arg("position_tolerance"), py::arg("orientation_tolerance"),
-           py::arg("max_step"), py::arg("max_iterations"), py::arg("rows"));
+      .def("point_jacobian", &point_jacobian, py::arg("q"), py::arg("rows"), py::arg("point"),
+           py::arg("frame"), py::arg("out") = py::none())
+      .def("ik_differential", &ik_differential, py::arg("T_targets"), py::arg("q0"),
+           py::arg("lower"), py::arg("upper"), py::arg("damping"), py::arg("position_tolerance"),
+           py::arg("orientation_tolerance"), py::arg("max_step"), py::arg("max_iterations"),
+           py::arg("rows"));
+  fast::def_fast<&fk>(cls, "fk", py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&jacobian>(cls, "jacobian", py::arg("q"), py::arg("rows"),
+                            py::arg("in_tool_frame"), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

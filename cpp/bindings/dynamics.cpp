@@ -6,8 +6,9 @@
 #include <pybind11/pybind11.h>
 
 #include "binder.hpp"
-#include "dynamics_boundary.hpp"
 #include "chain_model.hpp"
+#include "dynamics_boundary.hpp"
+#include "fast_call.hpp"
 
 namespace spotkin::bindings {
 
@@ -142,15 +143,22 @@ py::object chain_aba(const ChainDynamics& d, py::handle q, py::handle qd, py::ha
 
 void bind_dynamics(py::module_& m) {
   using namespace dynamics_glue;
-  py::class_<ChainDynamics>(m, "ChainDynamics")
-      .def(py::init(&make_chain_dynamics), py::arg("chain"), py::arg("mass"), py::arg("com"), py::arg("inertia"))
-      .def_property_readonly("dof", &ChainDynamics::dof)
-      .def("rnea", &chain_rnea, py::arg("q"), py::arg("qd"), py::arg("qdd"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("gravity", &chain_gravity, py::arg("q"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("nonlinear_effects", &chain_nonlinear, py::arg("q"), py::arg("qd"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("crba", &chain_crba, py::arg("q"), py::arg("layout") = "full", py::arg("out") = py::none())
-      .def("coriolis_matrix", &chain_coriolis, py::arg("q"), py::arg("qd"), py::arg("out") = py::none())
-      .def("aba", &chain_aba, py::arg("q"), py::arg("qd"), py::arg("tau"), py::arg("gravity"), py::arg("out") = py::none());
+  py::class_<ChainDynamics> cls(m, "ChainDynamics");
+  cls.def(py::init(&make_chain_dynamics), py::arg("chain"), py::arg("mass"), py::arg("com"),
+          py::arg("inertia"))
+      .def_property_readonly("dof", &ChainDynamics::dof);
+  fast::def_fast<&chain_rnea>(cls, "rnea", py::arg("q"), py::arg("qd"), py::arg("qdd"),
+                              py::arg("gravity"), py::arg("out") = py::none());
+  fast::def_fast<&chain_gravity>(cls, "gravity", py::arg("q"), py::arg("gravity"),
+                                 py::arg("out") = py::none());
+  fast::def_fast<&chain_nonlinear>(cls, "nonlinear_effects", py::arg("q"), py::arg("qd"),
+                                   py::arg("gravity"), py::arg("out") = py::none());
+  fast::def_fast<&chain_crba>(cls, "crba", py::arg("q"), py::arg("layout") = "full",
+                              py::arg("out") = py::none());
+  fast::def_fast<&chain_coriolis>(cls, "coriolis_matrix", py::arg("q"), py::arg("qd"),
+                                  py::arg("out") = py::none());
+  fast::def_fast<&chain_aba>(cls, "aba", py::arg("q"), py::arg("qd"), py::arg("tau"),
+                             py::arg("gravity"), py::arg("out") = py::none());
   bind_floating_dynamics(m);
 }
 

@@ -6,6 +6,7 @@
 
 #include "binder.hpp"
 #include "dynamics_boundary.hpp"
+#include "fast_call.hpp"
 
 namespace spotkin::bindings {
 
@@ -188,19 +189,26 @@ py::object floating_com(const FloatingDynamics& d, py::handle q, py::handle out)
 
 void bind_floating_dynamics(py::module_& m) {
   using namespace floating_glue;
-  py::class_<FloatingDynamics>(m, "FloatingDynamics")
-      .def(py::init(&make_floating), py::arg("body_mass"), py::arg("body_com"), py::arg("body_inertia"),
-           py::arg("chains"))
+  py::class_<FloatingDynamics> cls(m, "FloatingDynamics");
+  cls.def(py::init(&make_floating), py::arg("body_mass"), py::arg("body_com"),
+          py::arg("body_inertia"), py::arg("chains"))
       .def_property_readonly("nq", [](const FloatingDynamics& d) { return d.f64.nq(); })
-      .def_property_readonly("nv", [](const FloatingDynamics& d) { return d.f64.nv(); })
-      .def("rnea", &floating_rnea, py::arg("q"), py::arg("v"), py::arg("a"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("gravity", &floating_gravity, py::arg("q"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("nonlinear_effects", &floating_nonlinear, py::arg("q"), py::arg("v"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("crba", &floating_crba, py::arg("q"), py::arg("layout") = "full", py::arg("out") = py::none())
-      .def("coriolis_matrix", &floating_coriolis, py::arg("q"), py::arg("v"), py::arg("out") = py::none())
-      .def("aba", &floating_aba, py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("gravity"), py::arg("out") = py::none())
-      .def("com", &floating_com<false>, py::arg("q"), py::arg("out") = py::none())
-      .def("com_jacobian", &floating_com<true>, py::arg("q"), py::arg("out") = py::none());
+      .def_property_readonly("nv", [](const FloatingDynamics& d) { return d.f64.nv(); });
+  fast::def_fast<&floating_rnea>(cls, "rnea", py::arg("q"), py::arg("v"), py::arg("a"),
+                                 py::arg("gravity"), py::arg("out") = py::none());
+  fast::def_fast<&floating_gravity>(cls, "gravity", py::arg("q"), py::arg("gravity"),
+                                    py::arg("out") = py::none());
+  fast::def_fast<&floating_nonlinear>(cls, "nonlinear_effects", py::arg("q"), py::arg("v"),
+                                      py::arg("gravity"), py::arg("out") = py::none());
+  fast::def_fast<&floating_crba>(cls, "crba", py::arg("q"), py::arg("layout") = "full",
+                                 py::arg("out") = py::none());
+  fast::def_fast<&floating_coriolis>(cls, "coriolis_matrix", py::arg("q"), py::arg("v"),
+                                     py::arg("out") = py::none());
+  fast::def_fast<&floating_aba>(cls, "aba", py::arg("q"), py::arg("v"), py::arg("tau"),
+                                py::arg("gravity"), py::arg("out") = py::none());
+  fast::def_fast<&floating_com<false>>(cls, "com", py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&floating_com<true>>(cls, "com_jacobian", py::arg("q"),
+                                      py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

@@ -18,13 +18,47 @@
 #include <structmember.h>
 
 #include <cstddef>
+#include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "bindings.hpp"
+#include "fast_call.hpp"
 
 namespace spotkin::bindings {
 
 namespace py = pybind11;
+
+namespace fast {
+
+namespace {
+std::unordered_map<PyObject*, Entry>& registry() {
+  static auto* entries = new std::unordered_map<PyObject*, Entry>();  // never freed: read at exit
+  return *entries;
+}
+std::vector<std::pair<std::string, std::string>>& names() {  // (type, method), for the tests
+  static auto* entries = new std::vector<std::pair<std::string, std::string>>();
+  return *entries;
+}
+}  // namespace
+
+void add(py::handle cls, const char* name, Entry entry) {
+  py::str key(name);
+  PyObject* descriptor = _PyType_Lookup(reinterpret_cast<PyTypeObject*>(cls.ptr()), key.ptr());
+  if (!descriptor || !PyInstanceMethod_Check(descriptor))
+    throw std::logic_error(std::string("def_fast: no method ") + name);
+  registry()[PyInstanceMethod_GET_FUNCTION(descriptor)] = entry;
+  names().emplace_back(py::str(cls.attr("__name__")), name);
+}
+
+Entry find(PyObject* function) noexcept {
+  const auto it = registry().find(function);
+  return it == registry().end() ? nullptr : it->second;
+}
+
+}  // namespace fast
 
 namespace {
 
@@ -49,6 +83,7 @@ struct CoreMethod {
   Py_ssize_t n_params, n_positional;
   PyTypeObject* cached_type;  // the core object's type, and its method's function (pybind11's
   PyObject* cached_function;  // instancemethod wraps it), looked up once
+  fast::Entry cached_fast;    // the function's direct call (fast_call.hpp), or null
 };
 
 PyObject* through_function(CoreMethod* self, PyObject* const* args, std::size_t nargsf,
@@ -70,6 +105,7 @@ PyObject* unbound_method(CoreMethod* self, PyObject* core) {
   Py_INCREF(function);
   self->cached_type = type;
   self->cached_function = function;
+  self->cached_fast = fast::find(function);
   return function;
 }
 
@@ -137,8 +173,11 @@ PyObject* call(PyObject* callable, PyObject* const* args, std::size_t nargsf, Py
   PyObject* result;
   if (PyObject* function = unbound_method(self, core)) {
     Py_INCREF(function);  // held through the call, should a re-entrant call replace the cache
-    result = PyObject_Vectorcall(function, stack + 1,
-                                 std::size_t(n_core + 1) | PY_VECTORCALL_ARGUMENTS_OFFSET, nullptr);
+    const fast::Entry direct = self->cached_fast;
+    result = direct ? direct(core, stack + 2, n_core) : nullptr;
+    if (!result && !PyErr_Occurred())  // no direct call, or it declined: pybind11's call
+      result = PyObject_Vectorcall(
+          function, stack + 1, std::size_t(n_core + 1) | PY_VECTORCALL_ARGUMENTS_OFFSET, nullptr);
     Py_DECREF(function);
   } else {
     PyObject* bound = PyObject_GetAttr(core, self->method);
@@ -274,6 +313,7 @@ py::object make_core_method(py::object function, py::str target, py::str method,
   self->n_positional = n_positional;
   self->cached_type = nullptr;
   self->cached_function = nullptr;
+  self->cached_fast = nullptr;
   PyObject_GC_Track(self);
   return py::reinterpret_steal<py::object>(reinterpret_cast<PyObject*>(self));
 }
@@ -286,6 +326,15 @@ void bind_core_method(py::module_& m) {
       py::arg("names"), py::arg("defaults"), py::arg("converters"), py::arg("n_positional"),
       py::arg("order"), py::arg("constants"), py::arg("required"),
       "A façade method that calls self.<target>.<method>(...) from C (spotkin._support.forward).");
+  m.def(
+      "_direct_calls",
+      [] {
+        py::list calls;
+        for (const auto& [type, method] : fast::names()) calls.append(py::make_tuple(type, method));
+        return calls;
+      },
+      "(core type, method) of every core method a façade method calls past pybind11's dispatcher "
+      "(cpp/bindings/fast_call.hpp).");
 }
 
 }  // namespace spotkin::bindings

@@ -7,8 +7,9 @@
 #include <array>
 #include <tuple>
 
-#include "bindings.hpp"
 #include "binder.hpp"
+#include "bindings.hpp"
+#include "fast_call.hpp"
 #include "numpy_boundary.hpp"
 #include "spotkin/parallel.hpp"
 
@@ -104,22 +105,26 @@ Leg make_leg(py::handle a, py::handle b, py::handle c, py::handle signs, py::han
 
 void bind_leg(py::module_& m) {
   using namespace leg_glue;
-  py::class_<Leg>(m, "Leg")
-      .def(py::init(&make_leg), py::arg("a"), py::arg("b"), py::arg("c"), py::arg("signs"),
-           py::arg("lower_limits"), py::arg("upper_limits"), py::arg("preferred_slot") = -1)
+  py::class_<Leg> cls(m, "Leg");
+  cls.def(py::init(&make_leg), py::arg("a"), py::arg("b"), py::arg("c"), py::arg("signs"),
+          py::arg("lower_limits"), py::arg("upper_limits"), py::arg("preferred_slot") = -1)
       .def_property_readonly("preferred_slot", &Leg::preferred_slot)
       .def_property_readonly("max_reach", &Leg::max_reach)
       .def_property_readonly("min_reach", &Leg::min_reach)
-      .def("fk", &fk, py::arg("q"), py::arg("out") = py::none())
-      .def("jacobian", &jacobian, py::arg("q"), py::arg("out") = py::none())
       .def("singularity", &singularity, py::arg("q"), py::arg("out") = py::none())
-      .def("ik", &ik, py::arg("p"), py::arg("seed") = py::none(), py::arg("nearest_fallback") = true, py::arg("out") = py::none())
-      .def("ik_all", &ik_all, py::arg("p"), py::arg("out") = py::none())
-      .def("nearest_reachable", [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
-        std::array<double, 3> out, q;
-        leg.nearest_reachable(p.data(), out.data(), within_limits, q.data());
-        return py::make_tuple(out, q);
-      }, py::arg("p"), py::arg("within_limits") = false);
+      .def(
+          "nearest_reachable",
+          [](const Leg& leg, std::array<double, 3> p, bool within_limits) {
+            std::array<double, 3> out, q;
+            leg.nearest_reachable(p.data(), out.data(), within_limits, q.data());
+            return py::make_tuple(out, q);
+          },
+          py::arg("p"), py::arg("within_limits") = false);
+  fast::def_fast<&fk>(cls, "fk", py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&jacobian>(cls, "jacobian", py::arg("q"), py::arg("out") = py::none());
+  fast::def_fast<&ik>(cls, "ik", py::arg("p"), py::arg("seed") = py::none(),
+                      py::arg("nearest_fallback") = true, py::arg("out") = py::none());
+  fast::def_fast<&ik_all>(cls, "ik_all", py::arg("p"), py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

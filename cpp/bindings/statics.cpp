@@ -13,6 +13,7 @@
 
 #include "binder.hpp"
 #include "dynamics_boundary.hpp"
+#include "fast_call.hpp"
 #include "numpy_boundary.hpp"
 #include "robot_statics.hpp"
 #include "spotkin/body.hpp"
@@ -139,12 +140,14 @@ RobotStatics make_robot_statics(const Body& body, const FloatingDynamics& floati
 }  // namespace
 
 void bind_statics(py::module_& m) {
-  py::class_<RobotStatics>(m, "RobotStatics")
-      .def(py::init(&make_robot_statics), py::arg("body"), py::arg("floating"), py::arg("mass"), py::keep_alive<1, 2>(),
-           py::keep_alive<1, 3>())
-      .def("com", &robot_com, py::arg("body_pose"), py::arg("sequence"), py::arg("q"), py::arg("out") = py::none())
-      .def("standing", &robot_standing, py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
-           py::arg("stance"), py::arg("gravity"), py::arg("out") = py::none());
+  py::class_<RobotStatics> cls(m, "RobotStatics");
+  cls.def(py::init(&make_robot_statics), py::arg("body"), py::arg("floating"), py::arg("mass"),
+          py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  fast::def_fast<&robot_com>(cls, "com", py::arg("body_pose"), py::arg("sequence"), py::arg("q"),
+                             py::arg("out") = py::none());
+  fast::def_fast<&robot_standing>(cls, "standing", py::arg("body_pose"), py::arg("sequence"),
+                                  py::arg("q"), py::arg("stance"), py::arg("gravity"),
+                                  py::arg("out") = py::none());
 }
 
 }  // namespace spotkin::bindings

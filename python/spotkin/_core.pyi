@@ -269,6 +269,10 @@ def _core_method(function: typing.Any, target: str, method: str, names: tuple, d
     """
     A façade method that calls self.<target>.<method>(...) from C (spotkin._support.forward).
     """
+def _direct_calls() -> list:
+    """
+    (core type, method) of every core method a façade method calls past pybind11's dispatcher (cpp/bindings/fast_call.hpp).
+    """
 def _elementary_costs(dtype: str = 'float64', repeats: typing.SupportsInt | typing.SupportsIndex = 100) -> dict[str, float]:
     """
     ns per element of the vectorised atan2, sincos, sqrt and multiply-add, on one thread.
