@@ -36,4 +36,8 @@ void cod_solve6(const double* J_row_major, int n, const double* e, double thresh
   for (int j = 0; j < n; ++j) dq[j] = x[j];
 }
 
+Eigen::Vector3d lstsq43(const Eigen::Matrix<double, 4, 3>& X, const Eigen::Vector4d& z) {
+  return X.completeOrthogonalDecomposition().solve(z);
+}
+
 }  // namespace spotkin::dense

@@ -1,10 +1,11 @@
 // The closed-loop gait controller (spotkin/motion/controller.hpp): the reference controller's tick
 // (python/spotkin/reference/controller.py) in double, for one robot; the binding runs robots on
 // threads.
-#include <Eigen/Dense>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 
+#include "spotkin/dense.hpp"
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/statics.hpp"
 #include "spotkin/kernels/body.hpp"
@@ -43,7 +44,7 @@ void ground_plane(const double (*points)[3], const double* foot_z, double out[3]
   Eigen::Matrix<double, kLegs, 1> z;
   for (int i = 0; i < kLegs; ++i)
     X(i, 0) = 1.0, X(i, 1) = points[i][0], X(i, 2) = points[i][1], z(i) = points[i][2] - foot_z[i];
-  const Eigen::Vector3d plane = X.completeOrthogonalDecomposition().solve(z);
+  const Eigen::Vector3d plane = dense::lstsq43(X, z);
   for (int k = 0; k < 3; ++k) out[k] = plane(k);
 }
 

@@ -3,13 +3,144 @@
 // per sample and the stance forces' decomposition (statics.hpp, Eigen's dense solvers).
 #include "spotkin/dynamics/robot_statics.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/statics.hpp"
 
 namespace spotkin::dynamics {
+
+// statics.hpp (W)
+void stance_forces(int k, const Eigen::Vector3d* r, const Eigen::Vector3d& F, Eigen::Vector3d* f,
+                   double residual[6]) noexcept {
+  Eigen::Vector3d mean_r = Eigen::Vector3d::Zero();
+  for (int i = 0; i < k; ++i) f[i] = F / double(k), mean_r += r[i] / double(k);
+  if (k > 1) {
+    // Dynamic columns (at most 3): Eigen gives thin unitaries only for those
+    using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3 * (kMaxFeet - 1), 3>;
+    Tall At(3 * (k - 1), 3);  // (M N)^T
+    for (int j = 1; j < k; ++j) {
+      const double h = 1.0 / std::sqrt(double(j) * double(j + 1));
+      Eigen::Vector3d sj = -double(j) * h * r[j];
+      for (int i = 0; i < j; ++i) sj += h * r[i];
+      // [s]x^T = -[s]x: rows 3 (j - 1) .. of (M N)^T
+      At.block<3, 3>(3 * (j - 1), 0) << 0.0, sj[2], -sj[1], -sj[2], 0.0, sj[0], sj[1], -sj[0], 0.0;
+    }
+    const Eigen::Vector3d moment0 = mean_r.cross(F);  // M f_0
+    const Eigen::JacobiSVD<Tall> svd(At, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& sigma = svd.singularValues();  // (M N)^T = U S V^T, so pinv(M N) = U S^+ V^T
+    Eigen::Vector3d w = svd.matrixV().transpose() * -moment0;
+    for (int a = 0; a < 3; ++a) w[a] = sigma[a] > 1e-9 * sigma[0] ? w[a] / sigma[a] : 0.0;
+    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3 * (kMaxFeet - 1), 1> z = svd.matrixU() * w;
+    for (int j = 1; j < k; ++j) {  // f += N z
+      const double h = 1.0 / std::sqrt(double(j) * double(j + 1));
+      const Eigen::Vector3d zj = z.segment<3>(3 * (j - 1));
+      for (int i = 0; i < j; ++i) f[i] += h * zj;
+      f[j] -= double(j) * h * zj;
+    }
+  }
+  Eigen::Vector3d force = F, moment = Eigen::Vector3d::Zero();
+  for (int i = 0; i < k; ++i) force -= f[i], moment -= r[i].cross(f[i]);
+  for (int a = 0; a < 3; ++a) residual[a] = force[a], residual[3 + a] = moment[a];
+}
+
+// statics.hpp: one sample
+void standing_sample(int legs, const double* com, double mass, const double* feet,
+                     const double* foot_jacobians, const double* leg_gravity,
+                     const std::uint8_t* stance, const double* gravity, double* tau, double* forces,
+                     std::int8_t* status, double* margin, double* residual) noexcept {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  double sum = mass + gravity[0] + gravity[1] + gravity[2];  // NaN or Inf anywhere makes it NaN
+  for (int r = 0; r < 3; ++r) sum += com[r];
+  for (int j = 0; j < 3 * legs; ++j) sum += feet[j] + leg_gravity[j];
+  for (int j = 0; j < 9 * legs; ++j) sum += foot_jacobians[j];
+  if (!(sum - sum == 0.0)) {
+    for (int j = 0; j < 3 * legs; ++j) tau[j] = nan, forces[j] = nan;
+    for (int a = 0; a < 6; ++a) residual[a] = nan;
+    *status = static_cast<std::int8_t>(Stance::InvalidInput);
+    *margin = nan;
+    return;
+  }
+
+  const Eigen::Vector3d g(gravity[0], gravity[1], gravity[2]), c(com[0], com[1], com[2]);
+  const double weight = mass * g.norm();
+  int k = 0, foot_of[kMaxFeet];
+  for (int l = 0; l < legs; ++l)
+    if (stance[l]) foot_of[k++] = l;
+  Eigen::Vector3d r[kMaxFeet], f[kMaxFeet];
+  for (int i = 0; i < k; ++i) {
+    const double* p = feet + 3 * foot_of[i];
+    r[i] = Eigen::Vector3d(p[0] - c[0], p[1] - c[1], p[2] - c[2]);
+  }
+  // The common case first: three feet or more off one line balance the moment exactly, and the
+  // minimum-norm forces are f = A^T (A A^T)^-1 b (A: [I ...; [r_i]x ...], b = [-m g; 0]); else, or
+  // when that solve is inaccurate, stance_forces' least squares (the same f when it is exact).
+  bool solved = false;
+  if (k >= 3) {
+    Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 3 * kMaxFeet> A(6, 3 * k);
+    for (int i = 0; i < k; ++i) {
+      A.block<3, 3>(0, 3 * i).setIdentity();
+      A.block<3, 3>(3, 3 * i) << 0.0, -r[i][2], r[i][1], r[i][2], 0.0, -r[i][0], -r[i][1], r[i][0],
+          0.0;
+    }
+    Eigen::Matrix<double, 6, 1> b;
+    b << -mass * g, Eigen::Vector3d::Zero();
+    // a coefficient-wise product (A has at most 3 kMaxFeet columns): Eigen's general product of a
+    // dynamic-width A packs blocks for a cache-blocked kernel, a third of a sample's time here
+    const Eigen::Matrix<double, 6, 6> AAt = A.lazyProduct(A.transpose());
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(AAt);
+    const auto& D = ldlt.vectorD();
+    if (ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff()) {
+      const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3 * kMaxFeet, 1> x =
+          A.transpose() * ldlt.solve(b);
+      const Eigen::Matrix<double, 6, 1> left = b - A * x;
+      solved = left.norm() <= 1e-12 * weight;
+      if (solved) {
+        for (int i = 0; i < k; ++i) f[i] = x.segment<3>(3 * i);
+        for (int a = 0; a < 6; ++a) residual[a] = left[a];
+      }
+    }
+  }
+  if (!solved) stance_forces(k, r, -mass * g, f, residual);
+
+  // the support margin in the plane normal to gravity
+  double m = nan;
+  if (g.norm() > 0.0) {
+    const Eigen::Vector3d up = -g.normalized();
+    Eigen::Vector3d u = up.cross(Eigen::Vector3d::UnitX());
+    if (u.norm() < 0.5) u = up.cross(Eigen::Vector3d::UnitY());
+    u.normalize();
+    const Eigen::Vector3d w = up.cross(u);
+    double flat[kMaxFeet][2];
+    for (int i = 0; i < k; ++i) {
+      const Eigen::Map<const Eigen::Vector3d> p(feet + 3 * foot_of[i]);
+      flat[i][0] = p.dot(u), flat[i][1] = p.dot(w);
+    }
+    const double cc[2] = {c.dot(u), c.dot(w)};
+    m = detail_statics::support_margin(flat, k, cc);
+  }
+
+  Stance s = Stance::Ok;
+  if (Eigen::Map<const Eigen::Matrix<double, 6, 1>>(residual).norm() > 1e-9 * weight) {
+    s = Stance::Unbalanced;
+  } else if (g.norm() > 0.0) {
+    const Eigen::Vector3d up = -g.normalized();
+    for (int i = 0; i < k; ++i)
+      if (f[i].dot(up) < -1e-9 * weight) s = m > 0.0 ? Stance::Pulling : Stance::Outside;
+  }
+  for (int j = 0; j < 3 * legs; ++j) tau[j] = leg_gravity[j], forces[j] = 0.0;
+  for (int i = 0; i < k; ++i) {
+    const int l = foot_of[i];
+    const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J(foot_jacobians + 9 * l);
+    const Eigen::Vector3d held = J.transpose() * f[i];
+    for (int a = 0; a < 3; ++a) tau[3 * l + a] -= held[a], forces[3 * l + a] = f[i][a];
+  }
+  *status = static_cast<std::int8_t>(s);
+  *margin = m;
+}
 
 namespace {
 

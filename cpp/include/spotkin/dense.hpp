@@ -22,5 +22,8 @@ Eigen::Matrix<double, 5, 5> inverse5(const Eigen::Matrix<double, 5, 5>& A);
 // dq = J^+ e for a 6 x n row-major J (n <= 7) by a complete orthogonal decomposition whose
 // rank drops the singular directions below `threshold` times the largest.
 void cod_solve6(const double* J_row_major, int n, const double* e, double threshold, double* dq);
+// The minimum-norm least-squares x of X x = z for a 4 x 3 X (Eigen's complete orthogonal
+// decomposition, its default threshold), as NumPy's lstsq answers.
+Eigen::Vector3d lstsq43(const Eigen::Matrix<double, 4, 3>& X, const Eigen::Vector4d& z);
 
 }  // namespace spotkin::dense
