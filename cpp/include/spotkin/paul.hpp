@@ -53,7 +53,8 @@ struct Type2 {
 // zero_tolerance: |Z| at or below it counts as 0 when X = Y = 0 (type 6 passes
 // one scaled to its coefficients, since its Z is a difference of squares).
 SPOTKIN_INLINE Type2 type2(double X, double Y, double Z, double zero_tolerance = 0.0) noexcept {
-  const bool finite = std::isfinite(X) & std::isfinite(Y) & std::isfinite(Z);  // Inf or NaN: no root
+  // Inf or NaN: no root (ints and &, not &&: no branch, and no Clang -Wbitwise-instead-of-logical)
+  const bool finite = (int(std::isfinite(X)) & int(std::isfinite(Y)) & int(std::isfinite(Z))) != 0;
   const double m = scale_of(X, Y, Z);
   X /= m, Y /= m, Z /= m, zero_tolerance /= m;
   Type2 out;
