@@ -124,6 +124,19 @@ def test_as_real_conversions():
             _boundary.as_real(bad, "x")
 
 
+def test_python_ints_beyond_int64_are_numbers():
+    """NumPy holds ints beyond int64 as objects: they are read as float64, as NumPy's float64
+    conversion reads them, and an int beyond float64's range is a ValueError saying so."""
+    out = _boundary.as_real((10**30, 0, 1.5), "velocity")
+    assert out.dtype == np.float64
+    np.testing.assert_array_equal(out, [1e30, 0.0, 1.5])
+    assert _boundary.as_real([[10**20], [1]], "x", np.float32).dtype == np.float32
+    with pytest.raises(ValueError, match="velocity holds an integer too large for float64"):
+        _boundary.as_real((10**400, 0, 0), "velocity")
+    with pytest.raises(TypeError, match="velocity must be a real numeric array, got tuple"):
+        _boundary.as_real((10**30, None), "velocity")
+
+
 def test_float32_of_either_byte_order_stays_float32():
     pose64 = np.stack([POSE, POSE + 0.01])
     target64 = np.stack([_euler_matrix(p) @ SPOT.arm.fk(Q_ARM) for p in pose64])

@@ -236,3 +236,9 @@ def test_the_torque_weighted_forces_hold_a_joint_at_its_cap_and_give_the_wrench_
     np.testing.assert_allclose(rest[2:], free_rest[2:], atol=1e-3 * weight)
     assert abs(rest[0]) > abs(free_rest[0]) + 0.01 * weight  # the push gives way
     assert (held[two, 2] > 0).all() and (held[~two] == 0).all()
+
+
+def test_a_velocity_beyond_float64_says_so():
+    controller = sk.GaitController(GO2, "trot")
+    with pytest.raises(ValueError, match="velocity holds an integer too large for float64"):
+        controller.step(0.0, standing(GO2), (10**400, 0, 0))

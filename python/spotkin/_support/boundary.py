@@ -43,6 +43,18 @@ def _type_name(value) -> str:
     return type(value).__name__
 
 
+def _python_numbers(array: np.ndarray, name: str) -> np.ndarray | None:
+    """An object array of plain Python numbers (NumPy's answer for ints beyond int64) as float64;
+    ``ValueError`` for an int beyond float64's range; None when it holds anything else."""
+    items = array.ravel().tolist()
+    if not all(type(x) in (int, float, bool) for x in items):
+        return None
+    try:
+        return np.array(items, dtype=np.float64).reshape(array.shape)
+    except OverflowError:
+        raise ValueError(f"{name} holds an integer too large for float64 (beyond about 1.8e308)") from None
+
+
 def as_real(value: ArrayLike, name: str, dtype=None) -> np.ndarray:
     """``value`` as a real ndarray: float32 (native order) for float32 input, else float64.
 
@@ -69,6 +81,9 @@ def as_real(value: ArrayLike, name: str, dtype=None) -> np.ndarray:
     kind = array.dtype.kind
     if kind not in "biuf" or array.dtype.fields is not None:
         plain = kind == "O" and not isinstance(value, np.ndarray)
+        numbers = _python_numbers(array, name) if isinstance(value, (list, tuple)) else None
+        if numbers is not None:  # ints beyond int64, as NumPy's float64 conversion reads them
+            return numbers if dtype is not np.float32 else numbers.astype(np.float32)
         what = _type_name(value) if plain else f"dtype {array.dtype}"
         raise TypeError(f"{name} must be a real numeric array, got {what}")
     target = dtype if dtype is not None else real_dtype(array)
