@@ -82,6 +82,7 @@ def main() -> list[tuple[str, float, float, str, float | None]]:
     out_q, out_status = np.empty(12), np.empty(4, np.int8)
     out_J = np.empty((12, 18))
     out_g = np.empty(3)
+    out_standing = (np.empty(12), np.empty((4, 3)), np.empty((), np.int8), np.empty(()), np.empty(6))
 
     # the gait controller's tick: one robot, its state standing (the controller walks on)
     controller = sk.GaitController(go2, "trot")
@@ -102,7 +103,7 @@ def main() -> list[tuple[str, float, float, str, float | None]]:
         go2.body_ik(pose, feet, seed, out=(out_q, out_status))
         go2.body_jacobian(pose, out_q, out=out_J)
         leg_chain.gravity(out_q[:3], out=out_g)
-        go2.standing_torques(pose, out_q)
+        go2.standing_torques(pose, out_q, out=out_standing)
 
     pins = {
         "pin FK(12)": lambda: pin.forwardKinematics(pin12, data12, q12),
