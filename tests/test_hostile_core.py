@@ -203,6 +203,45 @@ def test_ctrl_c_interrupts_a_long_batch(threads):
     assert float(words[1]) - sent < 0.5  # ~0.1 s asked; generous on a loaded machine
 
 
+_LONG_DIRECT_BATCH = """
+    import sys, time
+    import numpy as np
+    import spotkin as sk
+    sk.set_num_threads(1)
+    go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+    go2.standing_torques(np.array([0, 0, 0.3, 0, 0, 0.0]), np.zeros(12))
+    pose = np.zeros((2_000_000, 6), np.float32)  # ~1 us each on one thread: seconds of work
+    pose[:, 2] = 0.3
+    print("ready", flush=True)
+    try:
+        go2.standing_torques(pose, np.zeros(12, np.float32))  # a core method called past pybind11
+    except KeyboardInterrupt:
+        print("interrupted", time.perf_counter(), flush=True)
+        sys.exit(0)
+    print("finished", flush=True)
+"""
+
+
+def test_ctrl_c_interrupts_a_direct_call():
+    """The façade's direct call (cpp/bindings/fast_call.hpp) raises the interrupt as pybind11's
+    dispatcher does: it neither swallows it nor runs the batch again."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(_LONG_DIRECT_BATCH)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout.readline().strip() == "ready"
+    time.sleep(0.5)  # inside the batch by now
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    words = out.split()
+    assert words[0] == "interrupted", out
+    assert float(words[1]) - sent < 0.5
+
+
 def test_ctrl_c_interrupts_ik_differential():
     code = """
         import sys, time
