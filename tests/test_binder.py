@@ -4,6 +4,10 @@ aliasing, and bit-identical results for any thread count, on the calls that go t
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 
@@ -161,6 +165,62 @@ def test_shared_row_broadcasts_over_large_batches(arm, n):
     p = LEG.fk(leg_q((n,)))
     seed = leg_q(())
     np.testing.assert_array_equal(LEG.ik(p, seed)[0], LEG.ik(p, np.tile(seed, (n, 1)))[0])
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_broadcast_views_are_read_as_broadcasts(arm, dtype):
+    """An argument that is itself a broadcast view (np.broadcast_to: leading strides 0) is read row
+    by row as a broadcast, never copied whole, with the bits of its materialised copy: fully and
+    partly repeated, beside arguments that are not, with NaN and huge angles in a repeated row, in
+    batches across block and thread boundaries."""
+    q = arm_q(arm, (3, 1)).astype(dtype)
+    views = [np.broadcast_to(q, (3, 700, arm.dof)), np.broadcast_to(q[0, 0], (2100, arm.dof))]
+    for view in views:
+        assert 0 in view.strides
+        np.testing.assert_array_equal(arm.gravity(view), arm.gravity(view.copy()))
+        np.testing.assert_array_equal(arm.fk(view), arm.fk(view.copy()))
+    qd = arm_q(arm, (700,)).astype(dtype)
+    view = views[0]
+    want = arm.inverse_dynamics(view.copy(), qd, qd)
+    np.testing.assert_array_equal(arm.inverse_dynamics(view, qd, qd), want)
+    row = leg_q((2,)).astype(dtype)
+    row[1, 0] = np.nan
+    bad = np.broadcast_to(row[:, None], (2, 600, 3))
+    p = LEG.fk(bad)
+    np.testing.assert_array_equal(p, LEG.fk(bad.copy()))
+    assert np.isnan(p[1]).all() and np.isfinite(p[0]).all()
+    if dtype == np.float64:
+        seed = leg_q(()) + np.array([2e6 * np.pi, 0.0, 0.0])  # huge, an exact multiple of 2 pi away
+        targets = LEG.fk(leg_q((600,)))
+        seeds = np.broadcast_to(seed, (600, 3))
+        np.testing.assert_array_equal(LEG.ik(targets, seeds)[0], LEG.ik(targets, seeds.copy())[0])
+    poses = np.broadcast_to(np.array([0.0, 0.0, 0.5, 0.02, -0.03, 0.1], dtype), (5, 400, 6))
+    feet = SPOT.stance_feet(0.5).astype(dtype)
+    got, want = SPOT.body_ik(poses, feet), SPOT.body_ik(poses.copy(), feet)
+    np.testing.assert_array_equal(got.q, want.q)
+    np.testing.assert_array_equal(got.status, want.status)
+    assert got.q.dtype == dtype and got.q.shape == (5, 400, 12)
+
+
+def test_a_broadcast_view_costs_no_copy_of_itself():
+    """Two million poses as one broadcast row: the peak memory grows by the outputs, not by a
+    96 MB copy of the poses (as it did)."""
+    code = """
+        import resource
+        import numpy as np
+        import spotkin as sk
+        go2 = sk.Robot.from_urdf(sk.robots.path("go2"))
+        go2.center_of_mass(np.array([0, 0, 0.3, 0, 0, 0.0]), np.zeros(12))
+        out = np.empty((2_000_000, 3))
+        out[:] = 0.0  # the output's pages, touched before the baseline
+        pose = np.broadcast_to(np.array([0, 0, 0.3, 0.1, 0, 0]), (2_000_000, 6))
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        go2.center_of_mass(pose, np.zeros(12), out=out)
+        print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024)
+    """
+    result = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert float(result.stdout) < 40.0  # MB; a copy of the poses is 96 MB
 
 
 # ---- NaN rows and huge angles --------------------------------------------------------------------------

@@ -395,18 +395,41 @@ void run_range(const Op& op, const void* context, Kernel<T> kernel, const Argume
     run_span<T>(op, context, kernel, args, outs, leading, stream, in_place, first, std::min(end, first + span));
 }
 
+// arr with its repeated rows read once: each leading dimension that steps by 0 bytes (a broadcast
+// view, such as np.broadcast_to's) gets length 1, so that the rows are broadcast here (Shared or
+// Gathered) instead of copied whole by contiguous(). arr itself when it repeats none.
+py::array collapse_repeated_rows(const py::array& arr, std::size_t n_leading) {
+  const py::ssize_t* shape = arr.shape();
+  const py::ssize_t* strides = arr.strides();
+  bool repeats = false;
+  for (std::size_t d = 0; d < n_leading; ++d) repeats |= strides[d] == 0 && shape[d] > 1;
+  if (!repeats) return arr;
+  std::vector<py::ssize_t> collapsed(shape, shape + arr.ndim()),
+      steps(strides, strides + arr.ndim());
+  for (std::size_t d = 0; d < n_leading; ++d)
+    if (steps[d] == 0) collapsed[d] = 1;
+  return py::array(arr.dtype(), collapsed, steps, arr.data(), arr);  // a view: arr stays its base
+}
+
 template <typename T>
 py::object call_in(const Op& op, const void* context, const py::object* objects, const bool* present, py::handle out) {
   Argument<T> args[kMaxArgs];
+  Shape
+      read_leading[kMaxArgs];  // an argument's leading shape as read (its repeated rows collapsed)
+  bool collapsed[kMaxArgs] = {};
   for (int k = 0; k < op.n_args; ++k) {
     if (!present[k]) continue;  // an omitted optional argument
     const Arg& spec = op.args[k];
     Argument<T>& a = args[k];
-    const auto given = py::reinterpret_borrow<py::array>(objects[k]);
-    a.shape = match_shape(spec, given, a.leading);
+    const auto as_given = py::reinterpret_borrow<py::array>(objects[k]);
+    a.shape = match_shape(spec, as_given, a.leading);
+    const py::array given = collapse_repeated_rows(as_given, a.leading.size());
+    if (given.ptr() != as_given.ptr()) {
+      collapsed[k] = true;
+      read_leading[k].assign(given.shape(), given.shape() + a.leading.size());
+    }
     a.width = spec.shapes[a.shape].size();
     a.angles = spec.angles[a.shape];
-    // a float64 angle beside float32 arguments is reduced before it is narrowed (1e308 rad is an angle)
     // a float64 angle beside float32 arguments is reduced before it is narrowed (1e308 rad is an angle)
     auto working = std::is_same_v<T, float> && a.angles && !is_float32(given) ? seed_angles<T>(given, a.width, a.angles)
                                                                              : contiguous<T>(given);
@@ -414,8 +437,10 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
     a.array = std::move(working);
     a.rows = Rows::Direct;
   }
-  const Shape leading = broadcast(op, args);
+  const Shape leading = broadcast(op, args);  // of the leading shapes as given
   const py::ssize_t n = count(leading);
+  for (int k = 0; k < op.n_args; ++k)  // then each argument's rows as read
+    if (collapsed[k]) args[k].leading = read_leading[k];
   for (int k = 0; k < op.n_args; ++k) {
     Argument<T>& a = args[k];
     if (a.rows == Rows::Absent || a.leading == leading) continue;

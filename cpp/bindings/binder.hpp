@@ -11,7 +11,8 @@
 // - NumPy broadcasting of the leading (batch) dimensions of every argument: one
 //   row shared by every sample is read with stride 0, or copied block by block into
 //   a small buffer for kernels that read contiguous rows; a partly broadcast
-//   argument is gathered block by block (never materialised whole);
+//   argument is gathered block by block (never materialised whole), and so is one
+//   that is itself a broadcast view (leading strides 0: its repeated rows read once);
 // - huge angles (beyond vector_math::kReducibleLimit) replaced by their exact
 //   remainder, in a copy of the block that holds them;
 // - NaN rows: a sample with a NaN or an Inf in an argument marked nan_rows gets NaN
