@@ -414,8 +414,8 @@ py::array collapse_repeated_rows(const py::array& arr, std::size_t n_leading) {
 template <typename T>
 py::object call_in(const Op& op, const void* context, const py::object* objects, const bool* present, py::handle out) {
   Argument<T> args[kMaxArgs];
-  Shape
-      read_leading[kMaxArgs];  // an argument's leading shape as read (its repeated rows collapsed)
+  // each argument's leading shape as read, where its repeated rows are collapsed
+  Shape read_leading[kMaxArgs];
   bool collapsed[kMaxArgs] = {};
   for (int k = 0; k < op.n_args; ++k) {
     if (!present[k]) continue;  // an omitted optional argument
