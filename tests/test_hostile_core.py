@@ -168,6 +168,27 @@ def test_thread_start_failure_falls_back():
 
 # -- Ctrl-C ---------------------------------------------------------------------------------------
 
+
+def _interrupt(code: str, wait: float) -> float:
+    """Runs ``code`` (which prints "ready", then "interrupted <time>" on KeyboardInterrupt), sends
+    it SIGINT ``wait`` seconds after it is ready, and returns how long the interrupt took."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout.readline().strip() == "ready"
+    time.sleep(wait)  # inside the batch by now
+    sent = time.perf_counter()  # CLOCK_MONOTONIC: the child's clock too
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    words = out.split()
+    assert words[0] == "interrupted", out
+    return float(words[1]) - sent
+
+
 _LONG_BATCH = """
     import sys, time
     import numpy as np
@@ -186,21 +207,7 @@ _LONG_BATCH = """
 
 @pytest.mark.parametrize("threads", [1, 2])
 def test_ctrl_c_interrupts_a_long_batch(threads):
-    proc = subprocess.Popen(
-        [sys.executable, "-c", textwrap.dedent(_LONG_BATCH.format(threads=threads))],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    assert proc.stdout.readline().strip() == "ready"
-    time.sleep(0.5)  # inside the batch by now
-    sent = time.perf_counter()  # CLOCK_MONOTONIC: the child's clock too
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 0, err
-    words = out.split()
-    assert words[0] == "interrupted", out
-    assert float(words[1]) - sent < 0.5  # ~0.1 s asked; generous on a loaded machine
+    assert _interrupt(_LONG_BATCH.format(threads=threads), 0.5) < 0.5  # ~0.1 s asked; generous
 
 
 _LONG_DIRECT_BATCH = """
@@ -225,21 +232,7 @@ _LONG_DIRECT_BATCH = """
 def test_ctrl_c_interrupts_a_direct_call():
     """The façade's direct call (cpp/bindings/fast_call.hpp) raises the interrupt as pybind11's
     dispatcher does: it neither swallows it nor runs the batch again."""
-    proc = subprocess.Popen(
-        [sys.executable, "-c", textwrap.dedent(_LONG_DIRECT_BATCH)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    assert proc.stdout.readline().strip() == "ready"
-    time.sleep(0.5)  # inside the batch by now
-    sent = time.perf_counter()
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
-    assert proc.returncode == 0, err
-    words = out.split()
-    assert words[0] == "interrupted", out
-    assert float(words[1]) - sent < 0.5
+    assert _interrupt(_LONG_DIRECT_BATCH, 0.5) < 0.5
 
 
 def test_ctrl_c_interrupts_ik_differential():
@@ -262,21 +255,7 @@ def test_ctrl_c_interrupts_ik_differential():
             sys.exit(0)
         print("finished", flush=True)
     """
-    proc = subprocess.Popen(
-        [sys.executable, "-c", textwrap.dedent(code)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    assert proc.stdout.readline().strip() == "ready"
-    time.sleep(0.8)
-    sent = time.perf_counter()
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
-    assert proc.returncode == 0, err
-    words = out.split()
-    assert words[0] == "interrupted", out
-    assert float(words[1]) - sent < 0.5
+    assert _interrupt(code, 0.8) < 0.5
 
 
 # -- NaN isolation --------------------------------------------------------------------------------
