@@ -135,6 +135,16 @@ def test_python_ints_beyond_int64_are_numbers():
         _boundary.as_real((10**400, 0, 0), "velocity")
     with pytest.raises(TypeError, match="velocity must be a real numeric array, got tuple"):
         _boundary.as_real((10**30, None), "velocity")
+    # the compiled boundary reads them the same way (a batch takes it; one sample its own path)
+    leg = SPOT.leg("fl")
+    q, status = leg.ik([[10**30, 0, 0]])
+    np.testing.assert_array_equal(status, [sk.Status.UNREACHABLE])
+    np.testing.assert_array_equal(q, leg.ik([[1e30, 0.0, 0.0]])[0])
+    for bad in ([10**400, 0, 0], [[10**400, 0, 0]]):
+        with pytest.raises(ValueError, match="p holds an integer too large for float64"):
+            leg.ik(bad)
+    with pytest.raises(TypeError, match="p must be a real numeric array"):
+        leg.ik([[10**30, "1.5", 0]])
 
 
 def test_float32_of_either_byte_order_stays_float32():

@@ -76,6 +76,26 @@ inline bool is_masked_array(py::handle obj) {
   return PyObject_IsInstance(obj.ptr(), masked_type) == 1;
 }
 
+// An object array of plain Python numbers (NumPy's answer for a list holding ints beyond int64) as
+// float64, as NumPy's float64 conversion reads them (spotkin._support.boundary._python_numbers);
+// ValueError for an int beyond float64's range; a null object when it holds anything else.
+inline py::object python_numbers(const py::array& arr, const char* name) {
+  const py::list items = arr.attr("ravel")().attr("tolist")();
+  py::array_t<double> out(arr.size());
+  double* to = out.mutable_data();
+  for (py::ssize_t i = 0; i < py::ssize_t(items.size()); ++i) {
+    PyObject* item = PyList_GET_ITEM(items.ptr(), i);
+    if (!PyLong_CheckExact(item) && !PyFloat_CheckExact(item) && !PyBool_Check(item)) return {};
+    to[i] = PyFloat_AsDouble(item);
+    if (to[i] == -1.0 && PyErr_Occurred()) {
+      PyErr_Clear();
+      throw py::value_error(std::string(name) +
+                            " holds an integer too large for float64 (beyond about 1.8e308)");
+    }
+  }
+  return out.attr("reshape")(arr.attr("shape"));
+}
+
 // Any array-like to an ndarray of a real dtype; TypeError otherwise (also for a
 // masked array, whose mask the kernels would ignore).
 inline py::array as_real_array(py::handle obj, const char* name) {
@@ -100,6 +120,8 @@ inline py::array as_real_array(py::handle obj, const char* name) {
                          std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
   }
   const char kind = arr.dtype().kind();
+  if (kind == 'O' && (PyList_Check(obj.ptr()) || PyTuple_Check(obj.ptr())))
+    if (py::object numbers = python_numbers(arr, name)) return numbers;  // ints beyond int64
   if (kind != 'f' && kind != 'i' && kind != 'u' && kind != 'b')
     throw py::type_error(std::string(name) + " must be a real numeric array, got dtype " +
                          std::string(py::str(arr.dtype())));
