@@ -260,7 +260,7 @@ def test_bad_inputs_fail_at_once_with_the_in_memory_messages():
         (lambda: skd.body_ik(SPOT, None, FEET), TypeError, "body_pose"),
         (lambda: skd.body_ik(SPOT.leg("fl"), x, FEET), TypeError, "robot must be an sk.Robot"),
         (lambda: skd.body_fk(SPOT, x, da.zeros((100, 11))), ValueError, r"q must have shape \(\.\.\., 12\)"),
-        (lambda: skd.fk(SPOT, x[:, :3]), TypeError, "model must be an sk.Leg, sk.SpotArm or sk.Chain"),
+        (lambda: skd.fk(SPOT, x[:, :3]), TypeError, "model must be a solver"),
         (lambda: skd.fk(SPOT.arm, x[:, :5]), ValueError, r"q must have shape \(\.\.\., 6\)"),
         (lambda: skd.jacobian(SPOT.leg("fl"), x[:, :3], frame="tool"), ValueError, "frame is for a Chain"),
         (lambda: skd.jacobian(GO2.chain("FL_foot"), x[:, :3], frame="world"), ValueError, "frame"),

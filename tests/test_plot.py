@@ -338,7 +338,7 @@ def test_bad_arguments_raise_errors_that_name_them(robots):
         (lambda: plot.workspace(spot.leg("fl"), offset=np.nan), ValueError, "offset"),
         (lambda: plot.workspace(spot.leg("fl"), extent=[1, 0, 0, 1]), ValueError, "extent"),
         (lambda: plot.workspace(spot.leg("fl"), extent=[0, 1, 0]), ValueError, "extent"),
-        (lambda: plot.workspace(spot.arm), TypeError, "solver"),
+        (lambda: plot.workspace(spot.arm), ValueError, "3-joint chains"),  # a 6-joint chain
         (lambda: plot.trajectory("traj"), TypeError, "traj"),
         (lambda: plot.trajectory(sk.trajectory.point_to_point([0], [1], 1, 1), t=[[0.0]]), ValueError, "t"),
         (lambda: plot.trajectory(sk.trajectory.point_to_point([0], [1], 1, 1), t=[np.nan]), ValueError, "t"),

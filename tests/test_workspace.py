@@ -135,7 +135,7 @@ def test_dexterity_of_a_six_joint_chain_matches_the_arm():
 @pytest.mark.parametrize(
     ("call", "error", "match"),
     [
-        (lambda: sk.workspace("leg"), TypeError, "Leg, SpotArm or Chain"),
+        (lambda: sk.workspace("leg"), TypeError, "obj must be a solver"),
         (lambda: sk.workspace(sk.SpotArm(), n=-1), ValueError, "n must be"),
         (lambda: sk.workspace(sk.SpotArm(), n=2.5), TypeError, "n must be an integer"),
         (lambda: sk.workspace(sk.Chain.from_mdh([(1, 0, 0, 0, 0)])), ValueError, "prismatic"),

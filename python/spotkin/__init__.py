@@ -51,6 +51,7 @@ from .motion import (
 
 # What the models' pickles call to rebuild them, at this path (publish below) whichever file defines
 # them: a pickle names "spotkin" only.
+from .model.arm import _rebuild_spot_arm as _rebuild_spot_arm  # isort: skip
 from .model.chain import _rebuild_chain as _rebuild_chain  # isort: skip
 from .model.chain import _rebuild_joints as _rebuild_joints  # isort: skip
 from .model.chain import _rebuild_with_ik_tolerance as _rebuild_with_ik_tolerance  # isort: skip
@@ -67,6 +68,7 @@ _REBUILDERS = (
     "_rebuild_mimic",
     "_rebuild_robot",
     "_rebuild_spot",
+    "_rebuild_spot_arm",
     "_rebuild_with_ik_tolerance",
     "_rebuild_with_inertials",
 )

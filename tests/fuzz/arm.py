@@ -11,9 +11,9 @@ import spotkin as sk
 from .batch import Batch
 from .entry import angle_slot, register
 from .objects import euler_matrix, in_limits, pose_matrix, rigid
-from .oracles import finite_check, nearest_check, rigid_error, solution_check
+from .oracles import finite_check, frame_slot, nearest_check, rigid_error, solution_check
 from .outputs import OutSlot, close, describe, outs
-from .slots import ACCEPT, OK, REJECT, Array, Real, finite
+from .slots import ACCEPT, OK, REJECT, Arg, Array, Custom, Real, finite
 
 RIGID_EXTRA = {  # (4, 4) tools and bases
     "scaled": (lambda c, v: 2 * np.eye(4), REJECT, "value"),
@@ -51,7 +51,12 @@ def arm_entries():
         name="SpotArm.jacobian",
         covers="spotkin.SpotArm.jacobian",
         call=lambda c, **k: c.arm.jacobian(**k),
-        slots=[angle_slot("q", 6), OutSlot(("float", (6, 6)))],
+        slots=[
+            angle_slot("q", 6),
+            frame_slot(6, "frame"),
+            frame_slot(6, "point"),
+            OutSlot(("float", (6, 6))),
+        ],
         baseline=arm_q,
         outputs=outs(("float", (6, 6))),
         check=finite_check,
@@ -131,9 +136,92 @@ def arm_entries():
                 default="omit",
                 extra={"inverted": (lambda c, v: v[:, ::-1], REJECT, "value")},
             ),
+            Custom(
+                "joint_names",
+                {
+                    "sdk": lambda c, r, b: Arg(("a", "b", "c", "d", "e", "f")),
+                    "none": lambda c, r, b: Arg(None),
+                    "list": lambda c, r, b: Arg(["a", "b", "c", "d", "e", "f"]),
+                    "five": lambda c, r, b: Arg(("a", "b", "c", "d", "e"), REJECT, "value"),
+                },
+                default="omit",
+            ),
         ],
         probe=arm_probe,
         pair_rule=lambda plan: REJECT if plan["forearm"] == plan["forearm_offset"] == "zero" else None,
         overflow_ok=True,
+    )
+
+    def limits_arg(value, expect=ACCEPT, why=""):
+        return lambda c, r, b: Arg(value, expect, why)
+
+    def with_limits_probe(result, kw, c):
+        if not isinstance(result, sk.SpotArm) or result is c.arm:
+            return f"with_limits returned {describe(result)}, not a new SpotArm"
+        q = in_limits(result.limits, np.random.default_rng(1), 16, margin=0.01)
+        sol = result.ik_all(result.fk(q))
+        inside = (sol.q >= result.limits[:, 0] - 1e-9) & (sol.q <= result.limits[:, 1] + 1e-9)
+        if (sol.valid & ~inside.all(-1)).any():
+            return "a valid slot lies outside the new limits: the closed form kept the old ones"
+        return None
+
+    register(
+        name="SpotArm.with_limits",
+        covers="spotkin.SpotArm.with_limits",
+        call=lambda c, **k: c.arm.with_limits(**k),
+        slots=[
+            Custom(
+                "limits",
+                {
+                    "valid": limits_arg({"arm0.sh0": (-1.0, 1.0)}),
+                    "index": limits_arg({4: (-0.5, 0.5)}),
+                    "table": limits_arg(np.tile([-2.0, 2.0], (6, 1))),
+                    "unlimited": limits_arg(np.tile([-np.inf, np.inf], (6, 1))),
+                    "empty": limits_arg({}),
+                    "unknown": limits_arg({"arm0.xx": (0.0, 1.0)}, REJECT, "value"),
+                    "inverted": limits_arg({"arm0.sh0": (1.0, -1.0)}, REJECT, "value"),
+                    "nan": limits_arg({0: (np.nan, 1.0)}, REJECT, "value"),
+                    "shape": limits_arg(np.zeros((5, 2)), REJECT, "value"),
+                    "none": limits_arg(None, REJECT, "type"),
+                    "str": limits_arg("arm0.sh0", REJECT, "type"),
+                },
+            )
+        ],
+        probe=with_limits_probe,
+    )
+
+    def from_chain_probe(result, kw, c):
+        chain = kw["chain"]
+        urdf_names = ("arm_sh0", "arm_sh1", "arm_el0", "arm_el1", "arm_wr0", "arm_wr1")
+        spot_arm = isinstance(chain, sk.SpotArm) or chain.joint_names == urdf_names
+        if result is None:
+            return "the Spot arm's chain was not recognised" if spot_arm else None
+        if not spot_arm:
+            return f"from_chain made a SpotArm of a chain of another structure: {describe(chain)}"
+        if not isinstance(result, sk.SpotArm) or result.joint_names != chain.joint_names:
+            return f"from_chain returned {describe(result)}, not a SpotArm with the chain's names"
+        q = in_limits(result.limits, np.random.default_rng(2), 8, margin=0.01)
+        if np.abs(result.fk(q) - chain.fk(q)).max() > 1e-12:
+            return "the SpotArm's fk differs from the chain's"
+        return None
+
+    register(
+        name="SpotArm.from_chain",
+        covers="spotkin.SpotArm.from_chain",
+        call=lambda c, **k: sk.SpotArm.from_chain(**k),
+        slots=[
+            Custom(
+                "chain",
+                {
+                    "valid": lambda c, r, b: Arg(c.robot("spot_urdf").chain("arm_hand")),
+                    "spot_arm_itself": lambda c, r, b: Arg(c.arm),
+                    "dh6": lambda c, r, b: Arg(c.chain("dh6")),
+                    "leg_chain": lambda c, r, b: Arg(c.chain("go2_fl")),
+                    "leg": lambda c, r, b: Arg(c.spot.leg("fl"), REJECT, "type"),
+                    "none": lambda c, r, b: Arg(None, REJECT, "type"),
+                },
+            )
+        ],
+        probe=from_chain_probe,
     )
     return tool_extra

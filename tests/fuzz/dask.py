@@ -197,7 +197,7 @@ def register_entries() -> None:
     }
 
     def frame_none(name):
-        """A Leg's or an arm's Jacobian has no frame argument: only None is taken."""
+        """A Leg's Jacobian has no frame argument: only None is taken."""
         return Custom(
             name,
             {
@@ -245,7 +245,7 @@ def register_entries() -> None:
 
     for key, (get, pattern) in models.items():
         model = model_slot("model", get, lambda c: c.spot)
-        chain = key in ("mdh3", "dh6")
+        chain = key in ("mdh3", "dh6", "arm")  # the Spot Arm is a Chain: its Jacobian takes frame and point
         twin(f"dask.fk[{key}]", "spotkin.dask.fk", skd.fk, pattern.format("fk"), model)
         twin(
             f"dask.jacobian[{key}]",

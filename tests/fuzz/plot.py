@@ -291,7 +291,7 @@ def register_entries() -> None:
                     "go2": const(lambda c: c.robot("go2").legs[0]),
                     "chain3": const(lambda c: c.chain("dh3")),
                     "chain6": const(lambda c: c.chain("mdh6"), REJECT, "value"),
-                    "arm": const(lambda c: c.arm, REJECT, "type"),
+                    "arm": const(lambda c: c.arm, REJECT, "value"),  # a 6-joint chain
                     "str": const("leg", REJECT, "type"),
                 },
             ),

@@ -26,6 +26,7 @@ __all__ = [
     "as_real",
     "as_scalar",
     "broadcast_lead",
+    "broadcast_seed",
     "check_trailing",
     "fallback_is_nearest",
     "into_out",
@@ -254,3 +255,17 @@ def limit_table(limits: ArrayLike | None, n: int) -> np.ndarray:
     if np.isnan(table).any() or (table[:, 0] > table[:, 1]).any():
         raise ValueError(f"limits must satisfy lower <= upper, with no NaN, got {table.tolist()}")
     return table
+
+
+def broadcast_seed(T: ArrayLike, seed: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Pose targets (..., 4, 4) or (..., 7) and seeds (..., n) broadcast over their leading
+    dimensions (the core checks the trailing ones)."""
+    T, seed = as_real(T, "T"), as_real(seed, "seed")
+    trailing = 2 if T.shape[-2:] == (4, 4) else 1
+    if T.shape[:-trailing] == seed.shape[:-1]:
+        return T, seed  # nothing to broadcast (the common case: a few microseconds saved per call)
+    lead = broadcast_lead(T=(T.shape[:-trailing], T.shape), seed=(seed.shape[:-1], seed.shape))
+    return (
+        np.broadcast_to(T, (*lead, *T.shape[-trailing:])),
+        np.broadcast_to(seed, (*lead, *seed.shape[-1:])),
+    )

@@ -8,7 +8,6 @@ import time
 import numpy as np
 
 from .._support.version import __version__
-from ..model.arm import SpotArm
 from ..model.robot import Robot
 from .pictures import _load_robot
 
@@ -82,9 +81,10 @@ def workspace_report(
                 f"  the >= 50 % region spans x {low[0]:.2f}..{high[0]:.2f}, y {low[1]:.2f}..{high[1]:.2f}, "
                 f"z {low[2]:.2f}..{high[2]:.2f} m"
             )
-        if isinstance(arm, SpotArm):  # the same arm with its joint limits removed, for comparison
+        if np.isfinite(arm.limits).any():  # the same arm with its joint limits removed, for comparison
+            unlimited = np.tile([-np.inf, np.inf], (arm.dof, 1))
             free = dexterity(
-                SpotArm(*arm._params[:6], limits=None), spacing=spacing, orientations=orientations, seed=seed
+                arm.with_limits(unlimited), spacing=spacing, orientations=orientations, seed=seed
             )
             print(
                 f"  without joint limits: every sampled orientation at {1e3 * free.volume(1.0):.1f} L of "

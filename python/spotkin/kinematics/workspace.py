@@ -24,9 +24,6 @@ import numpy as np
 
 from .._support.boundary import as_finite, as_index
 from .._support.status import Status
-from ..model.arm import SpotArm
-from ..model.chain import Chain
-from ..model.leg import Leg
 
 __all__ = ["Dexterity", "WorkspaceSamples", "dexterity", "workspace", "workspace_volume"]
 
@@ -77,19 +74,22 @@ class Dexterity(NamedTuple):
         return float(np.count_nonzero(self.fraction >= at_least)) * self.spacing**3
 
 
-def _kind(obj) -> str:
-    if isinstance(obj, Leg):
-        return "leg"
-    if isinstance(obj, SpotArm):
-        return "arm"
-    if isinstance(obj, Chain):
-        return "chain"
-    raise TypeError(f"obj must be a spotkin Leg, SpotArm or Chain, got {type(obj).__name__}")
+_INTERFACE = ("dof", "limits", "fk", "ik_all", "ik")
 
 
-def _limits(obj, kind: str) -> tuple[np.ndarray, np.ndarray]:
+def _check_solver(obj) -> None:
+    """``obj`` answers the solver interface every leg, arm and chain shares (``TypeError`` otherwise)."""
+    if not all(hasattr(obj, name) for name in _INTERFACE):
+        raise TypeError(
+            f"obj must be a solver (a spotkin Leg, arm or Chain: {', '.join(_INTERFACE)}), "
+            f"got {type(obj).__name__}"
+        )
+
+
+def _limits(obj) -> tuple[np.ndarray, np.ndarray]:
     lower, upper = obj.limits[:, 0], obj.limits[:, 1]  # the solvers' shared (n, 2) limits
-    prismatic = obj.sigma == 1 if kind == "chain" else np.zeros(lower.shape, dtype=bool)
+    sigma = getattr(obj, "sigma", None)  # a chain's joint types; a leg's joints are all revolute
+    prismatic = np.zeros(lower.shape, dtype=bool) if sigma is None else np.asarray(sigma) == 1
     if (prismatic & ~(np.isfinite(lower) & np.isfinite(upper))).any():
         raise ValueError("sampling a workspace needs finite limits on every prismatic joint")
     lower = np.where(np.isfinite(lower), lower, -np.pi)
@@ -97,26 +97,26 @@ def _limits(obj, kind: str) -> tuple[np.ndarray, np.ndarray]:
     return lower, upper
 
 
-def _tool_points(obj, kind: str, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """(points (n, 3), poses (n, 4, 4) or None for a leg)."""
-    if kind == "leg":
-        return obj.fk(q), None
-    T = obj.fk(q)
-    return T[..., :3, 3], T
+def _tool_points(obj, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(points (n, 3), poses (n, 4, 4), or None where fk gives points: a leg's feet)."""
+    out = obj.fk(q)
+    if out.shape[-2:] == (4, 4):
+        return out[..., :3, 3], out
+    return out, None
 
 
-def _branch_counts(obj, kind: str, points: np.ndarray, poses: np.ndarray | None) -> np.ndarray:
-    if kind == "leg":
-        return obj.ik_all(points).valid.sum(-1).astype(np.int8)
-    if kind == "arm":
-        return obj.ik_all(poses).valid.sum(-1).astype(np.int8)
-    try:
-        if obj.dof == 3:
-            return obj.ik_position(points).valid.sum(-1).astype(np.int8)
-        if obj.dof == 6:
-            return obj.ik_all(poses).valid.sum(-1).astype(np.int8)
-    except ValueError:  # no closed form for this chain
-        pass
+def _ik_targets(obj, points: np.ndarray, poses: np.ndarray | None):
+    """What the solver's closed-form ``ik_all`` takes: points for 3 joints, poses for 6; None otherwise."""
+    return points if obj.dof == 3 else poses if obj.dof == 6 else None
+
+
+def _branch_counts(obj, points: np.ndarray, poses: np.ndarray | None) -> np.ndarray:
+    targets = _ik_targets(obj, points, poses)
+    if targets is not None:
+        try:
+            return obj.ik_all(targets).valid.sum(-1).astype(np.int8)
+        except ValueError:  # no closed form for this chain
+            pass
     return np.full(len(points), -1, dtype=np.int8)
 
 
@@ -140,9 +140,9 @@ def workspace(obj, n: int = 100_000, seed: int | None = 0) -> WorkspaceSamples:
     :func:`numpy.random.default_rng`; None for fresh entropy), with their FK points and branch
     counts (see :class:`WorkspaceSamples`). ``n`` is at most :data:`MAX_SAMPLES` (20,000,000). A
     prismatic joint without finite limits raises ``ValueError``; another object ``TypeError``."""
-    kind = _kind(obj)
+    _check_solver(obj)
     n = _count(n, "n", MAX_SAMPLES)
-    lower, upper = _limits(obj, kind)
+    lower, upper = _limits(obj)
     rng = _rng(seed)
     q = rng.random((n, lower.size))  # then lower + (upper - lower) * q, in place (the same numbers)
     q *= upper - lower
@@ -151,17 +151,13 @@ def workspace(obj, n: int = 100_000, seed: int | None = 0) -> WorkspaceSamples:
     branches = np.empty(n, dtype=np.int8)
     for start in range(0, n, _BATCH):
         block = slice(start, min(n, start + _BATCH))
-        points[block], poses = _tool_points(obj, kind, q[block])
-        branches[block] = _branch_counts(obj, kind, points[block], poses)
+        points[block], poses = _tool_points(obj, q[block])
+        branches[block] = _branch_counts(obj, points[block], poses)
     return WorkspaceSamples(q, points, branches)
 
 
-def _position_reachable(obj, kind: str, points: np.ndarray) -> np.ndarray:
-    if kind == "leg":
-        return obj.ik_all(points).valid.any(-1)
-    if kind == "chain" and obj.dof == 3:
-        return obj.ik_position(points).valid.any(-1)
-    raise ValueError("workspace_volume needs a Leg or a 3-joint Chain (position IK in closed form)")
+def _position_reachable(obj, points: np.ndarray) -> np.ndarray:
+    return obj.ik_all(points).valid.any(-1)  # a 3-joint solver's closed-form position IK
 
 
 def workspace_volume(obj, n: int = 1_000_000, seed: int | None = 0, pad: float = 0.05):
@@ -172,14 +168,14 @@ def workspace_volume(obj, n: int = 1_000_000, seed: int | None = 0, pad: float =
     ``pad`` (in [0, 1]) times its size on each side so it holds the whole workspace; ``n`` points uniform in
     the box are tested by the closed-form IK (some slot valid), ``n`` at most :data:`MAX_VOLUME_SAMPLES`
     (1e10). volume = box volume x hit fraction p, standard error = box volume x sqrt(p (1 - p) / n)."""
-    kind = _kind(obj)
+    _check_solver(obj)
     n = _count(n, "n", MAX_VOLUME_SAMPLES)
     if n < 1:
         raise ValueError("n must be >= 1")
     pad = as_finite(pad, "pad", 0.0)
     if pad > 1.0:
         raise ValueError(f"pad must be in [0, 1] (a fraction of the box size), got {pad}")
-    if kind != "leg" and not (kind == "chain" and obj.dof == 3):
+    if obj.dof != 3:
         raise ValueError("workspace_volume needs a Leg or a 3-joint Chain (position IK in closed form)")
     rng = _rng(seed)
     points = workspace(obj, 100_000, int(rng.integers(2**63))).points
@@ -190,7 +186,7 @@ def workspace_volume(obj, n: int = 1_000_000, seed: int | None = 0, pad: float =
     hits = 0
     for start in range(0, n, _BATCH):
         m = min(n, start + _BATCH) - start
-        hits += int(np.count_nonzero(_position_reachable(obj, kind, low + (high - low) * rng.random((m, 3)))))
+        hits += int(np.count_nonzero(_position_reachable(obj, low + (high - low) * rng.random((m, 3)))))
     p = hits / n
     return box * p, box * float(np.sqrt(p * (1 - p) / n))
 
@@ -243,8 +239,8 @@ def dexterity(
     at most :data:`MAX_ORIENTATIONS` (1,000,000), their product at most :data:`MAX_SOLVES` (1e10) and
     ``samples`` at most :data:`MAX_SAMPLES`: ``ValueError`` (naming the argument and the bound) before
     anything is allocated."""
-    kind = _kind(obj)
-    if kind == "leg" or (kind == "chain" and obj.dof != 6):
+    _check_solver(obj)
+    if obj.dof != 6:
         raise ValueError("dexterity needs a 6-joint arm or chain")
     spacing = as_finite(spacing, "spacing", 0.0, strict=True)
     orientations = _count(orientations, "orientations", MAX_ORIENTATIONS)

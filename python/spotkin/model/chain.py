@@ -110,6 +110,10 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         "_tool",
     )
 
+    _block_dependent = frozenset({"ik", "ik_all", "ik_position"})
+    """Methods whose answer for a sample may differ in the last bits between a full block of the lane
+    kernels and a short one (spotkin.dask cuts its batches at block multiples for them)."""
+
     def __init__(
         self,
         rows: ArrayLike,
@@ -154,7 +158,12 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         (default all revolute), ``limits`` (n, 2). ``base`` maps the world frame to the frame
         before joint 0 and ``tool`` the last joint's frame to the tool frame.
         """
-        chain = cls.__new__(cls)
+        chain = Chain.__new__(Chain)  # a Chain whichever class asks (a subclass has its own constructor)
+        chain._set_joints(placements, axes, types, base, tool, limits, joint_names)
+        return chain
+
+    def _set_joints(self, placements, axes, types, base, tool, limits, joint_names) -> None:
+        """:meth:`from_joints`'s model, checked, set on this (new) object."""
         placements = rigid_transforms(placements, "placements")
         if placements.ndim != 3 or placements.shape[1:] != (4, 4):
             raise ValueError(f"placements must have shape (n, 4, 4), got {placements.shape}")
@@ -166,23 +175,22 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         if types.shape != (n,) or not np.isin(types, (0, 1)).all():
             raise ValueError(f"types must have shape ({n},) with 0 (revolute) or 1 (prismatic) entries")
         types = types.astype(np.int8)
-        chain._base = None if base is None else rigid_transforms(base, "base")
-        chain._tool = None if tool is None else rigid_transforms(tool, "tool")
-        chain._core = _core.Chain.from_joints(
-            placements, axes, types.astype(np.float64), chain._base, chain._tool
+        self._base = None if base is None else rigid_transforms(base, "base")
+        self._tool = None if tool is None else rigid_transforms(tool, "tool")
+        self._core = _core.Chain.from_joints(
+            placements, axes, types.astype(np.float64), self._base, self._tool
         )
-        chain._rows = None
-        chain._convention = "joints"
-        chain._joints = (placements, axes, types)
-        chain._names = None if joint_names is None else tuple(str(name) for name in joint_names)
-        if chain._names is not None and len(chain._names) != n:
-            raise ValueError(f"joint_names must have {n} names, got {len(chain._names)}")
-        chain._limits = _limits(limits, n)
-        chain._ik = None
-        chain._ik_tolerance = None
-        chain._inertials = None
-        chain._dynamics = None
-        return chain
+        self._rows = None
+        self._convention = "joints"
+        self._joints = (placements, axes, types)
+        self._names = None if joint_names is None else tuple(str(name) for name in joint_names)
+        if self._names is not None and len(self._names) != n:
+            raise ValueError(f"joint_names must have {n} names, got {len(self._names)}")
+        self._limits = _limits(limits, n)
+        self._ik = None
+        self._ik_tolerance = None
+        self._inertials = None
+        self._dynamics = None
 
     @classmethod
     def from_urdf(
@@ -229,7 +237,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         for a revolute joint (q adds to theta) and 1 for a prismatic one (q adds to r).
         ``limits`` is an optional (dof, 2) array of (lower, upper) joint limits.
         """
-        return cls(rows, convention="mdh", base=base, tool=tool, limits=limits)
+        return Chain(rows, convention="mdh", base=base, tool=tool, limits=limits)
 
     @classmethod
     def from_dh(
@@ -245,7 +253,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         variable adds to theta (sigma = 0) or to d (sigma = 1). Joint j turns about
         the z axis of frame j-1.
         """
-        return cls(rows, convention="dh", base=base, tool=tool, limits=limits)
+        return Chain(rows, convention="dh", base=base, tool=tool, limits=limits)
 
     @property
     def dof(self) -> int:
@@ -316,11 +324,25 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         :func:`spotkin.inertia.link_inertials`).
         """
         inertials = link_inertials(mass, com, inertia, self.dof)
-        chain = self.__class__.__new__(self.__class__)
-        for name in self.__slots__:
-            setattr(chain, name, getattr(self, name))
+        chain = self._copy()
         chain._inertials = inertials
         chain._dynamics = None  # built from the new inertials on first use
+        return chain
+
+    def _renamed(self, names: tuple[str, ...]) -> Chain:
+        """This chain with other joint names (a new object)."""
+        if len(names) != self.dof:
+            raise ValueError(f"joint_names must have {self.dof} names, got {len(names)}")
+        chain = self._copy()
+        chain._names = tuple(str(name) for name in names)
+        return chain
+
+    def _copy(self) -> Chain:
+        """A shallow copy of this object (every slot, a subclass's too): the ``with_*`` methods' start."""
+        chain = self.__class__.__new__(self.__class__)
+        for cls in type(self).__mro__:
+            for name in getattr(cls, "__slots__", ()):
+                setattr(chain, name, getattr(self, name))
         return chain
 
     @core_method("_core", "fk")
@@ -410,9 +432,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
                 f"got {type(limits).__name__}"
             )
         lower, upper = _limit_override(limits, self._limits, self._names, "limits")
-        chain = self.__class__.__new__(self.__class__)
-        for name in self.__slots__:
-            setattr(chain, name, getattr(self, name))
+        chain = self._copy()
         chain._limits = (lower, upper)
         chain._ik = None  # the closed-form solvers hold the limits
         return chain

@@ -11,9 +11,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._support.boundary import as_finite, as_index, as_real, broadcast_lead, into_out, quiet_float_errors
+from .._support.boundary import (
+    as_finite,
+    as_index,
+    as_real,
+    broadcast_lead,
+    broadcast_seed,
+    into_out,
+    quiet_float_errors,
+)
 from .._support.status import Status
-from .arm import _broadcast_seed
 
 if TYPE_CHECKING:
     from .chain import Chain
@@ -118,9 +125,7 @@ class _ChainIKMethods:
         distance = as_finite(distance, "distance", 0.0)
         if not angle < 0.1:
             raise ValueError(f"angle must be below 0.1 (the sine of an angle), got {angle!r}")
-        chain = self.__class__.__new__(self.__class__)
-        for name in self.__slots__:
-            setattr(chain, name, getattr(self, name))
+        chain = self._copy()
         chain._ik = None
         chain._ik_tolerance = (float(angle), float(distance))
         return chain
@@ -381,7 +386,7 @@ class _ChainIKMethods:
         ``seed`` (..., 7) broadcasts against T's leading dimensions."""
         k = as_index(free_joint, "free_joint")
         self._free_core(k)
-        T, seed = _broadcast_seed(T, seed)
+        T, seed = broadcast_seed(T, seed)
         if seed.shape[-1] != 7:
             raise ValueError(f"seed must have shape (..., 7), got {seed.shape}")
         grid = self._free_grid(k, values)

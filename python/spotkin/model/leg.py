@@ -124,6 +124,9 @@ class Leg:
 
     __slots__ = ("_core", "_geometry", "_joint_names", "_limits", "_name")
 
+    slot_names = SLOT_NAMES
+    """What each of :meth:`ik_all`'s 4 slots means (hip normal or flipped, knee back or forward)."""
+
     def __init__(
         self,
         hip_offset: float,

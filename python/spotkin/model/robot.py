@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 from .. import _core, urdf
 from .._support.boundary import as_real
 from ..dynamics import inertia
+from .arm import arm_solver
 from .chain import Chain
 from .leg import Leg
 from .robot_body import _WholeBodyMethods
@@ -95,15 +96,15 @@ def _limit_table(limits, model) -> dict[str, tuple[float, float]]:
 
 
 class RobotNaming(NamedTuple):
-    """A description's legs and joints under other names (the Spot SDK's, say), and optionally a
-    dedicated closed form for its arm: what :class:`spotkin.Spot` adds to the packaged description."""
+    """A description's legs and joints under other names (the Spot SDK's, say): what
+    :class:`spotkin.Spot` adds to the packaged description. Data only: the robot is built as any other."""
 
     legs: Mapping[str, str]
     """Recognised leg name -> the robot's leg name, in the robot's leg order."""
     joints: Callable[[str], tuple[str, str, str]]
     """A leg's (new) name -> its three joints' names."""
-    arm: Callable[[urdf.Model], object] | None = None
-    """The description -> its arm's solver (None: the arm's chain, as for any robot)."""
+    arm_joints: Mapping[str, str] | None = None
+    """The description's arm joint name -> the robot's (None: the description's names)."""
 
 
 class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
@@ -236,10 +237,8 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
         self._source = None if naming else (text, feet, contact_offset, nominal, limits, leg_order)
         self._report = tuple(leg_report) + tuple(arm_report)
         self._specs = (tuple(specs), tuple(arms))
-        if naming is not None and naming.arm is not None and arms:
-            arm_solvers = (naming.arm(model),)
-        else:
-            arm_solvers = tuple(self.chain(arm.tip, base=arm.base) for arm in arms)
+        renames = naming.arm_joints if naming is not None else None
+        arm_solvers = tuple(arm_solver(self.chain(arm.tip, base=arm.base), renames) for arm in arms)
         self._arms = arm_solvers
         # body <- arm base: the arm's chain starts at the link its first joint hangs from, which the
         # recognition reaches from the body through fixed joints only (find_arms takes the first six
@@ -380,7 +379,9 @@ class Robot(_WholeBodyMethods, _FloatingBaseMethods, _JointNameMethods):
     def arm(self):
         """The first arm found on the body (a 6-joint :class:`Chain`), or None. Its :meth:`Chain.ik` is in
         closed form when the arm is of a 6R family (:attr:`Chain.ik_kind`: a spherical wrist, three
-        parallel axes as on UR arms and the Unitree Z1, or a spherical shoulder).
+        parallel axes as on UR arms and the Unitree Z1, or a spherical shoulder). An arm with the Spot
+        Arm's structure is a :class:`SpotArm` (a Chain solved by the arm's own closed form), as
+        :attr:`spotkin.Spot.arm` is: the same object whichever way the robot was loaded.
 
         **Its frame is the arm's base link**, the link its first joint hangs from (``arm.fk`` gives
         base <- tool), which is the body only when the arm is mounted straight on it. The whole-body

@@ -109,30 +109,6 @@ def _checked_model(model: Mapping) -> dict:
     return checked
 
 
-def _arm_from_urdf(model: urdf.Model) -> dict:
-    """The Spot Arm's numbers (mount, link lengths, limits) read off the description, checking
-    that it has the structure SpotArm solves: axes z, y, y, x, y, x, every rpy zero, offsets
-    only where SpotArm has them."""
-    joints = [model.joint(name) for name in _URDF_ARM]
-    expected_axes = ((0, 0, 1), (0, 1, 0), (0, 1, 0), (1, 0, 0), (0, 1, 0), (1, 0, 0))
-    for joint, axis in zip(joints, expected_axes):
-        if not np.allclose(joint.axis, axis, atol=1e-12) or not np.allclose(joint.origin[:3, :3], np.eye(3)):
-            raise ValueError(f"{joint.name}: not the Spot Arm's structure")
-    origin = [joint.origin[:3, 3] for joint in joints]
-    hand = np.linalg.inv(model.placement(model.joint("arm_wr1").child)) @ model.placement("arm_hand")
-    checks = (origin[1], origin[2][1:], origin[3][1:2], origin[4], origin[5], hand[:3, 3][1:])
-    if any(np.abs(v).max() > 1e-12 for v in checks if np.size(v)):
-        raise ValueError("the arm's offsets are not the Spot Arm's structure")
-    return {
-        "mount": tuple(origin[0]),
-        "upper_arm": float(origin[2][0]),
-        "forearm": float(origin[3][0]),
-        "forearm_offset": float(origin[3][2]),
-        "hand": float(hand[0, 3]),
-        "limits": tuple((joint.lower, joint.upper) for joint in joints),
-    }
-
-
 def _spot_arm(arm: Mapping) -> SpotArm:
     """The Spot Arm's dedicated closed form from its numbers (mount, link lengths, limits)."""
     return SpotArm(
@@ -150,11 +126,11 @@ def _sdk_joints(leg: str) -> tuple[str, str, str]:
     return (f"{leg}.hx", f"{leg}.hy", f"{leg}.kn")
 
 
-# The packaged description under the SDK's names (legs in SDK order), its arm solved by SpotArm
+# The packaged description under the SDK's names (legs in SDK order, the arm's joints arm0.sh0, ...)
 _SDK_NAMING = RobotNaming(
     legs={_URDF_LEGS[name]: name for name in LEG_NAMES},
     joints=_sdk_joints,
-    arm=lambda description: _spot_arm(_arm_from_urdf(description)),
+    arm_joints=dict(zip(_URDF_ARM, ARM_JOINT_NAMES)),
 )
 
 
@@ -165,8 +141,8 @@ class Spot(Robot):
     By default the model is the packaged Spot URDF (``spotkin/robots/spot_with_arm.urdf``,
     built by the same machinery as :meth:`Robot.from_urdf`, with per-leg joint limits),
     named as the SDK names it: legs fl, fr, hl, hr; joints fl.hx, ... hr.kn; the arm is a
-    :class:`SpotArm`. :meth:`q_from_names` and :meth:`names_from_q` also answer to the packaged
-    URDF's joint names (``front_left_hip_x``, ``arm_sh0``, ...).
+    :class:`SpotArm` (arm0.sh0, ... arm0.wr1). :meth:`q_from_names` and :meth:`names_from_q` also answer
+    to the packaged URDF's joint names (``front_left_hip_x``, ``arm_sh0``, ...).
 
     ``model`` is instead a dict shaped like :data:`spotkin.models.SPOT`: keys
     ``"hip_positions"`` (a (3,) point per leg name), ``"leg"`` (``hip_offset``,
@@ -259,7 +235,9 @@ class Spot(Robot):
 
     @property
     def arm(self) -> SpotArm:
-        """The Spot Arm, mounted at its official position on the body."""
+        """The Spot Arm, mounted at its official position on the body: a :class:`SpotArm` (a
+        :class:`Chain` with the arm's closed form and the URDF's mass properties; joints named as the
+        SDK names them), the one :meth:`Robot.from_urdf` gives for the same description."""
         return self._arm
 
     @property

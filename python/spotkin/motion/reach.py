@@ -170,7 +170,7 @@ def _compiled(robot, box: ReachBox):
         if numbers.chain is None:
             raise ValueError("reach needs the robot's description (a URDF) for its arm's chain and capsules")
         arm = robot.arm
-        arm_core = arm._core if isinstance(arm, SpotArm) else arm._ik_core()
+        arm_core = arm._arm if isinstance(arm, SpotArm) else arm._ik_core()  # the solver its ik runs
         caps = numbers.capsules
         capsules = (
             None

@@ -15,7 +15,6 @@ from .. import Status, body_transform
 from ._common import (
     _BLOCKED,
     _VALID,
-    SLOT_NAMES,
     _check_fig,
     _equal_3d,
     _frame_axes,
@@ -26,7 +25,6 @@ from ._common import (
     as_real,
 )
 from ._solvers import (
-    _arm_links,
     _beyond_limits,
     _default_q,
     _drawable,
@@ -40,21 +38,13 @@ from ._solvers import (
 _LEG_JOINTS = ("hip roll", "hip pitch", "knee")
 
 
-def _arm_slot_name(slot: int) -> str:
-    shoulder = ("front", "back")[slot // 4]
-    elbow = ("up", "down")[slot // 2 % 2]
-    wrist = ("wr0 ≥ 0", "wr0 < 0")[slot % 2]
-    return f"{shoulder} shoulder, elbow {elbow}, {wrist}"
-
-
 def _slot_names(solver, slots: int) -> tuple[str, ...]:
     """What each of ``ik_all``'s slots means, where the solver's branches have a fixed meaning: a leg's
     (hip normal or flipped, knee back or forward), the Spot arm's (shoulder, elbow, wrist); else
     "solution K"."""
-    if _is_leg(solver):
-        return SLOT_NAMES
-    if _arm_links(solver) is not None:
-        return tuple(_arm_slot_name(k) for k in range(slots))
+    names = getattr(solver, "slot_names", None)  # the solver's own, where its slots have a fixed meaning
+    if names is not None and len(names) == slots:
+        return tuple(names)
     return tuple(f"solution {k}" for k in range(slots))
 
 

@@ -32,33 +32,14 @@ def _has_frames(solver) -> bool:
     return callable(getattr(solver, "frames", None))
 
 
-def _arm_links(solver):
-    """The Spot arm's link geometry (mount, upper arm, forearm, forearm offset) of a solver that has no
-    joint frames to give, or None."""
-    params = getattr(solver, "_params", None)
-    if _has_frames(solver) or params is None or solver.dof != 6:
-        return None
-    return params[:4]
-
-
 def _drawable(solver) -> bool:
     """The pictures can place ``solver``'s joints (:func:`_joint_origins`)."""
-    return _is_leg(solver) or _has_frames(solver) or _arm_links(solver) is not None
+    return _is_leg(solver) or _has_frames(solver)
 
 
 def _rx(t: float) -> np.ndarray:
     c, s = math.cos(t), math.sin(t)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _ry(t: float) -> np.ndarray:
-    c, s = math.cos(t), math.sin(t)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _rz(t: float) -> np.ndarray:
-    c, s = math.cos(t), math.sin(t)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _joint_origins(solver, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -68,8 +49,7 @@ def _joint_origins(solver, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     is marked).
 
     - a leg: hip roll, hip pitch, knee, foot (rows 0, 1, 2);
-    - a chain: its frames' origins, base first and tool last (joint k at row k + 1);
-    - the Spot arm: mount (sh0, sh1), elbow (el0), wrist (el1, wr0, wr1), tool point.
+    - a chain (the Spot arm too): its frames' origins, base first and tool last (joint k at row k + 1).
     """
     if _is_leg(solver):
         hip_pitch = _rx(solver.signs[0] * q[0]) @ solver.a
@@ -77,14 +57,7 @@ def _joint_origins(solver, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return points, np.arange(3)
     if _has_frames(solver):
         return solver.frames(q)[:, :3, 3], np.arange(1, solver.dof + 1)
-    links = _arm_links(solver)
-    if links is None:
-        raise TypeError(f"the joints of a {type(solver).__name__} cannot be drawn: it gives no joint frames")
-    mount, upper_arm, forearm, forearm_offset = links
-    shoulder = _rz(q[0]) @ _ry(q[1])
-    elbow = mount + shoulder @ np.array([upper_arm, 0.0, 0.0])
-    wrist = elbow + shoulder @ _ry(q[2]) @ np.array([forearm, 0.0, forearm_offset])
-    return np.array([mount, elbow, wrist, solver.fk(q)[:3, 3]]), np.array([0, 0, 1, 2, 2, 2])
+    raise TypeError(f"the joints of a {type(solver).__name__} cannot be drawn: it gives no joint frames")
 
 
 def _revolute(solver) -> np.ndarray:

@@ -8,20 +8,19 @@ from typing import Callable
 import numpy as np
 
 from .._support.boundary import as_real
-from ..model.arm import SpotArm
 from ..model.chain import Chain
-from ..model.leg import Leg
 from ..model.robot import Robot
 from .dask_graph import (
     _BODY_POSE,
-    _TOOL_POSE,
     _as_dask,
     _dof,
+    _fk_gives_poses,
     _lazy,
     _model,
     _Plan,
     _plan,
     _robot,
+    _takes,
     _target_core,
 )
 
@@ -107,7 +106,7 @@ def body_rates(robot: Robot, body_pose, q, twist, seq: str = "XYZ", tolerance: f
 
 def _plan_fk(model, q) -> _Plan:
     model = _model(model)
-    return _plan(model, "fk", [("q", q, (_dof(model),))], {}, (), "p" if isinstance(model, Leg) else "T")
+    return _plan(model, "fk", [("q", q, (_dof(model),))], {}, (), "T" if _fk_gives_poses(model) else "p")
 
 
 def fk(model, q):
@@ -123,7 +122,7 @@ def _plan_jacobian(model, q, frame=None, point=None) -> _Plan:
     for name, value in (("frame", frame), ("point", point)):
         if value is None:
             continue
-        if not isinstance(model, Chain):
+        if not _takes(model.jacobian, name):
             raise ValueError(
                 f"{name} is for a Chain's Jacobian; a {type(model).__name__}'s has none, got {value!r}"
             )
@@ -142,12 +141,11 @@ def jacobian(model, q, frame: str | int | None = None, point: str | int | None =
 def _plan_ik(model, target, seed=None, fallback=None) -> _Plan:
     model = _model(model)
     options = {}
-    if isinstance(model, Leg):
-        method = "ik"
+    method = "ik"
+    if _takes(model.ik, "fallback"):  # a leg's: the nearest reachable foot by default
         if fallback is not None:
             options["fallback"] = fallback
     else:
-        method = "ik"
         if fallback is not None and fallback != "nan":
             raise ValueError(
                 f"fallback must be None or 'nan' for a {type(model).__name__}: arm and chain IK give NaN "
@@ -173,13 +171,11 @@ def ik(model, target, seed=None, fallback: str | None = None):
 
 def _plan_ik_all(model, target, seed=None) -> _Plan:
     model = _model(model)
-    if isinstance(model, SpotArm):
-        inputs = [("target", target, _TOOL_POSE), ("seed", seed, (6,))]
+    if _takes(model.ik_all, "seed"):  # a SpotArm's: the seed fixes the free angle of singular poses
+        inputs = [("target", target, _target_core(model)), ("seed", seed, (_dof(model),))]
         return _plan(model, "ik_all", inputs, {}, (), None)
     if seed is not None:
         raise TypeError(f"ik_all of a {type(model).__name__} takes no seed (only a SpotArm's does)")
-    if isinstance(model, Leg):
-        return _plan(model, "ik_all", [("target", target, (3,))], {}, (), None)
     return _plan(model, "ik_all", [("target", target, _target_core(model))], {}, (), None)
 
 
@@ -203,7 +199,7 @@ def _dynamics(model) -> tuple[str, int, int]:
     """(method prefix, nq, nv): a :class:`~spotkin.Chain`'s own methods (fixed base: q and its rates
     (..., dof)), or a :class:`~spotkin.Robot`'s :attr:`~spotkin.Robot.floating_base` (q (..., 7 + n),
     v (..., 6 + n))."""
-    if isinstance(model, Chain):
+    if hasattr(model, "mass_matrix") and hasattr(model, "dof"):  # a chain, fixed base
         return "", model.dof, model.dof
     if isinstance(model, Robot):
         floating = model.floating_base  # ValueError for a robot without a URDF description

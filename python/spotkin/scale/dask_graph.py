@@ -3,6 +3,7 @@ as Dask arrays: one kernel call per chunk of the batch axes."""
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import math
 import operator
@@ -12,10 +13,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from .._support.boundary import as_real, broadcast_lead, check_trailing
-from ..model.arm import SpotArm
 from ..model.body import pose_format
-from ..model.chain import Chain
-from ..model.leg import Leg
 from ..model.robot import Robot
 from .dask_kernel import HighLevelGraph, _Kernel, _method, da, tokenize, unify_chunks
 
@@ -237,19 +235,34 @@ def _robot(robot) -> Robot:
     return robot
 
 
+_INTERFACE = ("dof", "limits", "joint_names", "fk", "jacobian", "ik_all", "ik")
+
+
 def _model(model):
-    if not isinstance(model, (Leg, SpotArm, Chain)):
-        raise TypeError(f"model must be an sk.Leg, sk.SpotArm or sk.Chain, got {type(model).__name__}")
+    """``model`` when it answers the solver interface every leg, arm and chain shares."""
+    if not all(hasattr(model, name) for name in _INTERFACE):
+        raise TypeError(
+            f"model must be a solver (an sk.Leg, an arm or an sk.Chain: {', '.join(_INTERFACE)}), "
+            f"got {type(model).__name__}"
+        )
     return model
 
 
 def _dof(model) -> int:
-    return 3 if isinstance(model, Leg) else 6 if isinstance(model, SpotArm) else model.dof
+    return model.dof
+
+
+def _takes(method, name: str) -> bool:
+    """``method`` (a solver's) has a parameter ``name``."""
+    return name in inspect.signature(method).parameters
+
+
+def _fk_gives_poses(model) -> bool:
+    """The solver's ``fk`` gives tool poses (..., 4, 4), not points (a leg's feet, (..., 3))."""
+    return np.shape(model.fk(np.zeros(model.dof)))[-2:] == (4, 4)
 
 
 def _target_core(model):
-    """A leg's targets are foot points (3,); an arm's tool poses; a chain's points (3,) for 3
-    joints (:meth:`Chain.ik_position`), tool poses otherwise (:meth:`Chain.ik`)."""
-    if isinstance(model, Leg) or (isinstance(model, Chain) and model.dof == 3):
-        return (3,)
-    return _TOOL_POSE
+    """A 3-joint solver's targets are points (3,) (a leg's feet, a chain's tool point); a 6- or
+    7-joint one's tool poses."""
+    return (3,) if model.dof == 3 else _TOOL_POSE

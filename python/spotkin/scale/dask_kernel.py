@@ -27,8 +27,6 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
 
 
 from .._support.runtime import get_num_threads, thread_limit
-from ..model.arm import SpotArm
-from ..model.chain import Chain
 
 # Dask, which the graph imports from here
 __all__ = ["HighLevelGraph", "da", "tokenize", "unify_chunks"]
@@ -62,17 +60,11 @@ def _model_from_pickle(digest: str, data: bytes):
 # only on its index in the batch and the batch's size, whatever the thread count.
 ALIGNMENT = 64
 
-# Kernels whose vector blocks and scalar remainders round differently in the last bits (the arm's
-# vectorised loop and its scalar epilogue; the chains' closed forms across 16 lanes or one by one):
-# the whole call runs every sample below the last multiple of ALIGNMENT in full blocks, the rest as a
-# batch of their own. The samples of a full block are computed independently of each other (lanes).
-_BLOCKED = {
-    ("SpotArm", "ik"),
-    ("SpotArm", "ik_all"),
-    ("Chain", "ik"),
-    ("Chain", "ik_all"),
-    ("Chain", "ik_position"),
-}
+# A model's methods whose vector blocks and scalar remainders round differently in the last bits (the
+# arm's vectorised loop and its scalar epilogue; the chains' closed forms across 16 lanes or one by one)
+# are named by its class's _block_dependent: the whole call runs every sample below the last multiple of
+# ALIGNMENT in full blocks, the rest as a batch of their own. The samples of a full block are computed
+# independently of each other (lanes).
 
 
 class _Kernel:
@@ -100,7 +92,7 @@ class _Kernel:
     def __init__(self, model, method, options, dtypes, cores=(), outputs=(), total=0) -> None:
         self.model, self.method, self.options, self.dtypes = model, method, options, dtypes
         self.cores, self.outputs = cores, outputs  # per-sample shapes of the inputs and outputs
-        self.cut = total - total % ALIGNMENT if (_kind(model), method) in _BLOCKED else None
+        self.cut = total - total % ALIGNMENT if method in getattr(model, "_block_dependent", ()) else None
         # the graph's chunks (set by _lazy): the threads of a call are the cores' share of one chunk, so
         # that the scheduler's threads, one chunk each, do not each start every core's worth
         self.tasks = 0
@@ -188,10 +180,6 @@ def _whole(blocks: tuple) -> tuple:
             (block,) = block
         out.append(block)
     return tuple(out)
-
-
-def _kind(model) -> str:
-    return "SpotArm" if isinstance(model, SpotArm) else "Chain" if isinstance(model, Chain) else ""
 
 
 def _method(model, method: str) -> Callable:
