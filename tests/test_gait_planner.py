@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from urdf_helpers import robot_named
 
@@ -80,6 +80,20 @@ def test_a_command_the_legs_cannot_follow_is_shortened_as_the_reference_does(nam
     pitch=st.floats(-0.1, 0.1),
     rate=st.sampled_from([60.0, 173.0, 400.0]),
     preset=st.sampled_from(["walk", "trot", "pace", "bound", "gallop"]),
+)
+# a flight phase (no foot down) at ticks where a leg has no IK answer: the residual is NaN there, as
+# the margin (the centre of mass is unknown), in both planners
+@example(
+    vx=1.5,
+    vy=0.5,
+    yaw=-1.0,
+    period=0.75,
+    duty=0.375,
+    step=0.0,
+    roll=0.0,
+    pitch=0.0625,
+    rate=60.0,
+    preset="trot",
 )
 def test_custom_gaits_commands_attitudes_and_rates_are_the_reference_plan(
     vx, vy, yaw, period, duty, step, roll, pitch, rate, preset

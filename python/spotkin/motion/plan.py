@@ -51,13 +51,15 @@ class GaitPlan(NamedTuple):
     status: np.ndarray
     """(..., ticks) int8 :class:`spotkin.Status`: the worst leg's IK status."""
     margin: np.ndarray
-    """(..., ticks) m: the centre of mass's projection to the support polygon, positive inside."""
+    """(..., ticks) m: the centre of mass's projection to the support polygon, positive inside; NaN at a
+    tick where a leg has no IK answer (the centre of mass is then unknown)."""
     shortened: np.ndarray
     """(..., ticks) bool: the command was slowed to fit the legs' steps, or a swinging foot's foothold was
     pulled back towards its nominal point to be reachable."""
     residual: np.ndarray
     """(..., ticks, 6) the wrench the stance forces leave unbalanced, [force (N); moment about the centre
-    of mass (N m)], world axes: the weight's moment about the line of two feet in a trot, say."""
+    of mass (N m)], world axes: the weight's moment about the line of two feet in a trot, say; NaN at a
+    tick where a leg has no IK answer, as :attr:`margin`."""
 
 
 def gait_numbers(resolved) -> np.ndarray:

@@ -475,6 +475,8 @@ def sample(robot, state: PlannerState) -> dict:
     margin = support_margin([feet[i, :2] for i in down], com[:2]) if np.isfinite(com).all() else math.nan
     gravity = np.array([0.0, 0.0, -G])
     forces, residual = stance_forces(feet, state.contact, com, robot.mass, gravity)
+    if not np.isfinite(com).all():  # a leg without an answer: the centre of mass, and so the wrench, unknown
+        residual = np.full(6, np.nan)
     weight = robot.floating_base.gravity(robot.floating_q(pose, q), gravity)[6 : 6 + 3 * n]
     tau = np.empty(3 * n)
     for i in range(n):
