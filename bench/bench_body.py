@@ -16,7 +16,7 @@ from conftest import SIZES
 SPOT = sk.Spot()
 FEET = SPOT.stance_feet(0.5)
 HIPS = SPOT.hip_positions
-LEGS = [(leg.hip_offset, leg.upper, leg.lower, leg.knee_offset) for leg in SPOT.legs]
+LEGS = [(leg.hip_offset, leg.upper_length, leg.lower_length, leg.knee_offset) for leg in SPOT.legs]
 
 
 def poses(n: int) -> np.ndarray:

@@ -10,7 +10,7 @@ from baselines import leg_fk, leg_ik_one_branch, leg_jacobian, numpy_impl
 from conftest import SIZES
 
 LEG = sk.Spot().leg("fl")
-PARAMS = (LEG.hip_offset, LEG.upper, LEG.lower, LEG.knee_offset)
+PARAMS = (LEG.hip_offset, LEG.upper_length, LEG.lower_length, LEG.knee_offset)
 
 
 def configurations(n: int) -> np.ndarray:

@@ -96,7 +96,13 @@ def test_body_ik_matches_the_leg_reference(rng):
         for i, leg in enumerate(SPOT.legs):
             p = R.T @ (feet[n, i] - t) - SPOT.hip_positions[i]
             q_ref, status_ref = ref_leg.ik(
-                p, leg.hip_offset, leg.upper, leg.lower, leg.knee_offset, leg.limits[:, 0], leg.limits[:, 1]
+                p,
+                leg.hip_offset,
+                leg.upper_length,
+                leg.lower_length,
+                leg.knee_offset,
+                leg.limits[:, 0],
+                leg.limits[:, 1],
             )
             assert res.status[n, i] == status_ref
             q = res.q[n, 3 * i : 3 * i + 3]
@@ -218,7 +224,7 @@ def test_body_rates_keep_the_feet_still(rng):
 
 def test_body_rates_flag_singular_legs():
     q12 = SPOT.body_ik(NOMINAL, FEET).q
-    beta = np.arctan2(SPOT.leg("fl").knee_offset, SPOT.leg("fl").upper)
+    beta = np.arctan2(SPOT.leg("fl").knee_offset, SPOT.leg("fl").upper_length)
     q12[2] = -beta  # front-left knee stretched
     rates = SPOT.body_rates(NOMINAL, q12, [0.1, 0, 0, 0, 0, 0.2])
     np.testing.assert_array_equal(rates.singular, [True, False, False, False])
@@ -248,7 +254,7 @@ def test_arm_ik_world_and_fk_all(rng):
         atol=1e-14,
     )
     # knees sit at the upper-leg length from the hy joints and the lower-leg length from the feet
-    assert np.allclose(np.linalg.norm(frames.feet - frames.knees, axis=-1), SPOT.leg("fl").lower)
+    assert np.allclose(np.linalg.norm(frames.feet - frames.knees, axis=-1), SPOT.leg("fl").lower_length)
     # a hand target held fixed in the world while the body moves
     target = sk.body_transform(NOMINAL) @ arm.fk([0.2, -1.0, 1.7, 0.1, 0.4, 0.0])
     moving = random_poses(rng, 50, spread=0.02)

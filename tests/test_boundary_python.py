@@ -331,7 +331,7 @@ def test_body_rates_all_nan_and_single_nan():
 def test_body_rates_nan_and_singular_masks_agree(rng):
     q = np.tile(Q12, (200, 1)) + rng.normal(0, 0.3, (200, 12))
     q[rng.random((200, 12)) < 0.05] = np.nan
-    beta = np.arctan2(SPOT.leg("fl").knee_offset, SPOT.leg("fl").upper)
+    beta = np.arctan2(SPOT.leg("fl").knee_offset, SPOT.leg("fl").upper_length)
     q[::7, 2] = -beta  # front-left knee stretched
     rates = SPOT.body_rates(POSE, q, TWIST)
     np.testing.assert_array_equal(np.isnan(rates.qd.reshape(200, 4, 3)).any(-1), rates.singular)
@@ -426,7 +426,9 @@ def test_fk_all_matches_independent_frames(rng):
         hips = T[:, None, :3, 3] + np.einsum("nij,kj->nki", T[:, :3, :3], SPOT.hip_positions)
         np.testing.assert_allclose(frames.hips, hips, atol=1e-15)
         # knees at the upper-leg length (with its offset) from the hy joints
-        np.testing.assert_allclose(np.linalg.norm(frames.feet - frames.knees, axis=-1), SPOT.leg("fl").lower)
+        np.testing.assert_allclose(
+            np.linalg.norm(frames.feet - frames.knees, axis=-1), SPOT.leg("fl").lower_length
+        )
         assert frames.hand is None
 
 

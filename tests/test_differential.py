@@ -185,7 +185,7 @@ def test_rank_spot_leg_and_arm_singularities():
     leg = spot.legs[0]
     assert sk.rank(leg.jacobian([0.1, 0.4, 0.7])) == 3
     # stretched knee: with the 0.025 m knee offset at kn = -atan2(knee_offset, upper), not at 0
-    stretched = -np.arctan2(leg.knee_offset, leg.upper)
+    stretched = -np.arctan2(leg.knee_offset, leg.upper_length)
     assert sk.rank(leg.jacobian([0.1, 0.4, stretched])) == 2
     assert sk.rank(leg.jacobian([0.1, 0.4, 0.0])) == 3
     arm = spot.arm

@@ -424,7 +424,10 @@ def test_huge_leg_angles_equal_their_exact_remainder(magnitude):
     reduced = _exactly_reduced(q)
     p = LEG.fk(q)
     expected = np.array(
-        [leg_reference.fk(qi, LEG.hip_offset, LEG.upper, LEG.lower, LEG.knee_offset) for qi in reduced]
+        [
+            leg_reference.fk(qi, LEG.hip_offset, LEG.upper_length, LEG.lower_length, LEG.knee_offset)
+            for qi in reduced
+        ]
     )
     np.testing.assert_allclose(p, expected, atol=1e-12)
     np.testing.assert_allclose(LEG.jacobian(q), LEG.jacobian(reduced), atol=1e-12)

@@ -23,7 +23,7 @@ U, L, K, H1 = 0.3205, 0.3365, 0.025, 0.110945
 
 
 def params(leg: sk.Leg) -> tuple[float, float, float, float]:
-    return leg.hip_offset, leg.upper, leg.lower, leg.knee_offset
+    return leg.hip_offset, leg.upper_length, leg.lower_length, leg.knee_offset
 
 
 def legs_under_test() -> list[sk.Leg]:

@@ -285,7 +285,7 @@ def test_joints_beyond_limits_and_singular_legs_are_marked(robots):
     pose, q = _stance(spot, "spot", np.random.default_rng(5))
     q = q.copy()
     q[2] = -3.0  # fl knee below its limit (-2.7929)
-    beta = np.arctan2(spot.leg("hl").knee_offset, spot.leg("hl").upper)
+    beta = np.arctan2(spot.leg("hl").knee_offset, spot.leg("hl").upper_length)
     q[8] = -beta  # hl stretched: singular (and beyond the knee's upper limit)
     ax = plot.robot(spot, pose, q, title="marked").axes[0]
     frames = spot.fk_all(pose, q)

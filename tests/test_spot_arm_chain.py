@@ -197,3 +197,17 @@ def test_solvers_share_one_interface():
         back, status = solver.ik(target, q)
         assert (status == sk.Status.OK).all()
         np.testing.assert_allclose(back, q, atol=1e-8)
+
+
+def test_a_legs_lengths_are_not_its_limits():
+    """``upper``/``lower`` mean joint limits on a chain; a leg's link lengths are ``upper_length`` and
+    ``lower_length``, and the old names warn (and still answer the lengths)."""
+    leg = sk.Leg(hip_offset=0.11, upper=0.32, lower=0.34, knee_offset=0.02, side="left")
+    assert (leg.upper_length, leg.lower_length) == (0.32, 0.34)
+    with pytest.warns(DeprecationWarning, match="upper_length"):
+        assert leg.upper == 0.32
+    with pytest.warns(DeprecationWarning, match="lower_length"):
+        assert leg.lower == 0.34
+    # the knee at full stretch is the two lengths plus the offset, as fk says
+    p = leg.fk([0.0, 0.0, -np.arctan2(0.02, 0.32)])
+    assert np.hypot(0.02, 0.32) + 0.34 == pytest.approx(np.hypot(p[0], p[2]), abs=1e-12)

@@ -41,6 +41,7 @@ With Spot's limits, exactly one slot (0) is valid whenever the foot is more than
 
 from __future__ import annotations
 
+import warnings
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -277,14 +278,36 @@ class Leg:
         return float(self._geometry[0][1] + self._geometry[1][1] + self._geometry[2][1])
 
     @property
-    def upper(self) -> float:
-        """-b_z: the hip-pitch → knee length along -z (Spot's 0.3205)."""
+    def upper_length(self) -> float:
+        """-b_z: the hip-pitch → knee length along -z (Spot's 0.3205): the upper leg."""
         return -self._geometry[1][2]
 
     @property
-    def lower(self) -> float:
-        """-c_z: the knee → foot length along -z (Spot's 0.3365)."""
+    def lower_length(self) -> float:
+        """-c_z: the knee → foot length along -z (Spot's 0.3365): the lower leg."""
         return -self._geometry[2][2]
+
+    @property
+    def upper(self) -> float:
+        """Deprecated: :attr:`upper_length` (a :class:`Chain`'s ``upper`` is its upper joint limits)."""
+        warnings.warn(
+            "Leg.upper is the upper leg's length: use Leg.upper_length (Chain.upper is a joint limit; "
+            "a leg's joint limits are Leg.limits)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.upper_length
+
+    @property
+    def lower(self) -> float:
+        """Deprecated: :attr:`lower_length` (a :class:`Chain`'s ``lower`` is its lower joint limits)."""
+        warnings.warn(
+            "Leg.lower is the lower leg's length: use Leg.lower_length (Chain.lower is a joint limit; "
+            "a leg's joint limits are Leg.limits)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.lower_length
 
     @property
     def knee_offset(self) -> float:

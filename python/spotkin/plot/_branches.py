@@ -15,6 +15,7 @@ from .. import Status, body_transform
 from ._common import (
     _BLOCKED,
     _VALID,
+    SLOT_NAMES,
     _check_fig,
     _equal_3d,
     _frame_axes,
@@ -43,6 +44,8 @@ def _slot_names(solver, slots: int) -> tuple[str, ...]:
     (hip normal or flipped, knee back or forward), the Spot arm's (shoulder, elbow, wrist); else
     "solution K"."""
     names = getattr(solver, "slot_names", None)  # the solver's own, where its slots have a fixed meaning
+    if names is None and _is_leg(solver):  # a leg's geometry: its slots are a leg's
+        names = SLOT_NAMES
     if names is not None and len(names) == slots:
         return tuple(names)
     return tuple(f"solution {k}" for k in range(slots))
