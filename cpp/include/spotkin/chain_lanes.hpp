@@ -179,29 +179,33 @@ S* scratch(std::size_t count) {
 }
 
 // The block's joint values by joint (padded with the last sample), their sines and cosines,
-// and the shifts along the axes (r, plus q for a prismatic joint).
+// and the shifts along the axes (r, plus q for a prismatic joint). Every joint's angles are
+// written first and their sines and cosines taken in one pass over [n][B]: taken joint by joint,
+// each vector load of a joint's B angles just after their scalar stores missed store-to-load
+// forwarding (perf: the single-sample Jacobian's hottest instruction).
 template <typename S, int B>
 struct LaneJoints {
-  S *c, *s, *shift;  // [n][B] each, in the thread's scratch
+  S *c, *s, *shift, *angle;  // [n][B] each, in the thread's scratch
   explicit LaneJoints(int n) {
-    S* at = scratch<S, 0>(3 * std::size_t(n) * B);
-    c = at, s = at + std::size_t(n) * B, shift = at + 2 * std::size_t(n) * B;
+    S* at = scratch<S, 0>(4 * std::size_t(n) * B);
+    c = at, s = at + std::size_t(n) * B, shift = at + 2 * std::size_t(n) * B,
+    angle = at + 3 * std::size_t(n) * B;
   }
 
   SPOTKIN_INLINE void load(const Chain<S>& chain, const S* q, std::ptrdiff_t m) noexcept {
     const int n = chain.dof();
-    S angle[B];
     for (int j = 0; j < n; ++j) {
       const Joint<S>& joint = chain.joints()[std::size_t(j)];
       const bool revolute = joint.type == JointType::Revolute;
       S* sh = shift + std::size_t(j) * B;
+      S* a = angle + std::size_t(j) * B;
       for (int i = 0; i < B; ++i) {
         const S qi = q[std::min<std::ptrdiff_t>(i, m - 1) * n + j];
-        angle[i] = revolute ? joint.theta + qi : joint.theta;
+        a[i] = revolute ? joint.theta + qi : joint.theta;
         sh[i] = revolute ? joint.r : joint.r + qi;
       }
-      vector_math::sincos(angle, s + std::size_t(j) * B, c + std::size_t(j) * B, B);
     }
+    vector_math::sincos(angle, s, c, std::ptrdiff_t(n) * B);  // element by element: the same bits
   }
 };
 
