@@ -75,9 +75,16 @@ class ScratchArray {
   static_assert(alignof(T) <= ScratchStack::kAlign, "ScratchArray aligns to at most 64 bytes");
 
  public:
-  explicit ScratchArray(std::size_t n) : ScratchArray(n, nullptr) {}
-  ScratchArray(std::size_t n, const T& value) : ScratchArray(n, &value) {}
-  ScratchArray(std::size_t n, Uninitialized) : ScratchArray(n, nullptr, false) {}
+  explicit ScratchArray(std::size_t n) : ScratchArray(ScratchStack::local(), n, nullptr) {}
+  ScratchArray(std::size_t n, const T& value) : ScratchArray(ScratchStack::local(), n, &value) {}
+  ScratchArray(std::size_t n, Uninitialized)
+      : ScratchArray(ScratchStack::local(), n, nullptr, false) {}
+  // The same from a stack the caller looked up once (ScratchStack::local()).
+  ScratchArray(ScratchStack& stack, std::size_t n) : ScratchArray(stack, n, nullptr) {}
+  ScratchArray(ScratchStack& stack, std::size_t n, const T& value)
+      : ScratchArray(stack, n, &value) {}
+  ScratchArray(ScratchStack& stack, std::size_t n, Uninitialized)
+      : ScratchArray(stack, n, nullptr, false) {}
   ScratchArray(const ScratchArray&) = delete;
   ScratchArray& operator=(const ScratchArray&) = delete;
   ~ScratchArray() {
@@ -93,8 +100,8 @@ class ScratchArray {
   T* end() noexcept { return data_ + n_; }
 
  private:
-  ScratchArray(std::size_t n, const T* value, bool initialise = true)
-      : stack_(ScratchStack::local()),
+  ScratchArray(ScratchStack& stack, std::size_t n, const T* value, bool initialise = true)
+      : stack_(stack),
         mark_(stack_.mark()),
         n_(n),
         data_(static_cast<T*>(stack_.take(n * sizeof(T) + (n == 0), alignof(T)))) {

@@ -17,13 +17,24 @@ template <typename M, int L>
 struct ChainBlock {
   using P = Pack<M, L>;
   int n;
-  ScratchArray<P> q, qd, qdd, in, out;
+  ScratchStack&
+      stack;  // the thread's, looked up once (each lookup is a call into the TLS resolver)
+  ScratchArray<P> q, qd, qdd, out;
   ScratchArray<Pose<P>> X;
   P g[3];
   bool ok[L];
 
+  // q is loaded whole (every lane) and X written whole by begin() before either is read, so neither
+  // is zeroed first (for one sample, the zeroing was a tenth of a gravity call); qd and qdd are
+  // zero where no rows are given.
   explicit ChainBlock(int dof, int out_width)
-      : n(dof), q(dof), qd(dof, P(M(0))), qdd(dof, P(M(0))), in(dof), out(out_width), X(dof) {}
+      : n(dof),
+        stack(ScratchStack::local()),
+        q(stack, dof, uninitialized),
+        qd(stack, dof, P(M(0))),
+        qdd(stack, dof, P(M(0))),
+        out(stack, out_width),
+        X(stack, dof, uninitialized) {}
 
   // Loads q (poses computed), optional qd, qdd (or tau) and gravity.
   SPOTKIN_INLINE void begin(const ChainModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* qd_rows,
@@ -48,7 +59,8 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
   using P = Pack<M, L>;
   const int n = model.dof();
   ChainBlock<M, L> blk(n, n);
-  ScratchArray<Force<P>> f(static_cast<std::size_t>(n));
+  ScratchArray<Force<P>> f(blk.stack, static_cast<std::size_t>(n),
+                           uninitialized);  // written before read
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, qd, qdd, &g, b0, m);
@@ -56,7 +68,7 @@ SPOTKIN_INLINE void rnea_batch(const ChainModel<M, L>& model, Rows<M> q, const R
       rnea_chain(model, blk.X.data(), blk.qd.data(), blk.qdd.data(), zero_motion<P>(),
                  blk.root_acceleration(), blk.out.data(), f.data());
     else  // G(q)
-      gravity_chain(model, blk.X.data(), blk.root_acceleration(), blk.out.data(), f.data());
+      gravity_chain(model, blk.X.data(), blk.root_acceleration().v, blk.out.data(), f.data());
     store(blk.out.data(), n, b0, m, blk.ok, tau, stream);
   }
   if (stream) stream_fence();

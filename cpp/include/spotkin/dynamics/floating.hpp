@@ -65,6 +65,8 @@ class FloatingModel {
 template <typename M, int L>
 struct FloatingBlock {
   using P = Pack<M, L>;
+  ScratchStack&
+      stack;  // the thread's, looked up once (each lookup is a call into the TLS resolver)
   ScratchArray<P> q, v, a, out;
   ScratchArray<Pose<P>> X;
   M3<P> R;
@@ -76,11 +78,12 @@ struct FloatingBlock {
   // are zero where no rows are given, and not kept at all without `rates` (the centre of mass and
   // the CRBA read neither).
   FloatingBlock(const FloatingModel<M, L>& model, int out_width, bool rates = true)
-      : q(static_cast<std::size_t>(model.nq()), uninitialized),
-        v(rates ? static_cast<std::size_t>(model.nv()) : 0, P(M(0))),
-        a(rates ? static_cast<std::size_t>(model.nv()) : 0, P(M(0))),
-        out(static_cast<std::size_t>(out_width)),
-        X(static_cast<std::size_t>(model.joints()), uninitialized) {}
+      : stack(ScratchStack::local()),
+        q(stack, static_cast<std::size_t>(model.nq()), uninitialized),
+        v(stack, rates ? static_cast<std::size_t>(model.nv()) : 0, P(M(0))),
+        a(stack, rates ? static_cast<std::size_t>(model.nv()) : 0, P(M(0))),
+        out(stack, static_cast<std::size_t>(out_width)),
+        X(stack, static_cast<std::size_t>(model.joints()), uninitialized) {}
 
   SPOTKIN_INLINE void begin(const FloatingModel<M, L>& model, const Rows<M>& q_rows, const Rows<M>* v_rows,
                             const Rows<M>* a_rows, const Rows<M>* g_rows, std::ptrdiff_t b0, int m,
@@ -116,7 +119,8 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
                                         std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
-  ScratchArray<Force<P>> f(static_cast<std::size_t>(model.joints()));
+  ScratchArray<Force<P>> f(blk.stack, static_cast<std::size_t>(model.joints()),
+                           uninitialized);  // written before read
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, v, a, &g, b0, m);
@@ -132,7 +136,7 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
       const Force<P> fk =
           v || a ? rnea_chain(model.chains()[k], blk.X.data() + o, blk.v.data() + 6 + o,
                               blk.a.data() + 6 + o, vb, ab, blk.out.data() + 6 + o, f.data() + o)
-                 : gravity_chain(model.chains()[k], blk.X.data() + o, ab, blk.out.data() + 6 + o,
+                 : gravity_chain(model.chains()[k], blk.X.data() + o, ab.v, blk.out.data() + 6 + o,
                                  f.data() + o);  // G(q): at rest
       fb.n += fk.n, fb.f += fk.f;
     }

@@ -40,20 +40,23 @@ SPOTKIN_INLINE Force<Pack<M, L>> rnea_chain(const ChainModel<M, L>& model, const
   return to_parent(X[0], f[0]);
 }
 
-// rnea_chain at rest (qd = qdd = 0, v0 = 0): G(q) when a0 = -g. The velocity terms of RBDA Table
-// 5.1 vanish: a_i = X a_parent, f_i = I a_i, tau_i = S^T f_i, f_parent += X^T f_i. The same values
-// as rnea_chain with zero rates (the dropped terms are exact zeros), in about half the arithmetic.
+// rnea_chain at rest (qd = qdd = 0, v0 = 0): G(q) when the root's acceleration is the linear
+// a0 = -g (its angular part zero). The velocity terms of RBDA Table 5.1 vanish, and with them
+// every angular acceleration: a_i = X a_parent is (0, R^T a_parent), f_i = I a_i is
+// (h x a_i, m a_i), tau_i = S^T f_i, f_parent += X^T f_i. The same values as rnea_chain with zero
+// rates up to the sign of a zero (the dropped terms are exact zeros), in about a third of the
+// forward pass's arithmetic.
 template <typename M, int L>
 SPOTKIN_INLINE Force<Pack<M, L>> gravity_chain(const ChainModel<M, L>& model,
-                                               const Pose<Pack<M, L>>* X,
-                                               const Motion<Pack<M, L>>& a0, Pack<M, L>* tau,
-                                               Force<Pack<M, L>>* f) noexcept {
+                                               const Pose<Pack<M, L>>* X, const V3<Pack<M, L>>& a0,
+                                               Pack<M, L>* tau, Force<Pack<M, L>>* f) noexcept {
   using P = Pack<M, L>;
   const int n = model.dof();
-  Motion<P> a = a0;
+  V3<P> a = a0;
   for (int j = 0; j < n; ++j) {
-    a = to_child(X[j], a);
-    f[j] = apply(model.inertia(j), a);
+    a = mul_t(X[j].R, a);
+    const RigidInertia<P> I = model.inertia(j);
+    f[j] = {cross(I.h, a), scale(a, I.m)};
   }
   for (int j = n - 1; j >= 0; --j) {
     tau[j] = model.project(j, f[j]);
