@@ -90,6 +90,9 @@ inline std::vector<LinkInertial> inertials_from(py::handle mass_obj, py::handle 
 
 // The mass matrix's layout argument ("full", "lower" or "packed") and its output's trailing shape.
 inline dynamics::SymmetricLayout symmetric_layout(py::handle layout) {
+  // the default, as the façade passes it: the interned "full" (a pointer compare, no string made)
+  static PyObject* const full = PyUnicode_InternFromString("full");
+  if (layout.ptr() == full) return dynamics::SymmetricLayout::Full;
   if (!py::isinstance<py::str>(layout))
     throw py::type_error("layout must be a str, 'full', 'lower' or 'packed', got " +
                          std::string(py::str(py::type::of(layout).attr("__name__"))));

@@ -67,6 +67,10 @@ class ScratchStack {
 // structs of packs (for an array the kernel writes in full before reading it: no memset).
 struct Uninitialized {};
 inline constexpr Uninitialized uninitialized{};
+// The tag of a ScratchArray value-initialised (zeroed) or left as it is, by a flag.
+struct ZeroIf {
+  bool zero;
+};
 
 // n objects of type T (value-initialised, copies of `value`, or default-initialised) from the
 // thread's ScratchStack, with the part of std::vector's interface the kernels use.
@@ -85,6 +89,8 @@ class ScratchArray {
       : ScratchArray(stack, n, &value) {}
   ScratchArray(ScratchStack& stack, std::size_t n, Uninitialized)
       : ScratchArray(stack, n, nullptr, false) {}
+  ScratchArray(ScratchStack& stack, std::size_t n, ZeroIf zero)
+      : ScratchArray(stack, n, nullptr, zero.zero) {}
   ScratchArray(const ScratchArray&) = delete;
   ScratchArray& operator=(const ScratchArray&) = delete;
   ~ScratchArray() {

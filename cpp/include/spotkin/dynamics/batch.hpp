@@ -17,8 +17,7 @@ template <typename M, int L>
 struct ChainBlock {
   using P = Pack<M, L>;
   int n;
-  ScratchStack&
-      stack;  // the thread's, looked up once (each lookup is a call into the TLS resolver)
+  ScratchStack& stack;  // the thread's, looked up once (each lookup calls the TLS resolver)
   ScratchArray<P> q, qd, qdd, out;
   ScratchArray<Pose<P>> X;
   P g[3];
@@ -26,14 +25,15 @@ struct ChainBlock {
 
   // q is loaded whole (every lane) and X written whole by begin() before either is read, so neither
   // is zeroed first (for one sample, the zeroing was a tenth of a gravity call); qd and qdd are
-  // zero where no rows are given.
-  explicit ChainBlock(int dof, int out_width)
+  // zero where no rows are given, and not kept at all without `rates`; `out` is zeroed only with
+  // `zero_out` (the CRBA's writer clears its own).
+  explicit ChainBlock(int dof, int out_width, bool rates = true, bool zero_out = true)
       : n(dof),
         stack(ScratchStack::local()),
         q(stack, dof, uninitialized),
-        qd(stack, dof, P(M(0))),
-        qdd(stack, dof, P(M(0))),
-        out(stack, out_width),
+        qd(stack, rates ? dof : 0, P(M(0))),
+        qdd(stack, rates ? dof : 0, P(M(0))),
+        out(stack, out_width, ZeroIf{zero_out}),
         X(stack, dof, uninitialized) {}
 
   // Loads q (poses computed), optional qd, qdd (or tau) and gravity.
@@ -81,11 +81,14 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
                                std::ptrdiff_t end, bool stream, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int n = model.dof(), width = symmetric_width(n, layout);
-  ChainBlock<M, L> blk(n, SymmetricWriter<P>::size(n));
-  ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(n));
-  ScratchArray<P> trig(2 * static_cast<std::size_t>(n));  // sines, cosines
-  ScratchArray<M> scratch(3 * static_cast<std::size_t>(n * L));
-  ScratchArray<int> gather(static_cast<std::size_t>(n * n));
+  ChainBlock<M, L> blk(n, SymmetricWriter<P>::size(n), false,
+                       false);  // no rates; put.clear() zeroes out
+  // each written whole before it is read (crba_chain sets Ic from the bodies, joint_trig the rest)
+  ScratchArray<SymInertia<P>> Ic(blk.stack, static_cast<std::size_t>(n), uninitialized);
+  ScratchArray<P> trig(blk.stack, 2 * static_cast<std::size_t>(n),
+                       uninitialized);  // sines, cosines
+  ScratchArray<M> scratch(blk.stack, 3 * static_cast<std::size_t>(n * L), uninitialized);
+  ScratchArray<int> gather(blk.stack, static_cast<std::size_t>(n * n), uninitialized);
   const int* index = symmetric_gather(n, layout, gather.data());
   P *sines = trig.data(), *cosines = sines + n;
   const SymmetricWriter<P> put{blk.out.data(), n};

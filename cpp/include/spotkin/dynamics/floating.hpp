@@ -155,10 +155,14 @@ SPOTKIN_INLINE void floating_crba_batch(const FloatingModel<M, L>& model, Rows<M
   using P = Pack<M, L>;
   const int nv = model.nv(), width = symmetric_width(nv, layout);
   FloatingBlock<M, L> blk(model, SymmetricWriter<P>::size(nv), false);
-  ScratchArray<SymInertia<P>> Ic(static_cast<std::size_t>(model.joints()));
-  ScratchArray<P> trig(2 * static_cast<std::size_t>(model.joints()));  // sines, cosines
-  ScratchArray<M> scratch(3 * static_cast<std::size_t>(model.joints() * L));
-  ScratchArray<int> gather(static_cast<std::size_t>(nv * nv));
+  // each written whole before it is read (crba_chain sets Ic from the bodies, joint_trig the rest)
+  ScratchArray<SymInertia<P>> Ic(blk.stack, static_cast<std::size_t>(model.joints()),
+                                 uninitialized);
+  ScratchArray<P> trig(blk.stack, 2 * static_cast<std::size_t>(model.joints()),
+                       uninitialized);  // sines, cosines
+  ScratchArray<M> scratch(blk.stack, 3 * static_cast<std::size_t>(model.joints() * L),
+                          uninitialized);
+  ScratchArray<int> gather(blk.stack, static_cast<std::size_t>(nv * nv), uninitialized);
   const int* index = symmetric_gather(nv, layout, gather.data());
   P *sines = trig.data(), *cosines = sines + model.joints();
   const SymmetricWriter<P> put{blk.out.data(), nv};
@@ -266,9 +270,10 @@ SPOTKIN_INLINE void floating_com_batch(const FloatingModel<M, L>& model, Rows<M>
   const int nv = model.nv(), width = jacobian ? 3 * nv : 3;
   FloatingBlock<M, L> blk(model, width, false);
   // each written before it is read (S only with the Jacobian)
-  ScratchArray<Motion<P>> S(jacobian ? static_cast<std::size_t>(model.joints()) : 0, uninitialized);
-  ScratchArray<P> ms(static_cast<std::size_t>(model.joints()), uninitialized);
-  ScratchArray<V3<P>> hs(static_cast<std::size_t>(model.joints()), uninitialized);
+  ScratchArray<Motion<P>> S(blk.stack, jacobian ? static_cast<std::size_t>(model.joints()) : 0,
+                            uninitialized);
+  ScratchArray<P> ms(blk.stack, static_cast<std::size_t>(model.joints()), uninitialized);
+  ScratchArray<V3<P>> hs(blk.stack, static_cast<std::size_t>(model.joints()), uninitialized);
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, nullptr, nullptr, nullptr, b0, m);
