@@ -232,12 +232,16 @@ void make_output(Output& r, const Out& spec, const Shape& leading) {
   r.array = std::move(made);
 }
 
-bool overlaps(const py::array& a, const void* data, std::size_t bytes) {
-  const auto* lo = static_cast<const char*>(a.data());
-  const auto* hi = lo + a.nbytes();
-  const auto* b = static_cast<const char*>(data);
-  return a.nbytes() > 0 && bytes > 0 && lo < b + bytes && b < hi;
-}
+// The bytes an array spans (a C-contiguous `out=` array's), read once for the inputs it is tested
+// on.
+struct Span {
+  const char *lo, *hi;
+  explicit Span(const py::array& a) : lo(static_cast<const char*>(a.data())), hi(lo + a.nbytes()) {}
+  bool overlaps(const void* data, std::size_t bytes) const noexcept {
+    const auto* b = static_cast<const char*>(data);
+    return hi > lo && bytes > 0 && lo < b + bytes && b < hi;
+  }
+};
 
 // One span of a thread's samples. The common case: every argument read in place (its own rows, or
 // one row for all read with stride 0) and nothing huge, NaN or Inf in the span: one kernel call.
@@ -495,9 +499,11 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
       r.describe(spec, leading.empty(), true);
       r.data = checked.mutable_data();
       r.array = checked;
+      const Span span(checked);
       for (int k = 0; k < op.n_args; ++k)  // an input that shares memory with an output is read from a copy
         if (args[k].rows != Rows::Absent &&
-            overlaps(checked, args[k].data, sizeof(T) * std::size_t(count(args[k].leading) * args[k].width))) {
+            span.overlaps(args[k].data,
+                          sizeof(T) * std::size_t(count(args[k].leading) * args[k].width))) {
           const auto source = py::reinterpret_borrow<py::array>(args[k].array);
           py::array_t<T, py::array::c_style> copy(Shape(source.shape(), source.shape() + source.ndim()));
           if (source.nbytes()) std::memcpy(copy.mutable_data(), source.data(), std::size_t(source.nbytes()));
@@ -625,8 +631,9 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
     if (given[o] && !given[o].is_none()) {
       Shape shape(spec.shape.dim, spec.shape.dim + spec.shape.ndim);
       py::array checked = checked_out<T>(given[o], spec, o, shape);
+      const Span span(checked);
       for (int k = 0; k < op.n_args; ++k)
-        if (block.in[k] && overlaps(checked, block.in[k], sizeof(T) * std::size_t(widths[k])))
+        if (block.in[k] && span.overlaps(block.in[k], sizeof(T) * std::size_t(widths[k])))
           return {};
       r.describe(spec, true, true);
       r.data = checked.mutable_data();

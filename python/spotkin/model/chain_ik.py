@@ -276,14 +276,14 @@ class _ChainIKMethods:
         sol = self.ik_all(target, free_joint, free_value)
         return _into_outs(_nearest_solution(sol, seed, self.sigma == 1), out)
 
-    def __getattr__(self, name: str):
-        """Names of the previous interface, kept a short while: ``ik_nearest`` is :meth:`ik`."""
-        if name == "ik_nearest":
-            warnings.warn(
-                "Chain.ik_nearest is deprecated: use Chain.ik(target, seed)", DeprecationWarning, stacklevel=2
-            )
-            return self.ik
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+    @property
+    def ik_nearest(self):
+        """Deprecated: :meth:`ik` (the previous interface's name, kept a short while). A property, not a
+        ``__getattr__`` hook: a class with one pays for it on every attribute read."""
+        warnings.warn(
+            "Chain.ik_nearest is deprecated: use Chain.ik(target, seed)", DeprecationWarning, stacklevel=2
+        )
+        return self.ik
 
     def ik_position(self, p: ArrayLike, *, out: tuple | None = None) -> ChainSolutions:
         """Every joint solution placing the tool point at p, for a 3-joint chain (``out``: as
