@@ -73,6 +73,19 @@ def _limit_override(limits, current, names, what: str) -> tuple[np.ndarray, np.n
     return lower, upper
 
 
+def _names(joint_names) -> tuple[str, ...]:
+    """joint_names as a tuple of str (``TypeError`` naming it otherwise)."""
+    names = None
+    if not isinstance(joint_names, (str, bytes)):
+        try:
+            names = tuple(joint_names)
+        except TypeError:
+            names = None
+    if names is None or not all(isinstance(name, str) for name in names):
+        raise TypeError(f"joint_names must be a sequence of str, got {type(joint_names).__name__}")
+    return names
+
+
 def _urdf_loader_missing(*args):
     raise ImportError("spotkin.model.urdf_chain registers Chain.from_urdf's loader: import spotkin")
 
@@ -183,7 +196,7 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         self._rows = None
         self._convention = "joints"
         self._joints = (placements, axes, types)
-        self._names = None if joint_names is None else tuple(str(name) for name in joint_names)
+        self._names = None if joint_names is None else _names(joint_names)
         if self._names is not None and len(self._names) != n:
             raise ValueError(f"joint_names must have {n} names, got {len(self._names)}")
         self._limits = _limits(limits, n)
