@@ -179,33 +179,56 @@ S* scratch(std::size_t count) {
 }
 
 // The block's joint values by joint (padded with the last sample), their sines and cosines,
-// and the shifts along the axes (r, plus q for a prismatic joint). Every joint's angles are
-// written first and their sines and cosines taken in one pass over [n][B]: taken joint by joint,
-// each vector load of a joint's B angles just after their scalar stores missed store-to-load
-// forwarding (perf: the single-sample Jacobian's hottest instruction).
+// and the shifts along the axes (r, plus q for a prismatic joint). A small block (a few samples:
+// a control loop's call) writes every joint's angles first and takes their sines and cosines in
+// one pass over [n][B]: joint by joint, each vector load of a joint's B angles just after their
+// scalar stores missed store-to-load forwarding (perf: the single-sample Jacobian's hottest
+// instruction). A full block keeps the joint-by-joint pass, and so do the frames (their full
+// blocks measured 6 % slower with the other pass compiled beside them). The angles stay in a local
+// array either way: in the thread's scratch, which the compiler cannot tell from q, the full
+// blocks' loads were 4-9 % slower. Element by element both ways: the same bits.
 template <typename S, int B>
 struct LaneJoints {
-  S *c, *s, *shift, *angle;  // [n][B] each, in the thread's scratch
+  static constexpr int kOnePassJoints = 32;  // the small blocks' one pass, up to this many joints
+  S *c, *s, *shift;                          // [n][B] each, in the thread's scratch
   explicit LaneJoints(int n) {
-    S* at = scratch<S, 0>(4 * std::size_t(n) * B);
-    c = at, s = at + std::size_t(n) * B, shift = at + 2 * std::size_t(n) * B,
-    angle = at + 3 * std::size_t(n) * B;
+    S* at = scratch<S, 0>(3 * std::size_t(n) * B);
+    c = at, s = at + std::size_t(n) * B, shift = at + 2 * std::size_t(n) * B;
   }
 
+  template <bool OnePass = (B < kBlock)>
   SPOTKIN_INLINE void load(const Chain<S>& chain, const S* q, std::ptrdiff_t m) noexcept {
     const int n = chain.dof();
+    if constexpr (OnePass) {
+      if (n <= kOnePassJoints) {
+        S angle[kOnePassJoints * B];
+        for (int j = 0; j < n; ++j) {
+          const Joint<S>& joint = chain.joints()[std::size_t(j)];
+          const bool revolute = joint.type == JointType::Revolute;
+          S* sh = shift + std::size_t(j) * B;
+          S* a = angle + std::size_t(j) * B;
+          for (int i = 0; i < B; ++i) {
+            const S qi = q[std::min<std::ptrdiff_t>(i, m - 1) * n + j];
+            a[i] = revolute ? joint.theta + qi : joint.theta;
+            sh[i] = revolute ? joint.r : joint.r + qi;
+          }
+        }
+        vector_math::sincos(angle, s, c, std::ptrdiff_t(n) * B);
+        return;
+      }
+    }
+    S angle[B];
     for (int j = 0; j < n; ++j) {
       const Joint<S>& joint = chain.joints()[std::size_t(j)];
       const bool revolute = joint.type == JointType::Revolute;
       S* sh = shift + std::size_t(j) * B;
-      S* a = angle + std::size_t(j) * B;
       for (int i = 0; i < B; ++i) {
         const S qi = q[std::min<std::ptrdiff_t>(i, m - 1) * n + j];
-        a[i] = revolute ? joint.theta + qi : joint.theta;
+        angle[i] = revolute ? joint.theta + qi : joint.theta;
         sh[i] = revolute ? joint.r : joint.r + qi;
       }
+      vector_math::sincos(angle, s + std::size_t(j) * B, c + std::size_t(j) * B, B);
     }
-    vector_math::sincos(angle, s, c, std::ptrdiff_t(n) * B);  // element by element: the same bits
   }
 };
 
@@ -345,7 +368,7 @@ SPOTKIN_INLINE void frames_blocks(const Chain<S>& chain, const S* q, S* out, std
   auto* frames = reinterpret_cast<S(*)[12][B]>(scratch<S, 1>(std::size_t(n + 2) * 12 * B));
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
     const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
-    lanes.load(chain, q + b0 * n, m);
+    lanes.template load<false>(chain, q + b0 * n, m);
     walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, frames);
     for (std::ptrdiff_t i = 0; i < m; ++i)
       for (int k = 0; k < n + 2; ++k) {
