@@ -150,7 +150,7 @@ const char* dtype_name(Kind kind, bool single) {
 
 // Checks a caller's out= array for output k; TypeError (dtype) or ValueError (shape, layout).
 template <typename T>
-py::array checked_out(py::handle obj, const Out& spec, int k, const Shape& shape) {
+py::array checked_out(py::handle obj, const Out& spec, int k, const py::ssize_t* shape, int ndim) {
   const auto label = [&] {
     return "out[" + std::to_string(k) + "] (" + spec.name + ")";
   };  // for errors only
@@ -170,9 +170,11 @@ py::array checked_out(py::handle obj, const Out& spec, int k, const Shape& shape
     throw py::type_error(label() + " must have dtype " +
                          dtype_name(spec.kind, std::is_same_v<T, float>) + ", got " +
                          std::string(py::str(arr.dtype())));
-  if (Shape(arr.shape(), arr.shape() + arr.ndim()) != shape)
-    throw py::value_error(label() + " must have shape " + format_shape(shape) + ", got " +
-                          format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())));
+  // compared in place (a Shape made per call was two allocations per out= array, a control tick's
+  // cost)
+  if (arr.ndim() != ndim || !std::equal(shape, shape + ndim, arr.shape()))
+    throw py::value_error(label() + " must have shape " + format_shape(Shape(shape, shape + ndim)) +
+                          ", got " + format_shape(Shape(arr.shape(), arr.shape() + arr.ndim())));
   constexpr int kNeeded = py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_ | py::detail::npy_api::NPY_ARRAY_ALIGNED_ |
                           py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   if ((py::detail::array_proxy(arr.ptr())->flags & kNeeded) != kNeeded)
@@ -495,7 +497,7 @@ py::object call_in(const Op& op, const void* context, const py::object* objects,
     if (given[o] && !given[o].is_none()) {
       Shape shape = leading;
       shape.insert(shape.end(), spec.shape.dim, spec.shape.dim + spec.shape.ndim);
-      py::array checked = checked_out<T>(given[o], spec, o, shape);
+      py::array checked = checked_out<T>(given[o], spec, o, shape.data(), int(shape.size()));
       r.describe(spec, leading.empty(), true);
       r.data = checked.mutable_data();
       r.array = checked;
@@ -629,8 +631,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
     Output& r = outs[o];
     r.width = spec.shape.size();
     if (given[o] && !given[o].is_none()) {
-      Shape shape(spec.shape.dim, spec.shape.dim + spec.shape.ndim);
-      py::array checked = checked_out<T>(given[o], spec, o, shape);
+      py::array checked = checked_out<T>(given[o], spec, o, spec.shape.dim, spec.shape.ndim);
       const Span span(checked);
       for (int k = 0; k < op.n_args; ++k)
         if (block.in[k] && span.overlaps(block.in[k], sizeof(T) * std::size_t(widths[k])))
