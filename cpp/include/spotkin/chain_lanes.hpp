@@ -183,8 +183,9 @@ S* scratch(std::size_t count) {
 // a control loop's call) writes every joint's angles first and takes their sines and cosines in
 // one pass over [n][B]: joint by joint, each vector load of a joint's B angles just after their
 // scalar stores missed store-to-load forwarding (perf: the single-sample Jacobian's hottest
-// instruction). A full block keeps the joint-by-joint pass, and so do the frames (their full
-// blocks measured 6 % slower with the other pass compiled beside them). The angles stay in a local
+// instruction). A full block keeps the joint-by-joint pass, and so do FK and the frames (their
+// full blocks measured 5-6 % slower with the other pass compiled beside them; the Jacobian's did
+// not move). The angles stay in a local
 // array either way: in the thread's scratch, which the compiler cannot tell from q, the full
 // blocks' loads were 4-9 % slower. Element by element both ways: the same bits.
 template <typename S, int B>
@@ -277,7 +278,7 @@ SPOTKIN_INLINE void forward_blocks(const Chain<S>& chain, const S* q, S* out, st
     for (int i = 0; i < B; ++i) rows[e][i] = e == 15 ? S(1) : S(0);
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
     const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
-    lanes.load(chain, q + b0 * n, m);
+    lanes.template load<false>(chain, q + b0 * n, m);
     walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, nullptr);
     if constexpr (std::is_same_v<S, float> || Wide) {  // 16 columns of lanes, transposed in registers
       for (int r = 0; r < 3; ++r) {
