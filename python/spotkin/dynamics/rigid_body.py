@@ -39,7 +39,9 @@ def inertials_of(chain, inertials=None) -> LinkInertials:
         inertials = getattr(chain, "inertials", None)
     if inertials is None:
         raise ValueError(
-            "this chain carries no inertial parameters: pass inertials=LinkInertials(mass, com, inertia)"
+            "this chain carries no inertial parameters: give it some with "
+            "chain.with_inertials(mass, com, inertia) (a chain from a URDF with <inertial> elements has "
+            "them), or pass inertials=LinkInertials(mass, com, inertia) to a spotkin.dynamics function"
         )
     try:
         mass, com, inertia = inertials
