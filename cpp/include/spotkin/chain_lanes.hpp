@@ -179,15 +179,14 @@ S* scratch(std::size_t count) {
 }
 
 // The block's joint values by joint (padded with the last sample), their sines and cosines,
-// and the shifts along the axes (r, plus q for a prismatic joint). A small block (a few samples:
-// a control loop's call) writes every joint's angles first and takes their sines and cosines in
-// one pass over [n][B]: joint by joint, each vector load of a joint's B angles just after their
-// scalar stores missed store-to-load forwarding (perf: the single-sample Jacobian's hottest
-// instruction). A full block keeps the joint-by-joint pass, and so do FK and the frames (their
-// full blocks measured 5-6 % slower with the other pass compiled beside them; the Jacobian's did
-// not move). The angles stay in a local
-// array either way: in the thread's scratch, which the compiler cannot tell from q, the full
-// blocks' loads were 4-9 % slower. Element by element both ways: the same bits.
+// and the shifts along the axes (r, plus q for a prismatic joint). load<true> (the Jacobian's
+// small blocks: a control loop's call) writes every joint's angles first and takes their sines
+// and cosines in one pass over [n][B]: joint by joint, each vector load of a joint's B angles just
+// after their scalar stores missed store-to-load forwarding (perf: the single-sample Jacobian's
+// hottest instruction). Everything else keeps the joint-by-joint pass: FK's and the frames' full
+// blocks measured 5-6 % slower with the other pass compiled beside them. The angles stay in a
+// local array (in the thread's scratch, which the compiler cannot tell from q, the full blocks
+// were 4-9 % slower). Element by element both ways: the same bits.
 template <typename S, int B>
 struct LaneJoints {
   static constexpr int kOnePassJoints = 32;  // the small blocks' one pass, up to this many joints
@@ -197,7 +196,7 @@ struct LaneJoints {
     c = at, s = at + std::size_t(n) * B, shift = at + 2 * std::size_t(n) * B;
   }
 
-  template <bool OnePass = (B < kBlock)>
+  template <bool OnePass = false>
   SPOTKIN_INLINE void load(const Chain<S>& chain, const S* q, std::ptrdiff_t m) noexcept {
     const int n = chain.dof();
     if constexpr (OnePass) {
@@ -278,7 +277,7 @@ SPOTKIN_INLINE void forward_blocks(const Chain<S>& chain, const S* q, S* out, st
     for (int i = 0; i < B; ++i) rows[e][i] = e == 15 ? S(1) : S(0);
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
     const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
-    lanes.template load<false>(chain, q + b0 * n, m);
+    lanes.load(chain, q + b0 * n, m);
     walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, nullptr);
     if constexpr (std::is_same_v<S, float> || Wide) {  // 16 columns of lanes, transposed in registers
       for (int r = 0; r < 3; ++r) {
@@ -320,7 +319,7 @@ SPOTKIN_INLINE void jacobian_blocks(const Chain<S>& chain, const S* q, S* out, s
   auto* staged = reinterpret_cast<S(*)[B]>(store + 2 * std::size_t(3 * n) * B);
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
     const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
-    lanes.load(chain, q + b0 * n, m);
+    lanes.template load<(B < kBlock)>(chain, q + b0 * n, m);
     walk<S, B>(chain, tool, lanes, T, axes, origins, nullptr);
     for (int j = 0; j < n; ++j) {
       const bool revolute = chain.joints()[std::size_t(j)].type == JointType::Revolute;
@@ -369,7 +368,7 @@ SPOTKIN_INLINE void frames_blocks(const Chain<S>& chain, const S* q, S* out, std
   auto* frames = reinterpret_cast<S(*)[12][B]>(scratch<S, 1>(std::size_t(n + 2) * 12 * B));
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += B) {
     const std::ptrdiff_t m = std::min<std::ptrdiff_t>(B, count - b0);
-    lanes.template load<false>(chain, q + b0 * n, m);
+    lanes.load(chain, q + b0 * n, m);
     walk<S, B>(chain, tool, lanes, T, nullptr, nullptr, frames);
     for (std::ptrdiff_t i = 0; i < m; ++i)
       for (int k = 0; k < n + 2; ++k) {

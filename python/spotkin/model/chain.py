@@ -343,11 +343,11 @@ class Chain(_ChainDynamicsMethods, _ChainIKMethods):
         return chain
 
     def _renamed(self, names: tuple[str, ...]) -> Chain:
-        """This chain with other joint names (a new object)."""
+        """This chain with other joint names (a new object), checked as :meth:`from_joints` checks them."""
         if len(names) != self.dof:
             raise ValueError(f"joint_names must have {self.dof} names, got {len(names)}")
         chain = self._copy()
-        chain._names = tuple(str(name) for name in names)
+        chain._names = _names(names)
         return chain
 
     def _copy(self) -> Chain:

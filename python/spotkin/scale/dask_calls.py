@@ -141,7 +141,6 @@ def jacobian(model, q, frame: str | int | None = None, point: str | int | None =
 def _plan_ik(model, target, seed=None, fallback=None) -> _Plan:
     model = _model(model)
     options = {}
-    method = "ik"
     if _takes(model.ik, "fallback"):  # a leg's: the nearest reachable foot by default
         if fallback is not None:
             options["fallback"] = fallback
@@ -152,7 +151,7 @@ def _plan_ik(model, target, seed=None, fallback=None) -> _Plan:
                 f"for a target without a solution, got {fallback!r}"
             )
     inputs = [("target", target, _target_core(model)), ("seed", seed, (_dof(model),))]
-    return _plan(model, method, inputs, options, ("q", "status"), None)
+    return _plan(model, "ik", inputs, options, ("q", "status"), None)
 
 
 def ik(model, target, seed=None, fallback: str | None = None):

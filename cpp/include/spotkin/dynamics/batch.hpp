@@ -81,8 +81,8 @@ SPOTKIN_INLINE void crba_batch(const ChainModel<M, L>& model, Rows<M> q, M* A, s
                                std::ptrdiff_t end, bool stream, SymmetricLayout layout = SymmetricLayout::Full) {
   using P = Pack<M, L>;
   const int n = model.dof(), width = symmetric_width(n, layout);
-  ChainBlock<M, L> blk(n, SymmetricWriter<P>::size(n), false,
-                       false);  // no rates; put.clear() zeroes out
+  // no rate rows; put.clear() zeroes the output
+  ChainBlock<M, L> blk(n, SymmetricWriter<P>::size(n), false, false);
   // each written whole before it is read (crba_chain sets Ic from the bodies, joint_trig the rest)
   ScratchArray<SymInertia<P>> Ic(blk.stack, static_cast<std::size_t>(n), uninitialized);
   ScratchArray<P> trig(blk.stack, 2 * static_cast<std::size_t>(n),

@@ -65,8 +65,7 @@ class FloatingModel {
 template <typename M, int L>
 struct FloatingBlock {
   using P = Pack<M, L>;
-  ScratchStack&
-      stack;  // the thread's, looked up once (each lookup is a call into the TLS resolver)
+  ScratchStack& stack;  // the thread's, looked up once (each lookup calls the TLS resolver)
   ScratchArray<P> q, v, a, out;
   ScratchArray<Pose<P>> X;
   M3<P> R;
@@ -119,8 +118,8 @@ SPOTKIN_INLINE void floating_rnea_batch(const FloatingModel<M, L>& model, Rows<M
                                         std::ptrdiff_t end, bool stream) {
   using P = Pack<M, L>;
   FloatingBlock<M, L> blk(model, model.nv());
-  ScratchArray<Force<P>> f(blk.stack, static_cast<std::size_t>(model.joints()),
-                           uninitialized);  // written before read
+  // written before read
+  ScratchArray<Force<P>> f(blk.stack, static_cast<std::size_t>(model.joints()), uninitialized);
   for (std::ptrdiff_t b0 = begin; b0 < end; b0 += L) {
     const int m = static_cast<int>(std::min<std::ptrdiff_t>(L, end - b0));
     blk.begin(model, q, v, a, &g, b0, m);
