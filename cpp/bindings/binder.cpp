@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <new>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -69,6 +70,26 @@ struct Output {
     single = one, given = caller_s, to_scalar = spec.scalar;
     codes = spec.kind == Kind::Code ? spec.codes : nullptr;
   }
+};
+
+// The outputs of one call, only the op's constructed (an array of kMaxOuts was zeroed whole, a
+// `rep stos` on every single-sample call).
+class Outputs {
+ public:
+  explicit Outputs(int n) {
+    for (; n_ < n; ++n_) new (storage_ + n_ * sizeof(Output)) Output();
+  }
+  ~Outputs() {
+    while (n_ > 0) (*this)[--n_].~Output();
+  }
+  Outputs(const Outputs&) = delete;
+  Outputs& operator=(const Outputs&) = delete;
+  Output* data() { return std::launder(reinterpret_cast<Output*>(storage_)); }
+  Output& operator[](int k) { return data()[k]; }
+
+ private:
+  alignas(Output) unsigned char storage_[kMaxOuts * sizeof(Output)];
+  int n_ = 0;
 };
 
 // The call's answer: its one output, or a tuple of them: the op's registered result type (a
@@ -566,9 +587,9 @@ Given classify(py::handle obj) {
 template <typename T>
 py::object call_single(const Op& op, const void* context, const py::handle* objs,
                        const Given* kinds, py::handle out) {
-  Block<T> block;
+  Block<T> block(op.n_args, op.n_outs);
   T seq_rows[kMaxArgs][kSeqMax];
-  std::ptrdiff_t widths[kMaxArgs] = {};
+  std::ptrdiff_t widths[kMaxArgs];  // set with block.in
   for (int k = 0; k < op.n_args; ++k) {
     const Arg& spec = op.args[k];
     PyObject* o = objs[k].ptr();
@@ -614,7 +635,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
     }
   }
 
-  Output outs[kMaxOuts];
+  Outputs outs(op.n_outs);
   py::handle given[kMaxOuts];
   if (!out.is_none()) {
     if (PyTuple_CheckExact(out.ptr()) && PyTuple_GET_SIZE(out.ptr()) == op.n_outs) {
@@ -651,7 +672,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
   } else {
     op.f64(context, block);
   }
-  return results(op, outs);
+  return results(op, outs.data());
 }
 
 }  // namespace
