@@ -161,6 +161,31 @@ def test_failures_stay_in_their_leg():
     np.testing.assert_allclose(res.q[2, :3], q_leg, atol=1e-12)
 
 
+@pytest.mark.parametrize("n", [1, 3, 100])  # one pose (its legs in lanes), a few, a block
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("fallback", ["nearest", "nan"])
+def test_a_foot_too_far_to_subtract_is_unreachable_not_invalid(n, dtype, fallback):
+    # Finite inputs whose hip-frame point overflows (foot - t beyond the largest float): the leg's
+    # target is beyond reach, so UNREACHABLE with the leg API's answer for a target that far in that
+    # direction (straight down here), as the other legs (far below, without overflow). A NaN foot
+    # stays INVALID_INPUT.
+    big = float(np.finfo(dtype).max) * 0.9
+    pose = np.array([0.0, 0.0, big, 0.0, 0.0, 0.0], dtype)
+    feet = FEET.astype(dtype)
+    feet[1, 2] = -big
+    res = SPOT.body_ik(np.tile(pose, (n, 1)), np.tile(feet, (n, 1, 1)), fallback=fallback)
+    np.testing.assert_array_equal(res.status, np.ones((n, 4)))
+    assert res.q.dtype == dtype
+    q_leg, status = SPOT.leg("fr").ik(np.array([0.0, 0.0, -1e300]), fallback=fallback)
+    assert status == sk.Status.UNREACHABLE
+    if fallback == "nan":
+        assert np.isnan(res.q[:, 3:6]).all()
+    else:
+        np.testing.assert_allclose(res.q[:, 3:6], np.tile(q_leg, (n, 1)), atol=1e-6 if dtype == np.float32 else 1e-9)
+    feet[1, 2] = np.nan
+    np.testing.assert_array_equal(SPOT.body_ik(pose, feet).status, [1, 3, 1, 1])
+
+
 def test_invalid_rotation_marks_all_legs():
     T = matrix_poses(NOMINAL[None])[0]
     T[:3, :3] *= 1.01

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "spotkin/arm.hpp"
@@ -298,6 +299,36 @@ SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& 
   leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
 )
 
+// A valid pose and a finite foot whose hip-frame point overflows (|foot - t| near the largest
+// double, or float's for float inputs): a target beyond reach, not an invalid input. Its direction,
+// computed in double at a scale where nothing overflows, gives Leg::ik's answer for a target that
+// far: UNREACHABLE, with the in-limit configuration nearest to it (NaN without the fallback); the
+// hip's offset is nothing at that distance. R and t as BlockPoses holds them (R[3 r + k] = R(r,
+// k)), for one pose. Returns false, nothing written, when the foot is not finite (INVALID_INPUT).
+template <typename T>
+bool overflowed_foot(const Leg& leg, const double* R, const double* t, const T* foot,
+                     bool nearest_fallback, T* q_out) noexcept {
+  if (!leg_batch::finite3(foot)) return false;
+  const double scale =
+      std::is_same_v<T, float> ? 1.0 : 0x1p-600;  // (1e308 2^-600: 4e127, far still)
+  double d[3], p[3];
+  for (int j = 0; j < 3; ++j) d[j] = double(foot[j]) * scale - t[j] * scale;
+  for (int i = 0; i < 3; ++i) p[i] = R[i] * d[0] + R[3 + i] * d[1] + R[6 + i] * d[2];  // R^T d
+  if (nearest_fallback)
+    leg_batch::unreachable_fallback(leg, p[0], p[1], p[2], q_out);
+  else
+    q_out[0] = q_out[1] = q_out[2] = T(quiet_nan<double>());
+  return true;
+}
+
+// The pose of lane i of a block's BlockPoses, in double: R (9) and t (3).
+template <typename C>
+SPOTKIN_INLINE void pose_of(const BlockPoses<C>& P, std::ptrdiff_t i, double* R,
+                            double* t) noexcept {
+  for (int r = 0; r < 9; ++r) R[r] = double(P.R[r][i]);
+  for (int r = 0; r < 3; ++r) t[r] = double(P.t[r][i]);
+}
+
 // read_poses, then whole vectors (as leg_batch::pad_block): the padding repeats the last pose, so
 // that a pose's answer never comes from a loop's scalar remainder. Returns the padded count.
 template <typename T, typename C>
@@ -420,14 +451,25 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
     T* qt = q + w * i;
     std::int8_t& st = status[n * i + l];
     const T* s = seed ? seed + w * i : nullptr;
-    if (P.ok[i] == C(0) || leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0) ||
+    T sd[3], leg_q[3];
+    if (P.ok[i] == C(0) ||
         (s && !(std::isfinite(double(s[col[0]])) && std::isfinite(double(s[col[1]])) &&
                 std::isfinite(double(s[col[2]]))))) {
       qt[col[0]] = qt[col[1]] = qt[col[2]] = T(quiet_nan<double>());
       st = std::int8_t(Status::InvalidInput);
       continue;
     }
-    T sd[3], leg_q[3];
+    if (leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) ==
+        C(0)) {  // a NaN foot, or overflow
+      double Rd[9], td[3];
+      pose_of(P, i, Rd, td);
+      const T* foot = feet + (feet_shared ? 3 * l : 3 * n * i + 3 * l);
+      const bool far = overflowed_foot(leg, Rd, td, foot, nearest_fallback, leg_q);
+      if (!far) leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
+      qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
+      st = std::int8_t(far ? Status::Unreachable : Status::InvalidInput);
+      continue;
+    }
     if (s) sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
     st = std::int8_t(open.choose(leg, k, s ? sd : nullptr, leg_q, nearest_fallback));
     qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
@@ -493,11 +535,23 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, 
           continue;
         }
         const T* s = seed ? seed + w * t : nullptr;
-        if (P.ok[i] == C(0) || exists[i] < C(0) ||
+        if (P.ok[i] == C(0) ||
             (s && !(std::isfinite(double(s[col[0]])) && std::isfinite(double(s[col[1]])) &&
                     std::isfinite(double(s[col[2]]))))) {
           qt[col[0]] = qt[col[1]] = qt[col[2]] = T(quiet_nan<double>());
           st = std::int8_t(Status::InvalidInput);
+          continue;
+        }
+        if (exists[i] < C(0)) {  // a NaN foot, or overflow
+          double Rd[9], td[3];
+          pose_of(P, i, Rd, td);
+          T leg_q[3];
+          const bool far =
+              overflowed_foot(leg, Rd, td, feet + (feet_shared ? 3 * l : 3 * n * t + 3 * l),
+                              nearest_fallback, leg_q);
+          if (!far) leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
+          qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
+          st = std::int8_t(far ? Status::Unreachable : Status::InvalidInput);
           continue;
         }
         open.add(i, x[i], y[i], z[i]);
@@ -574,8 +628,13 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
         const bool solved = k < open.count && open.index[k] == i;
         if (!solved ||
             (leg_seeded && !leg_batch::finite3(sd))) {  // as ik(): an invalid pose, target or seed
-          leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
-          st = std::int8_t(Status::InvalidInput);
+          double Rd[9], td[3];
+          pose_of(P, i, Rd, td);
+          const bool far =
+              !solved && P.ok[i] != C(0) && !(leg_seeded && !leg_batch::finite3(sd)) &&
+              overflowed_foot(leg, Rd, td, feet + 3 * n * t + 3 * l, nearest_fallback, leg_q);
+          if (!far) leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
+          st = std::int8_t(far ? Status::Unreachable : Status::InvalidInput);
         } else {
           st = std::int8_t(open.choose(leg, k, leg_seeded ? sd : nullptr, leg_q, nearest_fallback));
         }
