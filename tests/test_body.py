@@ -181,7 +181,8 @@ def test_a_foot_too_far_to_subtract_is_unreachable_not_invalid(n, dtype, fallbac
     if fallback == "nan":
         assert np.isnan(res.q[:, 3:6]).all()
     else:
-        np.testing.assert_allclose(res.q[:, 3:6], np.tile(q_leg, (n, 1)), atol=1e-6 if dtype == np.float32 else 1e-9)
+        tolerance = 1e-6 if dtype == np.float32 else 1e-9
+        np.testing.assert_allclose(res.q[:, 3:6], np.tile(q_leg, (n, 1)), atol=tolerance)
     feet[1, 2] = np.nan
     np.testing.assert_array_equal(SPOT.body_ik(pose, feet).status, [1, 3, 1, 1])
 
