@@ -411,27 +411,24 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
   const std::ptrdiff_t stride =
       format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   using C = leg_batch::Compute<T>;
-  constexpr std::ptrdiff_t N = Body::kPairLanes;
   const int n = body.n_legs(), w = body.width();
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
   read_padded_poses(poses, format, seq, stride, count, P);
   leg_batch::OpenTargets<C> open;
   const std::ptrdiff_t m = count * n, padded = leg_batch::padded_count<C>(m);
-  C R[9][N], t[3][N], f[3][N];
-  // pair k: pose k / n (the last one for the padding), leg k % n (counters: no division)
+  // (B2), as leg_block_slot, pair by pair: pair k is pose k / n (the last one for the padding), leg
+  // k % n (counters: no division). Computed where the pairs are gathered: staging the pairs' poses
+  // and feet in lane arrays cost 15 scalar stores a pair, then vector loads that waited for them
+  // (store forwarding fails): a fifth of a single pose's kernel.
   for (std::ptrdiff_t k = 0, i = 0, l = 0; k < padded; ++k) {
     const std::ptrdiff_t pose = std::min(i, count - 1);
     const T* foot = feet + (feet_shared ? 3 * l : 3 * n * pose + 3 * l);
-    for (int r = 0; r < 9; ++r) R[r][k] = P.R[r][pose];
-    for (int r = 0; r < 3; ++r) t[r][k] = P.t[r][pose], f[r][k] = C(foot[r]);
+    const C dx = C(foot[0]) - P.t[0][pose], dy = C(foot[1]) - P.t[1][pose], dz = C(foot[2]) - P.t[2][pose];
+    open.x[k] = P.R[0][pose] * dx + P.R[3][pose] * dy + P.R[6][pose] * dz - C(body.pair_hips[0][k]);
+    open.y[k] = P.R[1][pose] * dx + P.R[4][pose] * dy + P.R[7][pose] * dz - C(body.pair_hips[1][k]);
+    open.z[k] = P.R[2][pose] * dx + P.R[5][pose] * dy + P.R[8][pose] * dz - C(body.pair_hips[2][k]);
     if (++l == n) l = 0, ++i;
-  }
-  for (std::ptrdiff_t k = 0; k < padded; ++k) {  // (B2), as leg_block_slot
-    const C dx = f[0][k] - t[0][k], dy = f[1][k] - t[1][k], dz = f[2][k] - t[2][k];
-    open.x[k] = R[0][k] * dx + R[3][k] * dy + R[6][k] * dz - C(body.pair_hips[0][k]);
-    open.y[k] = R[1][k] * dx + R[4][k] * dy + R[7][k] * dz - C(body.pair_hips[1][k]);
-    open.z[k] = R[2][k] * dx + R[5][k] * dy + R[8][k] * dz - C(body.pair_hips[2][k]);
   }
   // Without a seed, first the legs' shared preferred slot, as ik()'s leg_block: when it settles
   // every pair (and every pose is valid), those are ik()'s answers
