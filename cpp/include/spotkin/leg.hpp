@@ -522,6 +522,12 @@ constexpr std::ptrdiff_t padded_count(std::ptrdiff_t m) noexcept {
 template <typename C>
 SPOTKIN_INLINE std::ptrdiff_t pad_block(C* x, C* y, C* z, std::ptrdiff_t m) noexcept {
   const std::ptrdiff_t padded = padded_count<C>(m);
+  if (m == 1) {  // one target (a single call): whole-vector stores, which the vector loads that
+    // follow can take from the store buffer (after scalar stores they wait for them to commit)
+    const C x0 = x[0], y0 = y[0], z0 = z[0];
+    for (std::ptrdiff_t k = 0; k < kLanes<C>; ++k) x[k] = x0, y[k] = y0, z[k] = z0;
+    return padded;
+  }
   for (std::ptrdiff_t k = m; k < padded; ++k) x[k] = x[m - 1], y[k] = y[m - 1], z[k] = z[m - 1];
   return padded;
 }
