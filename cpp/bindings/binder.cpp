@@ -587,7 +587,7 @@ Given classify(py::handle obj) {
 template <typename T>
 py::object call_single(const Op& op, const void* context, const py::handle* objs,
                        const Given* kinds, py::handle out) {
-  Block<T> block(op.n_args, op.n_outs);
+  Block<T> block(op.n_args);
   T seq_rows[kMaxArgs][kSeqMax];
   std::ptrdiff_t widths[kMaxArgs];  // set with block.in
   for (int k = 0; k < op.n_args; ++k) {

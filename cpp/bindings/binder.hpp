@@ -130,11 +130,13 @@ struct Block {
   int shape[kMaxArgs];  // which of the argument's accepted shapes it has
   void* out[kMaxOuts];
   bool stream = false;  // the call's outputs are large (spotkin/stream.hpp): store them streamed where the kernel can
-  // The entries of n_args arguments and n_outs outputs, null and zero (a single sample's call
-  // zeroes only these: the whole arrays took a `rep stos`, about 10 ns a call).
-  Block(int n_args = kMaxArgs, int n_outs = kMaxOuts) {
-    for (int k = 0; k < n_args; ++k) in[k] = nullptr, stride[k] = 0, shape[k] = 0;
-    for (int k = 0; k < n_outs; ++k) out[k] = nullptr;
+  // Every pointer null (a kernel may test an output past the op's, as the path sampler's optional
+  // twist), the strides and shapes of n_args arguments zero: a single sample's call zeroes no more
+  // (the whole arrays took a `rep stos`, about 10 ns a call).
+  explicit Block(int n_args = kMaxArgs) {
+    for (int k = 0; k < kMaxArgs; ++k) in[k] = nullptr;
+    for (int k = 0; k < kMaxOuts; ++k) out[k] = nullptr;
+    for (int k = 0; k < n_args; ++k) stride[k] = 0, shape[k] = 0;
   }
   T* real(int k) const { return static_cast<T*>(out[k]); }
   std::uint8_t* flags(int k) const { return static_cast<std::uint8_t*>(out[k]); }
