@@ -390,8 +390,17 @@ def _hard_stances(rng, robot, height, n, dtype):
 def test_few_poses_equal_their_rows_of_a_batch_to_the_bit(rng, dtype):
     """One to four poses are solved with each (pose, leg) pair in its own lane (every slot at once), a
     batch leg by leg: the answers, statuses and fallbacks are the same bits either way, with and without
-    a seed, a shared stance or one per pose, and in Euler, matrix and quaternion form."""
-    for robot, height in [(SPOT, 0.5), (robot_named("go2"), 0.3), (robot_named("heavy"), 0.6)]:
+    a seed, a shared stance or one per pose, and in Euler, matrix and quaternion form. The lanes are
+    padded to the running level's registers: the hexapod's 6 and 12 pairs leave padding lanes there."""
+    from fuzz.urdf_texts import HEXAPOD_URDF  # six legs, their joints interleaved in q
+
+    hexapod = sk.Robot.from_urdf_string(HEXAPOD_URDF)
+    for robot, height in [
+        (SPOT, 0.5),
+        (robot_named("go2"), 0.3),
+        (robot_named("heavy"), 0.6),
+        (hexapod, 0.3),
+    ]:
         poses, feet, seeds, feet0 = _hard_stances(rng, robot, height, 160, dtype)
         matrices = matrix_poses(poses.astype(np.float64)).astype(dtype)
         quats = np.hstack([poses[:, :3], Rotation.from_euler("XYZ", np.nan_to_num(poses[:, 3:])).as_quat()])

@@ -469,15 +469,18 @@ def test_leg_jacobian_matches_central_differences(rng):
     np.testing.assert_allclose(leg.jacobian(q), J_fd, atol=1e-9)
 
 
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("seeded", [False, True])
-def test_answers_do_not_depend_on_the_neighbouring_targets(rng, seeded):
+def test_answers_do_not_depend_on_the_neighbouring_targets(rng, seeded, dtype):
     """A target's answer is bit-identical whatever targets surround it in the batch (the kernels
-    work in blocks and solve the open targets of a block together, in vector lanes)."""
+    work in blocks, a short one padded to whole registers of the running level, and solve the open
+    targets of a block together, in vector lanes)."""
     leg = SPOT.leg("fl")
     q = in_limit_q(rng, 4_001)
     p = leg.fk(q)
     p[::37] *= 3.0  # unreachable targets among them
-    seed = q + 0.3 if seeded else None
+    p = p.astype(dtype)
+    seed = (q + 0.3).astype(dtype) if seeded else None
     whole_q, whole_status = leg.ik(p, seed=seed)
     every = leg.ik_all(p)
     for shift in (1, 3, 5, 7, 63):
@@ -487,6 +490,7 @@ def test_answers_do_not_depend_on_the_neighbouring_targets(rng, seeded):
         np.testing.assert_array_equal(leg.ik_all(p[shift:]).q, every.q[shift:])
     feet = SPOT.stance_feet(0.5)
     poses = np.array([0, 0, 0.5, 0, 0, 0]) + rng.normal(0, 1, (2_001, 6)) * [0.05, 0.05, 0.1, 0.3, 0.3, 0.3]
+    poses, feet = poses.astype(dtype), feet.astype(dtype)
     body = SPOT.body_ik(poses, feet)
     assert (body.status != 0).any() and (body.status == 0).any()
     for shift in (1, 5, 63):

@@ -7,11 +7,12 @@
 namespace spotkin::kernels {
 
 SPOTKIN_CLONES((template <typename T>), void, body_ik,
-               (const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq, const T* feet,
-                bool feet_shared, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n, bool nearest_fallback),
+               (const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
+                const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
+                std::ptrdiff_t n, bool nearest_fallback),
                (body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback),
-  body_batch::ik(body, poses, format, seq, feet, feet_shared, seed, q, status, n, nearest_fallback);
-)
+               body_batch::ik<register_bytes(kIsa)>(body, poses, format, seq, feet, feet_shared,
+                                                    seed, q, status, n, nearest_fallback);)
 SPOTKIN_CLONES((template <typename T>), void, body_ik_path,
                (const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
                 const T* feet, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n,

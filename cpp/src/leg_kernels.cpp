@@ -15,11 +15,10 @@ SPOTKIN_CLONES((template <typename T>), void, leg_jacobian, (const Leg& leg, con
   leg_batch::jacobian(leg, q, J, n);
 )
 SPOTKIN_CLONES((template <typename T>), void, leg_ik,
-               (const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status, std::ptrdiff_t n,
-                bool nearest_fallback),
+               (const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
+                std::ptrdiff_t n, bool nearest_fallback),
                (leg, p, seed, q, status, n, nearest_fallback),
-  leg_batch::ik(leg, p, seed, q, status, n, nearest_fallback);
-)
+               leg_batch::ik<register_bytes(kIsa)>(leg, p, seed, q, status, n, nearest_fallback);)
 SPOTKIN_CLONES((template <typename T>), void, leg_ik_all,
                (const Leg& leg, const T* p, T* q, std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status,
                 std::ptrdiff_t n),

@@ -403,7 +403,7 @@ SPOTKIN_INLINE bool ik_pairs_preferred(const Body& body, const BlockPoses<C>& P,
 // pads each leg's targets to whole vectors, so one pose costs n vector passes (2 n with a seed);
 // here the n legs of a pose share them. The lanes run ik()'s operations on the same values: the
 // same bits.
-template <typename T>
+template <int RegisterBytes, typename T>
 SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat format,
                              const EulerSequence& seq, const T* feet, bool feet_shared,
                              const T* seed, T* q, std::int8_t* status, std::ptrdiff_t count,
@@ -416,7 +416,10 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
   BlockPoses<C> P;
   read_padded_poses(poses, format, seq, stride, count, P);
   leg_batch::OpenTargets<C> open;
-  const std::ptrdiff_t m = count * n, padded = leg_batch::padded_count<C>(m);
+  // the pairs padded to whole registers of the level that runs (not to the 64 bytes of the batch's
+  // vectors: at AVX2 one Go2 pose is one register, not two); the loops run these whole
+  const std::ptrdiff_t lanes = RegisterBytes / std::ptrdiff_t(sizeof(C)), m = count * n,
+                       padded = std::min(Body::kPairLanes, (m + lanes - 1) / lanes * lanes);
   // (B2), as leg_block_slot, pair by pair: pair k is pose k / n (the last one for the padding), leg
   // k % n (counters: no division). Computed where the pairs are gathered: staging the pairs' poses
   // and feet in lane arrays cost 15 scalar stores a pair, then vector loads that waited for them
@@ -477,17 +480,19 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
 // (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:
 // null or (count, w). q (count, w) in the body's column order, status
 // (count, n): each leg's status and fallback are exactly the leg API's (NaN
-// for UNREACHABLE when !nearest_fallback).
-template <typename T>
-SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format, const EulerSequence& seq,
-                       const T* feet, bool feet_shared, const T* seed, T* q, std::int8_t* status,
-                       std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
+// for UNREACHABLE when !nearest_fallback). RegisterBytes: the vector register of the level that
+// runs it (register_bytes), whose width a few poses' lanes are padded to (ik_pairs).
+template <int RegisterBytes = 64, typename T>
+SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
+                       const EulerSequence& seq, const T* feet, bool feet_shared, const T* seed,
+                       T* q, std::int8_t* status, std::ptrdiff_t count,
+                       bool nearest_fallback = true) noexcept {
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   using C = leg_batch::Compute<T>;
   const int n = body.n_legs(), w = body.width();
   if (kPairLanesExact && count * n <= Body::kPairLanes)
-    return ik_pairs(body, poses, format, seq, feet, feet_shared, seed, q, status, count,
-                    nearest_fallback);
+    return ik_pairs<RegisterBytes>(body, poses, format, seq, feet, feet_shared, seed, q, status,
+                                   count, nearest_fallback);
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
   C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock], ok[kBlock];

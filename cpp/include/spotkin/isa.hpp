@@ -27,6 +27,11 @@ namespace spotkin {
 // Baseline is SSE2 on x86-64, the target's own baseline elsewhere (NEON on aarch64).
 enum class Isa : int { Baseline = 0, Avx2 = 1, Avx512 = 2 };
 
+// The bytes of one vector register at a level (SSE2 and NEON: 16).
+constexpr int register_bytes(Isa isa) noexcept {
+  return isa == Isa::Avx512 ? 64 : isa == Isa::Avx2 ? 32 : 16;
+}
+
 // The levels' names, as SPOTKIN_ISA and spotkin.set_isa take them.
 inline const char* isa_name(Isa isa) noexcept {
 #if SPOTKIN_HAS_ISA_CLONES

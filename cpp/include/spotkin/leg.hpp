@@ -513,19 +513,27 @@ template <typename C>
 constexpr std::ptrdiff_t padded_count(std::ptrdiff_t m) noexcept {
   return std::min(kBlock, (m + kLanes<C> - 1) / kLanes<C> * kLanes<C>);
 }
+// The same in registers of RegisterBytes (the level that runs: isa.hpp's register_bytes), which a
+// few targets fill with less padding than the 64 bytes above (at AVX2, one target is one register).
+template <typename C, int RegisterBytes>
+constexpr std::ptrdiff_t register_padded_count(std::ptrdiff_t m) noexcept {
+  constexpr std::ptrdiff_t lanes = RegisterBytes / std::ptrdiff_t(sizeof(C));
+  return std::min(kBlock, (m + lanes - 1) / lanes * lanes);
+}
 
 // Pads x, y, z after their first m entries with copies of entry m - 1, up to
 // whole vectors (padded_count), and returns that count. Vector passes over the
 // padded count run every target in the loop's full lanes (its scalar remainder
 // may round differently), so that an answer never depends on the target's
 // place in a block, that is on how the batch was split between threads or calls.
-template <typename C>
+// RegisterBytes (default: the 64 of padded_count): pads to whole registers of that many bytes.
+template <int RegisterBytes = 64, typename C>
 SPOTKIN_INLINE std::ptrdiff_t pad_block(C* x, C* y, C* z, std::ptrdiff_t m) noexcept {
-  const std::ptrdiff_t padded = padded_count<C>(m);
+  const std::ptrdiff_t padded = register_padded_count<C, RegisterBytes>(m);
   if (m == 1) {  // one target (a single call): whole-vector stores, which the vector loads that
     // follow can take from the store buffer (after scalar stores they wait for them to commit)
     const C x0 = x[0], y0 = y[0], z0 = z[0];
-    for (std::ptrdiff_t k = 0; k < kLanes<C>; ++k) x[k] = x0, y[k] = y0, z[k] = z0;
+    for (std::ptrdiff_t k = 0; k < padded; ++k) x[k] = x0, y[k] = y0, z[k] = z0;
     return padded;
   }
   for (std::ptrdiff_t k = m; k < padded; ++k) x[k] = x[m - 1], y[k] = y[m - 1], z[k] = z[m - 1];
@@ -703,8 +711,9 @@ SPOTKIN_INLINE void settle_open(OpenTargets<C>& open, const Leg& leg, const T* s
 
 // Limit-aware IK: q (count, 3), status (count). seed may be null. An
 // UNREACHABLE target gets unreachable_fallback's answer, or NaN when
-// !nearest_fallback.
-template <typename T>
+// !nearest_fallback. RegisterBytes: the register of the level that runs it (register_bytes), whose
+// width the preferred-slot pass pads a short block to.
+template <int RegisterBytes = 64, typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   using C = Compute<T>;
@@ -722,7 +731,8 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
       x[i] = C(p[3 * (b0 + i)]), y[i] = C(p[3 * (b0 + i) + 1]), z[i] = C(p[3 * (b0 + i) + 2]);
     }
     if (!seed) {  // two loops: GCC did not take the seed's test out of the loop on its own
-      preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, pad_block(x, y, z, m), tol, limit_tol);
+      preferred_pass(leg, x, y, z, hx, hy, kn, exists, ok, pad_block<RegisterBytes>(x, y, z, m),
+                     tol, limit_tol);
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
         T* qt = q + 3 * t;
