@@ -459,8 +459,8 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
       st = std::int8_t(Status::InvalidInput);
       continue;
     }
-    if (leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) ==
-        C(0)) {  // a NaN foot, or overflow
+    // a NaN foot, or a finite one whose hip-frame point overflows
+    if (leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0)) {
       double Rd[9], td[3];
       pose_of(P, i, Rd, td);
       const T* foot = feet + (feet_shared ? 3 * l : 3 * n * i + 3 * l);
