@@ -299,34 +299,24 @@ SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& 
   leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
 )
 
-// A valid pose and a finite foot whose hip-frame point overflows (|foot - t| near the largest
-// double, or float's for float inputs): a target beyond reach, not an invalid input. Its direction,
-// computed in double at a scale where nothing overflows, gives Leg::ik's answer for a target that
-// far: UNREACHABLE, with the in-limit configuration nearest to it (NaN without the fallback); the
-// hip's offset is nothing at that distance. R and t as BlockPoses holds them (R[3 r + k] = R(r,
-// k)), for one pose. Returns false, nothing written, when the foot is not finite (INVALID_INPUT).
-template <typename T>
-bool overflowed_foot(const Leg& leg, const double* R, const double* t, const T* foot,
+// The status and answer of a leg whose hip-frame point is not finite, at lane i of a block's poses
+// P (valid). A finite foot whose point overflowed (|foot - t| near the largest double, or float's
+// for float inputs) is a target beyond reach, not an invalid input: its direction, computed in
+// double at a scale where nothing overflows, gives Leg::ik's answer for a target that far
+// (UNREACHABLE, with the in-limit configuration nearest to it, NaN without the fallback; the hip's
+// offset is nothing at that distance). A foot that is not finite: INVALID_INPUT and NaN.
+template <typename T, typename C>
+Status unfinite_foot(const Leg& leg, const BlockPoses<C>& P, std::ptrdiff_t i, const T* foot,
                      bool nearest_fallback, T* q_out) noexcept {
-  if (!leg_batch::finite3(foot)) return false;
-  const double scale =
-      std::is_same_v<T, float> ? 1.0 : 0x1p-600;  // (1e308 2^-600: 4e127, far still)
+  q_out[0] = q_out[1] = q_out[2] = T(quiet_nan<double>());
+  if (!leg_batch::finite3(foot)) return Status::InvalidInput;
+  const double scale = std::is_same_v<T, float> ? 1.0 : 0x1p-600;  // (1e308 2^-600: 4e127, far)
   double d[3], p[3];
-  for (int j = 0; j < 3; ++j) d[j] = double(foot[j]) * scale - t[j] * scale;
-  for (int i = 0; i < 3; ++i) p[i] = R[i] * d[0] + R[3 + i] * d[1] + R[6 + i] * d[2];  // R^T d
-  if (nearest_fallback)
-    leg_batch::unreachable_fallback(leg, p[0], p[1], p[2], q_out);
-  else
-    q_out[0] = q_out[1] = q_out[2] = T(quiet_nan<double>());
-  return true;
-}
-
-// The pose of lane i of a block's BlockPoses, in double: R (9) and t (3).
-template <typename C>
-SPOTKIN_INLINE void pose_of(const BlockPoses<C>& P, std::ptrdiff_t i, double* R,
-                            double* t) noexcept {
-  for (int r = 0; r < 9; ++r) R[r] = double(P.R[r][i]);
-  for (int r = 0; r < 3; ++r) t[r] = double(P.t[r][i]);
+  for (int j = 0; j < 3; ++j) d[j] = double(foot[j]) * scale - double(P.t[j][i]) * scale;
+  for (int r = 0; r < 3; ++r)  // R^T d, R(j, r) = P.R[3 j + r]
+    p[r] = double(P.R[r][i]) * d[0] + double(P.R[3 + r][i]) * d[1] + double(P.R[6 + r][i]) * d[2];
+  if (nearest_fallback) leg_batch::unreachable_fallback(leg, p[0], p[1], p[2], q_out);
+  return Status::Unreachable;
 }
 
 // read_poses, then whole vectors (as leg_batch::pad_block): the padding repeats the last pose, so
@@ -418,8 +408,8 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
   leg_batch::OpenTargets<C> open;
   // the pairs padded to whole registers of the level that runs (not to the 64 bytes of the batch's
   // vectors: at AVX2 one Go2 pose is one register, not two); the loops run these whole
-  const std::ptrdiff_t lanes = RegisterBytes / std::ptrdiff_t(sizeof(C)), m = count * n,
-                       padded = std::min(Body::kPairLanes, (m + lanes - 1) / lanes * lanes);
+  const std::ptrdiff_t m = count * n,
+                       padded = leg_batch::register_padded_count<C, RegisterBytes>(m);
   // (B2), as leg_block_slot, pair by pair: pair k is pose k / n (the last one for the padding), leg
   // k % n (counters: no division). Computed where the pairs are gathered: staging the pairs' poses
   // and feet in lane arrays cost 15 scalar stores a pair, then vector loads that waited for them
@@ -459,19 +449,13 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
       st = std::int8_t(Status::InvalidInput);
       continue;
     }
-    // a NaN foot, or a finite one whose hip-frame point overflows
-    if (leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0)) {
-      double Rd[9], td[3];
-      pose_of(P, i, Rd, td);
-      const T* foot = feet + (feet_shared ? 3 * l : 3 * n * i + 3 * l);
-      const bool far = overflowed_foot(leg, Rd, td, foot, nearest_fallback, leg_q);
-      if (!far) leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
-      qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
-      st = std::int8_t(far ? Status::Unreachable : Status::InvalidInput);
-      continue;
+    if (leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0)) {  // NaN foot, or overflow
+      st = std::int8_t(unfinite_foot(leg, P, i, feet + (feet_shared ? 3 * l : 3 * n * i + 3 * l),
+                                     nearest_fallback, leg_q));
+    } else {
+      if (s) sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
+      st = std::int8_t(open.choose(leg, k, s ? sd : nullptr, leg_q, nearest_fallback));
     }
-    if (s) sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
-    st = std::int8_t(open.choose(leg, k, s ? sd : nullptr, leg_q, nearest_fallback));
     qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
   }
 }
@@ -545,15 +529,11 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
           continue;
         }
         if (exists[i] < C(0)) {  // a NaN foot, or overflow
-          double Rd[9], td[3];
-          pose_of(P, i, Rd, td);
           T leg_q[3];
-          const bool far =
-              overflowed_foot(leg, Rd, td, feet + (feet_shared ? 3 * l : 3 * n * t + 3 * l),
-                              nearest_fallback, leg_q);
-          if (!far) leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
+          st =
+              std::int8_t(unfinite_foot(leg, P, i, feet + (feet_shared ? 3 * l : 3 * n * t + 3 * l),
+                                        nearest_fallback, leg_q));
           qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
-          st = std::int8_t(far ? Status::Unreachable : Status::InvalidInput);
           continue;
         }
         open.add(i, x[i], y[i], z[i]);
@@ -628,15 +608,12 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
         T leg_q[3];
         std::int8_t st;
         const bool solved = k < open.count && open.index[k] == i;
-        if (!solved ||
-            (leg_seeded && !leg_batch::finite3(sd))) {  // as ik(): an invalid pose, target or seed
-          double Rd[9], td[3];
-          pose_of(P, i, Rd, td);
-          const bool far =
-              !solved && P.ok[i] != C(0) && !(leg_seeded && !leg_batch::finite3(sd)) &&
-              overflowed_foot(leg, Rd, td, feet + 3 * n * t + 3 * l, nearest_fallback, leg_q);
-          if (!far) leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
-          st = std::int8_t(far ? Status::Unreachable : Status::InvalidInput);
+        if (P.ok[i] == C(0) || (leg_seeded && !leg_batch::finite3(sd))) {  // as ik()
+          leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
+          st = std::int8_t(Status::InvalidInput);
+        } else if (!solved) {  // a NaN foot, or overflow
+          st = std::int8_t(
+              unfinite_foot(leg, P, i, feet + 3 * n * t + 3 * l, nearest_fallback, leg_q));
         } else {
           st = std::int8_t(open.choose(leg, k, leg_seeded ? sd : nullptr, leg_q, nearest_fallback));
         }

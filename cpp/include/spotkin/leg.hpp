@@ -509,16 +509,18 @@ constexpr std::ptrdiff_t kLanes = 64 / std::ptrdiff_t(sizeof(C));
 static_assert(kBlock % kLanes<float> == 0, "blocks hold whole vectors");
 
 // m rounded up to whole vectors of C (at most kBlock).
-template <typename C>
-constexpr std::ptrdiff_t padded_count(std::ptrdiff_t m) noexcept {
-  return std::min(kBlock, (m + kLanes<C> - 1) / kLanes<C> * kLanes<C>);
-}
-// The same in registers of RegisterBytes (the level that runs: isa.hpp's register_bytes), which a
-// few targets fill with less padding than the 64 bytes above (at AVX2, one target is one register).
+// m targets padded to whole registers of RegisterBytes (the level that runs: isa.hpp's
+// register_bytes; a few targets fill fewer of them than of 64 bytes: at AVX2 one target is one
+// register), at most a block.
 template <typename C, int RegisterBytes>
 constexpr std::ptrdiff_t register_padded_count(std::ptrdiff_t m) noexcept {
   constexpr std::ptrdiff_t lanes = RegisterBytes / std::ptrdiff_t(sizeof(C));
   return std::min(kBlock, (m + lanes - 1) / lanes * lanes);
+}
+// The same in 64-byte vectors (kLanes), whatever the level.
+template <typename C>
+constexpr std::ptrdiff_t padded_count(std::ptrdiff_t m) noexcept {
+  return register_padded_count<C, 64>(m);
 }
 
 // Pads x, y, z after their first m entries with copies of entry m - 1, up to
