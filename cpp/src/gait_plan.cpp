@@ -10,9 +10,7 @@
 #include <vector>
 
 #include "spotkin/dynamics/kernels.hpp"
-#include "spotkin/dynamics/statics.hpp"
 #include "spotkin/kernels/body.hpp"
-#include "spotkin/kernels/leg.hpp"
 #include "spotkin/leg.hpp"
 
 namespace spotkin::motion {
@@ -351,68 +349,6 @@ void swing(const double p0[3], const double p1[3], double s, double height, doub
   }
 }
 
-namespace {
-
-inline void cross(const double* a, const double* b, double* out) noexcept {
-  out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2],
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-// (W) in closed form. The minimum-norm forces with sum f_i = F and, in least squares,
-// sum (p_i - c) x f_i = 0 are f_i = F / k + y x s_i, s_i = p_i - p_mean, where K y = -m,
-// m = (p_mean - c) x F and K = sum (|s_i|^2 I - s_i s_i^T) (= (M N)(M N)^T of the reference's
-// Helmert form, so y = pinv(K) (-m) is its z = pinv(M N) (-M f_0) mapped back). Feet off one line:
-// K is invertible and the moment balances; on one line (two feet, say) along d, K = S (I - d d^T)
-// with S = sum |s_i|^2, and the moment about the line is left (the residual). k = 0: no force.
-void stance_forces(int k, const double (*p)[3], const double c[3], const double F[3],
-                   double (*f)[3], double residual[6]) noexcept {
-  if (k == 0) {
-    for (int a = 0; a < 3; ++a) residual[a] = F[a], residual[3 + a] = 0.0;
-    return;
-  }
-  double mean[3] = {0.0, 0.0, 0.0}, s[kLegs][3], K[9] = {}, S = 0.0, longest = -1.0,
-         d[3] = {0.0, 0.0, 0.0};
-  for (int i = 0; i < k; ++i)
-    for (int a = 0; a < 3; ++a) mean[a] += p[i][a];
-  for (int a = 0; a < 3; ++a) mean[a] /= k;
-  for (int i = 0; i < k; ++i) {
-    for (int a = 0; a < 3; ++a) s[i][a] = p[i][a] - mean[a];
-    const double n2 = s[i][0] * s[i][0] + s[i][1] * s[i][1] + s[i][2] * s[i][2];
-    S += n2;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) K[3 * a + b] += (a == b ? n2 : 0.0) - s[i][a] * s[i][b];
-    if (n2 > longest) longest = n2, d[0] = s[i][0], d[1] = s[i][1], d[2] = s[i][2];
-  }
-  const double r[3] = {mean[0] - c[0], mean[1] - c[1], mean[2] - c[2]};
-  double m[3], y[3] = {0.0, 0.0, 0.0};
-  cross(r, F, m);
-  const double minus_m[3] = {-m[0], -m[1], -m[2]};
-  // full rank: the smallest eigenvalue above ~1e-9 of the largest (det = l1 l2 l3 against (tr /
-  // 2)^3)
-  const double half_trace = S;  // tr K = 2 S
-  const double det = K[0] * (K[4] * K[8] - K[5] * K[7]) - K[1] * (K[3] * K[8] - K[5] * K[6]) +
-                     K[2] * (K[3] * K[7] - K[4] * K[6]);
-  if (k >= 3 && det > 1e-9 * half_trace * half_trace * half_trace) {
-    solve3(K, minus_m, y);
-  } else if (S > 0.0) {  // the feet on a line along d: y = -(m - d (d . m)) / S
-    const double n = std::sqrt(longest);
-    for (int a = 0; a < 3; ++a) d[a] /= n;
-    const double along = d[0] * m[0] + d[1] * m[1] + d[2] * m[2];
-    for (int a = 0; a < 3; ++a) y[a] = -(m[a] - d[a] * along) / S;
-  }
-  double total[3] = {0.0, 0.0, 0.0}, moment[3] = {0.0, 0.0, 0.0};
-  for (int i = 0; i < k; ++i) {
-    double ys[3], arm[3], mi[3];
-    cross(y, s[i], ys);
-    for (int a = 0; a < 3; ++a)
-      f[i][a] = F[a] / k + ys[a], total[a] += f[i][a], arm[a] = p[i][a] - c[a];
-    cross(arm, f[i], mi);
-    for (int a = 0; a < 3; ++a) moment[a] += mi[a];
-  }
-  for (int a = 0; a < 3; ++a) residual[a] = F[a] - total[a], residual[3 + a] = -moment[a];
-}
-
-}  // namespace
 
 void start(const GaitNumbers& gait, const double command[3], const double attitude[2],
            PlannerState& s) noexcept {
@@ -639,102 +575,9 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
   // the whole-body IK along the path, each tick seeded with the previous one
   kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz_sequence(), out.feet,
                                 nullptr, out.q, leg_status.data(), ticks, true);
-  // per block of ticks: the gravity torques and the centre of mass (the floating model's G(q), in
-  // lanes), then per tick qd, the stance forces (W), tau = G - J^T f and the margin (M)
-  const int nq = robot.floating.nq(), nv = robot.floating.nv();
-  constexpr int kSub = dynamics::kStaticsSubBlock;
-  std::vector<double> qf(std::size_t(nq) * kSub), wrench(std::size_t(nv) * kSub);
-  double g_body[3 * kSub], jacobians[kLegs][9 * kSub];
-  bool valid[kSub];
-  const double F[3] = {0.0, 0.0, robot.mass * kGravity};  // the weight the feet carry, -m g
-  constexpr double nan = quiet_nan<double>();
-  for (std::ptrdiff_t b0 = 0; b0 < ticks; b0 += kSub) {
-    const int m = int(std::min<std::ptrdiff_t>(kSub, ticks - b0));
-    for (int i = 0; i < m; ++i) {
-      const double* R = rotation.data() + 9 * (b0 + i);
-      const double* q = out.q + W * (b0 + i);
-      double* row = qf.data() + std::ptrdiff_t(nq) * i;
-      std::fill(row, row + nq, 0.0);
-      row[6] = 1.0;  // the body at the origin, the identity quaternion
-      bool finite = true;
-      for (int j = 0; j < W; ++j) finite = finite && std::isfinite(q[j]);
-      valid[i] = finite;
-      if (finite)
-        for (int j = 0; j < W; ++j) row[7 + j] = q[j];
-      for (int r = 0; r < 3; ++r) g_body[3 * i + r] = -kGravity * R[6 + r];  // R^T (0, 0, -g)
-    }
-    dynamics::floating_rnea_k(robot.floating, dynamics::Rows<double>{qf.data(), nq}, nullptr,
-                              nullptr, dynamics::Rows<double>{g_body, 3}, wrench.data(), 0, m,
-                              false);
-    for (int l = 0; l < kLegs; ++l) {  // each leg's d foot / d q_l, in lanes
-      const auto& col = body.columns[std::size_t(l)];
-      double q_leg[3 * kSub];
-      for (int i = 0; i < m; ++i)
-        for (int j = 0; j < 3; ++j) q_leg[3 * i + j] = out.q[W * (b0 + i) + col[std::size_t(j)]];
-      kernels::leg_jacobian<double>(body.legs[std::size_t(l)], q_leg, jacobians[l], m);
-    }
-    for (int i = 0; i < m; ++i) {
-      const std::ptrdiff_t n = b0 + i;
-      const double* R = rotation.data() + 9 * n;
-      const double* pose = out.pose + 6 * n;
-      const double* feet = out.feet + W * n;
-      const double* v = twist.data() + 6 * n;
-      const double* w = v + 3;
-      const double* G = wrench.data() + std::ptrdiff_t(nv) * i;
-      std::int8_t worst = leg_status[kLegs * n];
-      for (int l = 1; l < kLegs; ++l) worst = std::max(worst, leg_status[kLegs * n + l]);
-      out.status[n] = worst;
-      // the centre of mass across gravity from G's body wrench [f; n] (f = -m g, n = c x f):
-      // c = f x n / |f|^2 (its part along g moves no moment), then in the world
-      const double ff = G[0] * G[0] + G[1] * G[1] + G[2] * G[2], inv = ff > 0.0 ? 1.0 / ff : 0.0;
-      const double cb[3] = {(G[1] * G[5] - G[2] * G[4]) * inv, (G[2] * G[3] - G[0] * G[5]) * inv,
-                            (G[0] * G[4] - G[1] * G[3]) * inv};
-      double c[3];
-      for (int r = 0; r < 3; ++r)
-        c[r] = pose[r] + R[3 * r] * cb[0] + R[3 * r + 1] * cb[1] + R[3 * r + 2] * cb[2];
-      double down[kLegs][3], forces[kLegs][3] = {}, flat[kLegs][2], residual[6];
-      int feet_down = 0, slot[kLegs];
-      for (int l = 0; l < kLegs; ++l) {
-        slot[l] = -1;
-        if (!out.contact[kLegs * n + l]) continue;
-        slot[l] = feet_down;
-        for (int r = 0; r < 3; ++r) down[feet_down][r] = feet[3 * l + r];
-        flat[feet_down][0] = feet[3 * l], flat[feet_down][1] = feet[3 * l + 1];
-        ++feet_down;
-      }
-      double f_down[kLegs][3];
-      stance_forces(feet_down, down, c, F, f_down, residual);
-      for (int l = 0; l < kLegs; ++l)
-        if (slot[l] >= 0)
-          for (int r = 0; r < 3; ++r) forces[l][r] = f_down[slot[l]][r];
-      out.margin[n] = valid[i] ? support_margin(flat, feet_down, c) : nan;
-      for (int a = 0; a < 6; ++a) out.residual[6 * n + a] = valid[i] ? residual[a] : nan;
-      for (int l = 0; l < kLegs; ++l) {
-        const auto& col = body.columns[std::size_t(l)];
-        const double* p = feet + 3 * l;
-        const double* pd = feet_rate.data() + W * n + 3 * l;
-        // qd_l = J_l^-1 R^T (pdot_l - v - w x (p_l - t)): the foot's velocity relative to the hip
-        const double d[3] = {p[0] - pose[0], p[1] - pose[1], p[2] - pose[2]};
-        const double u[3] = {pd[0] - v[0] - (w[1] * d[2] - w[2] * d[1]),
-                             pd[1] - v[1] - (w[2] * d[0] - w[0] * d[2]),
-                             pd[2] - v[2] - (w[0] * d[1] - w[1] * d[0])};
-        double relative[3], qd[3], fb[3];
-        for (int r = 0; r < 3; ++r) {
-          relative[r] = R[r] * u[0] + R[3 + r] * u[1] + R[6 + r] * u[2];
-          fb[r] = R[r] * forces[l][0] + R[3 + r] * forces[l][1] + R[6 + r] * forces[l][2];  // R^T f
-        }
-        const double* J = jacobians[l] + 9 * i;
-        if (!solve3(J, relative, qd)) qd[0] = qd[1] = qd[2] = nan;
-        for (int j = 0; j < 3; ++j) {
-          const int column = col[std::size_t(j)];
-          out.qd[W * n + column] = qd[j];
-          // tau = G - (R J)^T f = G - J^T (R^T f)
-          out.tau[W * n + column] =
-              valid[i] ? G[6 + column] - (J[j] * fb[0] + J[3 + j] * fb[1] + J[6 + j] * fb[2]) : nan;
-        }
-      }
-    }
-  }
+  // the statics along the path: G(q), the stance forces, qd, tau and the margin (gait_statics.cpp)
+  plan_statics(robot, out, rotation.data(), feet_rate.data(), twist.data(), leg_status.data(),
+               ticks);
 }
 
 #define SPOTKIN_INSTANTIATE(L)                                                                    \

@@ -155,4 +155,13 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
                   double rate, const PlanRows& out, const PlanChange* changes = nullptr,
                   int n_changes = 0);
 
+// The statics along a plan's path (plan_command's last stage, gait_statics.cpp): from the rows'
+// pose, feet, contact and q, with each tick's rotation (9, row-major), feet velocities (4, 3) and
+// body twist [v; w] (6, world), and the legs' IK statuses (4): the rows' status, qd, tau, residual
+// and margin.
+template <typename Model>
+void plan_statics(const dynamics::RobotStaticsModel<Model>& robot, const PlanRows& out,
+                  const double* rotation, const double* feet_rate, const double* twist,
+                  const std::int8_t* leg_status, std::ptrdiff_t ticks);
+
 }  // namespace spotkin::motion
