@@ -283,7 +283,7 @@ void controller_tick(const dynamics::RobotStaticsModel<Model>& robot,
       settling = dt;  // a foot still reaching
   plan.t += settling;
   if (dt - settling > 0.0) advance(body, plan, dt - settling);
-  GaitNumbers P, Pd;
+  GaitNumbers P(uninitialized), Pd(uninitialized);  // blended writes both whole
   blended(plan, plan.t, P, &Pd);
   const double period = P[kPeriod], duty = P[kDuty];
   double nominal_z[kLegs], phases[kLegs], phase_rates[kLegs];

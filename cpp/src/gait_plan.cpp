@@ -12,6 +12,7 @@
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/kernels/body.hpp"
 #include "spotkin/leg.hpp"
+#include "spotkin/vector_math.hpp"
 
 namespace spotkin::motion {
 
@@ -19,6 +20,8 @@ namespace {
 
 constexpr double kPiValue = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPiValue;
+
+const GaitNumbers kZeroNumbers{};  // the rates of a settled gait
 
 // Whether the blend of step 1 is over at t (the gait's numbers are the new ones).
 inline bool settled_at(const PlannerState& s, double t) noexcept {
@@ -60,9 +63,8 @@ namespace {
 const GaitNumbers& numbers_at(const PlannerState& s, double t, GaitNumbers& scratch,
                               const GaitNumbers** rates = nullptr,
                               GaitNumbers* rate_scratch = nullptr) noexcept {
-  static const GaitNumbers zero{};
   if (settled_at(s, t)) {
-    if (rates) *rates = &zero;
+    if (rates) *rates = &kZeroNumbers;
     return s.new_numbers;
   }
   blended(s, t, scratch, rate_scratch);
@@ -161,14 +163,15 @@ struct Predictor {
   void to(double horizon, GaitNumbers& P) noexcept {
     const double dt = (s.t + horizon - t) / kPredictionSteps;
     double target[3];
+    GaitNumbers scratch(uninitialized);
     for (int k = 0; k < kPredictionSteps; ++k) {
       t += dt;
-      blended(s, t, P, nullptr);
-      const double rate1 = 1.0 / P[kPeriod];
+      const GaitNumbers& Pt = numbers_at(s, t, scratch);  // no copy once the gait has settled
+      const double rate1 = 1.0 / Pt[kPeriod];
       theta += dt * (rate + rate1) / 2.0;
       rate = rate1;
-      target_of(s, P, target, settled_at(s, t));
-      ramp(planar, target, P[kAccel], P[kYawAccel], dt);
+      target_of(s, Pt, target, settled_at(s, t));
+      ramp(planar, target, Pt[kAccel], Pt[kYawAccel], dt);
     }
     blended(s, t, P, nullptr);
   }
@@ -209,8 +212,8 @@ void body_pose(double x, double y, double z, double psi, double cz, double sz,
   const double R00 = cz * cy, R01 = -sz * cx + cz * sy * sx, R02 = sz * sx + cz * sy * cx;
   const double R12 = -cz * sx + sz * sy * cx, R22 = cy * cx;
   const double b = std::asin(std::min(std::max(R02, -1.0), 1.0));
-  const double a = std::atan2(-R12, R22);
-  double c = std::atan2(-R01, R00);
+  const double a = vector_math::atan2(-R12, R22);
+  double c = vector_math::atan2(-R01, R00);
   c += kTwoPi * std::nearbyint((psi - c) / kTwoPi);
   pose[0] = x, pose[1] = y, pose[2] = z, pose[3] = a, pose[4] = b, pose[5] = c;
   if (R_out) {
@@ -275,7 +278,10 @@ void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int 
   Predictor ahead(s);
   Planar planar[kChecks + 1];
   double theta[kChecks + 1];
-  GaitNumbers Pf[kChecks + 1];
+  static_assert(kChecks == 4, "one scratch initialiser per check");
+  GaitNumbers Pf[kChecks + 1] = {GaitNumbers(uninitialized), GaitNumbers(uninitialized),
+                                 GaitNumbers(uninitialized), GaitNumbers(uninitialized),
+                                 GaitNumbers(uninitialized)};
   ahead.to(to_touchdown, Pf[0]);
   planar[0] = ahead.planar, theta[0] = ahead.theta;
   const double t_stance = Pf[0][kDuty] * Pf[0][kPeriod];  // the gait's at touch-down
@@ -316,7 +322,7 @@ void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int 
     double phases[kLegs], rates[kLegs], delta[2], delta_rate[2];
     for (int j = 0; j < kLegs; ++j)
       phases[j] = frac(theta[k] + F[kOffsets + j]), rates[j] = 1.0 / F[kPeriod];
-    crawl_shift(F, GaitNumbers{}, phases, rates, delta, delta_rate);
+    crawl_shift(F, kZeroNumbers, phases, rates, delta, delta_rate);
     const double cp = std::cos(planar[k].psi), sp = std::sin(planar[k].psi);
     const double px = planar[k].x + cp * delta[0] - sp * delta[1] + offset[0];
     const double py = planar[k].y + sp * delta[0] + cp * delta[1] + offset[1];
@@ -374,12 +380,19 @@ double cross2(const double* o, const double* a, const double* b) noexcept {
   return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
 }
 
+// |(x, y)|: the square root of the sum of squares, which is several times faster than std::hypot;
+// hypot where the squares would overflow or underflow (a point 1e160 m away).
+inline double norm2d(double x, double y) noexcept {
+  const double n2 = x * x + y * y;
+  return n2 < 1e300 && n2 > 1e-300 ? std::sqrt(n2) : std::hypot(x, y);
+}
+
 double segment_distance(const double* c, const double* a, const double* b) noexcept {
   const double ab[2] = {b[0] - a[0], b[1] - a[1]};
   const double length2 = ab[0] * ab[0] + ab[1] * ab[1];
   double t = length2 == 0.0 ? 0.0 : ((c[0] - a[0]) * ab[0] + (c[1] - a[1]) * ab[1]) / length2;
   t = std::min(std::max(t, 0.0), 1.0);
-  return std::hypot(c[0] - a[0] - t * ab[0], c[1] - a[1] - t * ab[1]);
+  return norm2d(c[0] - a[0] - t * ab[0], c[1] - a[1] - t * ab[1]);
 }
 
 }  // namespace
@@ -408,7 +421,7 @@ double support_margin(const double (*points)[2], int k, const double c[2]) noexc
   double inside = std::numeric_limits<double>::infinity();
   for (int j = 0; j < h; ++j) {
     const double *a = hull[j], *b = hull[(j + 1) % h];
-    inside = std::min(inside, cross2(a, b, c) / std::hypot(b[0] - a[0], b[1] - a[1]));
+    inside = std::min(inside, cross2(a, b, c) / norm2d(b[0] - a[0], b[1] - a[1]));
   }
   if (inside >= 0.0) return inside;
   double nearest = std::numeric_limits<double>::infinity();
@@ -477,7 +490,7 @@ void change(PlannerState& s, const GaitNumbers* gait, const double* command) noe
 
 void advance(const Body& body, PlannerState& s, double dt) noexcept {
   const double t1 = s.t + dt;
-  GaitNumbers scratch;
+  GaitNumbers scratch(uninitialized);
   const GaitNumbers& P = numbers_at(s, t1, scratch);
   const double rate1 = 1.0 / P[kPeriod];
   s.theta += dt * (s.clock_rate + rate1) / 2.0;
@@ -510,7 +523,7 @@ void advance(const Body& body, PlannerState& s, double dt) noexcept {
 }
 
 void sample(const PlannerState& s, TickKinematics& out) noexcept {
-  GaitNumbers scratch, rate_scratch;
+  GaitNumbers scratch(uninitialized), rate_scratch(uninitialized);
   const GaitNumbers* rates_of = nullptr;
   const GaitNumbers& P = numbers_at(s, s.t, scratch, &rates_of, &rate_scratch);
   const GaitNumbers& Pd = *rates_of;

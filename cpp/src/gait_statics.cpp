@@ -1,5 +1,5 @@
 // The gait plan's statics along its path (spotkin/motion/gait_plan.hpp, plan_statics): per block of
-// ticks, the floating model's gravity torques G(q) in lanes, each leg's Jacobian in lanes, then the
+// ticks, the floating model's gravity torques G(q) in lanes, then each leg's Jacobian, the
 // stance forces (W), the residual, the joint velocities and tau = G - J^T f with a tick per lane
 // (statics_lanes, one clone per instruction-set level), and the support margin (M) tick by tick.
 #include <algorithm>
@@ -8,8 +8,9 @@
 
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/isa.hpp"
-#include "spotkin/kernels/leg.hpp"
+#include "spotkin/leg.hpp"
 #include "spotkin/motion/gait_plan.hpp"
+#include "spotkin/vector_math.hpp"
 
 namespace spotkin::motion {
 
@@ -21,10 +22,12 @@ constexpr int kW = 3 * kLegs;
 // A block of ticks, a tick per lane: one array per component.
 struct StaticsLanes {
   // inputs: the body's rotation (row-major) and position, the feet and their velocities (world),
-  // the body's twist (world), G's body wrench [f; n] and joint torques (each leg's joints in the
-  // leg's order), each leg's d foot / d q (body frame, row-major), 1 / 0 per leg down, 1 / 0 valid
+  // the body's twist (world), G's body wrench [f; n], each leg's joint angles and torques G (the
+  // leg's joint order), 1 / 0 per leg down, 1 / 0 valid
   double R[9][kSub], t[3][kSub], feet[kLegs][3][kSub], rate[kLegs][3][kSub], v[3][kSub], w[3][kSub];
-  double wrench[6][kSub], G[kLegs][3][kSub], J[kLegs][9][kSub], down[kLegs][kSub], valid[kSub];
+  double wrench[6][kSub], q[kLegs][3][kSub], G[kLegs][3][kSub], down[kLegs][kSub], valid[kSub];
+  // each leg's cos and sin of theta1, theta2, theta2 + theta3 (Leg::jacobian_from)
+  double cos_theta[kLegs][3][kSub], sin_theta[kLegs][3][kSub];
   // outputs: the centre of mass (world), the residual wrench [force; moment], qd and tau per leg
   double com[3][kSub], residual[6][kSub], qd[kLegs][3][kSub], tau[kLegs][3][kSub];
 };
@@ -51,7 +54,7 @@ SPOTKIN_INLINE double mask(bool condition) noexcept { return condition ? 1.0 : 0
 SPOTKIN_INLINE double finite_mask(double x) noexcept { return mask(x - x == 0.0); }
 
 // One tick (lane i) of the statics, branch-free. weight: m g.
-SPOTKIN_INLINE void statics_tick(StaticsLanes& b, int i, double weight) noexcept {
+SPOTKIN_INLINE void statics_tick(StaticsLanes& b, const Leg* legs, int i, double weight) noexcept {
   constexpr double nan = quiet_nan<double>();
   const double F[3] = {0.0, 0.0, weight};  // the weight the feet carry, -m g
   // the centre of mass across gravity from G's body wrench [f; n] (f = -m g, n = c x f):
@@ -158,8 +161,11 @@ SPOTKIN_INLINE void statics_tick(StaticsLanes& b, int i, double weight) noexcept
       relative[e] = b.R[e][i] * u[0] + b.R[3 + e][i] * u[1] + b.R[6 + e][i] * u[2];
       fb[e] = b.R[e][i] * f[l][0] + b.R[3 + e][i] * f[l][1] + b.R[6 + e][i] * f[l][2];  // R^T f
     }
-#pragma GCC unroll 9
-    for (int e = 0; e < 9; ++e) J[e] = b.J[l][e][i];
+    {  // d foot / d q_l (body frame, row-major), as Leg::jacobian
+      const double c[3] = {b.cos_theta[l][0][i], b.cos_theta[l][1][i], b.cos_theta[l][2][i]},
+                   sn[3] = {b.sin_theta[l][0][i], b.sin_theta[l][1][i], b.sin_theta[l][2][i]};
+      legs[l].jacobian_from(c, sn, J);
+    }
     const double det_J = adjugate_solve(J, relative, qd);
     const double solved =
         mask(det_J != 0.0) * finite_mask(det_J) * finite_mask(qd[0] + qd[1] + qd[2]);
@@ -174,8 +180,18 @@ SPOTKIN_INLINE void statics_tick(StaticsLanes& b, int i, double weight) noexcept
 }
 
 SPOTKIN_CLONES((__attribute__((noinline)) inline), void, statics_lanes,
-               (StaticsLanes & b, double weight), (b, weight),
-               for (int i = 0; i < kSub; ++i) statics_tick(b, i, weight);)
+               (StaticsLanes & b, const Leg* legs, double weight), (b, legs, weight),
+               for (int l = 0; l < kLegs;
+                    ++l) {  // Leg::jacobian's angles, each leg's sines and cosines in lanes
+                 double angle[3][kSub];
+                 for (int i = 0; i < kSub; ++i) {
+                   angle[0][i] = legs[l].sign(0) * b.q[l][0][i],
+                   angle[1][i] = legs[l].sign(1) * b.q[l][1][i];
+                   angle[2][i] = legs[l].sign(1) * b.q[l][1][i] + legs[l].sign(2) * b.q[l][2][i];
+                 }
+                 for (int k = 0; k < 3; ++k)
+                   vector_math::sincos(angle[k], b.sin_theta[l][k], b.cos_theta[l][k], kSub);
+               } for (int i = 0; i < kSub; ++i) statics_tick(b, legs, i, weight);)
 
 }  // namespace
 
@@ -186,7 +202,7 @@ void plan_statics(const dynamics::RobotStaticsModel<Model>& robot, const PlanRow
   const Body& body = robot.body;
   const int nq = robot.floating.nq(), nv = robot.floating.nv();
   std::vector<double> qf(std::size_t(nq) * kSub), wrench(std::size_t(nv) * kSub);
-  double g_body[3 * kSub], jacobians[kLegs][9 * kSub];
+  double g_body[3 * kSub];
   StaticsLanes lanes;
   constexpr double nan = quiet_nan<double>();
   for (std::ptrdiff_t b0 = 0; b0 < ticks; b0 += kSub) {
@@ -207,13 +223,6 @@ void plan_statics(const dynamics::RobotStaticsModel<Model>& robot, const PlanRow
     dynamics::floating_rnea_k(robot.floating, dynamics::Rows<double>{qf.data(), nq}, nullptr,
                               nullptr, dynamics::Rows<double>{g_body, 3}, wrench.data(), 0, m,
                               false);
-    for (int l = 0; l < kLegs; ++l) {  // each leg's d foot / d q_l, in lanes
-      const auto& col = body.columns[std::size_t(l)];
-      double q_leg[3 * kSub];
-      for (int i = 0; i < m; ++i)
-        for (int j = 0; j < 3; ++j) q_leg[3 * i + j] = out.q[kW * (b0 + i) + col[std::size_t(j)]];
-      kernels::leg_jacobian<double>(body.legs[std::size_t(l)], q_leg, jacobians[l], m);
-    }
     // into the lanes; the lanes past the block repeat its last tick
     for (int i = 0; i < kSub; ++i) {
       const int src = std::min(i, m - 1);
@@ -233,13 +242,13 @@ void plan_statics(const dynamics::RobotStaticsModel<Model>& robot, const PlanRow
         for (int e = 0; e < 3; ++e) {
           lanes.feet[l][e][i] = feet[3 * l + e], lanes.rate[l][e][i] = rate[3 * l + e];
           lanes.G[l][e][i] = G[6 + col[std::size_t(e)]];
+          lanes.q[l][e][i] = out.q[kW * n + col[std::size_t(e)]];
         }
-        for (int e = 0; e < 9; ++e) lanes.J[l][e][i] = jacobians[l][9 * src + e];
         lanes.down[l][i] = out.contact[kLegs * n + l] ? 1.0 : 0.0;
       }
       if (i >= m) lanes.valid[i] = lanes.valid[m - 1];
     }
-    statics_lanes(lanes, robot.mass * kGravity);
+    statics_lanes(lanes, body.legs.data(), robot.mass * kGravity);
     for (int i = 0; i < m; ++i) {
       const std::ptrdiff_t n = b0 + i;
       std::int8_t worst = leg_status[kLegs * n];

@@ -15,6 +15,7 @@
 
 #include "spotkin/body.hpp"
 #include "spotkin/dynamics/robot_statics.hpp"
+#include "spotkin/scratch.hpp"
 
 namespace spotkin::motion {
 
@@ -41,7 +42,10 @@ enum GaitSlot : int {
 };
 
 struct GaitNumbers {
-  double v[kGaitNumbers] = {};
+  double v[kGaitNumbers];
+  GaitNumbers() noexcept : v{} {}
+  // Scratch that is written whole before it is read: no zeroing (the planner's per-tick copies).
+  explicit GaitNumbers(Uninitialized) noexcept {}
   double operator[](int k) const noexcept { return v[k]; }
   double& operator[](int k) noexcept { return v[k]; }
 };
