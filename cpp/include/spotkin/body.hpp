@@ -279,6 +279,25 @@ SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip, c
   }
 }
 
+// (B2) alone for one leg over a block, for the seeded paths, which solve every slot themselves:
+// the hip-frame points R^T (f - t) - hip as leg_block_slot computes them, and exists = -1 where a
+// point is not finite (else 1), as leg_block gives it. No slot is solved.
+template <typename C>
+SPOTKIN_INLINE void leg_points_impl(const C* __restrict hip, const C (*__restrict R)[kBlock],
+                                    const C (*__restrict t)[kBlock], const C* __restrict fx,
+                                    const C* __restrict fy, const C* __restrict fz, C* __restrict x,
+                                    C* __restrict y, C* __restrict z, C* __restrict exists,
+                                    std::ptrdiff_t m) noexcept {
+  for (std::ptrdiff_t i = 0; i < m; ++i) {
+    const C dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
+    const C px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
+    const C py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
+    const C pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
+    x[i] = px, y[i] = py, z[i] = pz;
+    exists[i] = leg_batch::finite_mask(px, py, pz) == C(0) ? C(-1) : C(1);
+  }
+}
+
 // One run-time dispatched kernel per compute type (target_clones takes no templates).
 SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& leg, const double* __restrict hip,
                                             const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
@@ -298,6 +317,22 @@ SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& 
                                             float tol, float limit_tol) noexcept, (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
   leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
 )
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_points,
+               (const double* __restrict hip, const double (*__restrict R)[kBlock],
+                const double (*__restrict t)[kBlock], const double* __restrict fx,
+                const double* __restrict fy, const double* __restrict fz, double* __restrict x,
+                double* __restrict y, double* __restrict z, double* __restrict exists,
+                std::ptrdiff_t m) noexcept,
+               (hip, R, t, fx, fy, fz, x, y, z, exists, m),
+               leg_points_impl(hip, R, t, fx, fy, fz, x, y, z, exists, m);)
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_points,
+               (const float* __restrict hip, const float (*__restrict R)[kBlock],
+                const float (*__restrict t)[kBlock], const float* __restrict fx,
+                const float* __restrict fy, const float* __restrict fz, float* __restrict x,
+                float* __restrict y, float* __restrict z, float* __restrict exists,
+                std::ptrdiff_t m) noexcept,
+               (hip, R, t, fx, fy, fz, x, y, z, exists, m),
+               leg_points_impl(hip, R, t, fx, fy, fz, x, y, z, exists, m);)
 
 // The status and answer of a leg whose hip-frame point is not finite, at lane i of a block's poses
 // P (valid). A finite foot whose point overflowed (|foot - t| near the largest double, or float's
@@ -499,7 +534,11 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
       leg_batch::pad_block(fx, fy, fz, m);
       const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
-      leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol, limit_tol);
+      if (seed)  // every slot is solved below: the preferred one's answer would go unused
+        leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists, padded);
+      else
+        leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol,
+                  limit_tol);
       open.count = 0;
       if (!seed && leg_batch::all_settled(ok, P.ok, m)) {  // the common case, without a branch per target
         const std::ptrdiff_t c0 = col[0], c1 = col[1], c2 = col[2];
@@ -515,7 +554,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
         const std::ptrdiff_t t = b0 + i;
         T* qt = q_block + w * (t - b0);
         std::int8_t& st = status[n * t + l];
-        if (ok[i] != C(0) && P.ok[i] != C(0) && !seed) {  // the common case
+        if (!seed && ok[i] != C(0) && P.ok[i] != C(0)) {  // the common case (seeded: ok unset)
           qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
           st = std::int8_t(Status::Ok);
           continue;
@@ -572,8 +611,7 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
   const int n = body.n_legs(), w = body.width();
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
-  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock],
-      exists[kBlock], ok[kBlock];
+  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], exists[kBlock];
   leg_batch::OpenTargets<C> open;
   T running[3 * Body::kMaxLegs];  // each leg's seed, in its own three slots
   bool seeded = seed != nullptr;
@@ -595,7 +633,8 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
       leg_batch::pad_block(fx, fy, fz, m);
       const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
-      leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol, limit_tol);
+      leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists,
+                 padded);  // every slot is solved below
       open.count = 0;
       for (std::ptrdiff_t i = 0; i < m; ++i)
         if (P.ok[i] != C(0) && exists[i] >= C(0)) open.add(i, x[i], y[i], z[i]);
