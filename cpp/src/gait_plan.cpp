@@ -211,11 +211,16 @@ void body_pose(double x, double y, double z, double psi, double cz, double sz,
   const double cy = s.cos_pitch, sy = s.sin_pitch, cx = s.cos_roll, sx = s.sin_roll;
   const double R00 = cz * cy, R01 = -sz * cx + cz * sy * sx, R02 = sz * sx + cz * sy * cx;
   const double R12 = -cz * sx + sz * sy * cx, R22 = cy * cx;
-  const double b = std::asin(std::min(std::max(R02, -1.0), 1.0));
-  const double a = vector_math::atan2(-R12, R22);
-  double c = vector_math::atan2(-R01, R00);
-  c += kTwoPi * std::nearbyint((psi - c) / kTwoPi);
-  pose[0] = x, pose[1] = y, pose[2] = z, pose[3] = a, pose[4] = b, pose[5] = c;
+  pose[0] = x, pose[1] = y, pose[2] = z;
+  if (sx == 0.0 && sy == 0.0) {  // level (roll and pitch 0, cosines 1): R = Rz(psi), a = b = 0, c = psi
+    pose[3] = 0.0, pose[4] = 0.0, pose[5] = psi;
+  } else {
+    const double b = std::asin(std::min(std::max(R02, -1.0), 1.0));
+    const double a = vector_math::atan2(-R12, R22);
+    double c = vector_math::atan2(-R01, R00);
+    c += kTwoPi * std::nearbyint((psi - c) / kTwoPi);
+    pose[3] = a, pose[4] = b, pose[5] = c;
+  }
   if (R_out) {
     const double R[3][3] = {
         {R00, R01, R02}, {sz * cy, sz * sy * sx + cz * cx, R12}, {-sy, cy * sx, R22}};
@@ -398,6 +403,12 @@ double segment_distance(const double* c, const double* a, const double* b) noexc
 }  // namespace
 
 double support_margin(const double (*points)[2], int k, const double c[2]) noexcept {
+  if (k <= 2) {  // no area (a trot's or a pace's two feet): minus the distance to the segment
+    if (k == 0) return -std::numeric_limits<double>::infinity();
+    const double *lo = points[0], *hi = points[k - 1];  // lexicographic order, as sorted below
+    if (hi[0] < lo[0] || (hi[0] == lo[0] && hi[1] < lo[1])) std::swap(lo, hi);
+    return -segment_distance(c, lo, hi);
+  }
   // the distinct points in lexicographic order, then Andrew's monotone chain (counter-clockwise)
   std::array<double, 2> pts[Body::kMaxLegs];
   int n = 0;
