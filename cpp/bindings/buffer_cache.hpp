@@ -2,7 +2,7 @@
 //
 // Fresh memory costs a page fault per page on first touch (about 2 us per 4 KiB
 // page on the machines we measured, far more than the kernels' work per
-// sample). Outputs of at least kMinBytes are therefore mmap'd with
+// sample). Outputs of at least kMinBytes (1 MiB) are therefore mmap'd with
 // MADV_HUGEPAGE, and when the NumPy array that owns one dies, the buffer goes
 // to a small cache for the next call of a similar size. The cache is bounded
 // (kMaxBuffers buffers, kMaxBytes in all; the count allows the chunks a pool of
@@ -25,7 +25,7 @@ namespace spotkin::bindings {
 
 class BufferCache {
  public:
-  static constexpr std::size_t kMinBytes = std::size_t(4) << 20;
+  static constexpr std::size_t kMinBytes = std::size_t(1) << 20;
   static constexpr std::size_t kMaxBuffers = 32;
   static constexpr std::size_t kMaxBytes = std::size_t(1) << 30;
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "spotkin/dynamics/kernels.hpp"
@@ -575,9 +576,24 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
                   double rate, const PlanRows& out, const PlanChange* changes, int n_changes) {
   const Body& body = robot.body;
   constexpr int W = 3 * kLegs;
-  std::vector<double> feet_rate(std::size_t(ticks) * W), twist(std::size_t(ticks) * 6),
-      rotation(std::size_t(ticks) * 9);
-  std::vector<std::int8_t> leg_status(std::size_t(ticks) * kLegs);
+  // each tick's feet velocities, body twist and rotation (27 doubles) and legs' IK statuses: the
+  // thread's buffers, kept from command to command (a fresh 200 KB a command cost page faults and
+  // zeroing); written before they are read
+  struct Scratch {
+    std::unique_ptr<double[]> values;
+    std::unique_ptr<std::int8_t[]> statuses;
+    std::size_t ticks = 0;
+  };
+  thread_local Scratch scratch;
+  if (scratch.ticks < std::size_t(ticks)) {
+    scratch.values.reset(new double[std::size_t(ticks) * (W + 6 + 9)]);
+    scratch.statuses.reset(new std::int8_t[std::size_t(ticks) * kLegs]);
+    scratch.ticks = std::size_t(ticks);
+  }
+  double* const feet_rate = scratch.values.get();
+  double* const twist = feet_rate + std::size_t(ticks) * W;
+  double* const rotation = twist + std::size_t(ticks) * 6;
+  std::int8_t* const leg_status = scratch.statuses.get();
   PlannerState s;
   start(gait, command, attitude, s);
   TickKinematics k;
@@ -588,20 +604,21 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
       change(s, changes[pending].gait, changes[pending].command);
     sample(s, k);
     std::copy(k.pose, k.pose + 6, out.pose + 6 * n);
-    std::copy(&k.R[0][0], &k.R[0][0] + 9, rotation.data() + 9 * n);
+    std::copy(&k.R[0][0], &k.R[0][0] + 9, rotation + 9 * n);
     std::copy(&k.feet[0][0], &k.feet[0][0] + W, out.feet + W * n);
-    std::copy(&k.feet_rate[0][0], &k.feet_rate[0][0] + W, feet_rate.data() + W * n);
-    std::copy(k.linear, k.linear + 3, twist.data() + 6 * n);
-    std::copy(k.angular, k.angular + 3, twist.data() + 6 * n + 3);
+    std::copy(&k.feet_rate[0][0], &k.feet_rate[0][0] + W, feet_rate + W * n);
+    std::copy(k.linear, k.linear + 3, twist + 6 * n);
+    std::copy(k.angular, k.angular + 3, twist + 6 * n + 3);
     for (int i = 0; i < kLegs; ++i) out.contact[kLegs * n + i] = k.contact[i];
     out.shortened[n] = k.shortened;
   }
   // the whole-body IK along the path, each tick seeded with the previous one
   kernels::body_ik_path<double>(body, out.pose, BodyPoseFormat::Euler, xyz_sequence(), out.feet,
-                                nullptr, out.q, leg_status.data(), ticks, true);
+                                nullptr, out.q, leg_status, ticks, true);
   // the statics along the path: G(q), the stance forces, qd, tau and the margin (gait_statics.cpp)
-  plan_statics(robot, out, rotation.data(), feet_rate.data(), twist.data(), leg_status.data(),
-               ticks);
+  plan_statics(robot, out, rotation, feet_rate, twist, leg_status, ticks);
+  if (scratch.ticks > (std::size_t(1) << 15))
+    scratch = Scratch{};  // past 32768 ticks (7 MB): freed
 }
 
 #define SPOTKIN_INSTANTIATE(L)                                                                    \
