@@ -187,14 +187,19 @@ void crawl_shift(const GaitNumbers& P, const GaitNumbers& Pd, const double* phas
   value[0] = value[1] = rate[0] = rate[1] = 0.0;
   if (weight == 0.0 && weight_rate == 0.0) return;
   const double centre = (1.0 + P[kDuty]) / 2.0, centre_rate = Pd[kDuty] / 2.0;
+  // the first harmonic's angles a_i, their sines and cosines in one vectorised call; the second
+  // harmonic's angle is 2 a_i exactly (a product by 2), its cos and sin by the double angle
+  double first[kLegs], sin1[kLegs], cos1[kLegs];
+  for (int i = 0; i < kLegs; ++i) first[i] = kTwoPi * (phases[i] - centre);
+  vector_math::sincos(first, sin1, cos1, kLegs);
   double sum[2] = {0.0, 0.0}, sum_rate[2] = {0.0, 0.0};
   for (int i = 0; i < kLegs; ++i)
     for (int axis = 0; axis < 2; ++axis) {
       const double harmonic = axis == 0 ? 2.0 : 1.0;
-      const double angle = kTwoPi * harmonic * (phases[i] - centre);
       const double angle_rate = kTwoPi * harmonic * (phase_rates[i] - centre_rate);
       const double X = P[kSway + 2 * i + axis], X_rate = Pd[kSway + 2 * i + axis];
-      const double c = std::cos(angle), s = std::sin(angle);
+      const double c = axis == 0 ? (cos1[i] - sin1[i]) * (cos1[i] + sin1[i]) : cos1[i],
+                   s = axis == 0 ? 2.0 * sin1[i] * cos1[i] : sin1[i];
       sum[axis] += X * c;
       sum_rate[axis] += X_rate * c - X * s * angle_rate;
     }
