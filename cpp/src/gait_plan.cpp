@@ -122,9 +122,9 @@ double speed_scale(const GaitNumbers& P, const double target[3]) noexcept {
     const double dx = half_stance * (target[0] - target[2] * r1);
     const double dy = half_stance * (target[1] + target[2] * r0);
     const double a = dx / room[0], b = dy / room[1];
-    worst = std::max(worst, std::sqrt(a * a + b * b));
+    worst = std::max(worst, a * a + b * b);
   }
-  return 1.0 / worst;
+  return 1.0 / std::sqrt(worst);  // the square root of the largest: the largest square root
 }
 
 // Step 3's target: the command times `moving` times the step-fit scale (returned). Once the gait
@@ -418,8 +418,12 @@ double support_margin(const double (*points)[2], int k, const double c[2]) noexc
   // the distinct points in lexicographic order, then Andrew's monotone chain (counter-clockwise)
   std::array<double, 2> pts[Body::kMaxLegs];
   int n = 0;
-  for (int i = 0; i < k; ++i) pts[n++] = {points[i][0], points[i][1]};
-  std::sort(pts, pts + n);
+  for (int i = 0; i < k; ++i) {  // insertion sort: a handful of feet
+    std::array<double, 2> p{points[i][0], points[i][1]};
+    int j = n++;
+    for (; j > 0 && p < pts[j - 1]; --j) pts[j] = pts[j - 1];
+    pts[j] = p;
+  }
   n = int(std::unique(pts, pts + n) - pts);
   if (n == 0) return -std::numeric_limits<double>::infinity();
   const double* hull[2 * Body::kMaxLegs];
