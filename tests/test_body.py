@@ -501,3 +501,89 @@ def test_body_transform_broadcasts_writes_out_and_keeps_float64_for_float32(rng)
         sk.body_transform(np.zeros(5))
     with pytest.raises(TypeError, match="out"):
         sk.body_transform(euler[5], out=np.empty((4, 4), np.float32))
+
+
+def _wrapped(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def _wide_limits(name: str):
+    """Go2 or the tests' heavy quadruped with every joint's range widened to (-pi, pi]: most feet
+    then have all four branches valid, and a seed has a real choice."""
+    import re
+
+    from urdf_helpers import quadruped_urdf
+
+    text = sk.robots.text("go2") if name == "go2" else quadruped_urdf(0.4, 90.0, 200.0)
+    text = re.sub(r'lower="[^"]*"', 'lower="-3.14159"', text)
+    text = re.sub(r'upper="[^"]*"', 'upper="3.14159"', text)
+    return sk.Robot.from_urdf_string(text)
+
+
+WIDE = {}
+
+
+@pytest.mark.parametrize("name", ["go2", "heavy"])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_seed_gets_the_valid_branch_nearest_it(rng, name, dtype):
+    """With a seed, each leg's answer is its valid branch nearest the seed (the largest joint's circle
+    distance), found here by brute force over the leg's ik_all, on robots whose joints turn all the
+    way round (most feet have four valid branches). The seeds sit near the midpoints between two
+    valid branches, where a shortcut that skipped the other branches would go wrong, and near one
+    branch; some poses stretch the knees, where branches meet. In a batch, and for a few poses (the
+    batch's bits)."""
+    if name not in WIDE:
+        WIDE[name] = _wide_limits(name)
+    robot = WIDE[name]
+    height = {"go2": 0.3, "heavy": 0.6}[name]
+    n = 400
+    stance = robot.stance_feet(height)
+    poses = np.zeros((n, 6))
+    poses[:, 2] = height
+    poses += rng.normal(size=(n, 6)) * [0.05, 0.05, 0.05, 0.2, 0.2, 0.3]
+    poses[::7, 2] += rng.uniform(0.0, 0.3 * height, len(poses[::7]))  # stretched knees, or out of reach
+    feet = stance + rng.normal(size=(n, *stance.shape)) * 0.04
+    T = np.stack([sk.body_transform(p) for p in poses])
+    seeds = np.empty((n, 12))
+    branches, valid = [], []
+    for leg_index, leg in enumerate(robot.legs):
+        hip = robot.hip_positions[leg_index]
+        local = np.einsum("nji,nj->ni", T[:, :3, :3], feet[:, leg_index] - T[:, :3, 3]) - hip
+        sol = leg.ik_all(local)
+        branches.append(sol.q)
+        valid.append(sol.valid)
+        for k in range(n):
+            slots = np.flatnonzero(sol.valid[k])
+            if len(slots) == 0:
+                seeds[k, 3 * leg_index : 3 * leg_index + 3] = rng.uniform(-3, 3, 3)
+                continue
+            a, b = rng.choice(slots, 2, replace=len(slots) == 1)
+            u = rng.uniform(0.3, 0.7) if k % 3 else rng.uniform(0.0, 0.3)
+            step = _wrapped(sol.q[k, b] - sol.q[k, a])
+            seeds[k, 3 * leg_index : 3 * leg_index + 3] = sol.q[k, a] + u * step + rng.normal(0, 1e-3, 3)
+    got = robot.body_ik(poses.astype(dtype), feet.astype(dtype), seed=seeds.astype(dtype))
+    rows = range(0, n, 37)
+    few = [
+        robot.body_ik(poses[k].astype(dtype), feet[k].astype(dtype), seed=seeds[k].astype(dtype))
+        for k in rows
+    ]
+    tol = 1e-9 if dtype == np.float64 else 2e-3
+    checked = 0
+    for leg_index in range(len(robot.legs)):
+        q = branches[leg_index]
+        seed = seeds[:, 3 * leg_index : 3 * leg_index + 3]
+        distance = np.abs(_wrapped(q - seed[:, None, :])).max(axis=2)
+        distance[~valid[leg_index]] = np.inf
+        for k in range(n):
+            finite = np.sort(distance[k][np.isfinite(distance[k])])
+            if len(finite) < 2 or finite[1] - finite[0] < 10 * tol:
+                continue  # one valid branch (no choice), or a near tie (either is right to rounding)
+            expected = q[k, np.argmin(distance[k])]
+            answer = got.q[k, 3 * leg_index : 3 * leg_index + 3].astype(np.float64)
+            np.testing.assert_allclose(
+                _wrapped(answer - expected), 0.0, atol=tol, err_msg=f"pose {k} leg {leg_index}"
+            )
+            checked += 1
+    assert checked > n  # a real choice at most pose-legs
+    for j, k in enumerate(rows):  # a few poses: the batch's bits
+        np.testing.assert_array_equal(few[j].q, got.q[k])

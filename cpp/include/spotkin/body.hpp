@@ -238,11 +238,14 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
 
 // (B2) + the leg's preferred slot for one leg over a block: vectorised (one
 // clone per slot, so that the branch signs are constants).
-template <int Slot, typename C>
-SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip, const C (*__restrict R)[kBlock],
-                                   const C (*__restrict t)[kBlock], const C* __restrict fx, const C* __restrict fy,
-                                   const C* __restrict fz, C* __restrict x, C* __restrict y, C* __restrict z,
-                                   C (*__restrict q0)[kBlock], C* __restrict exists, C* __restrict ok,
+// Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
+template <int Slot, bool Bound, typename C>
+SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
+                                   const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
+                                   const C* __restrict fx, const C* __restrict fy,
+                                   const C* __restrict fz, C* __restrict x, C* __restrict y,
+                                   C* __restrict z, C (*__restrict q0)[kBlock],
+                                   C* __restrict exists, C* __restrict ok, C* __restrict bound,
                                    std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   Leg::SlotStages<C, kBlock> st;  // two loops: Leg::SlotStages
   for (std::ptrdiff_t i = 0; i < m; ++i) {
@@ -261,21 +264,32 @@ SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip, cons
     ok[i] = e * leg.limits().wrap_mask(q, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
+    if constexpr (Bound) bound[i] = leg.slot_separation(i, st);
   }
 }
 
-template <typename C>
-SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip, const C (*__restrict R)[kBlock],
-                                   const C (*__restrict t)[kBlock], const C* __restrict fx, const C* __restrict fy,
-                                   const C* __restrict fz, C* __restrict x, C* __restrict y, C* __restrict z,
-                                   C (*__restrict q0)[kBlock], C* __restrict exists, C* __restrict ok,
+template <bool Bound, typename C>
+SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip,
+                                   const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
+                                   const C* __restrict fx, const C* __restrict fy,
+                                   const C* __restrict fz, C* __restrict x, C* __restrict y,
+                                   C* __restrict z, C (*__restrict q0)[kBlock],
+                                   C* __restrict exists, C* __restrict ok, C* __restrict bound,
                                    std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
   switch (leg.preferred_slot()) {
-    case 0: return leg_block_slot<0>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-    case 1: return leg_block_slot<1>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-    case 2: return leg_block_slot<2>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-    default: return leg_block_slot<3>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
+    case 0:
+      return leg_block_slot<0, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
+                                      tol, limit_tol);
+    case 1:
+      return leg_block_slot<1, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
+                                      tol, limit_tol);
+    case 2:
+      return leg_block_slot<2, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
+                                      tol, limit_tol);
+    default:
+      return leg_block_slot<3, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
+                                      tol, limit_tol);
   }
 }
 
@@ -299,24 +313,47 @@ SPOTKIN_INLINE void leg_points_impl(const C* __restrict hip, const C (*__restric
 }
 
 // One run-time dispatched kernel per compute type (target_clones takes no templates).
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& leg, const double* __restrict hip,
-                                            const double (*__restrict R)[kBlock], const double (*__restrict t)[kBlock],
-                                            const double* __restrict fx, const double* __restrict fy,
-                                            const double* __restrict fz, double* __restrict x, double* __restrict y,
-                                            double* __restrict z, double (*__restrict q0)[kBlock],
-                                            double* __restrict exists, double* __restrict ok, std::ptrdiff_t m,
-                                            double tol, double limit_tol) noexcept, (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
-  leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-)
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block, (const Leg& leg, const float* __restrict hip,
-                                            const float (*__restrict R)[kBlock], const float (*__restrict t)[kBlock],
-                                            const float* __restrict fx, const float* __restrict fy,
-                                            const float* __restrict fz, float* __restrict x, float* __restrict y,
-                                            float* __restrict z, float (*__restrict q0)[kBlock],
-                                            float* __restrict exists, float* __restrict ok, std::ptrdiff_t m,
-                                            float tol, float limit_tol) noexcept, (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
-  leg_block_impl(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol);
-)
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block,
+               (const Leg& leg, const double* __restrict hip, const double (*__restrict R)[kBlock],
+                const double (*__restrict t)[kBlock], const double* __restrict fx,
+                const double* __restrict fy, const double* __restrict fz, double* __restrict x,
+                double* __restrict y, double* __restrict z, double (*__restrict q0)[kBlock],
+                double* __restrict exists, double* __restrict ok, std::ptrdiff_t m, double tol,
+                double limit_tol) noexcept,
+               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
+               leg_block_impl<false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
+                                     static_cast<double*>(nullptr), m, tol, limit_tol);)
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block,
+               (const Leg& leg, const float* __restrict hip, const float (*__restrict R)[kBlock],
+                const float (*__restrict t)[kBlock], const float* __restrict fx,
+                const float* __restrict fy, const float* __restrict fz, float* __restrict x,
+                float* __restrict y, float* __restrict z, float (*__restrict q0)[kBlock],
+                float* __restrict exists, float* __restrict ok, std::ptrdiff_t m, float tol,
+                float limit_tol) noexcept,
+               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
+               leg_block_impl<false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
+                                     static_cast<float*>(nullptr), m, tol, limit_tol);)
+// leg_block with each target's slot_separation (the seeded paths' certificates).
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block_seeded,
+               (const Leg& leg, const double* __restrict hip, const double (*__restrict R)[kBlock],
+                const double (*__restrict t)[kBlock], const double* __restrict fx,
+                const double* __restrict fy, const double* __restrict fz, double* __restrict x,
+                double* __restrict y, double* __restrict z, double (*__restrict q0)[kBlock],
+                double* __restrict exists, double* __restrict ok, double* __restrict bound,
+                std::ptrdiff_t m, double tol, double limit_tol) noexcept,
+               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol),
+               leg_block_impl<true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
+                                    tol, limit_tol);)
+SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block_seeded,
+               (const Leg& leg, const float* __restrict hip, const float (*__restrict R)[kBlock],
+                const float (*__restrict t)[kBlock], const float* __restrict fx,
+                const float* __restrict fy, const float* __restrict fz, float* __restrict x,
+                float* __restrict y, float* __restrict z, float (*__restrict q0)[kBlock],
+                float* __restrict exists, float* __restrict ok, float* __restrict bound,
+                std::ptrdiff_t m, float tol, float limit_tol) noexcept,
+               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol),
+               leg_block_impl<true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
+                                    tol, limit_tol);)
 SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_points,
                (const double* __restrict hip, const double (*__restrict R)[kBlock],
                 const double (*__restrict t)[kBlock], const double* __restrict fx,
@@ -463,10 +500,47 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
   if (!seed && body.preferred_slot >= 0 &&
       ik_pairs_preferred(body, P, open, count, padded, tol, limit_tol, q, status))
     return;
-  if (body.shared_knees)
+  // With a seed, as ik(): the preferred slot's answer where the seed certifies it
+  // (seed_certifies); every slot is solved only when some pair's seed does not
+  const bool certify = seed && body.preferred_slot >= 0;
+  C q0[3][kBlock], exists0[kBlock], ok0[kBlock], bound[kBlock];
+  bool certified[kBlock] = {};
+  bool every_slot = !certify;
+  if (certify) {
+    const auto& L = body.pair_legs;
+    switch (body.preferred_slot) {
+      case 0:
+        leg_batch::slot_pass_lanes<0, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
+                                            exists0, ok0, bound);
+        break;
+      case 1:
+        leg_batch::slot_pass_lanes<1, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
+                                            exists0, ok0, bound);
+        break;
+      case 2:
+        leg_batch::slot_pass_lanes<2, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
+                                            exists0, ok0, bound);
+        break;
+      default:
+        leg_batch::slot_pass_lanes<3, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
+                                            exists0, ok0, bound);
+        break;
+    }
+    for (std::ptrdiff_t k = 0, i = 0, l = 0; k < m; ++k, l = l + 1 == n ? 0 : l + 1, i += l == 0) {
+      const std::array<int, 3>& col = body.columns[std::size_t(l)];
+      const T* s = seed + w * i;
+      const T sd[3] = {s[col[0]], s[col[1]], s[col[2]]};
+      if (P.ok[i] == C(0) || !leg_batch::finite3(sd) ||
+          leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0))
+        continue;  // invalid, or a NaN foot: below, as without a certificate
+      certified[k] = leg_batch::seed_certifies(ok0[k], bound[k], q0[0][k], q0[1][k], q0[2][k], sd);
+      every_slot = every_slot || !certified[k];
+    }
+  }
+  if (every_slot && body.shared_knees)
     leg_batch::solve_slots_lanes<true>(body.pair_legs, open.x, open.y, open.z, padded, tol,
                                        limit_tol, open.q, open.ok, open.exists_hip);
-  else
+  else if (every_slot)
     leg_batch::solve_slots_lanes<false>(body.pair_legs, open.x, open.y, open.z, padded, tol,
                                         limit_tol, open.q, open.ok, open.exists_hip);
   // pair k = n i + l: pose i, leg l (counters, in the increment: the loop body may `continue`)
@@ -487,6 +561,9 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
     if (leg_batch::finite_mask(open.x[k], open.y[k], open.z[k]) == C(0)) {  // NaN foot, or overflow
       st = std::int8_t(unfinite_foot(leg, P, i, feet + (feet_shared ? 3 * l : 3 * n * i + 3 * l),
                                      nearest_fallback, leg_q));
+    } else if (certified[k]) {
+      leg_q[0] = T(q0[0][k]), leg_q[1] = T(q0[1][k]), leg_q[2] = T(q0[2][k]);
+      st = std::int8_t(Status::Ok);
     } else {
       if (s) sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
       st = std::int8_t(open.choose(leg, k, s ? sd : nullptr, leg_q, nearest_fallback));
@@ -514,8 +591,12 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
                                    count, nearest_fallback);
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
-  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock], exists[kBlock], ok[kBlock];
+  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock],
+      exists[kBlock], ok[kBlock], bound[kBlock];
   leg_batch::OpenTargets<C> open;
+  // with a seed, the preferred slot's answer where the seed certifies it (seed_certifies), every
+  // slot where it does not; on the terms ik_pairs has (legs sharing their preferred slot)
+  const bool certify = seed && body.preferred_slot >= 0;
   // a large output: each block's q staged here, then streamed out (no read for ownership)
   const bool stream =
       w <= kStagedWidth && std::size_t(count) * std::size_t(w) * sizeof(T) >= kStreamBytes;
@@ -534,7 +615,10 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
       leg_batch::pad_block(fx, fy, fz, m);
       const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
-      if (seed)  // every slot is solved below: the preferred one's answer would go unused
+      if (certify)
+        leg_block_seeded(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, bound, padded,
+                         tol, limit_tol);
+      else if (seed)  // every slot is solved below: the preferred one's answer would go unused
         leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists, padded);
       else
         leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol,
@@ -575,6 +659,14 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
           qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
           continue;
         }
+        if (certify) {
+          const T sd[3] = {s[col[0]], s[col[1]], s[col[2]]};
+          if (leg_batch::seed_certifies(ok[i], bound[i], q0[0][i], q0[1][i], q0[2][i], sd)) {
+            qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
+            st = std::int8_t(Status::Ok);
+            continue;
+          }
+        }
         open.add(i, x[i], y[i], z[i]);
       }
       open.solve(leg, tol, limit_tol);
@@ -611,8 +703,10 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
   const int n = body.n_legs(), w = body.width();
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
-  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], exists[kBlock];
+  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], exists[kBlock],
+      q0[3][kBlock], ok[kBlock], bound[kBlock];
   leg_batch::OpenTargets<C> open;
+  const bool certify = body.preferred_slot >= 0;  // as ik() certifies a seed
   T running[3 * Body::kMaxLegs];  // each leg's seed, in its own three slots
   bool seeded = seed != nullptr;
   if (seeded)
@@ -633,12 +727,16 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
       leg_batch::pad_block(fx, fy, fz, m);
       const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
-      leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists,
-                 padded);  // every slot is solved below
+      // the preferred slot's answers and the seeds' certificates (as ik() has them); every slot is
+      // solved only from the first target a seed does not certify (the seed of each is the answer
+      // before it), once a block
+      if (certify)
+        leg_block_seeded(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, bound, padded,
+                         tol, limit_tol);
+      else
+        leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists, padded);
       open.count = 0;
-      for (std::ptrdiff_t i = 0; i < m; ++i)
-        if (P.ok[i] != C(0) && exists[i] >= C(0)) open.add(i, x[i], y[i], z[i]);
-      open.solve(leg, tol, limit_tol);
+      bool opened = false;
       T* sd = running + 3 * l;
       bool leg_seeded = block_seeded;
       for (std::ptrdiff_t i = 0, k = 0; i < m; ++i) {
@@ -646,17 +744,27 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
         T* qt = q + w * t;
         T leg_q[3];
         std::int8_t st;
-        const bool solved = k < open.count && open.index[k] == i;
         if (P.ok[i] == C(0) || (leg_seeded && !leg_batch::finite3(sd))) {  // as ik()
           leg_q[0] = leg_q[1] = leg_q[2] = T(quiet_nan<double>());
           st = std::int8_t(Status::InvalidInput);
-        } else if (!solved) {  // a NaN foot, or overflow
+        } else if (exists[i] < C(0)) {  // a NaN foot, or overflow
           st = std::int8_t(
               unfinite_foot(leg, P, i, feet + 3 * n * t + 3 * l, nearest_fallback, leg_q));
+        } else if (certify && (leg_seeded ? leg_batch::seed_certifies(ok[i], bound[i], q0[0][i],
+                                                                      q0[1][i], q0[2][i], sd)
+                                          : ok[i] != C(0))) {  // unseeded: the preferred slot first
+          leg_q[0] = T(q0[0][i]), leg_q[1] = T(q0[1][i]), leg_q[2] = T(q0[2][i]);
+          st = std::int8_t(Status::Ok);
         } else {
+          if (!opened) {
+            for (std::ptrdiff_t j = i; j < m; ++j)
+              if (P.ok[j] != C(0) && exists[j] >= C(0)) open.add(j, x[j], y[j], z[j]);
+            open.solve(leg, tol, limit_tol);
+            opened = true;
+          }
+          while (open.index[k] < i) ++k;
           st = std::int8_t(open.choose(leg, k, leg_seeded ? sd : nullptr, leg_q, nearest_fallback));
         }
-        k += solved;
         qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
         status[n * t + l] = st;
         for (int j = 0; j < 3;

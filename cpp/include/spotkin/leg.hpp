@@ -229,6 +229,21 @@ class Leg {
                                C q[3]) const noexcept {
     return slot_angles_with<Slot>(k_, i, x, y, z, st, q);
   }
+  // A lower bound on the circle distance (circle_distance, the largest joint's) from slot Slot's
+  // answer to any other slot's, from its stages: the other knee branch's q3 is 2 acos_psi away
+  // (mod 2 pi), at least 2 sin_psi; the other hip branch's q1 is 2 atan2(S, h) away (mod 2 pi), at
+  // least 2 S / (|h| + S) (atan t >= t / (1 + t) for t >= 0). 0 where the branches meet.
+  template <typename C, std::ptrdiff_t N>
+  SPOTKIN_INLINE C slot_separation(std::ptrdiff_t i, const SlotStages<C, N>& st) const noexcept {
+    return slot_separation_with(k_, i, st);
+  }
+  template <typename C, std::ptrdiff_t N>
+  static SPOTKIN_INLINE C slot_separation_with(const RppConstants& k, std::ptrdiff_t i,
+                                               const SlotStages<C, N>& st) noexcept {
+    const C S = st.S[i], sum = C(std::fabs(k.h)) + S;
+    const C hip = sum > C(0) ? C(2) * S / sum : C(0), knee = C(2) * st.sin_psi[i];
+    return hip < knee ? hip : knee;
+  }
   // The stages with a leg's constants k (a lane kernel's: each lane its own leg's).
   template <typename C, std::ptrdiff_t N>
   static SPOTKIN_INLINE void slot_hip_with(const RppConstants& k, std::ptrdiff_t i, C y, C z, C tol,
@@ -607,6 +622,19 @@ SPOTKIN_INLINE bool all_settled(const C* ok, const C* also, std::ptrdiff_t m) no
 template <typename C>
 SPOTKIN_INLINE C finite_mask(C x, C y, C z) noexcept {
   return (((x - x) == C(0)) & ((y - y) == C(0)) & ((z - z) == C(0))) ? C(1) : C(0);
+}
+
+// Whether a seed certifies the preferred slot's answer q (ok: it is valid; bound: slot_separation)
+// as the valid slot nearest to it, the one OpenTargets::choose would pick: within 0.45 bound of the
+// seed (circle_distance), every other slot is at least bound from q, so at least 0.55 bound from
+// the seed (the triangle inequality; the margins cover rounding). Then no other slot need be
+// solved.
+template <typename C, typename T>
+SPOTKIN_INLINE bool seed_certifies(C ok, C bound, C q0, C q1, C q2, const T* seed) noexcept {
+  if (ok == C(0) || !(double(bound) > 1e-6)) return false;
+  const double q[3] = {double(q0), double(q1), double(q2)},
+               s[3] = {double(seed[0]), double(seed[1]), double(seed[2])};
+  return circle_distance<3>(q, s) <= 0.45 * double(bound);
 }
 
 // The targets of a block that the preferred-slot pass did not settle (a seed,

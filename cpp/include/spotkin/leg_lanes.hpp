@@ -40,12 +40,14 @@ struct LegLanes {
 
 // slot_pass with lane i solved for the leg L holds in lane i (m <= N), all in slot Slot: the same
 // operations on each lane as leg_block_slot for that leg alone. ok[i] = 1 where the slot exists
-// and fits the limits; exists[i] -1 for a non-finite target.
-template <int Slot, std::ptrdiff_t N, typename C>
+// and fits the limits; exists[i] -1 for a non-finite target. Bound: also each lane's
+// slot_separation (bound), as leg_block_seeded gives it.
+template <int Slot, bool Bound = false, std::ptrdiff_t N, typename C>
 SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __restrict x,
                                     const C* __restrict y, const C* __restrict z, std::ptrdiff_t m,
                                     C tol, C limit_tol, C (*__restrict q)[kBlock],
-                                    C* __restrict exists, C* __restrict ok) noexcept {
+                                    C* __restrict exists, C* __restrict ok,
+                                    C* __restrict bound = nullptr) noexcept {
   Leg::SlotStages<C, kBlock> st;
   for (std::ptrdiff_t i = 0; i < m; ++i) Leg::slot_hip_with(L.at(i), i, y[i], z[i], tol, st);
   for (std::ptrdiff_t i = 0; i < m; ++i) {
@@ -59,6 +61,7 @@ SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __
     ok[i] = e * JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : e;
     q[0][i] = qi[0], q[1][i] = qi[1], q[2][i] = qi[2];
+    if constexpr (Bound) bound[i] = Leg::slot_separation_with(k, i, st);
   }
 }
 
