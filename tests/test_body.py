@@ -530,8 +530,8 @@ def test_a_seed_gets_the_valid_branch_nearest_it(rng, name, dtype):
     distance), found here by brute force over the leg's ik_all, on robots whose joints turn all the
     way round (most feet have four valid branches). The seeds sit near the midpoints between two
     valid branches, where a shortcut that skipped the other branches would go wrong, and near one
-    branch; some poses stretch the knees, where branches meet. In a batch, and for a few poses (the
-    batch's bits)."""
+    branch; some poses stretch the knees, where branches meet. In a batch, for a few poses (the
+    batch's bits), and for each leg alone (Leg.ik with the leg's seed)."""
     if name not in WIDE:
         WIDE[name] = _wide_limits(name)
     robot = WIDE[name]
@@ -545,11 +545,12 @@ def test_a_seed_gets_the_valid_branch_nearest_it(rng, name, dtype):
     feet = stance + rng.normal(size=(n, *stance.shape)) * 0.04
     T = np.stack([sk.body_transform(p) for p in poses])
     seeds = np.empty((n, 12))
-    branches, valid = [], []
+    branches, valid, locals_ = [], [], []
     for leg_index, leg in enumerate(robot.legs):
         hip = robot.hip_positions[leg_index]
         local = np.einsum("nji,nj->ni", T[:, :3, :3], feet[:, leg_index] - T[:, :3, 3]) - hip
         sol = leg.ik_all(local)
+        locals_.append(local)
         branches.append(sol.q)
         valid.append(sol.valid)
         for k in range(n):
@@ -562,6 +563,10 @@ def test_a_seed_gets_the_valid_branch_nearest_it(rng, name, dtype):
             step = _wrapped(sol.q[k, b] - sol.q[k, a])
             seeds[k, 3 * leg_index : 3 * leg_index + 3] = sol.q[k, a] + u * step + rng.normal(0, 1e-3, 3)
     got = robot.body_ik(poses.astype(dtype), feet.astype(dtype), seed=seeds.astype(dtype))
+    leg_answers = [  # the legs alone, each with its own seed: the same choice
+        leg.ik(locals_[j].astype(dtype), seed=seeds[:, 3 * j : 3 * j + 3].astype(dtype))
+        for j, leg in enumerate(robot.legs)
+    ]
     rows = range(0, n, 37)
     few = [
         robot.body_ik(poses[k].astype(dtype), feet[k].astype(dtype), seed=seeds[k].astype(dtype))
@@ -582,6 +587,10 @@ def test_a_seed_gets_the_valid_branch_nearest_it(rng, name, dtype):
             answer = got.q[k, 3 * leg_index : 3 * leg_index + 3].astype(np.float64)
             np.testing.assert_allclose(
                 _wrapped(answer - expected), 0.0, atol=tol, err_msg=f"pose {k} leg {leg_index}"
+            )
+            alone = leg_answers[leg_index][0][k].astype(np.float64)  # (q, status)
+            np.testing.assert_allclose(
+                _wrapped(alone - expected), 0.0, atol=tol, err_msg=f"leg {leg_index} target {k}"
             )
             checked += 1
     assert checked > n  # a real choice at most pose-legs

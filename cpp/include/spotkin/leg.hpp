@@ -697,9 +697,11 @@ struct OpenTargets {
 
 // Vectorised: slot Slot and its limits for every target of a block; exists
 // -1 for invalid input.
-template <int Slot, typename C>
-SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z, C* hx, C* hy, C* kn, C* exists,
-                              C* ok, std::ptrdiff_t m, C tol, C limit_tol) noexcept {
+// Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
+template <int Slot, bool Bound = false, typename C>
+SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z, C* hx, C* hy,
+                              C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol,
+                              C* bound = nullptr) noexcept {
   Leg::SlotStages<C, kBlock> st;  // m <= kBlock
   for (std::ptrdiff_t i = 0; i < m; ++i) leg.slot_hip(i, y[i], z[i], tol, st);
   for (std::ptrdiff_t i = 0; i < m; ++i) {
@@ -710,18 +712,24 @@ SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z
     ok[i] = exists[i] * leg.limits().wrap_mask(q0, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : exists[i];
     hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
+    if constexpr (Bound) bound[i] = leg.slot_separation(i, st);
   }
 }
 
-template <typename C>
-SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, const C* z, C* hx, C* hy, C* kn,
-                                   C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol) noexcept {
+template <bool Bound = false, typename C>
+SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, const C* z, C* hx,
+                                   C* hy, C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol,
+                                   C limit_tol, C* bound = nullptr) noexcept {
   const Leg leg = leg_in;  // a local copy: the output arrays cannot alias its constants
   switch (leg.preferred_slot()) {
-    case 0: return slot_pass<0>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
-    case 1: return slot_pass<1>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
-    case 2: return slot_pass<2>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
-    default: return slot_pass<3>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol);
+    case 0:
+      return slot_pass<0, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+    case 1:
+      return slot_pass<1, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+    case 2:
+      return slot_pass<2, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+    default:
+      return slot_pass<3, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
   }
 }
 
@@ -747,7 +755,8 @@ template <int RegisterBytes = 64, typename T>
 SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int8_t* status,
                        std::ptrdiff_t count, bool nearest_fallback = true) noexcept {
   using C = Compute<T>;
-  C x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock];
+  C x[kBlock], y[kBlock], z[kBlock], hx[kBlock], hy[kBlock], kn[kBlock], exists[kBlock], ok[kBlock],
+      bound[kBlock];
   OpenTargets<C> open;
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   // Open targets gather across blocks (index: their place in the batch) and are
@@ -777,13 +786,18 @@ SPOTKIN_INLINE void ik(const Leg& leg, const T* p, const T* seed, T* q, std::int
           if (open.count == kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
         }
       }
-    } else {  // every target is chosen among all the slots
+    } else {  // the preferred slot where the seed certifies it (seed_certifies), else every slot
+      preferred_pass<true>(leg, x, y, z, hx, hy, kn, exists, ok,
+                           pad_block<RegisterBytes>(x, y, z, m), tol, limit_tol, bound);
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
         T* qt = q + 3 * t;
-        if (finite_mask(x[i], y[i], z[i]) == C(0) || !finite3(seed + 3 * t)) {
+        if (exists[i] < C(0) || !finite3(seed + 3 * t)) {
           qt[0] = qt[1] = qt[2] = T(quiet_nan<double>());
           status[t] = std::int8_t(Status::InvalidInput);
+        } else if (seed_certifies(ok[i], bound[i], hx[i], hy[i], kn[i], seed + 3 * t)) {
+          qt[0] = T(hx[i]), qt[1] = T(hy[i]), qt[2] = T(kn[i]);
+          status[t] = std::int8_t(Status::Ok);
         } else {
           open.add(t, x[i], y[i], z[i]);
           if (open.count == kBlock) settle_open(open, leg, seed, q, status, tol, limit_tol, nearest_fallback);
