@@ -289,10 +289,7 @@ void plan_foothold(const Body& body, PlannerState& s, const GaitNumbers& P, int 
   Predictor ahead(s);
   Planar planar[kChecks + 1];
   double theta[kChecks + 1];
-  static_assert(kChecks == 4, "one scratch initialiser per check");
-  GaitNumbers Pf[kChecks + 1] = {GaitNumbers(uninitialized), GaitNumbers(uninitialized),
-                                 GaitNumbers(uninitialized), GaitNumbers(uninitialized),
-                                 GaitNumbers(uninitialized)};
+  GaitNumbers Pf[kChecks + 1];  // once a lift-off
   ahead.to(to_touchdown, Pf[0]);
   planar[0] = ahead.planar, theta[0] = ahead.theta;
   const double t_stance = Pf[0][kDuty] * Pf[0][kPeriod];  // the gait's at touch-down
@@ -458,19 +455,10 @@ double py_mod(double x, double m) noexcept {
 }
 
 bool solve3(const double* A, const double* b, double* x) noexcept {
-  // by the adjugate (Cramer): branch-free, a hot path of the plan (four legs a tick); singular: det
-  // 0
-  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8],
-                        A[3] * A[7] - A[4] * A[6]};
-  const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
+  double y[3];
+  const double det = adjugate_solve(A, b, y);
   if (!(det != 0.0) || !std::isfinite(det)) return false;
-  const double inv = 1.0 / det;  // the rows of adj(A), the cofactors' transpose
-  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) *
-         inv;
-  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) *
-         inv;
-  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) *
-         inv;
+  x[0] = y[0], x[1] = y[1], x[2] = y[2];
   return std::isfinite(x[0] + x[1] + x[2]);
 }
 
@@ -585,24 +573,14 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
                   double rate, const PlanRows& out, const PlanChange* changes, int n_changes) {
   const Body& body = robot.body;
   constexpr int W = 3 * kLegs;
-  // each tick's feet velocities, body twist and rotation (27 doubles) and legs' IK statuses: the
-  // thread's buffers, kept from command to command (a fresh 200 KB a command cost page faults and
-  // zeroing); written before they are read
-  struct Scratch {
-    std::unique_ptr<double[]> values;
-    std::unique_ptr<std::int8_t[]> statuses;
-    std::size_t ticks = 0;
-  };
-  thread_local Scratch scratch;
-  if (scratch.ticks < std::size_t(ticks)) {
-    scratch.values.reset(new double[std::size_t(ticks) * (W + 6 + 9)]);
-    scratch.statuses.reset(new std::int8_t[std::size_t(ticks) * kLegs]);
-    scratch.ticks = std::size_t(ticks);
-  }
-  double* const feet_rate = scratch.values.get();
+  // each tick's feet velocities, body twist and rotation (27 doubles) and legs' IK statuses,
+  // written before they are read (not zeroed)
+  const std::unique_ptr<double[]> values(new double[std::size_t(ticks) * (W + 6 + 9)]);
+  const std::unique_ptr<std::int8_t[]> statuses(new std::int8_t[std::size_t(ticks) * kLegs]);
+  double* const feet_rate = values.get();
   double* const twist = feet_rate + std::size_t(ticks) * W;
   double* const rotation = twist + std::size_t(ticks) * 6;
-  std::int8_t* const leg_status = scratch.statuses.get();
+  std::int8_t* const leg_status = statuses.get();
   PlannerState s;
   start(gait, command, attitude, s);
   TickKinematics k;
@@ -626,8 +604,6 @@ void plan_command(const dynamics::RobotStaticsModel<Model>& robot, const GaitNum
                                 nullptr, out.q, leg_status, ticks, true);
   // the statics along the path: G(q), the stance forces, qd, tau and the margin (gait_statics.cpp)
   plan_statics(robot, out, rotation, feet_rate, twist, leg_status, ticks);
-  if (scratch.ticks > (std::size_t(1) << 15))
-    scratch = Scratch{};  // past 32768 ticks (7 MB): freed
 }
 
 #define SPOTKIN_INSTANTIATE(L)                                                                    \

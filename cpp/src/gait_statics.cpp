@@ -32,22 +32,6 @@ struct StaticsLanes {
   double com[3][kSub], residual[6][kSub], qd[kLegs][3][kSub], tau[kLegs][3][kSub];
 };
 
-// x = A^-1 b (3x3, A[r][c] = A[3 r + c]) by the adjugate, as solve3; returns det (the caller
-// selects: solve3 refuses det 0 or not finite).
-SPOTKIN_INLINE double adjugate_solve(const double* A, const double* b, double* x) noexcept {
-  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8],
-                        A[3] * A[7] - A[4] * A[6]};
-  const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
-  const double inv = 1.0 / det;
-  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) *
-         inv;
-  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) *
-         inv;
-  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) *
-         inv;
-  return det;
-}
-
 // 1 where a condition holds, else 0: the lanes' masks are doubles, so that the loop over lanes
 // has one element type and no control flow (GCC then vectorises it).
 SPOTKIN_INLINE double mask(bool condition) noexcept { return condition ? 1.0 : 0.0; }

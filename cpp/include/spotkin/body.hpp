@@ -293,83 +293,23 @@ SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip,
   }
 }
 
-// (B2) alone for one leg over a block, for the seeded paths, which solve every slot themselves:
-// the hip-frame points R^T (f - t) - hip as leg_block_slot computes them, and exists = -1 where a
-// point is not finite (else 1), as leg_block gives it. No slot is solved.
-template <typename C>
-SPOTKIN_INLINE void leg_points_impl(const C* __restrict hip, const C (*__restrict R)[kBlock],
-                                    const C (*__restrict t)[kBlock], const C* __restrict fx,
-                                    const C* __restrict fy, const C* __restrict fz, C* __restrict x,
-                                    C* __restrict y, C* __restrict z, C* __restrict exists,
-                                    std::ptrdiff_t m) noexcept {
-  for (std::ptrdiff_t i = 0; i < m; ++i) {
-    const C dx = fx[i] - t[0][i], dy = fy[i] - t[1][i], dz = fz[i] - t[2][i];
-    const C px = R[0][i] * dx + R[3][i] * dy + R[6][i] * dz - hip[0];  // R^T d - hip
-    const C py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
-    const C pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
-    x[i] = px, y[i] = py, z[i] = pz;
-    exists[i] = leg_batch::finite_mask(px, py, pz) == C(0) ? C(-1) : C(1);
-  }
-}
-
-// One run-time dispatched kernel per compute type (target_clones takes no templates).
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block,
-               (const Leg& leg, const double* __restrict hip, const double (*__restrict R)[kBlock],
-                const double (*__restrict t)[kBlock], const double* __restrict fx,
-                const double* __restrict fy, const double* __restrict fz, double* __restrict x,
-                double* __restrict y, double* __restrict z, double (*__restrict q0)[kBlock],
-                double* __restrict exists, double* __restrict ok, std::ptrdiff_t m, double tol,
-                double limit_tol) noexcept,
-               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
-               leg_block_impl<false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
-                                     static_cast<double*>(nullptr), m, tol, limit_tol);)
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block,
-               (const Leg& leg, const float* __restrict hip, const float (*__restrict R)[kBlock],
-                const float (*__restrict t)[kBlock], const float* __restrict fx,
-                const float* __restrict fy, const float* __restrict fz, float* __restrict x,
-                float* __restrict y, float* __restrict z, float (*__restrict q0)[kBlock],
-                float* __restrict exists, float* __restrict ok, std::ptrdiff_t m, float tol,
-                float limit_tol) noexcept,
-               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, m, tol, limit_tol),
-               leg_block_impl<false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
-                                     static_cast<float*>(nullptr), m, tol, limit_tol);)
-// leg_block with each target's slot_separation (the seeded paths' certificates).
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block_seeded,
-               (const Leg& leg, const double* __restrict hip, const double (*__restrict R)[kBlock],
-                const double (*__restrict t)[kBlock], const double* __restrict fx,
-                const double* __restrict fy, const double* __restrict fz, double* __restrict x,
-                double* __restrict y, double* __restrict z, double (*__restrict q0)[kBlock],
-                double* __restrict exists, double* __restrict ok, double* __restrict bound,
-                std::ptrdiff_t m, double tol, double limit_tol) noexcept,
-               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol),
-               leg_block_impl<true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
-                                    tol, limit_tol);)
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block_seeded,
-               (const Leg& leg, const float* __restrict hip, const float (*__restrict R)[kBlock],
-                const float (*__restrict t)[kBlock], const float* __restrict fx,
-                const float* __restrict fy, const float* __restrict fz, float* __restrict x,
-                float* __restrict y, float* __restrict z, float (*__restrict q0)[kBlock],
-                float* __restrict exists, float* __restrict ok, float* __restrict bound,
-                std::ptrdiff_t m, float tol, float limit_tol) noexcept,
-               (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol),
-               leg_block_impl<true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
-                                    tol, limit_tol);)
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_points,
-               (const double* __restrict hip, const double (*__restrict R)[kBlock],
-                const double (*__restrict t)[kBlock], const double* __restrict fx,
-                const double* __restrict fy, const double* __restrict fz, double* __restrict x,
-                double* __restrict y, double* __restrict z, double* __restrict exists,
-                std::ptrdiff_t m) noexcept,
-               (hip, R, t, fx, fy, fz, x, y, z, exists, m),
-               leg_points_impl(hip, R, t, fx, fy, fz, x, y, z, exists, m);)
-SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_points,
-               (const float* __restrict hip, const float (*__restrict R)[kBlock],
-                const float (*__restrict t)[kBlock], const float* __restrict fx,
-                const float* __restrict fy, const float* __restrict fz, float* __restrict x,
-                float* __restrict y, float* __restrict z, float* __restrict exists,
-                std::ptrdiff_t m) noexcept,
-               (hip, R, t, fx, fy, fz, x, y, z, exists, m),
-               leg_points_impl(hip, R, t, fx, fy, fz, x, y, z, exists, m);)
+// One run-time dispatched kernel per compute type (target_clones takes no templates). bound: null,
+// or each target's slot_separation too (the seeded paths' certificates).
+#define SPOTKIN_LEG_BLOCK(C)                                                                      \
+  SPOTKIN_CLONES((__attribute__((noinline)) inline), void, leg_block,                             \
+                 (const Leg& leg, const C* __restrict hip, const C(*__restrict R)[kBlock],        \
+                  const C(*__restrict t)[kBlock], const C* __restrict fx, const C* __restrict fy, \
+                  const C* __restrict fz, C* __restrict x, C* __restrict y, C* __restrict z,      \
+                  C(*__restrict q0)[kBlock], C* __restrict exists, C* __restrict ok,              \
+                  C* __restrict bound, std::ptrdiff_t m, C tol, C limit_tol) noexcept,            \
+                 (leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol), \
+                 if (bound) leg_block_impl<true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, \
+                                                 ok, bound, m, tol, limit_tol);                   \
+                 else leg_block_impl<false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,  \
+                                            bound, m, tol, limit_tol);)
+SPOTKIN_LEG_BLOCK(double)
+SPOTKIN_LEG_BLOCK(float)
+#undef SPOTKIN_LEG_BLOCK
 
 // The status and answer of a leg whose hip-frame point is not finite, at lane i of a block's poses
 // P (valid). A finite foot whose point overflowed (|foot - t| near the largest double, or float's
@@ -615,14 +555,8 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
       leg_batch::pad_block(fx, fy, fz, m);
       const std::array<double, 3>& hip = body.hips[std::size_t(l)];
       const C hip_c[3] = {C(hip[0]), C(hip[1]), C(hip[2])};
-      if (certify)
-        leg_block_seeded(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, bound, padded,
-                         tol, limit_tol);
-      else if (seed)  // every slot is solved below: the preferred one's answer would go unused
-        leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists, padded);
-      else
-        leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, padded, tol,
-                  limit_tol);
+      leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok,
+                certify ? bound : nullptr, padded, tol, limit_tol);
       open.count = 0;
       if (!seed && leg_batch::all_settled(ok, P.ok, m)) {  // the common case, without a branch per target
         const std::ptrdiff_t c0 = col[0], c1 = col[1], c2 = col[2];
@@ -730,11 +664,8 @@ SPOTKIN_INLINE void ik_path(const Body& body, const T* poses, BodyPoseFormat for
       // the preferred slot's answers and the seeds' certificates (as ik() has them); every slot is
       // solved only from the first target a seed does not certify (the seed of each is the answer
       // before it), once a block
-      if (certify)
-        leg_block_seeded(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok, bound, padded,
-                         tol, limit_tol);
-      else
-        leg_points(hip_c, P.R, P.t, fx, fy, fz, x, y, z, exists, padded);
+      leg_block(leg, hip_c, P.R, P.t, fx, fy, fz, x, y, z, q0, exists, ok,
+                certify ? bound : nullptr, padded, tol, limit_tol);
       open.count = 0;
       bool opened = false;
       T* sd = running + 3 * l;

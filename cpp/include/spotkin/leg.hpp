@@ -523,7 +523,6 @@ template <typename C>
 constexpr std::ptrdiff_t kLanes = 64 / std::ptrdiff_t(sizeof(C));
 static_assert(kBlock % kLanes<float> == 0, "blocks hold whole vectors");
 
-// m rounded up to whole vectors of C (at most kBlock).
 // m targets padded to whole registers of RegisterBytes (the level that runs: isa.hpp's
 // register_bytes; a few targets fill fewer of them than of 64 bytes: at AVX2 one target is one
 // register), at most a block.

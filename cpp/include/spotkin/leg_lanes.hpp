@@ -41,7 +41,7 @@ struct LegLanes {
 // slot_pass with lane i solved for the leg L holds in lane i (m <= N), all in slot Slot: the same
 // operations on each lane as leg_block_slot for that leg alone. ok[i] = 1 where the slot exists
 // and fits the limits; exists[i] -1 for a non-finite target. Bound: also each lane's
-// slot_separation (bound), as leg_block_seeded gives it.
+// slot_separation (bound), as leg_block gives it.
 template <int Slot, bool Bound = false, std::ptrdiff_t N, typename C>
 SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __restrict x,
                                     const C* __restrict y, const C* __restrict z, std::ptrdiff_t m,

@@ -117,7 +117,22 @@ void body_pose(double x, double y, double z, double psi, double cos_psi, double 
 inline double frac(double x) noexcept { return x - std::floor(x); }
 // x mod m as Python's float % (m > 0: the result in [0, m)).
 double py_mod(double x, double m) noexcept;
-// x = A^-1 b (3x3 row-major) by Cramer's rule; false when singular (det 0) or not finite. The
+// x = A^-1 b (3x3 row-major) by the adjugate (Cramer's rule), branch-free (the plan's statics run
+// it in lanes); returns det, and x is meaningless where det is 0 or not finite.
+SPOTKIN_INLINE double adjugate_solve(const double* A, const double* b, double* x) noexcept {
+  const double c0[3] = {A[4] * A[8] - A[5] * A[7], A[5] * A[6] - A[3] * A[8],
+                        A[3] * A[7] - A[4] * A[6]};
+  const double det = A[0] * c0[0] + A[1] * c0[1] + A[2] * c0[2];
+  const double inv = 1.0 / det;  // the rows of adj(A), the cofactors' transpose
+  x[0] = (c0[0] * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) *
+         inv;
+  x[1] = (c0[1] * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) *
+         inv;
+  x[2] = (c0[2] * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) *
+         inv;
+  return det;
+}
+// adjugate_solve; false (x not written) when singular (det 0) or not finite, or x not finite. The
 // references' np.linalg.solve agrees to rounding away from singular matrices.
 bool solve3(const double* A, const double* b, double* x) noexcept;
 // The Euler sequence "XYZ" of the plans' body poses.
