@@ -23,9 +23,9 @@
 
 #include "spotkin/arm.hpp"
 #include "spotkin/common.hpp"
+#include "spotkin/dynamics/pack.hpp"
 #include "spotkin/leg.hpp"
 #include "spotkin/leg_lanes.hpp"
-#include "spotkin/stream.hpp"
 #include "spotkin/vector_math.hpp"
 
 namespace spotkin {
@@ -120,8 +120,6 @@ struct Body {
 namespace body_batch {
 
 constexpr std::ptrdiff_t kBlock = 64;
-// The widest body (3 x legs) whose large outputs ik() stages and streams: six legs.
-constexpr int kStagedWidth = 18;
 
 // Rotation, translation and validity (1 / 0) of body poses for a block, SoA,
 // in the compute type C.
@@ -239,7 +237,9 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
 // (B2) + the leg's preferred slot for one leg over a block: vectorised (one
 // clone per slot, so that the branch signs are constants).
 // Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
-template <int Slot, bool Bound, typename C>
+// Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn); where not, the
+// in-limit test skips the turned angles (same bits, 6 % of body_ik at AVX2).
+template <int Slot, bool Bound, bool Turn, typename C>
 SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
                                    const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
                                    const C* __restrict fx, const C* __restrict fy,
@@ -261,10 +261,35 @@ SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
     C q[3];
     const C finite = leg_batch::finite_mask(x[i], y[i], z[i]);
     const C e = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q);
-    ok[i] = e * leg.limits().wrap_mask(q, limit_tol);
+    ok[i] =
+        e * (Turn ? leg.limits().wrap_mask(q, limit_tol) : leg.limits().clamp_mask(q, limit_tol));
     exists[i] = finite == C(0) ? C(-1) : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
     if constexpr (Bound) bound[i] = leg.slot_separation(i, st);
+  }
+}
+
+template <bool Bound, bool Turn, typename C>
+SPOTKIN_INLINE void leg_block_turn(const Leg& leg, const C* __restrict hip,
+                                   const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
+                                   const C* __restrict fx, const C* __restrict fy,
+                                   const C* __restrict fz, C* __restrict x, C* __restrict y,
+                                   C* __restrict z, C (*__restrict q0)[kBlock],
+                                   C* __restrict exists, C* __restrict ok, C* __restrict bound,
+                                   std::ptrdiff_t m, C tol, C limit_tol) noexcept {
+  switch (leg.preferred_slot()) {
+    case 0:
+      return leg_block_slot<0, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
+                                            bound, m, tol, limit_tol);
+    case 1:
+      return leg_block_slot<1, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
+                                            bound, m, tol, limit_tol);
+    case 2:
+      return leg_block_slot<2, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
+                                            bound, m, tol, limit_tol);
+    default:
+      return leg_block_slot<3, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
+                                            bound, m, tol, limit_tol);
   }
 }
 
@@ -277,20 +302,12 @@ SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip,
                                    C* __restrict exists, C* __restrict ok, C* __restrict bound,
                                    std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
-  switch (leg.preferred_slot()) {
-    case 0:
-      return leg_block_slot<0, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
-                                      tol, limit_tol);
-    case 1:
-      return leg_block_slot<1, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
-                                      tol, limit_tol);
-    case 2:
-      return leg_block_slot<2, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
-                                      tol, limit_tol);
-    default:
-      return leg_block_slot<3, Bound>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m,
-                                      tol, limit_tol);
-  }
+  if (leg.limits().may_turn())
+    leg_block_turn<Bound, true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol,
+                                limit_tol);
+  else
+    leg_block_turn<Bound, false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol,
+                                 limit_tol);
 }
 
 // One run-time dispatched kernel per compute type (target_clones takes no templates). bound: null,
@@ -365,25 +382,9 @@ SPOTKIN_INLINE bool ik_pairs_preferred(const Body& body, const BlockPoses<C>& P,
                                        std::ptrdiff_t padded, C tol, C limit_tol, T* q,
                                        std::int8_t* status) noexcept {
   C q0[3][kBlock], exists[kBlock], ok[kBlock];
-  const auto& L = body.pair_legs;  // (no lambda here: a clone's callees must inline into it)
-  switch (body.preferred_slot) {
-    case 0:
-      leg_batch::slot_pass_lanes<0>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
-                                    ok);
-      break;
-    case 1:
-      leg_batch::slot_pass_lanes<1>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
-                                    ok);
-      break;
-    case 2:
-      leg_batch::slot_pass_lanes<2>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
-                                    ok);
-      break;
-    default:
-      leg_batch::slot_pass_lanes<3>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0, exists,
-                                    ok);
-      break;
-  }
+  leg_batch::preferred_pass_lanes<false>(body.pair_legs, body.preferred_slot, open.x, open.y,
+                                         open.z, padded, tol, limit_tol, q0, exists, ok,
+                                         static_cast<C*>(nullptr));
   const int n = body.n_legs(), w = body.width();
   int unsettled = 0;
   for (std::ptrdiff_t k = 0, i = 0, l = 0; k < count * n;
@@ -447,25 +448,8 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
   bool certified[kBlock] = {};
   bool every_slot = !certify;
   if (certify) {
-    const auto& L = body.pair_legs;
-    switch (body.preferred_slot) {
-      case 0:
-        leg_batch::slot_pass_lanes<0, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
-                                            exists0, ok0, bound);
-        break;
-      case 1:
-        leg_batch::slot_pass_lanes<1, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
-                                            exists0, ok0, bound);
-        break;
-      case 2:
-        leg_batch::slot_pass_lanes<2, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
-                                            exists0, ok0, bound);
-        break;
-      default:
-        leg_batch::slot_pass_lanes<3, true>(L, open.x, open.y, open.z, padded, tol, limit_tol, q0,
-                                            exists0, ok0, bound);
-        break;
-    }
+    leg_batch::preferred_pass_lanes<true>(body.pair_legs, body.preferred_slot, open.x, open.y,
+                                          open.z, padded, tol, limit_tol, q0, exists0, ok0, bound);
     for (std::ptrdiff_t k = 0, i = 0, l = 0; k < m; ++k, l = l + 1 == n ? 0 : l + 1, i += l == 0) {
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
       const T* s = seed + w * i;
@@ -512,6 +496,48 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
   }
 }
 
+// Four values from or to memory that T aliases, through a vector type that says so
+// (memcpy into the packs became 16-byte copies through the stack, whose whole-vector reloads
+// missed store forwarding). Overloads, not a template: a typedef's attributes do not survive
+// being a template argument.
+SPOTKIN_INLINE dynamics::Pack<double, 4>::Vector load_four(const double* from) noexcept {
+  typedef double Four __attribute__((vector_size(32), aligned(8), may_alias));
+  return *reinterpret_cast<const Four*>(from);
+}
+SPOTKIN_INLINE dynamics::Pack<float, 4>::Vector load_four(const float* from) noexcept {
+  typedef float Four __attribute__((vector_size(16), aligned(4), may_alias));
+  return *reinterpret_cast<const Four*>(from);
+}
+SPOTKIN_INLINE void store_four(double* to, dynamics::Pack<double, 4>::Vector v) noexcept {
+  typedef double Four __attribute__((vector_size(32), aligned(8), may_alias));
+  *reinterpret_cast<Four*>(to) = v;
+}
+SPOTKIN_INLINE void store_four(float* to, dynamics::Pack<float, 4>::Vector v) noexcept {
+  typedef float Four __attribute__((vector_size(16), aligned(4), may_alias));
+  *reinterpret_cast<Four*>(to) = v;
+}
+
+// out[w i + c] = Q[c][i] for i < m, c < w: a block's answers, held by column, into rows of q.
+// Groups of 4 columns of 4 targets transposed in registers (dynamics::transpose_lanes), the
+// columns and targets left over one by one: moves only, the same bits.
+template <typename T>
+SPOTKIN_INLINE void transpose_rows(const T (*__restrict Q)[kBlock], int w, std::ptrdiff_t m,
+                                   T* __restrict out) noexcept {
+  constexpr int L = 4;
+  using V = typename dynamics::Pack<T, L>::Vector;
+  const int grouped = w / L * L;
+  std::ptrdiff_t i0 = 0;
+  for (; i0 + L <= m; i0 += L)
+    for (int c0 = 0; c0 < grouped; c0 += L) {
+      V r[L];
+      for (int k = 0; k < L; ++k) r[k] = load_four(&Q[c0 + k][i0]);
+      dynamics::transpose_lanes<T, L>(r);
+      for (int k = 0; k < L; ++k) store_four(out + (i0 + k) * w + c0, r[k]);
+    }
+  for (std::ptrdiff_t i = 0; i < m; ++i)
+    for (int c = i < i0 ? grouped : 0; c < w; ++c) out[i * w + c] = Q[c][i];
+}
+
 // Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
 // (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:
 // null or (count, w). q (count, w) in the body's column order, status
@@ -526,28 +552,42 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
   const std::ptrdiff_t stride = format == BodyPoseFormat::Euler ? 6 : (format == BodyPoseFormat::Matrix ? 16 : 7);
   using C = leg_batch::Compute<T>;
   const int n = body.n_legs(), w = body.width();
-  if (kPairLanesExact && count * n <= Body::kPairLanes)
-    return ik_pairs<RegisterBytes>(body, poses, format, seq, feet, feet_shared, seed, q, status,
-                                   count, nearest_fallback);
+  // A few double poses in the pair lanes. float32 ones take the batch path at any count: GCC
+  // fused another of hip_pitch's multiply-adds in the float batch kernel than in its lanes (one ulp
+  // apart at AVX2 on a tenth of Spot's targets, once leg_block_slot skipped the turned angles), and
+  // a pose's bits must not depend on the batch around it (one pose: 0.68 -> 0.8 us).
+  if constexpr (std::is_same_v<C, double>)
+    if (kPairLanesExact && count * n <= Body::kPairLanes)
+      return ik_pairs<RegisterBytes>(body, poses, format, seq, feet, feet_shared, seed, q, status,
+                                     count, nearest_fallback);
   const C tol = C(Leg::ratio_tolerance<T>()), limit_tol = C(JointLimits<3>::tolerance<T>());
   BlockPoses<C> P;
-  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], q0[3][kBlock],
+  C fx[kBlock], fy[kBlock], fz[kBlock], x[kBlock], y[kBlock], z[kBlock], own_q0[3][kBlock],
       exists[kBlock], ok[kBlock], bound[kBlock];
+  // The block's answers by column, Q[c][i], written out row by row at the block's end
+  // (transpose_rows): stored leg by leg into rows of w values, 3 scattered stores a target whose
+  // loads waited on them were a tenth of the kernel (AVX2). Legs in column order solve straight
+  // into their rows.
+  static_assert(std::is_same_v<C, T>, "the kernels compute in their input's type");
+  alignas(64) C Q[3 * Body::kMaxLegs][kBlock];
+  const bool contiguous = body.leg_contiguous();
   leg_batch::OpenTargets<C> open;
   // with a seed, the preferred slot's answer where the seed certifies it (seed_certifies), every
   // slot where it does not; on the terms ik_pairs has (legs sharing their preferred slot)
   const bool certify = seed && body.preferred_slot >= 0;
-  // a large output: each block's q staged here, then streamed out (no read for ownership)
-  const bool stream =
-      w <= kStagedWidth && std::size_t(count) * std::size_t(w) * sizeof(T) >= kStreamBytes;
-  T staged[kStagedWidth * kBlock];
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    T* const q_block = stream ? staged : q + w * b0;
+    // the block's rows of q fetched for writing while the legs are solved: written at the end in
+    // one burst, they waited on their cache lines (2-3 % of body_ik; non-temporal stores of the
+    // rows measured no faster, with one thread or two)
+    for (std::size_t k = 0, bytes = std::size_t(m * w) * sizeof(T); k < bytes; k += 64)
+      __builtin_prefetch(reinterpret_cast<const char*>(q + w * b0) + k, 1, 3);
     const std::ptrdiff_t padded = read_padded_poses(poses + stride * b0, format, seq, stride, m, P);
     for (int l = 0; l < n; ++l) {
       const Leg& leg = body.legs[std::size_t(l)];
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
+      C* const q_col[3] = {Q[col[0]], Q[col[1]], Q[col[2]]};
+      C(*const q0)[kBlock] = contiguous ? Q + 3 * l : own_q0;
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const T* f = feet + (feet_shared ? 3 * l : 3 * n * (b0 + i) + 3 * l);
         fx[i] = C(f[0]), fy[i] = C(f[1]), fz[i] = C(f[2]);
@@ -559,21 +599,19 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
                 certify ? bound : nullptr, padded, tol, limit_tol);
       open.count = 0;
       if (!seed && leg_batch::all_settled(ok, P.ok, m)) {  // the common case, without a branch per target
-        const std::ptrdiff_t c0 = col[0], c1 = col[1], c2 = col[2];
-        T* qt = q_block;
+        if (!contiguous)
+          for (int j = 0; j < 3; ++j) std::copy(q0[j], q0[j] + m, q_col[j]);
         std::int8_t* st = status + n * b0 + l;
-        for (std::ptrdiff_t i = 0; i < m; ++i, qt += w, st += n) {
-          qt[c0] = T(q0[0][i]), qt[c1] = T(q0[1][i]), qt[c2] = T(q0[2][i]);
-          *st = std::int8_t(Status::Ok);
-        }
+        for (std::ptrdiff_t i = 0; i < m; ++i, st += n) *st = std::int8_t(Status::Ok);
         continue;
       }
+      // (each target's answer below lands in its own lane i of Q, after q0's lane i is read: q0
+      // may be those rows)
       for (std::ptrdiff_t i = 0; i < m; ++i) {
         const std::ptrdiff_t t = b0 + i;
-        T* qt = q_block + w * (t - b0);
         std::int8_t& st = status[n * t + l];
         if (!seed && ok[i] != C(0) && P.ok[i] != C(0)) {  // the common case (seeded: ok unset)
-          qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
+          q_col[0][i] = q0[0][i], q_col[1][i] = q0[1][i], q_col[2][i] = q0[2][i];
           st = std::int8_t(Status::Ok);
           continue;
         }
@@ -581,7 +619,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
         if (P.ok[i] == C(0) ||
             (s && !(std::isfinite(double(s[col[0]])) && std::isfinite(double(s[col[1]])) &&
                     std::isfinite(double(s[col[2]]))))) {
-          qt[col[0]] = qt[col[1]] = qt[col[2]] = T(quiet_nan<double>());
+          q_col[0][i] = q_col[1][i] = q_col[2][i] = T(quiet_nan<double>());
           st = std::int8_t(Status::InvalidInput);
           continue;
         }
@@ -590,13 +628,13 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
           st =
               std::int8_t(unfinite_foot(leg, P, i, feet + (feet_shared ? 3 * l : 3 * n * t + 3 * l),
                                         nearest_fallback, leg_q));
-          qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
+          q_col[0][i] = leg_q[0], q_col[1][i] = leg_q[1], q_col[2][i] = leg_q[2];
           continue;
         }
         if (certify) {
           const T sd[3] = {s[col[0]], s[col[1]], s[col[2]]};
           if (leg_batch::seed_certifies(ok[i], bound[i], q0[0][i], q0[1][i], q0[2][i], sd)) {
-            qt[col[0]] = T(q0[0][i]), qt[col[1]] = T(q0[1][i]), qt[col[2]] = T(q0[2][i]);
+            q_col[0][i] = q0[0][i], q_col[1][i] = q0[1][i], q_col[2][i] = q0[2][i];
             st = std::int8_t(Status::Ok);
             continue;
           }
@@ -605,20 +643,18 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
       }
       open.solve(leg, tol, limit_tol);
       for (std::ptrdiff_t k = 0; k < open.count; ++k) {
-        const std::ptrdiff_t t = b0 + open.index[k];
-        T* qt = q_block + w * (t - b0);
+        const std::ptrdiff_t i = open.index[k], t = b0 + i;
         T sd[3], leg_q[3];
         if (seed) {
           const T* s = seed + w * t;
           sd[0] = s[col[0]], sd[1] = s[col[1]], sd[2] = s[col[2]];
         }
         status[n * t + l] = std::int8_t(open.choose(leg, k, seed ? sd : nullptr, leg_q, nearest_fallback));
-        qt[col[0]] = leg_q[0], qt[col[1]] = leg_q[1], qt[col[2]] = leg_q[2];
+        q_col[0][i] = leg_q[0], q_col[1][i] = leg_q[1], q_col[2][i] = leg_q[2];
       }
     }
-    if (stream) stream_copy<T, int(32 / sizeof(T))>(staged, q + w * b0, std::size_t(m * w));
+    transpose_rows(Q, w, m, q + w * b0);
   }
-  if (stream) stream_fence();
 }
 
 // Whole-body IK along a path (double): pose k seeded with the answer at pose k - 1, pose 0 with

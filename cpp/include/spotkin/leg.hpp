@@ -69,6 +69,32 @@ struct JointLimits {
   SPOTKIN_INLINE C wrap_mask(C* q, C tol = C(kTolerance)) const noexcept {
     return wrap_mask_within(lower, upper, q, tol);
   }
+  // Whether wrap_mask may turn an angle of [-pi, pi] by 2 pi to fit the limits: only where a
+  // limit lies beyond +-3 (a margin over pi and the tolerances, in float and double).
+  bool may_turn() const noexcept {
+    for (int j = 0; j < N; ++j)
+      if (!(lower[j] > -3.0 && upper[j] < 3.0)) return true;
+    return false;
+  }
+  // wrap_mask for angles in [-pi, pi] where !may_turn(): the same results and bits (no turned
+  // angle can fit), without computing the turned ones.
+  template <typename C>
+  SPOTKIN_INLINE C clamp_mask(C* q, C tol) const noexcept {
+    return clamp_mask_within(lower, upper, q, tol);
+  }
+  template <typename C>
+  static SPOTKIN_INLINE C clamp_mask_within(const double* lower, const double* upper, C* q,
+                                            C tol) noexcept {
+    C all = 1;
+#pragma GCC unroll 8
+    for (int j = 0; j < N; ++j) {
+      const C lower_j = C(lower[j]), upper_j = C(upper[j]), v = q[j];
+      const bool in0 = (v >= lower_j - tol) & (v <= upper_j + tol);
+      q[j] = in0 ? std::min(std::max(v, lower_j), upper_j) : v;
+      all = in0 ? all : C(0);
+    }
+    return all;
+  }
   // wrap_mask within the bounds lower, upper (a lane kernel's: each lane its own limits).
   template <typename C>
   static SPOTKIN_INLINE C wrap_mask_within(const double* lower, const double* upper, C* q,

@@ -16,8 +16,10 @@ struct LegLanes {
   double a0[N], a2[N], h[N], h2[N], Bz[N], Bx[N], Cz[N], Cx[N];
   double phi[N], cos_phi[N], sin_phi[N], knee_sum_sq[N], inv_2BC[N];
   double sign1[N], sign2[N], sign3[N], lower[3][N], upper[3][N];
+  bool may_turn = false;  // some lane's limits may turn an angle (JointLimits::may_turn)
 
   void set(std::ptrdiff_t i, const Leg& leg) noexcept {
+    may_turn = may_turn || leg.limits().may_turn();
     const RppConstants& k = leg.constants();
     a0[i] = k.a0, a2[i] = k.a2, h[i] = k.h, h2[i] = k.h2, Bz[i] = k.Bz, Bx[i] = k.Bx, Cz[i] = k.Cz,
     Cx[i] = k.Cx;
@@ -41,8 +43,9 @@ struct LegLanes {
 // slot_pass with lane i solved for the leg L holds in lane i (m <= N), all in slot Slot: the same
 // operations on each lane as leg_block_slot for that leg alone. ok[i] = 1 where the slot exists
 // and fits the limits; exists[i] -1 for a non-finite target. Bound: also each lane's
-// slot_separation (bound), as leg_block gives it.
-template <int Slot, bool Bound = false, std::ptrdiff_t N, typename C>
+// slot_separation (bound), as leg_block gives it. Turn: as leg_block_slot's (L.may_turn); the
+// same code as that kernel's, so that the compiler fuses the same multiply-adds in both.
+template <int Slot, bool Bound, bool Turn, std::ptrdiff_t N, typename C>
 SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __restrict x,
                                     const C* __restrict y, const C* __restrict z, std::ptrdiff_t m,
                                     C tol, C limit_tol, C (*__restrict q)[kBlock],
@@ -58,11 +61,47 @@ SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __
     const C e = finite * Leg::slot_angles_with<Slot>(k, i, x[i], y[i], z[i], st, qi);
     const double lower[3] = {L.lower[0][i], L.lower[1][i], L.lower[2][i]};
     const double upper[3] = {L.upper[0][i], L.upper[1][i], L.upper[2][i]};
-    ok[i] = e * JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol);
+    ok[i] = e * (Turn ? JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol)
+                      : JointLimits<3>::clamp_mask_within(lower, upper, qi, limit_tol));
     exists[i] = finite == C(0) ? C(-1) : e;
     q[0][i] = qi[0], q[1][i] = qi[1], q[2][i] = qi[2];
     if constexpr (Bound) bound[i] = Leg::slot_separation_with(k, i, st);
   }
+}
+
+// slot_pass_lanes in the lanes' shared preferred slot (0 .. 3), with or without turns (L.may_turn).
+template <bool Bound, std::ptrdiff_t N, typename C>
+SPOTKIN_INLINE void preferred_pass_lanes(const LegLanes<N>& __restrict L, int slot,
+                                         const C* __restrict x, const C* __restrict y,
+                                         const C* __restrict z, std::ptrdiff_t m, C tol,
+                                         C limit_tol, C (*__restrict q)[kBlock],
+                                         C* __restrict exists, C* __restrict ok,
+                                         C* __restrict bound) noexcept {
+#define SPOTKIN_SLOT_PASS(S, TURN) \
+  slot_pass_lanes<S, Bound, TURN>(L, x, y, z, m, tol, limit_tol, q, exists, ok, bound)
+  if (L.may_turn) {
+    switch (slot) {
+      case 0:
+        return SPOTKIN_SLOT_PASS(0, true);
+      case 1:
+        return SPOTKIN_SLOT_PASS(1, true);
+      case 2:
+        return SPOTKIN_SLOT_PASS(2, true);
+      default:
+        return SPOTKIN_SLOT_PASS(3, true);
+    }
+  }
+  switch (slot) {
+    case 0:
+      return SPOTKIN_SLOT_PASS(0, false);
+    case 1:
+      return SPOTKIN_SLOT_PASS(1, false);
+    case 2:
+      return SPOTKIN_SLOT_PASS(2, false);
+    default:
+      return SPOTKIN_SLOT_PASS(3, false);
+  }
+#undef SPOTKIN_SLOT_PASS
 }
 
 // solve_slots with lane i solved for the leg L holds in lane i (m <= N): the same operations on
