@@ -723,7 +723,8 @@ struct OpenTargets {
 // Vectorised: slot Slot and its limits for every target of a block; exists
 // -1 for invalid input.
 // Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
-template <int Slot, bool Bound = false, typename C>
+// Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn; else clamp_mask).
+template <int Slot, bool Bound, bool Turn, typename C>
 SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z, C* hx, C* hy,
                               C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol,
                               C* bound = nullptr) noexcept {
@@ -734,7 +735,8 @@ SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z
     C q0[3];
     const C finite = finite_mask(x[i], y[i], z[i]);
     exists[i] = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q0);
-    ok[i] = exists[i] * leg.limits().wrap_mask(q0, limit_tol);
+    ok[i] = exists[i] *
+            (Turn ? leg.limits().wrap_mask(q0, limit_tol) : leg.limits().clamp_mask(q0, limit_tol));
     exists[i] = finite == C(0) ? C(-1) : exists[i];
     hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
     if constexpr (Bound) bound[i] = leg.slot_separation(i, st);
@@ -746,16 +748,31 @@ SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, co
                                    C* hy, C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol,
                                    C limit_tol, C* bound = nullptr) noexcept {
   const Leg leg = leg_in;  // a local copy: the output arrays cannot alias its constants
+#define SPOTKIN_SLOT_PASS(S, TURN) \
+  slot_pass<S, Bound, TURN>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound)
+  if (leg.limits().may_turn()) {
+    switch (leg.preferred_slot()) {
+      case 0:
+        return SPOTKIN_SLOT_PASS(0, true);
+      case 1:
+        return SPOTKIN_SLOT_PASS(1, true);
+      case 2:
+        return SPOTKIN_SLOT_PASS(2, true);
+      default:
+        return SPOTKIN_SLOT_PASS(3, true);
+    }
+  }
   switch (leg.preferred_slot()) {
     case 0:
-      return slot_pass<0, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+      return SPOTKIN_SLOT_PASS(0, false);
     case 1:
-      return slot_pass<1, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+      return SPOTKIN_SLOT_PASS(1, false);
     case 2:
-      return slot_pass<2, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+      return SPOTKIN_SLOT_PASS(2, false);
     default:
-      return slot_pass<3, Bound>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+      return SPOTKIN_SLOT_PASS(3, false);
   }
+#undef SPOTKIN_SLOT_PASS
 }
 
 // Solves and chooses the gathered targets (open.index: places in the batch),
