@@ -269,30 +269,6 @@ SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
   }
 }
 
-template <bool Bound, bool Turn, typename C>
-SPOTKIN_INLINE void leg_block_turn(const Leg& leg, const C* __restrict hip,
-                                   const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
-                                   const C* __restrict fx, const C* __restrict fy,
-                                   const C* __restrict fz, C* __restrict x, C* __restrict y,
-                                   C* __restrict z, C (*__restrict q0)[kBlock],
-                                   C* __restrict exists, C* __restrict ok, C* __restrict bound,
-                                   std::ptrdiff_t m, C tol, C limit_tol) noexcept {
-  switch (leg.preferred_slot()) {
-    case 0:
-      return leg_block_slot<0, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
-                                            bound, m, tol, limit_tol);
-    case 1:
-      return leg_block_slot<1, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
-                                            bound, m, tol, limit_tol);
-    case 2:
-      return leg_block_slot<2, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
-                                            bound, m, tol, limit_tol);
-    default:
-      return leg_block_slot<3, Bound, Turn>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok,
-                                            bound, m, tol, limit_tol);
-  }
-}
-
 template <bool Bound, typename C>
 SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip,
                                    const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
@@ -302,12 +278,11 @@ SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip,
                                    C* __restrict exists, C* __restrict ok, C* __restrict bound,
                                    std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
-  if (leg.limits().may_turn())
-    leg_block_turn<Bound, true>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol,
-                                limit_tol);
-  else
-    leg_block_turn<Bound, false>(leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol,
-                                 limit_tol);
+  with_slot(leg.preferred_slot(), leg.limits().may_turn(),
+            [&](auto slot, auto turn) SPOTKIN_LAMBDA_INLINE {
+              leg_block_slot<decltype(slot)::value, Bound, decltype(turn)::value>(
+                  leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol);
+            });
 }
 
 // One run-time dispatched kernel per compute type (target_clones takes no templates). bound: null,
@@ -500,6 +475,10 @@ SPOTKIN_INLINE void ik_pairs(const Body& body, const T* poses, BodyPoseFormat fo
 // (memcpy into the packs became 16-byte copies through the stack, whose whole-vector reloads
 // missed store forwarding). Overloads, not a template: a typedef's attributes do not survive
 // being a template argument.
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"  // always inlined: no vector crosses a call by value
+#endif
 SPOTKIN_INLINE dynamics::Pack<double, 4>::Vector load_four(const double* from) noexcept {
   typedef double Four __attribute__((vector_size(32), aligned(8), may_alias));
   return *reinterpret_cast<const Four*>(from);
@@ -516,6 +495,9 @@ SPOTKIN_INLINE void store_four(float* to, dynamics::Pack<float, 4>::Vector v) no
   typedef float Four __attribute__((vector_size(16), aligned(4), may_alias));
   *reinterpret_cast<Four*>(to) = v;
 }
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
 
 // out[w i + c] = Q[c][i] for i < m, c < w: a block's answers, held by column, into rows of q.
 // Groups of 4 columns of 4 targets transposed in registers (dynamics::transpose_lanes), the

@@ -532,6 +532,37 @@ class Leg {
   int order_[kSlots] = {0, 1, 2, 3};
 };
 
+// f(std::integral_constant<int, Slot>, std::bool_constant<Turn>) for a run-time slot (0 .. 3) and
+// turn flag (JointLimits::may_turn): the batch kernels' branch signs and in-limit test become
+// compile-time constants. f: a generic lambda marked SPOTKIN_LAMBDA_INLINE, so that it compiles
+// into the caller's clone.
+template <typename F>
+SPOTKIN_INLINE void with_slot(int slot, bool turn, F&& f) noexcept {
+  using std::bool_constant, std::integral_constant;
+  if (turn) {
+    switch (slot) {
+      case 0:
+        return f(integral_constant<int, 0>{}, bool_constant<true>{});
+      case 1:
+        return f(integral_constant<int, 1>{}, bool_constant<true>{});
+      case 2:
+        return f(integral_constant<int, 2>{}, bool_constant<true>{});
+      default:
+        return f(integral_constant<int, 3>{}, bool_constant<true>{});
+    }
+  }
+  switch (slot) {
+    case 0:
+      return f(integral_constant<int, 0>{}, bool_constant<false>{});
+    case 1:
+      return f(integral_constant<int, 1>{}, bool_constant<false>{});
+    case 2:
+      return f(integral_constant<int, 2>{}, bool_constant<false>{});
+    default:
+      return f(integral_constant<int, 3>{}, bool_constant<false>{});
+  }
+}
+
 // Batched leg kernels over `count` targets (row-major (count, 3) inputs).
 // Each block first solves every target with branch-free vector code, then
 // picks branches, applies limits and statuses per target.
@@ -748,31 +779,11 @@ SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, co
                                    C* hy, C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol,
                                    C limit_tol, C* bound = nullptr) noexcept {
   const Leg leg = leg_in;  // a local copy: the output arrays cannot alias its constants
-#define SPOTKIN_SLOT_PASS(S, TURN) \
-  slot_pass<S, Bound, TURN>(leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound)
-  if (leg.limits().may_turn()) {
-    switch (leg.preferred_slot()) {
-      case 0:
-        return SPOTKIN_SLOT_PASS(0, true);
-      case 1:
-        return SPOTKIN_SLOT_PASS(1, true);
-      case 2:
-        return SPOTKIN_SLOT_PASS(2, true);
-      default:
-        return SPOTKIN_SLOT_PASS(3, true);
-    }
-  }
-  switch (leg.preferred_slot()) {
-    case 0:
-      return SPOTKIN_SLOT_PASS(0, false);
-    case 1:
-      return SPOTKIN_SLOT_PASS(1, false);
-    case 2:
-      return SPOTKIN_SLOT_PASS(2, false);
-    default:
-      return SPOTKIN_SLOT_PASS(3, false);
-  }
-#undef SPOTKIN_SLOT_PASS
+  with_slot(leg.preferred_slot(), leg.limits().may_turn(),
+            [&](auto slot, auto turn) SPOTKIN_LAMBDA_INLINE {
+              slot_pass<decltype(slot)::value, Bound, decltype(turn)::value>(
+                  leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
+            });
 }
 
 // Solves and chooses the gathered targets (open.index: places in the batch),

@@ -77,31 +77,10 @@ SPOTKIN_INLINE void preferred_pass_lanes(const LegLanes<N>& __restrict L, int sl
                                          C limit_tol, C (*__restrict q)[kBlock],
                                          C* __restrict exists, C* __restrict ok,
                                          C* __restrict bound) noexcept {
-#define SPOTKIN_SLOT_PASS(S, TURN) \
-  slot_pass_lanes<S, Bound, TURN>(L, x, y, z, m, tol, limit_tol, q, exists, ok, bound)
-  if (L.may_turn) {
-    switch (slot) {
-      case 0:
-        return SPOTKIN_SLOT_PASS(0, true);
-      case 1:
-        return SPOTKIN_SLOT_PASS(1, true);
-      case 2:
-        return SPOTKIN_SLOT_PASS(2, true);
-      default:
-        return SPOTKIN_SLOT_PASS(3, true);
-    }
-  }
-  switch (slot) {
-    case 0:
-      return SPOTKIN_SLOT_PASS(0, false);
-    case 1:
-      return SPOTKIN_SLOT_PASS(1, false);
-    case 2:
-      return SPOTKIN_SLOT_PASS(2, false);
-    default:
-      return SPOTKIN_SLOT_PASS(3, false);
-  }
-#undef SPOTKIN_SLOT_PASS
+  with_slot(slot, L.may_turn, [&](auto s, auto turn) SPOTKIN_LAMBDA_INLINE {
+    slot_pass_lanes<decltype(s)::value, Bound, decltype(turn)::value>(L, x, y, z, m, tol, limit_tol,
+                                                                      q, exists, ok, bound);
+  });
 }
 
 // solve_slots with lane i solved for the leg L holds in lane i (m <= N): the same operations on
