@@ -536,31 +536,24 @@ class Leg {
 // turn flag (JointLimits::may_turn): the batch kernels' branch signs and in-limit test become
 // compile-time constants. f: a generic lambda marked SPOTKIN_LAMBDA_INLINE, so that it compiles
 // into the caller's clone.
-template <typename F>
-SPOTKIN_INLINE void with_slot(int slot, bool turn, F&& f) noexcept {
-  using std::bool_constant, std::integral_constant;
-  if (turn) {
-    switch (slot) {
-      case 0:
-        return f(integral_constant<int, 0>{}, bool_constant<true>{});
-      case 1:
-        return f(integral_constant<int, 1>{}, bool_constant<true>{});
-      case 2:
-        return f(integral_constant<int, 2>{}, bool_constant<true>{});
-      default:
-        return f(integral_constant<int, 3>{}, bool_constant<true>{});
-    }
-  }
+template <bool Turn, typename F>
+SPOTKIN_INLINE void with_slot_turning(int slot, F&& f) noexcept {
+  using std::integral_constant;
   switch (slot) {
     case 0:
-      return f(integral_constant<int, 0>{}, bool_constant<false>{});
+      return f(integral_constant<int, 0>{}, std::bool_constant<Turn>{});
     case 1:
-      return f(integral_constant<int, 1>{}, bool_constant<false>{});
+      return f(integral_constant<int, 1>{}, std::bool_constant<Turn>{});
     case 2:
-      return f(integral_constant<int, 2>{}, bool_constant<false>{});
+      return f(integral_constant<int, 2>{}, std::bool_constant<Turn>{});
     default:
-      return f(integral_constant<int, 3>{}, bool_constant<false>{});
+      return f(integral_constant<int, 3>{}, std::bool_constant<Turn>{});
   }
+}
+template <typename F>
+SPOTKIN_INLINE void with_slot(int slot, bool turn, F&& f) noexcept {
+  if (turn) return with_slot_turning<true>(slot, f);
+  with_slot_turning<false>(slot, f);
 }
 
 // Batched leg kernels over `count` targets (row-major (count, 3) inputs).
