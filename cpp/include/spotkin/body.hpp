@@ -559,13 +559,27 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
   const bool certify = seed && body.preferred_slot >= 0;
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
-    // the block's rows of q fetched for writing while the legs are solved: written at the end in
-    // one burst, they waited on their cache lines (2-3 % of body_ik; non-temporal stores of the
-    // rows measured no faster, with one thread or two)
-    for (std::size_t k = 0, bytes = std::size_t(m * w) * sizeof(T); k < bytes; k += 64)
-      __builtin_prefetch(reinterpret_cast<const char*>(q + w * b0) + k, 1, 3);
+    // While the legs are solved, each leg fetches its share of the lines of the block's rows of q
+    // (for writing) and of the next block's poses: written at the end in one burst, the rows
+    // waited on their cache lines (2-3 % of body_ik; non-temporal stores of the rows measured no
+    // faster, with one thread or two), fetched all at the block's start the prefetches waited in
+    // turn (3 % at AVX2), and the poses' loads waited on memory once the boundary no longer
+    // scanned them first.
+    const char* const rows = reinterpret_cast<const char*>(q + w * b0);
+    const std::size_t bytes = std::size_t(m * w) * sizeof(T);
+    const char* const next = reinterpret_cast<const char*>(poses + stride * (b0 + m));
+    const std::size_t next_bytes =
+        std::size_t(std::min(kBlock, count - b0 - m) * stride) * sizeof(T);
     const std::ptrdiff_t padded = read_padded_poses(poses + stride * b0, format, seq, stride, m, P);
     for (int l = 0; l < n; ++l) {
+      const std::size_t share = std::size_t(l), shares = std::size_t(n);
+      for (std::size_t k = bytes * share / shares / 64 * 64, end = bytes * (share + 1) / shares;
+           k < end; k += 64)
+        __builtin_prefetch(rows + k, 1, 3);
+      for (std::size_t k = next_bytes * share / shares / 64 * 64,
+                       end = next_bytes * (share + 1) / shares;
+           k < end; k += 64)
+        __builtin_prefetch(next + k, 0, 3);
       const Leg& leg = body.legs[std::size_t(l)];
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
       C* const q_col[3] = {Q[col[0]], Q[col[1]], Q[col[2]]};
