@@ -152,7 +152,8 @@ def main() -> list[tuple[str, float, float, str, float | None]]:
 
 def report(rows) -> str:
     lines = [
-        "single-call latency from Python, one thread (timeit: best of 7 rounds of 20,000 calls, each call and its reference in turn)",
+        "single-call latency from Python, one thread (timeit: best of 7 rounds of 20,000 calls,"
+        " each call and its reference in turn)",
         f"  {'call':<26}{'spotkin':>10}{'reference':>31}{'ratio':>8}{'target':>9}",
     ]
     for name, us, ref, ref_name, target in rows:
