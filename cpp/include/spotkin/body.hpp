@@ -261,8 +261,7 @@ SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
     C q[3];
     const C finite = leg_batch::finite_mask(x[i], y[i], z[i]);
     const C e = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q);
-    ok[i] =
-        e * (Turn ? leg.limits().wrap_mask(q, limit_tol) : leg.limits().clamp_mask(q, limit_tol));
+    ok[i] = e * leg.limits().template wrap_mask<Turn>(q, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
     if constexpr (Bound) bound[i] = leg.slot_separation(i, st);

@@ -65,38 +65,21 @@ struct JointLimits {
   // set to the bound), and returns 1.0 if every joint fits, 0.0 otherwise
   // (joints that fit no way are left as given). Branch-free, for vectorised
   // loops; C is the kernel's compute type (float for the float32 kernels).
-  template <typename C = double>
+  // Turn false: the angles turned by 2 pi are not tried (may_turn).
+  template <bool Turn = true, typename C = double>
   SPOTKIN_INLINE C wrap_mask(C* q, C tol = C(kTolerance)) const noexcept {
-    return wrap_mask_within(lower, upper, q, tol);
+    return wrap_mask_within<Turn>(lower, upper, q, tol);
   }
   // Whether wrap_mask may turn an angle of [-pi, pi] by 2 pi to fit the limits: only where a
-  // limit lies beyond +-3 (a margin over pi and the tolerances, in float and double).
+  // limit lies beyond +-3 (a margin over pi and the tolerances, in float and double). Where not,
+  // wrap_mask<false> gives the same results and bits without computing the turned angles.
   bool may_turn() const noexcept {
     for (int j = 0; j < N; ++j)
       if (!(lower[j] > -3.0 && upper[j] < 3.0)) return true;
     return false;
   }
-  // wrap_mask for angles in [-pi, pi] where !may_turn(): the same results and bits (no turned
-  // angle can fit), without computing the turned ones.
-  template <typename C>
-  SPOTKIN_INLINE C clamp_mask(C* q, C tol) const noexcept {
-    return clamp_mask_within(lower, upper, q, tol);
-  }
-  template <typename C>
-  static SPOTKIN_INLINE C clamp_mask_within(const double* lower, const double* upper, C* q,
-                                            C tol) noexcept {
-    C all = 1;
-#pragma GCC unroll 8
-    for (int j = 0; j < N; ++j) {
-      const C lower_j = C(lower[j]), upper_j = C(upper[j]), v = q[j];
-      const bool in0 = (v >= lower_j - tol) & (v <= upper_j + tol);
-      q[j] = in0 ? std::min(std::max(v, lower_j), upper_j) : v;
-      all = in0 ? all : C(0);
-    }
-    return all;
-  }
   // wrap_mask within the bounds lower, upper (a lane kernel's: each lane its own limits).
-  template <typename C>
+  template <bool Turn = true, typename C>
   static SPOTKIN_INLINE C wrap_mask_within(const double* lower, const double* upper, C* q,
                                            C tol) noexcept {
     constexpr C two_pi = C(2) * kPi<C>;
@@ -105,13 +88,19 @@ struct JointLimits {
     for (int j = 0; j < N; ++j) {
       const C lower_j = C(lower[j]), upper_j = C(upper[j]);
       const C lo = lower_j - tol, hi = upper_j + tol;
-      const C v = q[j], minus = v - two_pi, plus = v + two_pi;
+      const C v = q[j];
       const bool in0 = (v >= lo) & (v <= hi);
-      const bool in_minus = (minus >= lo) & (minus <= hi);
-      const bool in_plus = (plus >= lo) & (plus <= hi);
-      const C fitted = std::min(std::max(in0 ? v : (in_minus ? minus : plus), lower_j), upper_j);
-      q[j] = (in0 | in_minus | in_plus) ? fitted : v;
-      all = (in0 | in_minus | in_plus) ? all : C(0);
+      C chosen = v;
+      bool fits = in0;
+      if constexpr (Turn) {
+        const C minus = v - two_pi, plus = v + two_pi;
+        const bool in_minus = (minus >= lo) & (minus <= hi);
+        const bool in_plus = (plus >= lo) & (plus <= hi);
+        chosen = in0 ? v : (in_minus ? minus : plus);
+        fits = in0 | in_minus | in_plus;
+      }
+      q[j] = fits ? std::min(std::max(chosen, lower_j), upper_j) : v;
+      all = fits ? all : C(0);
     }
     return all;
   }
@@ -747,7 +736,7 @@ struct OpenTargets {
 // Vectorised: slot Slot and its limits for every target of a block; exists
 // -1 for invalid input.
 // Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
-// Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn; else clamp_mask).
+// Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn; else wrap_mask<false>).
 template <int Slot, bool Bound, bool Turn, typename C>
 SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z, C* hx, C* hy,
                               C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol,
@@ -759,8 +748,7 @@ SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z
     C q0[3];
     const C finite = finite_mask(x[i], y[i], z[i]);
     exists[i] = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q0);
-    ok[i] = exists[i] *
-            (Turn ? leg.limits().wrap_mask(q0, limit_tol) : leg.limits().clamp_mask(q0, limit_tol));
+    ok[i] = exists[i] * leg.limits().template wrap_mask<Turn>(q0, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : exists[i];
     hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
     if constexpr (Bound) bound[i] = leg.slot_separation(i, st);

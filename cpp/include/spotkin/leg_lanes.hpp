@@ -61,8 +61,7 @@ SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __
     const C e = finite * Leg::slot_angles_with<Slot>(k, i, x[i], y[i], z[i], st, qi);
     const double lower[3] = {L.lower[0][i], L.lower[1][i], L.lower[2][i]};
     const double upper[3] = {L.upper[0][i], L.upper[1][i], L.upper[2][i]};
-    ok[i] = e * (Turn ? JointLimits<3>::wrap_mask_within(lower, upper, qi, limit_tol)
-                      : JointLimits<3>::clamp_mask_within(lower, upper, qi, limit_tol));
+    ok[i] = e * JointLimits<3>::wrap_mask_within<Turn>(lower, upper, qi, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : e;
     q[0][i] = qi[0], q[1][i] = qi[1], q[2][i] = qi[2];
     if constexpr (Bound) bound[i] = Leg::slot_separation_with(k, i, st);
