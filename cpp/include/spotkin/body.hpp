@@ -519,6 +519,16 @@ SPOTKIN_INLINE void transpose_rows(const T (*__restrict Q)[kBlock], int w, std::
     for (int c = i < i0 ? grouped : 0; c < w; ++c) out[i * w + c] = Q[c][i];
 }
 
+// Fetches the cache lines of share `share` of `shares` of [from, from + bytes), for writing
+// (Write) or reading.
+template <int Write>
+SPOTKIN_INLINE void prefetch_share(const char* from, std::size_t bytes, int share,
+                                   int shares) noexcept {
+  const std::size_t end = bytes * std::size_t(share + 1) / std::size_t(shares);
+  for (std::size_t k = bytes * std::size_t(share) / std::size_t(shares) / 64 * 64; k < end; k += 64)
+    __builtin_prefetch(from + k, Write, 3);
+}
+
 // Whole-body IK over `count` poses, with n = body.n_legs() and w = 3 n. feet:
 // (count, n, 3) or, when feet_shared, one (n, 3) stance for every pose. seed:
 // null or (count, w). q (count, w) in the body's column order, status
@@ -559,11 +569,11 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
   for (std::ptrdiff_t b0 = 0; b0 < count; b0 += kBlock) {
     const std::ptrdiff_t m = std::min(kBlock, count - b0);
     // While the legs are solved, each leg fetches its share of the lines of the block's rows of q
-    // (for writing) and of the next block's poses: written at the end in one burst, the rows
-    // waited on their cache lines (2-3 % of body_ik; non-temporal stores of the rows measured no
-    // faster, with one thread or two), fetched all at the block's start the prefetches waited in
-    // turn (3 % at AVX2), and the poses' loads waited on memory once the boundary no longer
-    // scanned them first.
+    // (for writing) and of the next block's poses (prefetch_share): written at the end in one
+    // burst, the rows waited on their cache lines (2-3 % of body_ik; non-temporal stores of the
+    // rows measured no faster, with one thread or two); fetched all at the block's start, the
+    // prefetches waited in turn (3 % at AVX2); without the poses', body_ik was 2-4 % slower at AVX2
+    // (the boundary's scan of a span leaves them in cache, but not in the nearest one).
     const char* const rows = reinterpret_cast<const char*>(q + w * b0);
     const std::size_t bytes = std::size_t(m * w) * sizeof(T);
     const char* const next = reinterpret_cast<const char*>(poses + stride * (b0 + m));
@@ -571,14 +581,8 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
         std::size_t(std::min(kBlock, count - b0 - m) * stride) * sizeof(T);
     const std::ptrdiff_t padded = read_padded_poses(poses + stride * b0, format, seq, stride, m, P);
     for (int l = 0; l < n; ++l) {
-      const std::size_t share = std::size_t(l), shares = std::size_t(n);
-      for (std::size_t k = bytes * share / shares / 64 * 64, end = bytes * (share + 1) / shares;
-           k < end; k += 64)
-        __builtin_prefetch(rows + k, 1, 3);
-      for (std::size_t k = next_bytes * share / shares / 64 * 64,
-                       end = next_bytes * (share + 1) / shares;
-           k < end; k += 64)
-        __builtin_prefetch(next + k, 0, 3);
+      prefetch_share<1>(rows, bytes, l, n);
+      prefetch_share<0>(next, next_bytes, l, n);
       const Leg& leg = body.legs[std::size_t(l)];
       const std::array<int, 3>& col = body.columns[std::size_t(l)];
       C* const q_col[3] = {Q[col[0]], Q[col[1]], Q[col[2]]};
