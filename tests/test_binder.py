@@ -7,6 +7,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
+import warnings
 
 import numpy as np
 import pytest
@@ -366,3 +367,87 @@ def test_one_sample_out_overlapping_its_input_is_read_first():
         LEG.fk(q, out=(np.empty(3), np.empty(3)))
     with pytest.raises(TypeError, match=r"out\[0\] \(p\) must have dtype float64"):
         LEG.fk(np.array([0.1, 0.9, -1.5]), out=np.empty(3, np.float32))
+
+
+# A single sample's outputs come from a pool of spare arrays (binder.cpp, SparePool): an array is
+# handed out again only when nothing else refers to it. These check that a result anyone can still
+# reach is never written by a later call.
+def _spot_and_stance():
+    robot = sk.Spot()
+    feet = robot.stance_feet(0.5)
+    return robot, feet
+
+
+def test_a_held_result_is_never_overwritten_by_later_calls():
+    robot, feet = _spot_and_stance()
+    poses = [np.array([0.0, 0.0, 0.5, 0.02 * k, -0.01 * k, 0.03 * k]) for k in range(6)]
+    held = [robot.body_ik(p, feet) for p in poses]  # each kept: none may be reused
+    copies = [(r.q.copy(), r.status.copy()) for r in held]
+    for p in poses[::-1]:
+        robot.body_ik(p, feet)  # dropped at once: free to reuse
+    for p in poses:
+        robot.body_ik(p, feet)
+    for r, (q, status) in zip(held, copies):
+        np.testing.assert_array_equal(r.q, q)
+        np.testing.assert_array_equal(r.status, status)
+    assert len({id(r.q) for r in held}) == len(held)
+
+
+def test_what_still_refers_to_a_result_keeps_it():
+    import weakref
+
+    robot, feet = _spot_and_stance()
+    a = np.array([0.0, 0.0, 0.5, 0.05, 0.0, 0.0])
+    b = np.array([0.0, 0.0, 0.5, -0.05, 0.0, 0.0])
+    q_a = robot.body_ik(a, feet).q
+    expected = q_a.copy()
+    view = q_a[2:5]  # a view (its base is the result)
+    memory = memoryview(robot.body_ik(a, feet).q)  # an exported buffer
+    weak_target = robot.body_ik(a, feet).q
+    weak = weakref.ref(weak_target)
+    del q_a, weak_target
+    for _ in range(40):
+        robot.body_ik(b, feet)
+    np.testing.assert_array_equal(view, expected[2:5])
+    np.testing.assert_array_equal(np.asarray(memory), expected)
+    alive = weak()  # let go by the pool (as it would be without one), or alive and never rewritten
+    assert alive is None or np.array_equal(alive, expected)
+
+
+def test_a_result_changed_before_it_was_dropped_is_not_handed_out_changed():
+    robot, feet = _spot_and_stance()
+    pose = np.array([0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
+    for change in ("shape", "readonly", "strides"):
+        for _ in range(3):
+            q = robot.body_ik(pose, feet).q
+            if change == "shape":
+                q.shape = (4, 3)
+            elif change == "readonly":
+                q.flags.writeable = False
+            else:
+                with warnings.catch_warnings():  # deprecated in NumPy 2.4, still possible
+                    warnings.simplefilter("ignore", DeprecationWarning)
+                    q.strides = (0,)
+            del q
+            fresh = robot.body_ik(pose, feet)
+            assert fresh.q.shape == (12,) and fresh.q.strides == (8,) and fresh.q.flags.writeable
+            assert fresh.q.flags.c_contiguous and fresh.q.flags.owndata and fresh.q.base is None
+            np.testing.assert_array_equal(fresh.q, robot.body_ik(pose, feet).q)
+
+
+def test_reused_outputs_answer_as_new_ones():
+    robot, feet = _spot_and_stance()
+    rng = np.random.default_rng(7)
+    poses = np.concatenate(
+        [rng.uniform(-0.03, 0.03, (50, 3)) + [0, 0, 0.5], rng.uniform(-0.2, 0.2, (50, 3))], axis=1
+    )
+    batch = robot.body_ik(poses, feet)
+    for k in range(len(poses)):  # each call's arrays those the last call dropped
+        one = robot.body_ik(poses[k], feet)
+        np.testing.assert_array_equal(one.q, batch.q[k])
+        np.testing.assert_array_equal(one.status, batch.status[k])
+        assert one.q.dtype == np.float64 and one.status.dtype == np.int8
+    pose32 = poses[0].astype(np.float32)
+    one32 = robot.body_ik(pose32, feet.astype(np.float32))
+    assert one32.q.dtype == np.float32  # float32 spares apart from float64 ones of the same shape
+    assert robot.body_ik(poses[0], feet).q.dtype == np.float64

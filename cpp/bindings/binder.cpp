@@ -240,17 +240,133 @@ py::array new_output(const Out& spec, const Shape& leading) {
   return py::reinterpret_steal<py::array>(made);
 }
 
-// Output r made here: a single sample's status in r itself (returned as a spotkin.Status), else a
-// new array of the leading shape and the output's sample shape.
+// A single sample's outputs, reused (issue 34: a control loop's call allocates nothing). Making
+// and freeing a small NumPy array costs ~50-60 ns (NumPy's allocator looks up its handler in a
+// context variable on both), two or three per call. The pool keeps a reference to the arrays it
+// made; one whose only reference is the pool's is unreachable from Python, so it is handed out
+// again, as CPython's zip reuses its result tuple. Only if it is exactly as made: no weak
+// reference, no base, its shape, strides, dtype and flags unchanged (a user may set a.shape or
+// a.flags.writeable before dropping it). Used under the GIL only: off on free-threaded Python.
+// Every output is written whole by its kernel, as a new array's would be.
+class SparePool {
+ public:
+  // A free array of this type and sample shape (a new reference), or null.
+  PyObject* take(int type, int nd, const Py_intptr_t* dims) {
+#ifdef Py_GIL_DISABLED
+    return nullptr;
+#else
+    for (Entry& e : entries_) {
+      if (!e.array || e.type != type || e.nd != nd || !std::equal(dims, dims + nd, e.dims))
+        continue;
+      if (Py_REFCNT(e.array) != 1) continue;  // the caller holds it
+      if (!e.unchanged()) {                   // changed before it was dropped: let it go
+        Py_CLEAR(e.array);
+        continue;
+      }
+      Py_INCREF(e.array);
+      return e.array;
+    }
+    return nullptr;
+#endif
+  }
+  // Keep a reference to `made`, a new array of this type and shape: in a free slot, else in
+  // place of an unused array, else in place of the oldest kept (the caller may still hold it).
+  void keep(PyObject* made, int type, int nd, const Py_intptr_t* dims) {
+#ifndef Py_GIL_DISABLED
+    Entry* slot = nullptr;
+    for (Entry& e : entries_)
+      if (!e.array) {
+        slot = &e;
+        break;
+      }
+    for (Entry& e : entries_)
+      if (!slot && Py_REFCNT(e.array) == 1) slot = &e;
+    if (!slot) slot = &entries_[next_++ % kSlots];
+    Py_XDECREF(slot->array);
+    const auto* a = reinterpret_cast<const Fields*>(made);
+    slot->array = made, slot->type = type, slot->nd = nd;
+    slot->descr = a->descr, slot->flags = a->flags;
+    std::copy(dims, dims + nd, slot->dims);
+    std::copy(a->strides, a->strides + nd, slot->strides);
+    Py_INCREF(made);
+#else
+    (void)made, (void)type, (void)nd, (void)dims;
+#endif
+  }
+
+ private:
+  // NumPy's PyArrayObject_fields up to weakreflist (the same in NumPy 1.x and 2.x).
+  struct Fields {
+    PyObject_HEAD char* data;
+    int nd;
+    Py_intptr_t* dimensions;
+    Py_intptr_t* strides;
+    PyObject* base;
+    PyObject* descr;
+    int flags;
+    PyObject* weakreflist;
+  };
+  struct Entry {
+    PyObject* array = nullptr;
+    int type = 0, nd = 0, flags = 0;
+    PyObject* descr = nullptr;
+    Py_intptr_t dims[kMaxDims] = {}, strides[kMaxDims] = {};
+    bool unchanged() const {
+      const auto* a = reinterpret_cast<const Fields*>(array);
+      return Py_TYPE(array) ==
+                 reinterpret_cast<PyTypeObject*>(py::detail::npy_api::get().PyArray_Type_) &&
+             !a->weakreflist && !a->base && a->descr == descr && a->flags == flags && a->nd == nd &&
+             std::equal(dims, dims + nd, a->dimensions) &&
+             std::equal(strides, strides + nd, a->strides);
+    }
+  };
+  static constexpr int kSlots = 16;
+  Entry entries_[kSlots];
+  unsigned next_ = 0;
+};
+
+SparePool& spare_pool() {
+  static SparePool* pool =
+      new SparePool();  // never freed: its arrays outlive the interpreter's teardown order
+  return *pool;
+}
+
+// A single sample's output array (no leading dimension): a free spare, or a new one kept.
 template <typename T>
-void make_output(Output& r, const Out& spec, const Shape& leading) {
+py::array single_output(const Out& spec) {
+  using api = py::detail::npy_api;
+  const int type = spec.kind == Kind::Real
+                       ? (std::is_same_v<T, float> ? api::NPY_FLOAT_ : api::NPY_DOUBLE_)
+                   : spec.kind == Kind::Bool  ? api::NPY_BOOL_
+                   : spec.kind == Kind::Index ? api::NPY_INT64_
+                                              : api::NPY_INT8_;
+  Py_intptr_t dims[kMaxDims];
+  std::copy(spec.shape.dim, spec.shape.dim + spec.shape.ndim, dims);
+  SparePool& pool = spare_pool();
+  if (PyObject* spare = pool.take(type, spec.shape.ndim, dims))
+    return py::reinterpret_steal<py::array>(spare);
+  auto& numpy = api::get();
+  PyObject* made =
+      numpy.PyArray_NewFromDescr_(numpy.PyArray_Type_, numpy.PyArray_DescrFromType_(type),
+                                  spec.shape.ndim, dims, nullptr, nullptr, 0, nullptr);
+  if (!made) throw py::error_already_set();
+  pool.keep(made, type, spec.shape.ndim, dims);
+  return py::reinterpret_steal<py::array>(made);
+}
+
+// Output r made here: a single sample's status in r itself (returned as a spotkin.Status), else a
+// new array of the leading shape and the output's sample shape (reusable: a free spare of the
+// pool).
+template <typename T>
+void make_output(Output& r, const Out& spec, const Shape& leading, bool reusable = false) {
   r.describe(spec, leading.empty(), false);
   if (spec.kind == Kind::Status && leading.empty() && spec.shape.ndim == 0) {
     r.data = &r.single_status;
     r.scalar = true;
     return;
   }
-  py::array made = new_output<T>(spec, leading);
+  py::array made =
+      reusable && leading.empty() ? single_output<T>(spec) : new_output<T>(spec, leading);
   r.data = made.mutable_data();
   r.array = std::move(made);
 }
@@ -662,7 +778,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
       r.array = std::move(checked);
       continue;
     }
-    make_output<T>(r, spec, kNoLeading);
+    make_output<T>(r, spec, kNoLeading, true);
   }
   block.first = 0;
   block.m = 1;
