@@ -256,8 +256,7 @@ class SparePool {
     return nullptr;
 #else
     for (Entry& e : entries_) {
-      if (!e.array || e.type != type || e.nd != nd || !std::equal(dims, dims + nd, e.dims))
-        continue;
+      if (!e.array || e.type != type || e.nd != nd || !same(dims, e.dims, nd)) continue;
       if (Py_REFCNT(e.array) != 1) continue;  // the caller holds it
       if (!e.unchanged()) {                   // changed before it was dropped: let it go
         Py_CLEAR(e.array);
@@ -267,6 +266,48 @@ class SparePool {
       return e.array;
     }
     return nullptr;
+#endif
+  }
+  // A free result tuple of this type and length, its items replaced by None (they go back to
+  // the pool free), or null. Filled whole by single_results before Python sees it.
+  PyObject* take_tuple(PyTypeObject* type, int n) {
+#ifdef Py_GIL_DISABLED
+    return nullptr;
+#else
+    for (PyObject* t : tuples_) {
+      if (!t || Py_TYPE(t) != type || PyTuple_GET_SIZE(t) != n || Py_REFCNT(t) != 1) continue;
+      for (int k = 0; k < n; ++k) {  // None, never null: gc.get_objects() may show it
+        PyObject* item = PyTuple_GET_ITEM(t, k);
+        Py_INCREF(Py_None);
+        PyTuple_SET_ITEM(t, k, Py_None);
+        Py_XDECREF(item);
+      }
+      Py_INCREF(t);
+      return t;
+    }
+    return nullptr;
+#endif
+  }
+  // Keep a reference to `made`, a new result tuple of a type without a __dict__ or weak
+  // references (a NamedTuple), as keep does an array.
+  void keep_tuple(PyObject* made) {
+#ifndef Py_GIL_DISABLED
+    const PyTypeObject* type = Py_TYPE(made);
+    if (type->tp_dictoffset || type->tp_weaklistoffset) return;
+    PyObject** slot = nullptr;
+    for (PyObject*& t : tuples_)
+      if (!t) {
+        slot = &t;
+        break;
+      }
+    for (PyObject*& t : tuples_)
+      if (!slot && Py_REFCNT(t) == 1) slot = &t;
+    if (!slot) slot = &tuples_[next_tuple_++ % kTupleSlots];
+    Py_XDECREF(*slot);
+    *slot = made;
+    Py_INCREF(made);
+#else
+    (void)made;
 #endif
   }
   // Keep a reference to `made`, a new array of this type and shape: in a free slot, else in
@@ -316,13 +357,19 @@ class SparePool {
       return Py_TYPE(array) ==
                  reinterpret_cast<PyTypeObject*>(py::detail::npy_api::get().PyArray_Type_) &&
              !a->weakreflist && !a->base && a->descr == descr && a->flags == flags && a->nd == nd &&
-             std::equal(dims, dims + nd, a->dimensions) &&
-             std::equal(strides, strides + nd, a->strides);
+             same(dims, a->dimensions, nd) && same(strides, a->strides, nd);
     }
   };
-  static constexpr int kSlots = 16;
+  // a loop, not std::equal: GCC makes that a call of memcmp (~10 ns a call on these few bytes)
+  static bool same(const Py_intptr_t* a, const Py_intptr_t* b, int n) {
+    for (int k = 0; k < n; ++k)
+      if (a[k] != b[k]) return false;
+    return true;
+  }
+  static constexpr int kSlots = 16, kTupleSlots = 8;
   Entry entries_[kSlots];
-  unsigned next_ = 0;
+  PyObject* tuples_[kTupleSlots] = {};
+  unsigned next_ = 0, next_tuple_ = 0;
 };
 
 SparePool& spare_pool() {
@@ -352,6 +399,23 @@ py::array single_output(const Out& spec) {
   if (!made) throw py::error_already_set();
   pool.keep(made, type, spec.shape.ndim, dims);
   return py::reinterpret_steal<py::array>(made);
+}
+
+// A single sample's result tuple of the op's registered type (several outputs): a free spare
+// taken before the outputs were made (`spare`, its items None so that its arrays are free for
+// them), else a new one kept. Any other case: results().
+py::object single_results(const Op& op, const Output* outs, py::object spare) {
+  if (!spare) {
+    py::object made = results(op, outs);
+    if (op.n_outs > 1 && op.named && *op.named) spare_pool().keep_tuple(made.ptr());
+    return made;
+  }
+  for (int o = 0; o < op.n_outs; ++o) {
+    PyObject* none = PyTuple_GET_ITEM(spare.ptr(), o);
+    PyTuple_SET_ITEM(spare.ptr(), o, outs[o].result().release().ptr());
+    Py_DECREF(none);
+  }
+  return spare;
 }
 
 // Output r made here: a single sample's status in r itself (returned as a spotkin.Status), else a
@@ -751,6 +815,11 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
     }
   }
 
+  // a spare result tuple first: the arrays it held are then free for the outputs
+  py::object spare_tuple;
+  if (op.n_outs > 1 && op.named && *op.named && out.is_none())
+    spare_tuple = py::reinterpret_steal<py::object>(
+        spare_pool().take_tuple(reinterpret_cast<PyTypeObject*>(*op.named), op.n_outs));
   Outputs outs(op.n_outs);
   py::handle given[kMaxOuts];
   if (!out.is_none()) {
@@ -788,7 +857,7 @@ py::object call_single(const Op& op, const void* context, const py::handle* objs
   } else {
     op.f64(context, block);
   }
-  return results(op, outs.data());
+  return single_results(op, outs.data(), std::move(spare_tuple));
 }
 
 }  // namespace

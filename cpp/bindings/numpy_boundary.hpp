@@ -228,6 +228,9 @@ inline py::object& status_members() {
 inline py::object status_object(std::int8_t code) {
   py::object& members = status_members();
   if (members.is_none()) return py::int_(code);
+  PyObject* m = members.ptr();
+  if (PyTuple_CheckExact(m) && code >= 0 && code < PyTuple_GET_SIZE(m))  // by value, no int made
+    return py::reinterpret_borrow<py::object>(PyTuple_GET_ITEM(m, code));
   return members[py::int_(code)];
 }
 
