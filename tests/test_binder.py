@@ -296,6 +296,7 @@ def test_one_sample_answers_the_bits_of_its_batch_row(arm):
     q12 = go2.body_ik(poses, feet).q
     calls = {
         "leg.fk": lambda s: LEG.fk(q[s]),
+        "leg.ik": lambda s: LEG.ik(p[s])[0],
         "leg.ik seeded": lambda s: LEG.ik(p[s], q[s])[0],
         "leg.ik_all": lambda s: LEG.ik_all(p[s]).q,
         "arm.fk": lambda s: arm.fk(qa[s]),

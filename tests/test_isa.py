@@ -182,3 +182,23 @@ def test_a_sample_s_bits_are_the_same_alone_and_in_a_batch(dtype):
                 batch = call(whole)
                 for i in range(n):
                     np.testing.assert_array_equal(call(i), batch[i], err_msg=f"{level} {name} sample {i}")
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_lone_leg_target_answers_its_batch_row_at_every_level(dtype):
+    """A single leg IK target runs unpadded (the kernel's loops run it alone), a batch's rows in the
+    vector body: the same bits at every level, seeded or not, reachable, beyond the limits or not."""
+    rng = np.random.default_rng(11)
+    leg = sk.Robot.from_urdf(robots.path("go2")).leg("front_left")
+    lo, hi = leg.limits[:, 0], leg.limits[:, 1]
+    q = lo + (hi - lo) * rng.uniform(-0.1, 1.1, (300, 3))  # some beyond the limits
+    p = (leg.fk(q) + rng.normal(0.0, 0.02, (300, 3))).astype(dtype)  # some out of reach
+    seed = (q + rng.normal(0.0, 0.3, (300, 3))).astype(dtype)
+    for level in LEVELS:
+        with sk.isa(level):
+            unseeded, seeded = leg.ik(p), leg.ik(p, seed)
+            for i in range(len(p)):
+                alone, alone_seeded = leg.ik(p[i]), leg.ik(p[i], seed[i])
+                np.testing.assert_array_equal(alone[0], unseeded[0][i], err_msg=f"{level} target {i}")
+                np.testing.assert_array_equal(alone_seeded[0], seeded[0][i], err_msg=f"{level} seeded {i}")
+                assert alone[1] == unseeded[1][i] and alone_seeded[1] == seeded[1][i], (level, i)
