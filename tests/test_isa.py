@@ -202,3 +202,33 @@ def test_a_lone_leg_target_answers_its_batch_row_at_every_level(dtype):
                 np.testing.assert_array_equal(alone[0], unseeded[0][i], err_msg=f"{level} target {i}")
                 np.testing.assert_array_equal(alone_seeded[0], seeded[0][i], err_msg=f"{level} seeded {i}")
                 assert alone[1] == unseeded[1][i] and alone_seeded[1] == seeded[1][i], (level, i)
+
+
+def test_a_lone_arm_pose_answers_its_batch_row_at_every_level():
+    """The Spot arm's IK of one pose runs its branches and slots in lanes, a batch its poses: the
+    same operations (no fused multiply-adds in the arm's kernels, so none can be fused differently),
+    the same bits at every level, for matrix and quaternion poses, seeded or not, singular or not."""
+    rng = np.random.default_rng(5)
+    arm = sk.Spot().arm
+    lo, hi = arm.limits[:, 0], arm.limits[:, 1]
+    q = lo + (hi - lo) * rng.uniform(-0.05, 1.05, (240, 6))  # some beyond the limits
+    q[:30, 4] = 0.0  # the wrist singular
+    T = arm.fk(q)
+    T[30:60, :3, 3] *= 3.0  # out of reach
+    quat = rng.normal(size=(240, 4))
+    poses7 = np.concatenate([T[:, :3, 3], quat / np.linalg.norm(quat, axis=1, keepdims=True)], axis=1)
+    seeds = q + rng.normal(0.0, 0.2, q.shape)
+    for level in LEVELS:
+        with sk.isa(level):
+            for poses in (T, poses7):
+                batch, seeded, nearest = arm.ik_all(poses), arm.ik_all(poses, seeds), arm.ik(poses, seeds)
+                for i in range(len(poses)):
+                    alone, alone_seeded = arm.ik_all(poses[i]), arm.ik_all(poses[i], seeds[i])
+                    for got, row in ((alone, batch), (alone_seeded, seeded)):
+                        for name in got._fields:
+                            np.testing.assert_array_equal(
+                                getattr(got, name), getattr(row, name)[i], err_msg=f"{level} {name} pose {i}"
+                            )
+                    q_one, status_one = arm.ik(poses[i], seeds[i])
+                    np.testing.assert_array_equal(q_one, nearest[0][i], err_msg=f"{level} ik pose {i}")
+                    assert status_one == nearest[1][i], (level, i)

@@ -217,16 +217,21 @@ class Arm {
     return (sum - sum) == 0.0 ? ok : 0.0;
   }
 
-  // All 8 solutions for a target pose (steps 1-5). seed_sh0 / seed_el1 are the
-  // free angles in the shoulder and wrist singular cases. Returns 1.0 where the
-  // solutions exist (all eight or none), 0.0 elsewhere. Branch-free.
-  SPOTKIN_INLINE double solve_all(const Pose& target, double seed_sh0, double seed_el1, double q[kSlots][6],
-                                  double tol = kRatioTolerance) const noexcept {
+  // What the four (shoulder, elbow) branches of solve_all share: the wrist centre and frame, the
+  // shoulder angle, the elbow's half angle and the seeds' sines and cosines (steps 1-3).
+  struct Shared {
+    double Rw[3][3], c[3], c0, s0, sh0, cos_delta, sin_delta, delta, seed_s3, seed_c3, seed_el1;
+  };
+
+  // Steps 1-3 for a target pose; returns 1.0 where the solutions exist (all eight or none).
+  SPOTKIN_INLINE double solve_shared(const Pose& target, double seed_sh0, double seed_el1,
+                                     Shared& h, double tol) const noexcept {
     // (1) wrist pose T_w = T X^-1
-    double Rw_[3][3], c[3];
+    double* c = h.c;
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j)
-        Rw_[i][j] = target.R[i][0] * inv_X_R_[0][j] + target.R[i][1] * inv_X_R_[1][j] + target.R[i][2] * inv_X_R_[2][j];
+        h.Rw[i][j] = target.R[i][0] * inv_X_R_[0][j] + target.R[i][1] * inv_X_R_[1][j] +
+                     target.R[i][2] * inv_X_R_[2][j];
       c[i] = target.R[i][0] * inv_X_p_[0] + target.R[i][1] * inv_X_p_[1] + target.R[i][2] * inv_X_p_[2] +
              target.p[i] - g_.mount[i];
     }
@@ -236,69 +241,86 @@ class Arm {
     double seed_s0, seed_c0;
     vector_math::sincos_bounded(seed_sh0, seed_s0, seed_c0);
     const double inv_r = shoulder_singular ? 0.0 : 1.0 / r;
-    const double c0 = shoulder_singular ? seed_c0 : c[0] * inv_r;
-    const double s0 = shoulder_singular ? seed_s0 : c[1] * inv_r;
-    const double sh0 = shoulder_singular ? wrap_angle_vec(seed_sh0) : vector_math::atan2(c[1], c[0]);
+    h.c0 = shoulder_singular ? seed_c0 : c[0] * inv_r;
+    h.s0 = shoulder_singular ? seed_s0 : c[1] * inv_r;
+    h.sh0 = shoulder_singular ? wrap_angle_vec(seed_sh0) : vector_math::atan2(c[1], c[0]);
     // (3) elbow
     const double a = g_.upper_arm;
     const double ratio = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2] - a * a - Lf_ * Lf_) * inv_2aLf_;
     const double exists = std::fabs(ratio) <= 1.0 + tol ? 1.0 : 0.0;
-    const double cos_delta = std::clamp(ratio, -1.0, 1.0);
-    const double sin_delta = std::sqrt((1.0 - cos_delta) * (1.0 + cos_delta));
-    const double delta = vector_math::atan2(sin_delta, cos_delta);
+    h.cos_delta = std::clamp(ratio, -1.0, 1.0);
+    h.sin_delta = std::sqrt((1.0 - h.cos_delta) * (1.0 + h.cos_delta));
+    h.delta = vector_math::atan2(h.sin_delta, h.cos_delta);
     // seed el1 sin/cos for the wrist-singular case
-    double seed_s3, seed_c3;
-    vector_math::sincos_bounded(seed_el1, seed_s3, seed_c3);
-#pragma GCC unroll 2
-    for (int sb = 0; sb < 2; ++sb) {
-      const double sign0 = sb == 0 ? 1.0 : -1.0;
-      const double cs0 = sign0 * c0, ss0 = sign0 * s0;
-      const double sh0_b = sb == 0 ? sh0 : wrap_angle_vec(sh0 + kPi<double>);
-      const double u = cs0 * c[0] + ss0 * c[1], w = c[2];  // (4) the arm plane
-#pragma GCC unroll 2
-      for (int eb = 0; eb < 2; ++eb) {
-        const double mu = eb == 0 ? 1.0 : -1.0;
-        const double el0 = wrap_angle_vec(phi_ + mu * delta);
-        const double cos_el0 = cos_phi_ * cos_delta - mu * sin_phi_ * sin_delta;
-        const double sin_el0 = sin_phi_ * cos_delta + mu * cos_phi_ * sin_delta;
-        const double sx = a + g_.forearm * cos_el0 + g_.forearm_offset * sin_el0;
-        const double sz = -g_.forearm * sin_el0 + g_.forearm_offset * cos_el0;
-        const double sh1 = vector_math::atan2(u * sz - w * sx, w * sz + u * sx);
-        double s12, c12;
-        vector_math::sincos_bounded(sh1 + el0, s12, c12);
-        // (5) R36 = R03^T R_w, R03 = Rz(sh0) Ry(sh1 + el0)
-        const double r0[3] = {cs0 * c12, ss0 * c12, -s12};  // rows of R03^T
-        const double r1[3] = {-ss0, cs0, 0.0};
-        const double r2[3] = {cs0 * s12, ss0 * s12, c12};
-        double R36[3][3];
-        for (int j = 0; j < 3; ++j) {
-          R36[0][j] = r0[0] * Rw_[0][j] + r0[1] * Rw_[1][j] + r0[2] * Rw_[2][j];
-          R36[1][j] = r1[0] * Rw_[0][j] + r1[1] * Rw_[1][j];
-          R36[2][j] = r2[0] * Rw_[0][j] + r2[1] * Rw_[1][j] + r2[2] * Rw_[2][j];
-        }
-        const double s4 = std::sqrt(R36[1][0] * R36[1][0] + R36[2][0] * R36[2][0]);
-        const bool wrist_singular = s4 < kWristTolerance;
-        const double inv_s4 = wrist_singular ? 0.0 : 1.0 / s4;
-        const double c3 = wrist_singular ? seed_c3 : -R36[2][0] * inv_s4;
-        const double s3 = wrist_singular ? seed_s3 : R36[1][0] * inv_s4;
-        const double el1 = wrist_singular ? wrap_angle_vec(seed_el1) : vector_math::atan2(R36[1][0], -R36[2][0]);
-        const double wr0 = wrist_singular ? (R36[0][0] > 0.0 ? 0.0 : kPi<double>)
-                                          : vector_math::atan2(s4, R36[0][0]);
-        const double M11 = c3 * R36[1][1] + s3 * R36[2][1];
-        const double M12 = c3 * R36[1][2] + s3 * R36[2][2];
-        const double wr1 = vector_math::atan2(-M12, M11);
-        double* q0 = q[4 * sb + 2 * eb];
-        double* q1 = q[4 * sb + 2 * eb + 1];
-        // atan2 gives -pi for a -0 sine: the angle pi, which (-pi, pi] keeps (wrap_angle_vec maps it)
-        q0[0] = q1[0] = wrap_angle_vec(sh0_b);
-        q0[1] = q1[1] = wrap_angle_vec(sh1);
-        q0[2] = q1[2] = el0;
-        q0[3] = wrap_angle_vec(el1), q0[4] = wr0, q0[5] = wrap_angle_vec(wr1);
-        q1[3] = wrap_angle_vec(el1 + kPi<double>);
-        q1[4] = wrap_angle_vec(-wr0);
-        q1[5] = wrap_angle_vec(wr1 + kPi<double>);
-      }
+    vector_math::sincos_bounded(seed_el1, h.seed_s3, h.seed_c3);
+    h.seed_el1 = seed_el1;
+    return exists;
+  }
+
+  // Steps 4-5 for one (shoulder, elbow) branch: sign0 = +1 / -1 the shoulder facing the wrist
+  // centre or turned by pi, mu = +1 / -1 the elbow's sign; q0, q1 its two wrist solutions.
+  // Branch-free, so that a loop over the branches of one target vectorises (solve_branches).
+  SPOTKIN_INLINE void solve_branch(const Shared& h, double sign0, double mu, double q0[6],
+                                   double q1[6]) const noexcept {
+    const double a = g_.upper_arm;
+    const double* c = h.c;
+    const double cs0 = sign0 * h.c0, ss0 = sign0 * h.s0;
+    const double sh0_b = sign0 > 0.0 ? h.sh0 : wrap_angle_vec(h.sh0 + kPi<double>);
+    const double u = cs0 * c[0] + ss0 * c[1], w = c[2];  // (4) the arm plane
+    const double el0 = wrap_angle_vec(phi_ + mu * h.delta);
+    const double cos_el0 = cos_phi_ * h.cos_delta - mu * sin_phi_ * h.sin_delta;
+    const double sin_el0 = sin_phi_ * h.cos_delta + mu * cos_phi_ * h.sin_delta;
+    const double sx = a + g_.forearm * cos_el0 + g_.forearm_offset * sin_el0;
+    const double sz = -g_.forearm * sin_el0 + g_.forearm_offset * cos_el0;
+    const double sh1 = vector_math::atan2(u * sz - w * sx, w * sz + u * sx);
+    double s12, c12;
+    vector_math::sincos_bounded(sh1 + el0, s12, c12);
+    // (5) R36 = R03^T R_w, R03 = Rz(sh0) Ry(sh1 + el0)
+    const double r0[3] = {cs0 * c12, ss0 * c12, -s12};  // rows of R03^T
+    const double r1[3] = {-ss0, cs0, 0.0};
+    const double r2[3] = {cs0 * s12, ss0 * s12, c12};
+    double R36[3][3];
+    for (int j = 0; j < 3; ++j) {
+      R36[0][j] = r0[0] * h.Rw[0][j] + r0[1] * h.Rw[1][j] + r0[2] * h.Rw[2][j];
+      R36[1][j] = r1[0] * h.Rw[0][j] + r1[1] * h.Rw[1][j];
+      R36[2][j] = r2[0] * h.Rw[0][j] + r2[1] * h.Rw[1][j] + r2[2] * h.Rw[2][j];
     }
+    const double s4 = std::sqrt(R36[1][0] * R36[1][0] + R36[2][0] * R36[2][0]);
+    const bool wrist_singular = s4 < kWristTolerance;
+    const double inv_s4 = wrist_singular ? 0.0 : 1.0 / s4;
+    const double c3 = wrist_singular ? h.seed_c3 : -R36[2][0] * inv_s4;
+    const double s3 = wrist_singular ? h.seed_s3 : R36[1][0] * inv_s4;
+    const double el1 =
+        wrist_singular ? wrap_angle_vec(h.seed_el1) : vector_math::atan2(R36[1][0], -R36[2][0]);
+    const double wr0 =
+        wrist_singular ? (R36[0][0] > 0.0 ? 0.0 : kPi<double>) : vector_math::atan2(s4, R36[0][0]);
+    const double M11 = c3 * R36[1][1] + s3 * R36[2][1];
+    const double M12 = c3 * R36[1][2] + s3 * R36[2][2];
+    const double wr1 = vector_math::atan2(-M12, M11);
+    // atan2 gives -pi for a -0 sine: the angle pi, which (-pi, pi] keeps (wrap_angle_vec maps it)
+    q0[0] = q1[0] = wrap_angle_vec(sh0_b);
+    q0[1] = q1[1] = wrap_angle_vec(sh1);
+    q0[2] = q1[2] = el0;
+    q0[3] = wrap_angle_vec(el1), q0[4] = wr0, q0[5] = wrap_angle_vec(wr1);
+    q1[3] = wrap_angle_vec(el1 + kPi<double>);
+    q1[4] = wrap_angle_vec(-wr0);
+    q1[5] = wrap_angle_vec(wr1 + kPi<double>);
+  }
+
+  // All 8 solutions for a target pose (steps 1-5). seed_sh0 / seed_el1 are the
+  // free angles in the shoulder and wrist singular cases. Returns 1.0 where the
+  // solutions exist (all eight or none), 0.0 elsewhere. Branch-free.
+  SPOTKIN_INLINE double solve_all(const Pose& target, double seed_sh0, double seed_el1,
+                                  double q[kSlots][6],
+                                  double tol = kRatioTolerance) const noexcept {
+    Shared h;
+    const double exists = solve_shared(target, seed_sh0, seed_el1, h, tol);
+#pragma GCC unroll 2
+    for (int sb = 0; sb < 2; ++sb)
+#pragma GCC unroll 2
+      for (int eb = 0; eb < 2; ++eb)
+        solve_branch(h, sb == 0 ? 1.0 : -1.0, eb == 0 ? 1.0 : -1.0, q[4 * sb + 2 * eb],
+                     q[4 * sb + 2 * eb + 1]);
     return exists;
   }
 
@@ -418,25 +440,44 @@ SPOTKIN_INLINE bool finite6(const T* v) noexcept {
 
 // The vectorised core of ik_all: every solution of every pose in a block.
 // soa[k][i] is pose element k of sample i; qs[6 * slot + joint][i] receives the angles.
-SPOTKIN_CLONES_T((template <PoseFormat Format> __attribute__((noinline))), void, solve_block, (<Format>), (const Arm& arm, const double (*__restrict soa)[kBlock],
-                                const double* __restrict seed_sh0, const double* __restrict seed_el1,
-                                const double* __restrict seed_ok, double* __restrict ok_pose,
-                                double* __restrict ex, double (*__restrict qs)[kBlock], std::ptrdiff_t m,
-                                double tol) noexcept, (arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, tol),
-  constexpr int kWidth = Format == PoseFormat::Matrix ? 16 : 7;
-  for (std::ptrdiff_t i = 0; i < m; ++i) {
-    double in[kWidth];
-    for (int k = 0; k < kWidth; ++k) in[k] = soa[k][i];
-    Arm::Pose pose;
-    const double pose_ok = arm.read_pose<Format>(in, pose) * seed_ok[i];
-    double q_all[Arm::kSlots][6];
-    const double found = arm.solve_all(pose, seed_sh0[i], seed_el1[i], q_all, tol);
-    ok_pose[i] = pose_ok;
-    ex[i] = pose_ok * found;
-    for (int s = 0; s < Arm::kSlots; ++s)
-      for (int j = 0; j < 6; ++j) qs[6 * s + j][i] = q_all[s][j];
-  }
-)
+SPOTKIN_CLONES_T(
+    (template <PoseFormat Format> __attribute__((noinline))), void, solve_block, (<Format>),
+    (const Arm& arm, const double (*__restrict soa)[kBlock], const double* __restrict seed_sh0,
+     const double* __restrict seed_el1, const double* __restrict seed_ok,
+     double* __restrict ok_pose, double* __restrict ex, double (*__restrict qs)[kBlock],
+     std::ptrdiff_t m, double tol) noexcept,
+    (arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, tol),
+    constexpr int kWidth = Format == PoseFormat::Matrix ? 16 : 7;
+    if (m == 1) {  // one target (a single call): its four branches in lanes, the same operations
+      double in[kWidth];
+      for (int k = 0; k < kWidth; ++k) in[k] = soa[k][0];
+      Arm::Pose pose;
+      const double pose_ok = arm.read_pose<Format>(in, pose) * seed_ok[0];
+      Arm::Shared h;
+      const double found = arm.solve_shared(pose, seed_sh0[0], seed_el1[0], h, tol);
+      ok_pose[0] = pose_ok;
+      ex[0] = pose_ok * found;
+      double lanes[12][4];
+      for (int k = 0; k < 4; ++k) {  // vectorised over the branches: k = 2 sb + eb
+        double q0[6], q1[6];
+        arm.solve_branch(h, k < 2 ? 1.0 : -1.0, (k & 1) ? -1.0 : 1.0, q0, q1);
+        for (int j = 0; j < 6; ++j) lanes[j][k] = q0[j], lanes[6 + j][k] = q1[j];
+      }
+      for (int k = 0; k < 4; ++k)
+        for (int j = 0; j < 12; ++j) qs[12 * k + j][0] = lanes[j][k];
+      return;
+    } for (std::ptrdiff_t i = 0; i < m; ++i) {
+      double in[kWidth];
+      for (int k = 0; k < kWidth; ++k) in[k] = soa[k][i];
+      Arm::Pose pose;
+      const double pose_ok = arm.read_pose<Format>(in, pose) * seed_ok[i];
+      double q_all[Arm::kSlots][6];
+      const double found = arm.solve_all(pose, seed_sh0[i], seed_el1[i], q_all, tol);
+      ok_pose[i] = pose_ok;
+      ex[i] = pose_ok * found;
+      for (int s = 0; s < Arm::kSlots; ++s)
+        for (int j = 0; j < 6; ++j) qs[6 * s + j][i] = q_all[s][j];
+    })
 
 // Every solution: q (count, 8, 6) NaN where none exist, valid and exists
 // (count, 8), status (count). seed (count, 6) or null: used for the free angles
@@ -465,6 +506,31 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
       solve_block<PoseFormat::Matrix>(arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, Leg::ratio_tolerance<T>());
     } else {
       solve_block<PoseFormat::PositionQuaternion>(arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, Leg::ratio_tolerance<T>());
+    }
+    if (m == 1) {  // one target (a single call): its eight slots in lanes, the same operations
+      double lanes[6][Arm::kSlots], valid_slot[Arm::kSlots];
+      for (int s = 0; s < Arm::kSlots; ++s)
+        for (int j = 0; j < 6; ++j) lanes[j][s] = qs[6 * s + j][0];
+      const double e = ex[0];
+      for (int s = 0; s < Arm::kSlots; ++s) {  // vectorised over the slots: limits
+        double qi[6];
+        for (int j = 0; j < 6; ++j) qi[j] = lanes[j][s];
+        valid_slot[s] = e * arm.limits().wrap_mask(qi);
+        for (int j = 0; j < 6; ++j) lanes[j][s] = e != 0.0 ? qi[j] : nan;
+      }
+      double any = 0.0;
+      for (int s = 0; s < Arm::kSlots; ++s) any = std::max(any, valid_slot[s]);
+      status[b0] = ok_pose[0] == 0.0 ? std::int8_t(Status::InvalidInput)
+                   : any != 0.0      ? std::int8_t(Status::Ok)
+                   : e != 0.0        ? std::int8_t(Status::JointLimit)
+                                     : std::int8_t(Status::Unreachable);
+      T* qt = q + 48 * b0;
+      for (int s = 0; s < Arm::kSlots; ++s) {
+        for (int j = 0; j < 6; ++j) qt[6 * s + j] = T(lanes[j][s]);
+        valid[8 * b0 + s] = valid_slot[s] != 0.0;
+        exists[8 * b0 + s] = e != 0.0;
+      }
+      continue;
     }
     double any_valid[kBlock];
     for (std::ptrdiff_t i = 0; i < m; ++i) any_valid[i] = 0.0;
