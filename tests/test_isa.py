@@ -205,8 +205,9 @@ def test_a_lone_leg_target_answers_its_batch_row_at_every_level(dtype):
 
 
 def test_a_lone_arm_pose_answers_its_batch_row_at_every_level():
-    """The Spot arm's IK of one pose runs its branches and slots in lanes, a batch its poses: the
-    same operations (no fused multiply-adds in the arm's kernels, so none can be fused differently),
+    """The Spot arm's IK of one pose runs its branches and slots in loops of their own, a batch its
+    poses in lanes: the same operations (no fused multiply-adds in the arm's kernels, so none can be
+    fused differently),
     the same bits at every level, for matrix and quaternion poses, seeded or not, singular or not."""
     rng = np.random.default_rng(5)
     arm = sk.Spot().arm
