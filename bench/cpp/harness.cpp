@@ -84,10 +84,13 @@ SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, body_ik,
 SPOTKIN_CLONES((template <typename T> __attribute__((noinline))), void, body_fk, (const Body& body, const T* poses, const T* q, T* feet, std::ptrdiff_t n), (body, poses, q, feet, n),
   body_batch::fk(body, poses, BodyPoseFormat::Euler, EulerSequence{}, q, feet, n);
 )
-SPOTKIN_CLONES((__attribute__((noinline))), void, arm_ik_all, (const Arm& arm, const double* poses, double* q, std::uint8_t* valid,
-                               std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n), (arm, poses, q, valid, exists, status, n),
-  arm_batch::ik_all(arm, poses, PoseFormat::Matrix, static_cast<const double*>(nullptr), q, valid, exists, status, n);
-)
+SPOTKIN_CLONES((__attribute__((noinline))), void, arm_ik_all,
+               (const Arm& arm, const double* poses, double* q, std::uint8_t* valid,
+                std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n),
+               (arm, poses, q, valid, exists, status, n),
+               arm_batch::ik_all<register_bytes(kIsa)>(arm, poses, PoseFormat::Matrix,
+                                                       static_cast<const double*>(nullptr), q,
+                                                       valid, exists, status, n);)
 SPOTKIN_CLONES((__attribute__((noinline))), void, arm_fk, (const Arm& arm, const double* q, double* poses, std::ptrdiff_t n), (arm, q, poses, n),
   arm_batch::fk(arm, q, poses, n);
 )

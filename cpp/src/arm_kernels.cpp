@@ -15,11 +15,11 @@ SPOTKIN_CLONES((template <typename T>), void, arm_jacobian, (const Arm& arm, con
   arm_batch::jacobian(arm, q, out, n);
 )
 SPOTKIN_CLONES((template <typename T>), void, arm_ik_all,
-               (const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q, std::uint8_t* valid,
-                std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n),
+               (const Arm& arm, const T* poses, PoseFormat format, const T* seed, T* q,
+                std::uint8_t* valid, std::uint8_t* exists, std::int8_t* status, std::ptrdiff_t n),
                (arm, poses, format, seed, q, valid, exists, status, n),
-  arm_batch::ik_all(arm, poses, format, seed, q, valid, exists, status, n);
-)
+               arm_batch::ik_all<register_bytes(kIsa)>(arm, poses, format, seed, q, valid, exists,
+                                                       status, n);)
 
 // Only the choice is compiled here, at the baseline level; the solutions come from the
 // dispatched kernel above.
