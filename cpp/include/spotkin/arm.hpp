@@ -514,28 +514,22 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
       solve_block<PoseFormat::PositionQuaternion>(arm, soa, seed_sh0, seed_el1, seed_ok, ok_pose, ex, qs, m, Leg::ratio_tolerance<T>());
     }
     if (m == 1) {  // one pose (a single call): its eight slots in a loop of their own
-      double lanes[6][Arm::kSlots], valid_slot[Arm::kSlots];
-      for (int s = 0; s < Arm::kSlots; ++s)
-        for (int j = 0; j < 6; ++j) lanes[j][s] = qs[6 * s + j][0];
       const double e = ex[0];
-      for (int s = 0; s < Arm::kSlots; ++s) {  // the limits
-        double qi[6];
-        for (int j = 0; j < 6; ++j) qi[j] = lanes[j][s];
-        valid_slot[s] = e * arm.limits().wrap_mask(qi);
-        for (int j = 0; j < 6; ++j) lanes[j][s] = e != 0.0 ? qi[j] : nan;
-      }
+      T* qt = q + 48 * b0;
       double any = 0.0;
-      for (int s = 0; s < Arm::kSlots; ++s) any = std::max(any, valid_slot[s]);
+      for (int s = 0; s < Arm::kSlots; ++s) {  // the limits, each slot written as it is tested
+        double qi[6];
+        for (int j = 0; j < 6; ++j) qi[j] = qs[6 * s + j][0];
+        const double valid_slot = e * arm.limits().wrap_mask(qi);
+        any = std::max(any, valid_slot);
+        for (int j = 0; j < 6; ++j) qt[6 * s + j] = T(e != 0.0 ? qi[j] : nan);
+        valid[8 * b0 + s] = valid_slot != 0.0;
+        exists[8 * b0 + s] = e != 0.0;
+      }
       status[b0] = ok_pose[0] == 0.0 ? std::int8_t(Status::InvalidInput)
                    : any != 0.0      ? std::int8_t(Status::Ok)
                    : e != 0.0        ? std::int8_t(Status::JointLimit)
                                      : std::int8_t(Status::Unreachable);
-      T* qt = q + 48 * b0;
-      for (int s = 0; s < Arm::kSlots; ++s) {
-        for (int j = 0; j < 6; ++j) qt[6 * s + j] = T(lanes[j][s]);
-        valid[8 * b0 + s] = valid_slot[s] != 0.0;
-        exists[8 * b0 + s] = e != 0.0;
-      }
       continue;
     }
     double any_valid[kBlock];
