@@ -338,7 +338,8 @@ class SparePool {
  private:
   // NumPy's PyArrayObject_fields up to weakreflist (the same in NumPy 1.x and 2.x).
   struct Fields {
-    PyObject_HEAD char* data;
+    PyObject ob_base;  // PyObject_HEAD
+    char* data;
     int nd;
     Py_intptr_t* dimensions;
     Py_intptr_t* strides;
