@@ -203,12 +203,32 @@ py::array checked_out(py::handle obj, const Out& spec, int k, const py::ssize_t*
   return arr;
 }
 
+// NumPy's type number of an output of this kind, T the working dtype.
+template <typename T>
+int npy_type(Kind kind) {
+  using api = py::detail::npy_api;
+  return kind == Kind::Real    ? (std::is_same_v<T, float> ? api::NPY_FLOAT_ : api::NPY_DOUBLE_)
+         : kind == Kind::Bool  ? api::NPY_BOOL_
+         : kind == Kind::Index ? api::NPY_INT64_
+                               : api::NPY_INT8_;
+}
+
+// A new C-contiguous array of NumPy type `type` and shape dims[0, nd), made directly (no shape
+// vectors): a new reference.
+PyObject* small_array(int type, int nd, Py_intptr_t* dims) {
+  auto& numpy = py::detail::npy_api::get();
+  PyObject* made =
+      numpy.PyArray_NewFromDescr_(numpy.PyArray_Type_, numpy.PyArray_DescrFromType_(type), nd, dims,
+                                  nullptr, nullptr, 0, nullptr);
+  if (!made) throw py::error_already_set();
+  return made;
+}
+
 // A new C-contiguous output (leading + the sample's shape) of the output's dtype. A small one is made
 // directly (no shape vectors: a single sample's call makes several); a large one comes from the
 // buffer cache (cached_array).
 template <typename T>
 py::array new_output(const Out& spec, const Shape& leading) {
-  using api = py::detail::npy_api;
   const std::size_t nd = leading.size() + std::size_t(spec.shape.ndim);
   const std::size_t item = element_size<T>(spec.kind);
   std::size_t bytes = item;
@@ -229,15 +249,7 @@ py::array new_output(const Out& spec, const Shape& leading) {
   std::size_t k = 0;
   for (py::ssize_t d : leading) dims[k++] = d;
   for (int d = 0; d < spec.shape.ndim; ++d) dims[k++] = spec.shape.dim[d];
-  const int type = spec.kind == Kind::Real    ? (std::is_same_v<T, float> ? api::NPY_FLOAT_ : api::NPY_DOUBLE_)
-                   : spec.kind == Kind::Bool  ? api::NPY_BOOL_
-                   : spec.kind == Kind::Index ? api::NPY_INT64_
-                                              : api::NPY_INT8_;
-  auto& numpy = api::get();
-  PyObject* made = numpy.PyArray_NewFromDescr_(numpy.PyArray_Type_, numpy.PyArray_DescrFromType_(type), int(nd), dims,
-                                               nullptr, nullptr, 0, nullptr);
-  if (!made) throw py::error_already_set();
-  return py::reinterpret_steal<py::array>(made);
+  return py::reinterpret_steal<py::array>(small_array(npy_type<T>(spec.kind), int(nd), dims));
 }
 
 // A single sample's outputs, reused (issue 34: a control loop's call allocates nothing). Making
@@ -294,17 +306,9 @@ class SparePool {
 #ifndef Py_GIL_DISABLED
     const PyTypeObject* type = Py_TYPE(made);
     if (type->tp_dictoffset || type->tp_weaklistoffset) return;
-    PyObject** slot = nullptr;
-    for (PyObject*& t : tuples_)
-      if (!t) {
-        slot = &t;
-        break;
-      }
-    for (PyObject*& t : tuples_)
-      if (!slot && Py_REFCNT(t) == 1) slot = &t;
-    if (!slot) slot = &tuples_[next_tuple_++ % kTupleSlots];
-    Py_XDECREF(*slot);
-    *slot = made;
+    PyObject*& slot = *choose(tuples_, next_tuple_, [](PyObject*& t) -> PyObject*& { return t; });
+    Py_XDECREF(slot);
+    slot = made;
     Py_INCREF(made);
 #else
     (void)made;
@@ -314,15 +318,7 @@ class SparePool {
   // place of an unused array, else in place of the oldest kept (the caller may still hold it).
   void keep(PyObject* made, int type, int nd, const Py_intptr_t* dims) {
 #ifndef Py_GIL_DISABLED
-    Entry* slot = nullptr;
-    for (Entry& e : entries_)
-      if (!e.array) {
-        slot = &e;
-        break;
-      }
-    for (Entry& e : entries_)
-      if (!slot && Py_REFCNT(e.array) == 1) slot = &e;
-    if (!slot) slot = &entries_[next_++ % kSlots];
+    Entry* slot = choose(entries_, next_, [](Entry& e) -> PyObject*& { return e.array; });
     Py_XDECREF(slot->array);
     const auto* a = reinterpret_cast<const Fields*>(made);
     slot->array = made, slot->type = type, slot->nd = nd;
@@ -361,6 +357,17 @@ class SparePool {
              same(dims, a->dimensions, nd) && same(strides, a->strides, nd);
     }
   };
+  // The slot for a new object among `slots` (object(slot): its reference): an empty one, else one
+  // whose object only the pool refers to, else the next in turn (the caller may still hold its
+  // object; the pool lets it go).
+  template <typename Slot, std::size_t N, typename Object>
+  static Slot* choose(Slot (&slots)[N], unsigned& next, Object object) {
+    for (Slot& slot : slots)
+      if (!object(slot)) return &slot;
+    for (Slot& slot : slots)
+      if (Py_REFCNT(object(slot)) == 1) return &slot;
+    return &slots[next++ % N];
+  }
   // a loop, not std::equal: GCC makes that a call of memcmp (~10 ns a call on these few bytes)
   static bool same(const Py_intptr_t* a, const Py_intptr_t* b, int n) {
     for (int k = 0; k < n; ++k)
@@ -382,22 +389,13 @@ SparePool& spare_pool() {
 // A single sample's output array (no leading dimension): a free spare, or a new one kept.
 template <typename T>
 py::array single_output(const Out& spec) {
-  using api = py::detail::npy_api;
-  const int type = spec.kind == Kind::Real
-                       ? (std::is_same_v<T, float> ? api::NPY_FLOAT_ : api::NPY_DOUBLE_)
-                   : spec.kind == Kind::Bool  ? api::NPY_BOOL_
-                   : spec.kind == Kind::Index ? api::NPY_INT64_
-                                              : api::NPY_INT8_;
+  const int type = npy_type<T>(spec.kind);
   Py_intptr_t dims[kMaxDims];
   std::copy(spec.shape.dim, spec.shape.dim + spec.shape.ndim, dims);
   SparePool& pool = spare_pool();
   if (PyObject* spare = pool.take(type, spec.shape.ndim, dims))
     return py::reinterpret_steal<py::array>(spare);
-  auto& numpy = api::get();
-  PyObject* made =
-      numpy.PyArray_NewFromDescr_(numpy.PyArray_Type_, numpy.PyArray_DescrFromType_(type),
-                                  spec.shape.ndim, dims, nullptr, nullptr, 0, nullptr);
-  if (!made) throw py::error_already_set();
+  PyObject* made = small_array(type, spec.shape.ndim, dims);
   pool.keep(made, type, spec.shape.ndim, dims);
   return py::reinterpret_steal<py::array>(made);
 }

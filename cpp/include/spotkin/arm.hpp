@@ -485,6 +485,14 @@ SPOTKIN_CLONES_T(
         for (int j = 0; j < 6; ++j) qs[6 * s + j][i] = q_all[s][j];
     })
 
+// A pose's status: from its validity, whether any slot is valid, and whether solutions exist.
+SPOTKIN_INLINE std::int8_t pose_status(double pose_ok, double any_valid, double exists) noexcept {
+  return pose_ok == 0.0     ? std::int8_t(Status::InvalidInput)
+         : any_valid != 0.0 ? std::int8_t(Status::Ok)
+         : exists != 0.0    ? std::int8_t(Status::JointLimit)
+                            : std::int8_t(Status::Unreachable);
+}
+
 // Every solution: q (count, 8, 6) NaN where none exist, valid and exists
 // (count, 8), status (count). seed (count, 6) or null: used for the free angles
 // of the shoulder and wrist singular cases.
@@ -526,10 +534,7 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
         valid[8 * b0 + s] = valid_slot != 0.0;
         exists[8 * b0 + s] = e != 0.0;
       }
-      status[b0] = ok_pose[0] == 0.0 ? std::int8_t(Status::InvalidInput)
-                   : any != 0.0      ? std::int8_t(Status::Ok)
-                   : e != 0.0        ? std::int8_t(Status::JointLimit)
-                                     : std::int8_t(Status::Unreachable);
+      status[b0] = pose_status(ok_pose[0], any, e);
       continue;
     }
     double any_valid[kBlock];
@@ -545,11 +550,7 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
       }
     }
     for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: statuses
-      const std::int8_t st = ok_pose[i] == 0.0  ? std::int8_t(Status::InvalidInput)
-                             : any_valid[i] != 0 ? std::int8_t(Status::Ok)
-                             : ex[i] != 0.0      ? std::int8_t(Status::JointLimit)
-                                                 : std::int8_t(Status::Unreachable);
-      status[b0 + i] = st;
+      status[b0 + i] = pose_status(ok_pose[i], any_valid[i], ex[i]);
     }
     // back to (sample, slot, joint) order: with AVX2 and up, 4 x 4 tiles transposed in registers
     // (one value at a time, the loads 256 bytes apart took a quarter of a batch's time; 1e5 poses,
