@@ -240,8 +240,8 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
 // Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
 // Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn); where not, the
 // in-limit test skips the turned angles (same bits, 6 % of body_ik at AVX2).
-template <int Slot, bool Bound, bool Turn, typename C>
-SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
+template <bool Bound, bool Turn, typename C>
+SPOTKIN_INLINE void leg_block_slot(const Leg& leg, Leg::SlotSigns<C> signs, const C* __restrict hip,
                                    const C (*__restrict R)[kBlock], const C (*__restrict t)[kBlock],
                                    const C* __restrict fx, const C* __restrict fy,
                                    const C* __restrict fz, C* __restrict x, C* __restrict y,
@@ -255,13 +255,13 @@ SPOTKIN_INLINE void leg_block_slot(const Leg& leg, const C* __restrict hip,
     const C py = R[1][i] * dx + R[4][i] * dy + R[7][i] * dz - hip[1];
     const C pz = R[2][i] * dx + R[5][i] * dy + R[8][i] * dz - hip[2];
     x[i] = px, y[i] = py, z[i] = pz;
-    leg.slot_hip(i, py, pz, tol, st);
+    leg.slot_hip(i, py, pz, tol, signs, st);
   }
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    leg.slot_knee<Slot>(i, x[i], tol, st);
+    leg.slot_knee(i, x[i], tol, signs, st);
     C q[3];
     const C finite = leg_batch::finite_mask(x[i], y[i], z[i]);
-    const C e = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q);
+    const C e = finite * leg.slot_angles(i, x[i], y[i], z[i], st, q);
     ok[i] = e * leg.limits().template wrap_mask<Turn>(q, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : e;
     q0[0][i] = q[0], q0[1][i] = q[1], q0[2][i] = q[2];
@@ -278,11 +278,11 @@ SPOTKIN_INLINE void leg_block_impl(const Leg& leg_in, const C* __restrict hip,
                                    C* __restrict exists, C* __restrict ok, C* __restrict bound,
                                    std::ptrdiff_t m, C tol, C limit_tol) noexcept {
   const Leg leg = leg_in;  // a local copy: the outputs cannot alias its constants
-  with_slot(leg.preferred_slot(), leg.limits().may_turn(),
-            [&](auto slot, auto turn) SPOTKIN_LAMBDA_INLINE {
-              leg_block_slot<decltype(slot)::value, Bound, decltype(turn)::value>(
-                  leg, hip, R, t, fx, fy, fz, x, y, z, q0, exists, ok, bound, m, tol, limit_tol);
-            });
+  const Leg::SlotSigns<C> signs = Leg::slot_signs<C>(leg.preferred_slot());
+  with_turn(leg.limits().may_turn(), [&](auto turn) SPOTKIN_LAMBDA_INLINE {
+    leg_block_slot<Bound, decltype(turn)::value>(leg, signs, hip, R, t, fx, fy, fz, x, y, z, q0,
+                                                 exists, ok, bound, m, tol, limit_tol);
+  });
 }
 
 // One run-time dispatched kernel per compute type (target_clones takes no templates). bound: null,

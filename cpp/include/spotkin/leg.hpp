@@ -222,29 +222,46 @@ class Leg {
     *sigma_min = T(Eigen::JacobiSVD<Eigen::Matrix3d>(J).singularValues()[2]);
   }
 
+  // A slot's branch signs as values (slot = 2 hip branch + knee branch), for the batch passes of
+  // one slot: hip is eps of (I1), +1 for the normal hip branch and -1 for the flipped one; knee is
+  // -1 for knee branch 0 (psi = -acos, (I3)) and +1 for branch 1. Multiplying by +-1 is exact, so
+  // the passes give the bits that constant signs gave, in one compiled copy instead of four.
+  template <typename C>
+  struct SlotSigns {
+    C hip, knee;
+  };
+  template <typename C>
+  static constexpr SlotSigns<C> slot_signs(int slot) noexcept {
+    return {slot < 2 ? C(1) : C(-1), slot % 2 == 0 ? C(-1) : C(1)};
+  }
+
   // solve_slot in stages for block loops, over arrays the caller holds (SlotStages): the hip's
-  // square root in one loop (slot_hip), the knee and the angles in the next (slot_knee, slot_angles).
-  // The hip's square root then no longer sits on the long loop's critical path: the out-of-order
-  // core overlaps those of successive iterations (AVX2: body_ik 113 -> 102 ns; a third loop for the
-  // knee measured no better). Same operations as solve_slot.
+  // square root in one loop (slot_hip), the knee and the angles in the next (slot_knee,
+  // slot_angles). The hip's square root then no longer sits on the long loop's critical path: the
+  // out-of-order core overlaps those of successive iterations (AVX2: body_ik 113 -> 102 ns; a third
+  // loop for the knee measured no better). Same operations as solve_slot. The stages hold the
+  // slot's signs: S is eps S, and sin_psi and acos_psi carry the knee branch's sign (the stages'
+  // one multiply each, where the angles' loop, the longest, would take two).
   template <typename C, std::ptrdiff_t N>
   struct SlotStages {
     C S[N], hip_exists[N], cos_psi[N], sin_psi[N], acos_psi[N], knee_exists[N];
   };
   template <typename C, std::ptrdiff_t N>
-  SPOTKIN_INLINE void slot_hip(std::ptrdiff_t i, C y, C z, C tol, SlotStages<C, N>& st) const noexcept {
-    slot_hip_with(k_, i, y, z, tol, st);
+  SPOTKIN_INLINE void slot_hip(std::ptrdiff_t i, C y, C z, C tol, SlotSigns<C> signs,
+                               SlotStages<C, N>& st) const noexcept {
+    slot_hip_with(k_, i, y, z, tol, signs, st);
   }
-  template <int Slot, typename C, std::ptrdiff_t N>
-  SPOTKIN_INLINE void slot_knee(std::ptrdiff_t i, C x, C tol, SlotStages<C, N>& st) const noexcept {
-    slot_knee_with<Slot>(k_, i, x, tol, st);
+  template <typename C, std::ptrdiff_t N>
+  SPOTKIN_INLINE void slot_knee(std::ptrdiff_t i, C x, C tol, SlotSigns<C> signs,
+                                SlotStages<C, N>& st) const noexcept {
+    slot_knee_with(k_, i, x, tol, signs, st);
   }
-  template <int Slot, typename C, std::ptrdiff_t N>
+  template <typename C, std::ptrdiff_t N>
   SPOTKIN_INLINE C slot_angles(std::ptrdiff_t i, C x, C y, C z, const SlotStages<C, N>& st,
                                C q[3]) const noexcept {
-    return slot_angles_with<Slot>(k_, i, x, y, z, st, q);
+    return slot_angles_with(k_, i, x, y, z, st, q);
   }
-  // A lower bound on the circle distance (circle_distance, the largest joint's) from slot Slot's
+  // A lower bound on the circle distance (circle_distance, the largest joint's) from the slot's
   // answer to any other slot's, from its stages: the other knee branch's q3 is 2 acos_psi away
   // (mod 2 pi), at least 2 sin_psi; the other hip branch's q1 is 2 atan2(S, h) away (mod 2 pi), at
   // least 2 S / (|h| + S) (atan t >= t / (1 + t) for t >= 0). 0 where the branches meet.
@@ -255,37 +272,34 @@ class Leg {
   template <typename C, std::ptrdiff_t N>
   static SPOTKIN_INLINE C slot_separation_with(const RppConstants& k, std::ptrdiff_t i,
                                                const SlotStages<C, N>& st) noexcept {
-    const C S = st.S[i], sum = C(std::fabs(k.h)) + S;
-    const C hip = sum > C(0) ? C(2) * S / sum : C(0), knee = C(2) * st.sin_psi[i];
+    const C S = std::fabs(st.S[i]), sum = C(std::fabs(k.h)) + S;
+    const C hip = sum > C(0) ? C(2) * S / sum : C(0), knee = C(2) * std::fabs(st.sin_psi[i]);
     return hip < knee ? hip : knee;
   }
   // The stages with a leg's constants k (a lane kernel's: each lane its own leg's).
   template <typename C, std::ptrdiff_t N>
   static SPOTKIN_INLINE void slot_hip_with(const RppConstants& k, std::ptrdiff_t i, C y, C z, C tol,
-                                           SlotStages<C, N>& st) noexcept {
+                                           SlotSigns<C> signs, SlotStages<C, N>& st) noexcept {
     const Hip<C> hip = solve_hip(k, y, z, tol);
-    st.S[i] = hip.S, st.hip_exists[i] = hip.exists;
+    st.S[i] = signs.hip * hip.S, st.hip_exists[i] = hip.exists;
   }
-  template <int Slot, typename C, std::ptrdiff_t N>
+  template <typename C, std::ptrdiff_t N>
   static SPOTKIN_INLINE void slot_knee_with(const RppConstants& k, std::ptrdiff_t i, C x, C tol,
-                                            SlotStages<C, N>& st) noexcept {
-    constexpr C eps = Slot < 2 ? C(1) : C(-1);
-    const Knee<C> knee = solve_knee(k, x - C(k.a0), -eps * st.S[i] - C(k.a2), tol);
+                                            SlotSigns<C> signs, SlotStages<C, N>& st) noexcept {
+    const Knee<C> knee = solve_knee(k, x - C(k.a0), -st.S[i] - C(k.a2), tol, signs.knee);
     st.cos_psi[i] = knee.cos_psi, st.sin_psi[i] = knee.sin_psi, st.acos_psi[i] = knee.acos_psi;
     st.knee_exists[i] = knee.exists;
   }
-  template <int Slot, typename C, std::ptrdiff_t N>
+  template <typename C, std::ptrdiff_t N>
   static SPOTKIN_INLINE C slot_angles_with(const RppConstants& k, std::ptrdiff_t i, C x, C y, C z,
                                            const SlotStages<C, N>& st, C q[3]) noexcept {
-    constexpr C eps = Slot < 2 ? C(1) : C(-1);
-    constexpr int kb = Slot % 2;
-    const Hip<C> hip{y * y + z * z, st.S[i], st.hip_exists[i]};
+    const C signed_S = st.S[i];  // eps S: (eps y) S = y (eps S) exactly
     const Knee<C> knee{st.cos_psi[i], st.sin_psi[i], st.acos_psi[i], st.knee_exists[i]};
-    const C wx = x - C(k.a0), wz = -eps * hip.S - C(k.a2);
-    q[0] = hip_roll(k, y, z, hip, eps);
-    q[1] = hip_pitch(k, wx, wz, knee, kb);
-    q[2] = knee_angle(k, knee, kb);
-    return hip.exists * knee.exists;
+    const C wx = x - C(k.a0), wz = -signed_S - C(k.a2);
+    q[0] = hip_roll_signed(k, y, z, y * y + z * z, signed_S);
+    q[1] = hip_pitch(k, wx, wz, knee, C(1));  // the knee's sign is in knee's sin_psi, acos_psi
+    q[2] = knee_angle(k, knee, C(1));
+    return st.hip_exists[i] * knee.exists;
   }
 
   // All four branches of (I1)-(I4) for one target, angles in (-pi, pi], and
@@ -319,8 +333,9 @@ class Leg {
       for (int kb = 0; kb < 2; ++kb) {
         C* slot = q[2 * hb + kb];
         slot[0] = hx;
-        slot[1] = hip_pitch(k, wx, wz, knee, kb);
-        slot[2] = knee_angle(k, knee, kb);
+        const C knee_sign = kb == 0 ? C(-1) : C(1);
+        slot[1] = hip_pitch(k, wx, wz, knee, knee_sign);
+        slot[2] = knee_angle(k, knee, knee_sign);
       }
     }
   }
@@ -335,8 +350,8 @@ class Leg {
     const C wx = x - C(k_.a0), wz = -eps * hip.S - C(k_.a2);
     const Knee<C> knee = solve_knee(k_, wx, wz, tol);
     q[0] = hip_roll(k_, y, z, hip, eps);
-    q[1] = hip_pitch(k_, wx, wz, knee, kb);
-    q[2] = knee_angle(k_, knee, kb);
+    q[1] = hip_pitch(k_, wx, wz, knee, kb == 0 ? C(-1) : C(1));
+    q[2] = knee_angle(k_, knee, kb == 0 ? C(-1) : C(1));
     return hip.exists * knee.exists;
   }
 
@@ -426,7 +441,10 @@ class Leg {
   }
 
   template <typename C>
-  static SPOTKIN_INLINE Knee<C> solve_knee(const RppConstants& kc, C wx, C wz, C tol) noexcept {
+  // knee_sign: sin_psi and acos_psi of that knee branch's sign (SlotSigns::knee; exact, as atan2
+  // is odd in its first argument), or of +1.
+  static SPOTKIN_INLINE Knee<C> solve_knee(const RppConstants& kc, C wx, C wz, C tol,
+                                           C knee_sign = C(1)) noexcept {
     Knee<C> k;
     if constexpr (std::is_same_v<C, float>) {
       // Near the stretched and folded knee (ratio -> +-1) psi is sqrt-sensitive to the
@@ -437,12 +455,12 @@ class Leg {
       k.exists = std::fabs(ratio) <= 1.0 + double(tol) ? C(1) : C(0);
       const double cos_psi = std::clamp(ratio, -1.0, 1.0);
       k.cos_psi = C(cos_psi);
-      k.sin_psi = std::sqrt(C((1.0 - cos_psi) * (1.0 + cos_psi)));
+      k.sin_psi = knee_sign * std::sqrt(C((1.0 - cos_psi) * (1.0 + cos_psi)));
     } else {
       const C ratio = (wx * wx + wz * wz - C(kc.knee_sum_sq)) * C(kc.inv_2BC);
       k.exists = std::fabs(ratio) <= C(1) + tol ? C(1) : C(0);
       k.cos_psi = std::clamp(ratio, C(-1), C(1));
-      k.sin_psi = std::sqrt((C(1) - k.cos_psi) * (C(1) + k.cos_psi));
+      k.sin_psi = knee_sign * std::sqrt((C(1) - k.cos_psi) * (C(1) + k.cos_psi));
     }
     k.acos_psi = vector_math::atan2(k.sin_psi, k.cos_psi);
     return k;
@@ -457,6 +475,14 @@ class Leg {
     const C t1 = vector_math::atan2(z * h + eps * y * hip.S, y * h - eps * z * hip.S);
     return hip.r2 > C(0) ? half_open(C(k.sign1) * t1) : C(0);
   }
+  // hip_roll with eps S given (the same bits: a product's sign is exact).
+  template <typename C>
+  static SPOTKIN_INLINE C hip_roll_signed(const RppConstants& k, C y, C z, C r2,
+                                          C signed_S) noexcept {
+    const C h = C(k.h);
+    const C t1 = vector_math::atan2(z * h + y * signed_S, y * h - z * signed_S);
+    return r2 > C(0) ? half_open(C(k.sign1) * t1) : C(0);
+  }
 
   // An angle in [-pi, pi] (an atan2, maybe negated) into (-pi, pi]: -pi (atan2 of a -0 sine, or pi
   // negated) is pi.
@@ -465,10 +491,12 @@ class Leg {
     return t <= -kPi<C> ? kPi<C> : t;
   }
 
-  // theta3 = psi - phi, then q3 = s3 theta3 in (-pi, pi].
+  // theta3 = psi - phi, then q3 = s3 theta3 in (-pi, pi];
+  // knee_sign: -1 for knee branch 0 (psi = -acos), +1 for branch 1 (SlotSigns::knee).
   template <typename C>
-  static SPOTKIN_INLINE C knee_angle(const RppConstants& kc, const Knee<C>& k, int kb) noexcept {
-    const C t3 = (kb == 0 ? -k.acos_psi : k.acos_psi) - C(kc.phi);
+  static SPOTKIN_INLINE C knee_angle(const RppConstants& kc, const Knee<C>& k,
+                                     C knee_sign) noexcept {
+    const C t3 = knee_sign * k.acos_psi - C(kc.phi);
     const C q3 = C(kc.sign3) * t3;  // in (-2pi, 2pi)
     const C wrapped = q3 <= -kPi<C> ? q3 + C(2) * kPi<C> : q3;
     return wrapped > kPi<C> ? wrapped - C(2) * kPi<C> : wrapped;
@@ -477,10 +505,10 @@ class Leg {
   // (I4) with e^{i theta3} from psi: theta3 = psi - phi.
   template <typename C>
   static SPOTKIN_INLINE C hip_pitch(const RppConstants& kc, C wx, C wz, const Knee<C>& k,
-                                    int kb) noexcept {
+                                    C knee_sign) noexcept {
     const C Bz = C(kc.Bz), Bx = C(kc.Bx), Cz = C(kc.Cz), Cx = C(kc.Cx), cos_phi = C(kc.cos_phi),
             sin_phi = C(kc.sin_phi);
-    const C sin_psi = kb == 0 ? -k.sin_psi : k.sin_psi;
+    const C sin_psi = knee_sign * k.sin_psi;
     const C c3 = k.cos_psi * cos_phi + sin_psi * sin_phi;
     const C s3 = sin_psi * cos_phi - k.cos_psi * sin_phi;
     const C dz = Bz + c3 * Cz - s3 * Cx, dx = Bx + c3 * Cx + s3 * Cz;
@@ -521,28 +549,13 @@ class Leg {
   int order_[kSlots] = {0, 1, 2, 3};
 };
 
-// f(std::integral_constant<int, Slot>, std::bool_constant<Turn>) for a run-time slot (0 .. 3) and
-// turn flag (JointLimits::may_turn): the batch kernels' branch signs and in-limit test become
-// compile-time constants. f: a generic lambda marked SPOTKIN_LAMBDA_INLINE, so that it compiles
-// into the caller's clone.
-template <bool Turn, typename F>
-SPOTKIN_INLINE void with_slot_turning(int slot, F&& f) noexcept {
-  using std::integral_constant;
-  switch (slot) {
-    case 0:
-      return f(integral_constant<int, 0>{}, std::bool_constant<Turn>{});
-    case 1:
-      return f(integral_constant<int, 1>{}, std::bool_constant<Turn>{});
-    case 2:
-      return f(integral_constant<int, 2>{}, std::bool_constant<Turn>{});
-    default:
-      return f(integral_constant<int, 3>{}, std::bool_constant<Turn>{});
-  }
-}
+// f(std::bool_constant<Turn>) for a run-time turn flag (JointLimits::may_turn): the batch
+// kernels' in-limit test skips the turned angles where the limits cannot take them. f: a generic
+// lambda marked SPOTKIN_LAMBDA_INLINE, so that it compiles into the caller's clone.
 template <typename F>
-SPOTKIN_INLINE void with_slot(int slot, bool turn, F&& f) noexcept {
-  if (turn) return with_slot_turning<true>(slot, f);
-  with_slot_turning<false>(slot, f);
+SPOTKIN_INLINE void with_turn(bool turn, F&& f) noexcept {
+  if (turn) return f(std::true_type{});
+  f(std::false_type{});
 }
 
 // Batched leg kernels over `count` targets (row-major (count, 3) inputs).
@@ -733,21 +746,22 @@ struct OpenTargets {
   }
 };
 
-// Vectorised: slot Slot and its limits for every target of a block; exists
+// Vectorised: slot `slot` and its limits for every target of a block; exists
 // -1 for invalid input.
 // Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
 // Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn; else wrap_mask<false>).
-template <int Slot, bool Bound, bool Turn, typename C>
-SPOTKIN_INLINE void slot_pass(const Leg& leg, const C* x, const C* y, const C* z, C* hx, C* hy,
-                              C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol,
+template <bool Bound, bool Turn, typename C>
+SPOTKIN_INLINE void slot_pass(const Leg& leg, int slot, const C* x, const C* y, const C* z, C* hx,
+                              C* hy, C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol, C limit_tol,
                               C* bound = nullptr) noexcept {
+  const Leg::SlotSigns<C> signs = Leg::slot_signs<C>(slot);
   Leg::SlotStages<C, kBlock> st;  // m <= kBlock
-  for (std::ptrdiff_t i = 0; i < m; ++i) leg.slot_hip(i, y[i], z[i], tol, st);
+  for (std::ptrdiff_t i = 0; i < m; ++i) leg.slot_hip(i, y[i], z[i], tol, signs, st);
   for (std::ptrdiff_t i = 0; i < m; ++i) {
-    leg.slot_knee<Slot>(i, x[i], tol, st);
+    leg.slot_knee(i, x[i], tol, signs, st);
     C q0[3];
     const C finite = finite_mask(x[i], y[i], z[i]);
-    exists[i] = finite * leg.slot_angles<Slot>(i, x[i], y[i], z[i], st, q0);
+    exists[i] = finite * leg.slot_angles(i, x[i], y[i], z[i], st, q0);
     ok[i] = exists[i] * leg.limits().template wrap_mask<Turn>(q0, limit_tol);
     exists[i] = finite == C(0) ? C(-1) : exists[i];
     hx[i] = q0[0], hy[i] = q0[1], kn[i] = q0[2];
@@ -760,11 +774,10 @@ SPOTKIN_INLINE void preferred_pass(const Leg& leg_in, const C* x, const C* y, co
                                    C* hy, C* kn, C* exists, C* ok, std::ptrdiff_t m, C tol,
                                    C limit_tol, C* bound = nullptr) noexcept {
   const Leg leg = leg_in;  // a local copy: the output arrays cannot alias its constants
-  with_slot(leg.preferred_slot(), leg.limits().may_turn(),
-            [&](auto slot, auto turn) SPOTKIN_LAMBDA_INLINE {
-              slot_pass<decltype(slot)::value, Bound, decltype(turn)::value>(
-                  leg, x, y, z, hx, hy, kn, exists, ok, m, tol, limit_tol, bound);
-            });
+  with_turn(leg.limits().may_turn(), [&](auto turn) SPOTKIN_LAMBDA_INLINE {
+    slot_pass<Bound, decltype(turn)::value>(leg, leg.preferred_slot(), x, y, z, hx, hy, kn, exists,
+                                            ok, m, tol, limit_tol, bound);
+  });
 }
 
 // Solves and chooses the gathered targets (open.index: places in the batch),

@@ -40,25 +40,25 @@ struct LegLanes {
   }
 };
 
-// slot_pass with lane i solved for the leg L holds in lane i (m <= N), all in slot Slot: the same
+// slot_pass with lane i solved for the leg L holds in lane i (m <= N), all in one slot: the same
 // operations on each lane as leg_block_slot for that leg alone. ok[i] = 1 where the slot exists
 // and fits the limits; exists[i] -1 for a non-finite target. Bound: also each lane's
 // slot_separation (bound), as leg_block gives it. Turn: as leg_block_slot's (L.may_turn); the
 // same code as that kernel's, so that the compiler fuses the same multiply-adds in both.
-template <int Slot, bool Bound, bool Turn, std::ptrdiff_t N, typename C>
-SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, const C* __restrict x,
-                                    const C* __restrict y, const C* __restrict z, std::ptrdiff_t m,
-                                    C tol, C limit_tol, C (*__restrict q)[kBlock],
-                                    C* __restrict exists, C* __restrict ok,
-                                    C* __restrict bound = nullptr) noexcept {
+template <bool Bound, bool Turn, std::ptrdiff_t N, typename C>
+SPOTKIN_INLINE void slot_pass_lanes(const LegLanes<N>& __restrict L, Leg::SlotSigns<C> signs,
+                                    const C* __restrict x, const C* __restrict y,
+                                    const C* __restrict z, std::ptrdiff_t m, C tol, C limit_tol,
+                                    C (*__restrict q)[kBlock], C* __restrict exists,
+                                    C* __restrict ok, C* __restrict bound = nullptr) noexcept {
   Leg::SlotStages<C, kBlock> st;
-  for (std::ptrdiff_t i = 0; i < m; ++i) Leg::slot_hip_with(L.at(i), i, y[i], z[i], tol, st);
+  for (std::ptrdiff_t i = 0; i < m; ++i) Leg::slot_hip_with(L.at(i), i, y[i], z[i], tol, signs, st);
   for (std::ptrdiff_t i = 0; i < m; ++i) {
     const RppConstants k = L.at(i);
-    Leg::slot_knee_with<Slot>(k, i, x[i], tol, st);
+    Leg::slot_knee_with(k, i, x[i], tol, signs, st);
     C qi[3];
     const C finite = finite_mask(x[i], y[i], z[i]);
-    const C e = finite * Leg::slot_angles_with<Slot>(k, i, x[i], y[i], z[i], st, qi);
+    const C e = finite * Leg::slot_angles_with(k, i, x[i], y[i], z[i], st, qi);
     const double lower[3] = {L.lower[0][i], L.lower[1][i], L.lower[2][i]};
     const double upper[3] = {L.upper[0][i], L.upper[1][i], L.upper[2][i]};
     ok[i] = e * JointLimits<3>::wrap_mask_within<Turn>(lower, upper, qi, limit_tol);
@@ -76,9 +76,10 @@ SPOTKIN_INLINE void preferred_pass_lanes(const LegLanes<N>& __restrict L, int sl
                                          C limit_tol, C (*__restrict q)[kBlock],
                                          C* __restrict exists, C* __restrict ok,
                                          C* __restrict bound) noexcept {
-  with_slot(slot, L.may_turn, [&](auto s, auto turn) SPOTKIN_LAMBDA_INLINE {
-    slot_pass_lanes<decltype(s)::value, Bound, decltype(turn)::value>(L, x, y, z, m, tol, limit_tol,
-                                                                      q, exists, ok, bound);
+  const Leg::SlotSigns<C> signs = Leg::slot_signs<C>(slot);
+  with_turn(L.may_turn, [&](auto turn) SPOTKIN_LAMBDA_INLINE {
+    slot_pass_lanes<Bound, decltype(turn)::value>(L, signs, x, y, z, m, tol, limit_tol, q, exists,
+                                                  ok, bound);
   });
 }
 
