@@ -3,11 +3,12 @@
 // per sample and the stance forces' decomposition (statics.hpp, Eigen's dense solvers).
 #include "spotkin/dynamics/robot_statics.hpp"
 
-#include <Eigen/Dense>
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "spotkin/dense.hpp"
 #include "spotkin/dynamics/kernels.hpp"
 #include "spotkin/dynamics/statics.hpp"
 
@@ -19,25 +20,31 @@ void stance_forces(int k, const Eigen::Vector3d* r, const Eigen::Vector3d& F, Ei
   Eigen::Vector3d mean_r = Eigen::Vector3d::Zero();
   for (int i = 0; i < k; ++i) f[i] = F / double(k), mean_r += r[i] / double(k);
   if (k > 1) {
-    // Dynamic columns (at most 3): Eigen gives thin unitaries only for those
-    using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3 * (kMaxFeet - 1), 3>;
-    Tall At(3 * (k - 1), 3);  // (M N)^T
+    const int rows = 3 * (k - 1);
+    double At[3 * dense::kMaxThinRows];  // (M N)^T, row-major
+    static_assert(3 * (kMaxFeet - 1) <= dense::kMaxThinRows, "dense::thin_svd3 takes the rows");
     for (int j = 1; j < k; ++j) {
       const double h = 1.0 / std::sqrt(double(j) * double(j + 1));
       Eigen::Vector3d sj = -double(j) * h * r[j];
       for (int i = 0; i < j; ++i) sj += h * r[i];
       // [s]x^T = -[s]x: rows 3 (j - 1) .. of (M N)^T
-      At.block<3, 3>(3 * (j - 1), 0) << 0.0, sj[2], -sj[1], -sj[2], 0.0, sj[0], sj[1], -sj[0], 0.0;
+      const double block[9] = {0.0, sj[2], -sj[1], -sj[2], 0.0, sj[0], sj[1], -sj[0], 0.0};
+      std::copy(block, block + 9, At + 9 * (j - 1));
     }
     const Eigen::Vector3d moment0 = mean_r.cross(F);  // M f_0
-    const Eigen::JacobiSVD<Tall> svd(At, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto& sigma = svd.singularValues();  // (M N)^T = U S V^T, so pinv(M N) = U S^+ V^T
-    Eigen::Vector3d w = svd.matrixV().transpose() * -moment0;
-    for (int a = 0; a < 3; ++a) w[a] = sigma[a] > 1e-9 * sigma[0] ? w[a] / sigma[a] : 0.0;
-    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3 * (kMaxFeet - 1), 1> z = svd.matrixU() * w;
+    double U[3 * dense::kMaxThinRows], sigma[3], V[9];
+    dense::thin_svd3(At, rows, U, sigma, V);  // (M N)^T = U S V^T, so pinv(M N) = U S^+ V^T
+    double w[3];
+    for (int a = 0; a < 3; ++a) {
+      const double v_m = -(V[a] * moment0[0] + V[3 + a] * moment0[1] + V[6 + a] * moment0[2]);
+      w[a] = sigma[a] > 1e-9 * sigma[0] ? v_m / sigma[a] : 0.0;
+    }
+    double z[3 * dense::kMaxThinRows];
+    for (int i = 0; i < rows; ++i)
+      z[i] = U[3 * i] * w[0] + U[3 * i + 1] * w[1] + U[3 * i + 2] * w[2];
     for (int j = 1; j < k; ++j) {  // f += N z
       const double h = 1.0 / std::sqrt(double(j) * double(j + 1));
-      const Eigen::Vector3d zj = z.segment<3>(3 * (j - 1));
+      const Eigen::Vector3d zj(z[3 * (j - 1)], z[3 * (j - 1) + 1], z[3 * (j - 1) + 2]);
       for (int i = 0; i < j; ++i) f[i] += h * zj;
       f[j] -= double(j) * h * zj;
     }

@@ -22,8 +22,15 @@ Eigen::Matrix<double, 5, 5> inverse5(const Eigen::Matrix<double, 5, 5>& A);
 // dq = J^+ e for a 6 x n row-major J (n <= 7) by a complete orthogonal decomposition whose
 // rank drops the singular directions below `threshold` times the largest.
 void cod_solve6(const double* J_row_major, int n, const double* e, double threshold, double* dq);
-// The minimum-norm least-squares x of X x = z for a 4 x 3 X (Eigen's complete orthogonal
-// decomposition, its default threshold), as NumPy's lstsq answers.
+// The thin SVD A = U diag(S) V^T of a tall A (rows x 3, 3 <= rows <= kMaxThinRows, row-major), S
+// descending: Householder QR, A = Q R, then R's 3 x 3 Jacobi SVD, R = U_R diag(S) V^T, and
+// U = Q U_R (LAPACK's path for tall matrices). U is rows x 3, V 3 x 3, both row-major. (Eigen's
+// JacobiSVD of a dynamic-size matrix cost 12 s of compiling for its QR preconditioners.)
+constexpr int kMaxThinRows = 24;
+void thin_svd3(const double* A_row_major, int rows, double* U_row_major, double S[3],
+               double* V_row_major);
+// The minimum-norm least-squares x of X x = z for a 4 x 3 X: V S^+ U^T z from thin_svd3, with the
+// singular values up to 4 eps times the largest taken as zero (NumPy's lstsq default cutoff).
 Eigen::Vector3d lstsq43(const Eigen::Matrix<double, 4, 3>& X, const Eigen::Vector4d& z);
 
 }  // namespace spotkin::dense
