@@ -29,15 +29,6 @@ void svd_u2(const Eigen::Matrix2d& A, Eigen::Vector2d& sigma, Eigen::Matrix2d& U
 
 Eigen::Matrix<double, 5, 5> inverse5(const Eigen::Matrix<double, 5, 5>& A) { return A.inverse(); }
 
-void cod_solve6(const double* J_row_major, int n, const double* e, double threshold, double* dq) {
-  using Mat = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor, 6, 7>;
-  Eigen::CompleteOrthogonalDecomposition<Mat> cod(6, n);
-  cod.setThreshold(threshold);
-  cod.compute(Eigen::Map<const Mat>(J_row_major, 6, n));
-  const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 7, 1> x = cod.solve(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(e));
-  for (int j = 0; j < n; ++j) dq[j] = x[j];
-}
-
 void thin_svd3(const double* A, int rows, double* U, double S[3], double* V) {
   // Householder QR: H_k = I - 2 v_k v_k^T / |v_k|^2 zeroes column k below the diagonal; v_k = x -
   // alpha e_k with alpha = -sign(x_k) |x|, so that x_k - alpha does not cancel. A zero column: no

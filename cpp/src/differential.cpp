@@ -1,12 +1,14 @@
 // The Cholesky and complete-orthogonal-decomposition paths of
 // spotkin/differential.hpp (dls, pinv, the null-space projector) and the
 // closed-loop IK, compiled once, for float and double.
+#include "spotkin/differential.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/QR>
 
 #include "differential_types.hpp"
-#include "spotkin/differential.hpp"
+#include "spotkin/dense.hpp"
 
 namespace spotkin::differential {
 
@@ -199,3 +201,18 @@ SPOTKIN_INSTANTIATE(double)
 #undef SPOTKIN_INSTANTIATE
 
 }  // namespace spotkin::differential
+
+namespace spotkin::dense {
+
+// spotkin/dense.hpp: here, so that the build instantiates Eigen's complete orthogonal
+// decomposition once (pinv_solve's; a 6 x dynamic one of its own took 9 s of compiling).
+void cod_solve6(const double* J_row_major, int n, const double* e, double threshold, double* dq) {
+  using T = differential::Types<double>;
+  differential::Cod cod(6, n);
+  cod.setThreshold(threshold);
+  cod.compute(differential::map_jacobian<double>(J_row_major, 6, n));
+  const T::VecN x = cod.solve(differential::vector_in_double<double>(e, 6));
+  for (int j = 0; j < n; ++j) dq[j] = x[j];
+}
+
+}  // namespace spotkin::dense

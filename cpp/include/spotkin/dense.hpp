@@ -20,7 +20,8 @@ void svd_u2(const Eigen::Matrix2d& A, Eigen::Vector2d& sigma, Eigen::Matrix2d& U
 // A^-1 of a 5x5 matrix (partial-pivot LU).
 Eigen::Matrix<double, 5, 5> inverse5(const Eigen::Matrix<double, 5, 5>& A);
 // dq = J^+ e for a 6 x n row-major J (n <= 7) by a complete orthogonal decomposition whose
-// rank drops the singular directions below `threshold` times the largest.
+// rank drops the singular directions below `threshold` times the largest (compiled in
+// cpp/src/differential.cpp, with the decomposition's other use).
 void cod_solve6(const double* J_row_major, int n, const double* e, double threshold, double* dq);
 // The thin SVD A = U diag(S) V^T of a tall A (rows x 3, 3 <= rows <= kMaxThinRows, row-major), S
 // descending: Householder QR, A = Q R, then R's 3 x 3 Jacobi SVD, R = U_R diag(S) V^T, and
