@@ -235,8 +235,8 @@ SPOTKIN_INLINE void read_poses(const T* poses, BodyPoseFormat format, const Eule
   }
 }
 
-// (B2) + the leg's preferred slot for one leg over a block: vectorised (one
-// clone per slot, so that the branch signs are constants).
+// (B2) + the leg's preferred slot (its branch signs, Leg::SlotSigns) for one leg over a block:
+// vectorised.
 // Bound: also each target's slot_separation (bound), for a seed's certificate (seed_certifies).
 // Turn: the limits may take an angle turned by 2 pi (JointLimits::may_turn); where not, the
 // in-limit test skips the turned angles (same bits, 6 % of body_ik at AVX2).
