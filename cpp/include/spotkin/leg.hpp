@@ -471,11 +471,9 @@ class Leg {
   template <typename C>
   static SPOTKIN_INLINE C hip_roll(const RppConstants& k, C y, C z, const Hip<C>& hip,
                                    C eps) noexcept {
-    const C h = C(k.h);
-    const C t1 = vector_math::atan2(z * h + eps * y * hip.S, y * h - eps * z * hip.S);
-    return hip.r2 > C(0) ? half_open(C(k.sign1) * t1) : C(0);
+    return hip_roll_signed(k, y, z, hip.r2, eps * hip.S);
   }
-  // hip_roll with eps S given (the same bits: a product's sign is exact).
+  // hip_roll with eps S given ((eps y) S = y (eps S): a product's sign is exact).
   template <typename C>
   static SPOTKIN_INLINE C hip_roll_signed(const RppConstants& k, C y, C z, C r2,
                                           C signed_S) noexcept {
