@@ -552,15 +552,14 @@ SPOTKIN_INLINE void ik_all(const Arm& arm, const T* poses, PoseFormat format, co
     for (std::ptrdiff_t i = 0; i < m; ++i) {  // vectorised: statuses
       status[b0 + i] = pose_status(ok_pose[i], any_valid[i], ex[i]);
     }
-    // back to (sample, slot, joint) order: with AVX2 and up, 4 x 4 tiles transposed in registers
-    // (one value at a time, the loads 256 bytes apart took a quarter of a batch's time; 1e5 poses,
-    // one thread: AVX2 204-208 -> 187-188 ns a pose, AVX-512 161-163 -> 151 ns). Not at SSE2, whose
-    // 4-double tiles are register pairs: 400 -> 510 ns.
-    constexpr bool tiles = std::is_same_v<T, double> && RegisterBytes >= 32;
-    if constexpr (tiles) transpose_rows(qs, 48, m, q + 48 * b0);
+    // back to (sample, slot, joint) order: float64 by transpose_rows (one value at a time, the
+    // loads 256 bytes apart took a quarter of a batch's time; 1e5 poses, one thread: AVX2 204-208
+    // -> 187-188 ns a pose, AVX-512 161-163 -> 151 ns); float32 answers are rounded one by one
+    constexpr bool same_type = std::is_same_v<T, double>;
+    if constexpr (same_type) transpose_rows<RegisterBytes>(qs, 48, m, q + 48 * b0);
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       T* qt = q + 48 * (b0 + i);
-      if constexpr (!tiles)
+      if constexpr (!same_type)
         for (int k = 0; k < 48; ++k) qt[k] = T(qs[k][i]);
       for (int s = 0; s < Arm::kSlots; ++s) {
         valid[8 * (b0 + i) + s] = ok[s][i] != 0.0;

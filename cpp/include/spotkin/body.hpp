@@ -604,14 +604,7 @@ SPOTKIN_INLINE void ik(const Body& body, const T* poses, BodyPoseFormat format,
         q_col[0][i] = leg_q[0], q_col[1][i] = leg_q[1], q_col[2][i] = leg_q[2];
       }
     }
-    // float64 at SSE2 value by value: its 4-double tiles are register pairs (Spot, 1e5 poses, one
-    // thread: 197 -> 170 ns a pose)
-    if constexpr (std::is_same_v<T, double> && RegisterBytes < 32) {
-      for (std::ptrdiff_t i = 0; i < m; ++i)
-        for (int c = 0; c < w; ++c) q[w * (b0 + i) + c] = Q[c][i];
-    } else {
-      transpose_rows(Q, w, m, q + w * b0);
-    }
+    transpose_rows<RegisterBytes>(Q, w, m, q + w * b0);
   }
 }
 
