@@ -235,11 +235,11 @@ class Leg {
     return {slot < 2 ? C(1) : C(-1), slot % 2 == 0 ? C(-1) : C(1)};
   }
 
-  // solve_slot in stages for block loops, over arrays the caller holds (SlotStages): the hip's
-  // square root in one loop (slot_hip), the knee and the angles in the next (slot_knee,
+  // One slot of (I1)-(I4) in stages for block loops, over arrays the caller holds (SlotStages): the
+  // hip's square root in one loop (slot_hip), the knee and the angles in the next (slot_knee,
   // slot_angles). The hip's square root then no longer sits on the long loop's critical path: the
   // out-of-order core overlaps those of successive iterations (AVX2: body_ik 113 -> 102 ns; a third
-  // loop for the knee measured no better). Same operations as solve_slot. The stages hold the
+  // loop for the knee measured no better). Same operations as solve_all_with's. The stages hold the
   // slot's signs: S is eps S, and sin_psi and acos_psi carry the knee branch's sign (the stages'
   // one multiply each, where the angles' loop, the longest, would take two).
   template <typename C, std::ptrdiff_t N>
@@ -338,21 +338,6 @@ class Leg {
         slot[2] = knee_angle(k, knee, knee_sign);
       }
     }
-  }
-
-  // One slot only (the preferred one, for the walking controller's fast path),
-  // with the branch signs known at compile time. Returns 1.0 if it exists.
-  template <int Slot, typename C = double>
-  SPOTKIN_INLINE C solve_slot(C x, C y, C z, C q[3], C tol = C(kRatioTolerance)) const noexcept {
-    constexpr C eps = Slot < 2 ? C(1) : C(-1);
-    constexpr int kb = Slot % 2;
-    const Hip<C> hip = solve_hip(k_, y, z, tol);
-    const C wx = x - C(k_.a0), wz = -eps * hip.S - C(k_.a2);
-    const Knee<C> knee = solve_knee(k_, wx, wz, tol);
-    q[0] = hip_roll(k_, y, z, hip, eps);
-    q[1] = hip_pitch(k_, wx, wz, knee, kb == 0 ? C(-1) : C(1));
-    q[2] = knee_angle(k_, knee, kb == 0 ? C(-1) : C(1));
-    return hip.exists * knee.exists;
   }
 
   // The configuration within `limits` whose foot is nearest to p (exact; see
